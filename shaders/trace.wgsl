@@ -1,0 +1,318 @@
+// lambert's ray tracing kernel: one invocation per pixel (entry point `render`)
+// or per ray (entry point `trace_rays`).
+//
+// The CPU reference in src/cpu/kernel.rs mirrors this file function by
+// function with the same names; change both together.
+
+// Specialisation: the host sets these per scene so that a variant carries no
+// code for what its scene lacks. Defaults give the full shader.
+override HAS_TRIANGLES: bool = true;
+override HAS_SPHERES: bool = true;
+override HAS_SHADOWS: bool = true;
+
+const NO_HIT: u32 = 0xffffffffu;
+// WGSL has no infinity literal; the largest finite f32 serves as "no hit yet".
+const FAR: f32 = 3.40282347e38;
+const LIGHT_POINT: u32 = 0u;
+const LIGHT_DIRECTIONAL: u32 = 1u;
+const FLAG_SMOOTH: u32 = 1u;
+
+// Layouts: each struct here has a #[repr(C)] twin in src/layout.rs, checked
+// against naga's reflection of this file by tests/layout.rs.
+struct Params {
+    eye: vec3<f32>,
+    width: u32,
+    right: vec3<f32>,
+    height: u32,
+    up: vec3<f32>,
+    tan_half_x: f32,
+    forward: vec3<f32>,
+    tan_half_y: f32,
+    background: vec3<f32>,
+    num_triangles: u32,
+    ambient: vec3<f32>,
+    num_spheres: u32,
+    tile_origin: vec2<u32>,
+    num_lights: u32,
+    shadows: u32,
+}
+
+struct Triangle {
+    v0: vec3<f32>,
+    material: u32,
+    v1: vec3<f32>,
+    flags: u32,
+    v2: vec3<f32>,
+    _pad: u32,
+}
+
+// Per-vertex shading normals; only read for triangles with FLAG_SMOOTH.
+struct TriangleNormals {
+    n0: vec4<f32>,
+    n1: vec4<f32>,
+    n2: vec4<f32>,
+}
+
+struct Sphere {
+    center: vec3<f32>,
+    radius: f32,
+    material: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+struct Material {
+    albedo: vec3<f32>,
+    _pad: u32,
+}
+
+// Point light: `vector` is its position and `color` its intensity I
+// (irradiance I / r² at distance r). Directional light: `vector` is the unit
+// direction towards the light and `color` its irradiance.
+struct Light {
+    vector: vec3<f32>,
+    kind: u32,
+    color: vec3<f32>,
+    _pad: u32,
+}
+
+struct Ray {
+    origin: vec3<f32>,
+    tmin: f32,
+    dir: vec3<f32>,
+    tmax: f32,
+}
+
+// Hit point = (1-u-v)·v0 + u·v1 + v·v2 for triangles; u = v = 0 for spheres.
+struct Hit {
+    t: f32,
+    prim: u32,
+    u: f32,
+    v: f32,
+}
+
+struct Surface {
+    position: vec3<f32>,
+    geometric_normal: vec3<f32>,
+    shading_normal: vec3<f32>,
+    albedo: vec3<f32>,
+}
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read> triangles: array<Triangle>;
+@group(0) @binding(2) var<storage, read> triangle_normals: array<TriangleNormals>;
+@group(0) @binding(3) var<storage, read> spheres: array<Sphere>;
+@group(0) @binding(4) var<storage, read> materials: array<Material>;
+@group(0) @binding(5) var<storage, read> lights: array<Light>;
+@group(0) @binding(6) var out_color: texture_storage_2d<rgba32float, write>;
+@group(0) @binding(7) var out_prim: texture_storage_2d<r32uint, write>;
+
+fn miss() -> Hit {
+    return Hit(FAR, NO_HIT, 0.0, 0.0);
+}
+
+// Pinhole camera; `pixel` is a position in pixel units, row 0 at the top
+// (pixel centres are at +0.5).
+fn camera_ray(pixel: vec2<f32>) -> Ray {
+    let sx = (2.0 * pixel.x / f32(params.width) - 1.0) * params.tan_half_x;
+    let sy = (1.0 - 2.0 * pixel.y / f32(params.height)) * params.tan_half_y;
+    let dir = normalize(params.forward + sx * params.right + sy * params.up);
+    return Ray(params.eye, 0.0, dir, FAR);
+}
+
+// The lecture's test: plane hit t = n·(a − o)/(n·d), then three edge tests
+// that must all agree in sign. Returns (t, u, v); t = FAR on a miss.
+fn intersect_triangle(ray: Ray, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> vec3<f32> {
+    let n = cross(b - a, c - a);
+    let n_dot_d = dot(n, ray.dir);
+    if n_dot_d == 0.0 {
+        return vec3<f32>(FAR, 0.0, 0.0);
+    }
+    let t = dot(n, a - ray.origin) / n_dot_d;
+    // Written so that a NaN t is a miss too.
+    if !(t > ray.tmin && t < ray.tmax) {
+        return vec3<f32>(FAR, 0.0, 0.0);
+    }
+    let p = ray.origin + t * ray.dir;
+    let e0 = dot(cross(b - a, p - a), n);
+    let e1 = dot(cross(c - b, p - b), n);
+    let e2 = dot(cross(a - c, p - c), n);
+    let inside = (e0 >= 0.0 && e1 >= 0.0 && e2 >= 0.0) || (e0 <= 0.0 && e1 <= 0.0 && e2 <= 0.0);
+    if !inside {
+        return vec3<f32>(FAR, 0.0, 0.0);
+    }
+    // Edge values are twice the sub-triangle areas times |n|: barycentrics.
+    let nn = dot(n, n);
+    return vec3<f32>(t, e2 / nn, e0 / nn);
+}
+
+// Nearest root of |o + t·d − c|² = r² inside (tmin, tmax); FAR on a miss.
+// Uses the cancellation-free form of Ray Tracing Gems ch. 7.
+fn intersect_sphere(ray: Ray, center: vec3<f32>, radius: f32) -> f32 {
+    let oc = ray.origin - center;
+    let a = dot(ray.dir, ray.dir);
+    let b = dot(oc, ray.dir);
+    let c = dot(oc, oc) - radius * radius;
+    let f = oc - (b / a) * ray.dir;
+    let discriminant = a * (radius * radius - dot(f, f));
+    if discriminant < 0.0 {
+        return FAR;
+    }
+    let q = -b - sign_nonzero(b) * sqrt(discriminant);
+    let t0 = c / q;
+    let t1 = q / a;
+    let near = min(t0, t1);
+    let far = max(t0, t1);
+    if near > ray.tmin && near < ray.tmax {
+        return near;
+    }
+    if far > ray.tmin && far < ray.tmax {
+        return far;
+    }
+    return FAR;
+}
+
+fn sign_nonzero(x: f32) -> f32 {
+    return select(1.0, -1.0, x < 0.0);
+}
+
+fn trace_closest(ray_in: Ray) -> Hit {
+    var ray = ray_in;
+    // Misses report FAR, so an infinite tmax must not let them through.
+    ray.tmax = min(ray.tmax, FAR);
+    var hit = miss();
+    if HAS_TRIANGLES {
+        for (var i = 0u; i < params.num_triangles; i++) {
+            let tri = triangles[i];
+            let tuv = intersect_triangle(ray, tri.v0, tri.v1, tri.v2);
+            if tuv.x < ray.tmax {
+                ray.tmax = tuv.x;
+                hit = Hit(tuv.x, i, tuv.y, tuv.z);
+            }
+        }
+    }
+    if HAS_SPHERES {
+        for (var i = 0u; i < params.num_spheres; i++) {
+            let t = intersect_sphere(ray, spheres[i].center, spheres[i].radius);
+            if t < ray.tmax {
+                ray.tmax = t;
+                hit = Hit(t, params.num_triangles + i, 0.0, 0.0);
+            }
+        }
+    }
+    return hit;
+}
+
+// Any hit in (tmin, tmax): stops at the first blocker.
+fn trace_any(ray_in: Ray) -> bool {
+    var ray = ray_in;
+    ray.tmax = min(ray.tmax, FAR);
+    if HAS_TRIANGLES {
+        for (var i = 0u; i < params.num_triangles; i++) {
+            let tri = triangles[i];
+            if intersect_triangle(ray, tri.v0, tri.v1, tri.v2).x < ray.tmax {
+                return true;
+            }
+        }
+    }
+    if HAS_SPHERES {
+        for (var i = 0u; i < params.num_spheres; i++) {
+            if intersect_sphere(ray, spheres[i].center, spheres[i].radius) < ray.tmax {
+                return true;
+            }
+        }
+    }
+    return false;
+}
+
+fn face_forward(n: vec3<f32>, dir: vec3<f32>) -> vec3<f32> {
+    return select(n, -n, dot(n, dir) > 0.0);
+}
+
+fn surface_at(ray: Ray, hit: Hit) -> Surface {
+    if hit.prim < params.num_triangles {
+        let tri = triangles[hit.prim];
+        let w = 1.0 - hit.u - hit.v;
+        // From barycentrics, not o + t·d: the point lies closer to the plane.
+        let position = w * tri.v0 + hit.u * tri.v1 + hit.v * tri.v2;
+        let geometric = face_forward(normalize(cross(tri.v1 - tri.v0, tri.v2 - tri.v0)), ray.dir);
+        var shading = geometric;
+        if (tri.flags & FLAG_SMOOTH) != 0u {
+            let ns = triangle_normals[hit.prim];
+            let interpolated = w * ns.n0.xyz + hit.u * ns.n1.xyz + hit.v * ns.n2.xyz;
+            if dot(interpolated, interpolated) > 0.0 {
+                shading = face_forward(normalize(interpolated), ray.dir);
+            }
+        }
+        return Surface(position, geometric, shading, materials[tri.material].albedo);
+    }
+    let sphere = spheres[hit.prim - params.num_triangles];
+    let outward = normalize(ray.origin + hit.t * ray.dir - sphere.center);
+    // Re-projected onto the sphere to undo the rounding of t.
+    let position = sphere.center + sphere.radius * outward;
+    let normal = face_forward(outward, ray.dir);
+    return Surface(position, normal, normal, materials[sphere.material].albedo);
+}
+
+// Ray Tracing Gems ch. 6 (Wächter & Binder): move p off its surface along n
+// by a few ULPs of p (or a fixed amount near the origin), so that a ray
+// leaving p towards n's side cannot hit the surface it starts on.
+fn offset_ray_origin(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    let of_i = vec3<i32>(256.0 * n);
+    let p_i = bitcast<vec3<f32>>(bitcast<vec3<i32>>(p) + select(of_i, -of_i, p < vec3<f32>(0.0)));
+    let p_f = p + (1.0 / 65536.0) * n;
+    return select(p_i, p_f, abs(p) < vec3<f32>(1.0 / 32.0));
+}
+
+// Lambert: ambient·k + Σ k·E·max(0, n·l)·visible, linear RGB.
+fn shade(ray: Ray, hit: Hit) -> vec3<f32> {
+    if hit.prim == NO_HIT {
+        return params.background;
+    }
+    let surface = surface_at(ray, hit);
+    var color = params.ambient * surface.albedo;
+    let origin = offset_ray_origin(surface.position, surface.geometric_normal);
+    for (var i = 0u; i < params.num_lights; i++) {
+        let light = lights[i];
+        var to_light: vec3<f32>;
+        var irradiance: vec3<f32>;
+        var shadow_ray: Ray;
+        if light.kind == LIGHT_POINT {
+            let d = light.vector - surface.position;
+            let distance_squared = dot(d, d);
+            to_light = d / sqrt(distance_squared);
+            irradiance = light.color / distance_squared;
+            let s = light.vector - origin;
+            let shadow_length = length(s);
+            shadow_ray = Ray(origin, 0.0, s / shadow_length, shadow_length);
+        } else {
+            to_light = light.vector;
+            irradiance = light.color;
+            shadow_ray = Ray(origin, 0.0, to_light, FAR);
+        }
+        let cos_theta = dot(surface.shading_normal, to_light);
+        // Early out: no shadow ray for a light that cannot contribute.
+        if cos_theta <= 0.0 || all(irradiance == vec3<f32>(0.0)) {
+            continue;
+        }
+        if HAS_SHADOWS && params.shadows != 0u && trace_any(shadow_ray) {
+            continue;
+        }
+        color += surface.albedo * irradiance * cos_theta;
+    }
+    return color;
+}
+
+@compute @workgroup_size(8, 8)
+fn render(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = textureDimensions(out_color);
+    let pixel = params.tile_origin + id.xy;
+    if id.x >= size.x || id.y >= size.y || pixel.x >= params.width || pixel.y >= params.height {
+        return;
+    }
+    let ray = camera_ray(vec2<f32>(pixel) + 0.5);
+    let hit = trace_closest(ray);
+    textureStore(out_color, id.xy, vec4<f32>(shade(ray, hit), 1.0));
+    textureStore(out_prim, id.xy, vec4<u32>(hit.prim, 0u, 0u, 0u));
+}

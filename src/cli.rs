@@ -1,0 +1,242 @@
+//! The `lambert` command line.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+
+use crate::cpu::{self, Precision};
+use crate::diff::{self, Tolerance};
+use crate::error::{Error, Result};
+use crate::gpu::{self, AdapterRequest, Gpu, GpuRenderer};
+use crate::output::Rendered;
+use crate::progress::Progress;
+use crate::render::{DeviceChoice, Engine};
+use crate::scene::Scene;
+
+#[derive(Parser)]
+#[command(name = "lambert", version, about = "A GPU ray tracer with a CPU reference path")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene to PNG (sRGB, 8-bit), EXR or PFM (linear f32).
+    Render(RenderArgs),
+    /// Render a scene on two paths and compare the images.
+    Diff(DiffArgs),
+    /// List adapters, backends and limits.
+    Info(AdapterArgs),
+}
+
+#[derive(Args, Clone)]
+struct AdapterArgs {
+    /// Adapter whose name contains this (case-insensitive); else WGPU_ADAPTER_NAME.
+    #[arg(long)]
+    adapter: Option<String>,
+    /// vulkan, metal, dx12 or gl; else WGPU_BACKEND, else all.
+    #[arg(long)]
+    backend: Option<String>,
+}
+
+impl AdapterArgs {
+    fn request(&self) -> AdapterRequest {
+        AdapterRequest {
+            name: self.adapter.clone(),
+            backend: self.backend.clone(),
+        }
+    }
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    scene: PathBuf,
+    /// Output image: .png, .exr or .pfm.
+    #[arg(short, long)]
+    output: PathBuf,
+    #[arg(long, value_enum, default_value_t)]
+    device: DeviceChoice,
+    #[command(flatten)]
+    adapter: AdapterArgs,
+    /// Print nothing but errors.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum Comparison {
+    /// GPU (f32) against the CPU reference (f32).
+    GpuCpu,
+    /// GPU (f32) against the f64 oracle.
+    GpuOracle,
+    /// CPU reference (f32) against the f64 oracle.
+    CpuOracle,
+}
+
+#[derive(Args)]
+struct DiffArgs {
+    scene: PathBuf,
+    #[arg(long, value_enum, default_value = "gpu-cpu")]
+    compare: Comparison,
+    /// Write a picture of the differences (PNG).
+    #[arg(long)]
+    heatmap: Option<PathBuf>,
+    /// Print the statistics as JSON.
+    #[arg(long)]
+    json: bool,
+    /// Allowed channel difference: abs + rel·|value| (linear).
+    #[arg(long, default_value_t = Tolerance::default().abs)]
+    tol_abs: f32,
+    #[arg(long, default_value_t = Tolerance::default().rel)]
+    tol_rel: f32,
+    /// Fraction of pixels allowed beyond the tolerance.
+    #[arg(long, default_value_t = Tolerance::default().max_bad_fraction)]
+    max_bad: f64,
+    /// Fraction of pixels allowed to hit a different primitive.
+    #[arg(long, default_value_t = Tolerance::default().max_prim_mismatch_fraction)]
+    max_prim_mismatch: f64,
+    #[command(flatten)]
+    adapter: AdapterArgs,
+}
+
+pub fn run() -> Result<ExitCode> {
+    match Cli::parse().command {
+        Command::Render(args) => render(&args),
+        Command::Diff(args) => diff(&args),
+        Command::Info(args) => info(&args),
+    }
+}
+
+fn seconds(d: Duration) -> String {
+    format!("{:.3} s", d.as_secs_f64())
+}
+
+fn render(args: &RenderArgs) -> Result<ExitCode> {
+    // Fail on a bad output name before spending time on the render.
+    check_output_path(&args.output)?;
+    let start = Instant::now();
+    let scene = Scene::load(&args.scene)?;
+    let load = start.elapsed();
+
+    let start = Instant::now();
+    let (mut engine, note) = Engine::open(&scene, args.device, &args.adapter.request())?;
+    let upload = start.elapsed();
+    if let Some(note) = note {
+        eprintln!("{note}");
+    }
+    if !args.quiet {
+        eprintln!("rendering on {}", engine.describe());
+    }
+    let (rendered, timings) = engine.render(&scene, !args.quiet)?;
+
+    let start = Instant::now();
+    rendered.image.save(&args.output)?;
+    let write = start.elapsed();
+    if !args.quiet {
+        let rays = scene.camera.width as f64 * scene.camera.height as f64;
+        eprintln!(
+            "wrote {} ({}×{}, {} primitives)",
+            args.output.display(),
+            scene.camera.width,
+            scene.camera.height,
+            scene.primitive_count()
+        );
+        eprintln!(
+            "time: load {}, upload {}, render {}, readback {}, write {}",
+            seconds(load),
+            seconds(upload),
+            seconds(timings.render),
+            seconds(timings.readback),
+            seconds(write)
+        );
+        eprintln!(
+            "{:.2} Mrays/s (primary rays, render stage)",
+            rays / timings.render.as_secs_f64() / 1e6
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn check_output_path(path: &Path) -> Result<()> {
+    let extension = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match extension.as_deref() {
+        Some("png" | "exr" | "pfm") => Ok(()),
+        _ => Err(Error::Usage(format!(
+            "{}: unknown image format; use .png, .exr or .pfm",
+            path.display()
+        ))),
+    }
+}
+
+/// Renders on the GPU (any adapter, lavapipe included) with a hidden bar.
+pub fn render_gpu(scene: &Scene, request: &AdapterRequest) -> Result<Rendered> {
+    let mut renderer = GpuRenderer::new(Gpu::open(request, false)?, scene)?;
+    Ok(renderer.render(&Progress::hidden())?.0)
+}
+
+fn diff(args: &DiffArgs) -> Result<ExitCode> {
+    let scene = Scene::load(&args.scene)?;
+    let tolerance = Tolerance {
+        abs: args.tol_abs,
+        rel: args.tol_rel,
+        max_bad_fraction: args.max_bad,
+        max_prim_mismatch_fraction: args.max_prim_mismatch,
+    };
+    let request = args.adapter.request();
+    let cpu = |precision| cpu::render(&scene, precision, &Progress::hidden());
+    let (a, b) = match args.compare {
+        Comparison::GpuCpu => (render_gpu(&scene, &request)?, cpu(Precision::F32)),
+        Comparison::GpuOracle => (render_gpu(&scene, &request)?, cpu(Precision::F64)),
+        Comparison::CpuOracle => (cpu(Precision::F32), cpu(Precision::F64)),
+    };
+    let stats = diff::compare(&a, &b, &tolerance)?;
+    if let Some(path) = &args.heatmap {
+        diff::heatmap(&a, &b, &tolerance).save(path)?;
+    }
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&stats).expect("stats serialise")
+        );
+    } else {
+        println!("{stats}");
+    }
+    Ok(if stats.passed {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
+}
+
+fn info(args: &AdapterArgs) -> Result<ExitCode> {
+    let adapters = gpu::enumerate_adapters(&args.request())?;
+    println!("CPU path: {} threads", rayon::current_num_threads());
+    if adapters.is_empty() {
+        println!("no GPU adapters (install Mesa's lavapipe: apt-get install mesa-vulkan-drivers)");
+    }
+    for adapter in adapters {
+        let info = adapter.get_info();
+        let limits = adapter.limits();
+        println!("adapter: {}", info.name);
+        println!("  backend: {:?}, type: {:?}", info.backend, info.device_type);
+        println!("  driver: {} {}", info.driver, info.driver_info);
+        println!(
+            "  limits: storage binding {} MiB, buffer {} MiB, texture 2D {} px, workgroup invocations {}",
+            limits.max_storage_buffer_binding_size >> 20,
+            limits.max_buffer_size >> 20,
+            limits.max_texture_dimension_2d,
+            limits.max_compute_invocations_per_workgroup
+        );
+        println!(
+            "  timestamp queries: {}",
+            adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY)
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,45 @@
+//! One error type for the library; every message names the file, line or
+//! field at fault and what was wrong with it.
+
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// A scene file that does not parse or whose values are invalid; the
+    /// message names the line or the field.
+    #[error("{path}: {message}")]
+    Scene { path: PathBuf, message: String },
+    #[error("{path}:{line}: {message}")]
+    Obj {
+        path: PathBuf,
+        line: usize,
+        message: String,
+    },
+    #[error("GPU: {0}")]
+    Gpu(String),
+    #[error("{0}")]
+    Usage(String),
+}
+
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+impl Error {
+    pub fn io(path: &Path, source: std::io::Error) -> Self {
+        Error::Io {
+            path: path.to_path_buf(),
+            source,
+        }
+    }
+
+    pub fn scene(path: &Path, message: impl Into<String>) -> Self {
+        Error::Scene {
+            path: path.to_path_buf(),
+            message: message.into(),
+        }
+    }
+}

@@ -1,0 +1,574 @@
+//! The GPU path: adapter choice, scene upload, and tiled dispatch of
+//! `shaders/trace.wgsl` through wgpu.
+
+use std::sync::{Arc, Mutex, mpsc};
+use std::time::{Duration, Instant};
+
+use wgpu::util::DeviceExt;
+
+use crate::cpu::f32::CameraBasis;
+use crate::error::{Error, Result};
+use crate::layout::{Params, Sphere, Triangle, TriangleNormals};
+use crate::output::{Image, Rendered};
+use crate::progress::Progress;
+use crate::scene::{Camera, Scene};
+
+/// The kernel's source, validated by naga in tests/shaders.rs.
+pub const SHADER_SOURCE: &str = include_str!("../shaders/trace.wgsl");
+
+/// Side of the square tile one dispatch renders: small enough that no
+/// dispatch runs long enough for a GPU watchdog to kill it.
+pub const TILE: u32 = 256;
+const WORKGROUP: u32 = 8;
+
+/// Which adapter to use: `--adapter`, `--backend`, or wgpu's own
+/// `WGPU_ADAPTER_NAME` and `WGPU_BACKEND` when those are unset.
+#[derive(Clone, Debug, Default)]
+pub struct AdapterRequest {
+    /// Case-insensitive substring of the adapter's name.
+    pub name: Option<String>,
+    /// vulkan, metal, dx12 or gl.
+    pub backend: Option<String>,
+}
+
+impl AdapterRequest {
+    fn name_filter(&self) -> Option<String> {
+        self.name
+            .clone()
+            .or_else(|| std::env::var("WGPU_ADAPTER_NAME").ok())
+            .map(|n| n.to_lowercase())
+    }
+
+    /// True when the user named an adapter, which then may be a software one.
+    pub fn names_adapter(&self) -> bool {
+        self.name_filter().is_some()
+    }
+
+    /// The backends asked for, if any were.
+    fn backends(&self) -> Result<Option<wgpu::Backends>> {
+        match self.backend.as_deref() {
+            None => Ok(wgpu::Backends::from_env()),
+            Some(name) => match name.to_lowercase().as_str() {
+                "vulkan" | "vk" => Ok(Some(wgpu::Backends::VULKAN)),
+                "metal" | "mtl" => Ok(Some(wgpu::Backends::METAL)),
+                "dx12" | "d3d12" => Ok(Some(wgpu::Backends::DX12)),
+                "gl" | "gles" | "opengl" => Ok(Some(wgpu::Backends::GL)),
+                other => Err(Error::Usage(format!(
+                    "unknown backend '{other}': use vulkan, metal, dx12 or gl"
+                ))),
+            },
+        }
+    }
+}
+
+/// Every adapter wgpu finds for the requested backends. Unless a backend is
+/// named, GL is only tried when Vulkan, Metal and DX12 offer nothing: its
+/// headless start-up is slow and noisy.
+pub fn enumerate_adapters(request: &AdapterRequest) -> Result<Vec<wgpu::Adapter>> {
+    let find = |backends| {
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
+            backends,
+            ..wgpu::InstanceDescriptor::new_without_display_handle()
+        });
+        pollster::block_on(instance.enumerate_adapters(backends))
+    };
+    match request.backends()? {
+        Some(backends) => Ok(find(backends)),
+        None => {
+            let primary = find(wgpu::Backends::PRIMARY);
+            Ok(if primary.is_empty() { find(wgpu::Backends::SECONDARY) } else { primary })
+        }
+    }
+}
+
+fn describe(info: &wgpu::AdapterInfo) -> String {
+    format!("{} ({:?}, {:?})", info.name, info.backend, info.device_type)
+}
+
+fn is_software(info: &wgpu::AdapterInfo) -> bool {
+    info.device_type == wgpu::DeviceType::Cpu
+}
+
+/// An open device and queue.
+pub struct Gpu {
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub info: wgpu::AdapterInfo,
+    pub limits: wgpu::Limits,
+    errors: Arc<Mutex<Option<String>>>,
+}
+
+impl Gpu {
+    /// Opens the best adapter matching `request`: hardware before software,
+    /// Vulkan/Metal/DX12 before GL. With `hardware_only`, software
+    /// rasterisers such as lavapipe do not count.
+    pub fn open(request: &AdapterRequest, hardware_only: bool) -> Result<Gpu> {
+        let adapters = enumerate_adapters(request)?;
+        let filter = request.name_filter();
+        let rank = |info: &wgpu::AdapterInfo| {
+            let kind = match info.device_type {
+                wgpu::DeviceType::DiscreteGpu => 0,
+                wgpu::DeviceType::IntegratedGpu => 1,
+                wgpu::DeviceType::VirtualGpu => 2,
+                wgpu::DeviceType::Cpu => 3,
+                wgpu::DeviceType::Other => 4,
+            };
+            (kind, info.backend == wgpu::Backend::Gl)
+        };
+        let chosen = adapters
+            .iter()
+            .filter(|a| {
+                let info = a.get_info();
+                filter
+                    .as_ref()
+                    .is_none_or(|f| info.name.to_lowercase().contains(f))
+                    && !(hardware_only && is_software(&info))
+            })
+            .min_by_key(|a| rank(&a.get_info()));
+        let Some(adapter) = chosen else {
+            let available: Vec<String> = adapters.iter().map(|a| describe(&a.get_info())).collect();
+            let wanted = match (&filter, hardware_only) {
+                (Some(f), _) => format!("no adapter whose name contains '{f}'"),
+                (None, true) => "no hardware GPU adapter".to_string(),
+                (None, false) => "no GPU adapter".to_string(),
+            };
+            let available = if available.is_empty() {
+                "none (install Mesa's lavapipe: apt-get install mesa-vulkan-drivers)".to_string()
+            } else {
+                available.join(", ")
+            };
+            return Err(Error::Gpu(format!("{wanted}; adapters available: {available}")));
+        };
+        let info = adapter.get_info();
+        // The adapter's real limits, not wgpu's conservative defaults: large
+        // scenes need big storage bindings.
+        let limits = adapter.limits();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("lambert"),
+            required_features: wgpu::Features::empty(),
+            required_limits: limits.clone(),
+            ..Default::default()
+        }))
+        .map_err(|e| Error::Gpu(format!("cannot open {}: {e}", describe(&info))))?;
+        // wgpu's default handler panics; keep the error and report it instead.
+        let errors = Arc::new(Mutex::new(None));
+        let slot = errors.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            slot.lock().unwrap().get_or_insert(e.to_string());
+        }));
+        Ok(Gpu {
+            device,
+            queue,
+            info,
+            limits,
+            errors,
+        })
+    }
+
+    pub fn describe(&self) -> String {
+        describe(&self.info)
+    }
+
+    fn check_errors(&self) -> Result<()> {
+        match self.errors.lock().unwrap().take() {
+            Some(e) => Err(Error::Gpu(e)),
+            None => Ok(()),
+        }
+    }
+
+    fn wait(&self) -> Result<()> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| Error::Gpu(format!("waiting for the device: {e}")))?;
+        self.check_errors()
+    }
+
+    fn storage_buffer(&self, label: &str, bytes: &[u8]) -> Result<wgpu::Buffer> {
+        let limit = self
+            .limits
+            .max_storage_buffer_binding_size
+            .min(self.limits.max_buffer_size) as usize;
+        if bytes.len() > limit {
+            return Err(Error::Gpu(format!(
+                "the scene's {label} take {} bytes, more than the {} bytes one storage binding of {} may hold",
+                bytes.len(),
+                limit,
+                self.describe()
+            )));
+        }
+        Ok(self
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: bytes,
+                usage: wgpu::BufferUsages::STORAGE,
+            }))
+    }
+}
+
+/// Where the time of one GPU render went.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct GpuTimings {
+    pub render: Duration,
+    pub readback: Duration,
+}
+
+/// A scene resident on the device: buffers and pipeline are built once;
+/// a new camera only rewrites the uniform.
+pub struct GpuRenderer {
+    gpu: Gpu,
+    pipeline: wgpu::ComputePipeline,
+    bind_group: wgpu::BindGroup,
+    params: Params,
+    params_buffer: wgpu::Buffer,
+    color_texture: wgpu::Texture,
+    prim_texture: wgpu::Texture,
+    color_staging: wgpu::Buffer,
+    prim_staging: wgpu::Buffer,
+    /// Bytes of the scene's buffers on the device.
+    pub device_bytes: u64,
+    pub upload_time: Duration,
+}
+
+/// Bytes per row of a texture copy: wgpu requires a multiple of 256.
+pub fn padded_bytes_per_row(width: u32, bytes_per_pixel: u32) -> u32 {
+    let align = wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    (width * bytes_per_pixel).div_ceil(align) * align
+}
+
+/// The uniform for `scene` seen from `camera`: the f32 reference's basis, so
+/// both paths shoot the very same rays.
+pub fn params_for(scene: &Scene, camera: &Camera) -> Params {
+    let basis = CameraBasis::new(camera);
+    Params {
+        eye: basis.eye.to_array(),
+        width: basis.width,
+        right: basis.right.to_array(),
+        height: basis.height,
+        up: basis.up.to_array(),
+        tan_half_x: basis.tan_half_x,
+        forward: basis.forward.to_array(),
+        tan_half_y: basis.tan_half_y,
+        background: scene.background,
+        num_triangles: scene.triangles.len() as u32,
+        ambient: scene.ambient,
+        num_spheres: scene.spheres.len() as u32,
+        tile_origin: [0, 0],
+        num_lights: scene.lights.len() as u32,
+        shadows: scene.shadows as u32,
+    }
+}
+
+/// At least one element: wgpu rejects empty storage bindings.
+fn non_empty<T: bytemuck::Pod + Default>(items: &[T]) -> Vec<u8> {
+    if items.is_empty() {
+        bytemuck::bytes_of(&T::default()).to_vec()
+    } else {
+        bytemuck::cast_slice(items).to_vec()
+    }
+}
+
+impl GpuRenderer {
+    pub fn new(gpu: Gpu, scene: &Scene) -> Result<GpuRenderer> {
+        let start = Instant::now();
+        let device = &gpu.device;
+        let params = params_for(scene, &scene.camera);
+        let params_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("params"),
+            contents: bytemuck::bytes_of(&params),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        });
+        let buffers = [
+            gpu.storage_buffer("triangles", &non_empty::<Triangle>(&scene.triangles))?,
+            gpu.storage_buffer("normals", &non_empty::<TriangleNormals>(&scene.normals))?,
+            gpu.storage_buffer("spheres", &non_empty::<Sphere>(&scene.spheres))?,
+            gpu.storage_buffer("materials", &non_empty(&scene.materials))?,
+            gpu.storage_buffer("lights", &non_empty(&scene.lights))?,
+        ];
+        let device_bytes = buffers.iter().map(|b| b.size()).sum();
+
+        let texture = |label, format| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d {
+                    width: TILE,
+                    height: TILE,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            })
+        };
+        let color_texture = texture("color", wgpu::TextureFormat::Rgba32Float);
+        let prim_texture = texture("prim", wgpu::TextureFormat::R32Uint);
+        let staging = |label, bytes_per_pixel| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: (padded_bytes_per_row(TILE, bytes_per_pixel) * TILE) as u64,
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            })
+        };
+        let color_staging = staging("color readback", 16);
+        let prim_staging = staging("prim readback", 4);
+
+        let storage = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: true },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let storage_texture = |binding, format| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::StorageTexture {
+                access: wgpu::StorageTextureAccess::WriteOnly,
+                format,
+                view_dimension: wgpu::TextureViewDimension::D2,
+            },
+            count: None,
+        };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("scene"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                storage(1),
+                storage(2),
+                storage(3),
+                storage(4),
+                storage(5),
+                storage_texture(6, wgpu::TextureFormat::Rgba32Float),
+                storage_texture(7, wgpu::TextureFormat::R32Uint),
+            ],
+        });
+        let color_view = color_texture.create_view(&Default::default());
+        let prim_view = prim_texture.create_view(&Default::default());
+        let mut entries = vec![wgpu::BindGroupEntry {
+            binding: 0,
+            resource: params_buffer.as_entire_binding(),
+        }];
+        entries.extend(buffers.iter().enumerate().map(|(i, b)| wgpu::BindGroupEntry {
+            binding: i as u32 + 1,
+            resource: b.as_entire_binding(),
+        }));
+        entries.push(wgpu::BindGroupEntry {
+            binding: 6,
+            resource: wgpu::BindingResource::TextureView(&color_view),
+        });
+        entries.push(wgpu::BindGroupEntry {
+            binding: 7,
+            resource: wgpu::BindingResource::TextureView(&prim_view),
+        });
+
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("scene"),
+            layout: &layout,
+            entries: &entries,
+        });
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("trace.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(SHADER_SOURCE.into()),
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("scene"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let constants = specialisation(scene);
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("render"),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some("render"),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants: &constants,
+                zero_initialize_workgroup_memory: false,
+            },
+            cache: None,
+        });
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(Error::Gpu(format!("building the pipeline: {e}")));
+        }
+        gpu.wait()?;
+        Ok(GpuRenderer {
+            gpu,
+            pipeline,
+            bind_group,
+            params,
+            params_buffer,
+            color_texture,
+            prim_texture,
+            color_staging,
+            prim_staging,
+            device_bytes,
+            upload_time: start.elapsed(),
+        })
+    }
+
+    pub fn gpu(&self) -> &Gpu {
+        &self.gpu
+    }
+
+    /// Points the resident scene's camera elsewhere; uploads nothing else.
+    pub fn set_camera(&mut self, scene: &Scene, camera: &Camera) {
+        self.params = params_for(scene, camera);
+    }
+
+    /// Renders tile by tile, reading each back before the next.
+    pub fn render(&mut self, progress: &Progress) -> Result<(Rendered, GpuTimings)> {
+        let (width, height) = (self.params.width, self.params.height);
+        let mut rgb = vec![[0.0f32; 3]; width as usize * height as usize];
+        let mut prims = vec![0u32; width as usize * height as usize];
+        let mut timings = GpuTimings::default();
+        for tile_y in (0..height).step_by(TILE as usize) {
+            for tile_x in (0..width).step_by(TILE as usize) {
+                let tile_width = TILE.min(width - tile_x);
+                let tile_height = TILE.min(height - tile_y);
+                let start = Instant::now();
+                self.dispatch_tile(tile_x, tile_y, tile_width, tile_height)?;
+                timings.render += start.elapsed();
+
+                let start = Instant::now();
+                self.read_tile(tile_width, tile_height, |row, colors, ids| {
+                    let offset = ((tile_y + row) * width + tile_x) as usize;
+                    let n = tile_width as usize;
+                    for (dst, src) in rgb[offset..offset + n].iter_mut().zip(colors.chunks(4)) {
+                        *dst = [src[0], src[1], src[2]];
+                    }
+                    prims[offset..offset + n].copy_from_slice(ids);
+                })?;
+                timings.readback += start.elapsed();
+                progress.inc(1);
+            }
+        }
+        Ok((
+            Rendered {
+                image: Image { width, height, rgb },
+                prims,
+            },
+            timings,
+        ))
+    }
+
+    /// Number of tiles `render` dispatches for the current camera.
+    pub fn tile_count(&self) -> u64 {
+        self.params.width.div_ceil(TILE) as u64 * self.params.height.div_ceil(TILE) as u64
+    }
+
+    fn dispatch_tile(&mut self, x: u32, y: u32, width: u32, height: u32) -> Result<()> {
+        self.params.tile_origin = [x, y];
+        let gpu = &self.gpu;
+        gpu.queue
+            .write_buffer(&self.params_buffer, 0, bytemuck::bytes_of(&self.params));
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &self.bind_group, &[]);
+            pass.dispatch_workgroups(width.div_ceil(WORKGROUP), height.div_ceil(WORKGROUP), 1);
+        }
+        gpu.queue.submit([encoder.finish()]);
+        gpu.wait()
+    }
+
+    /// Copies the tile's textures to the staging buffers (rows padded as
+    /// wgpu requires), maps them and hands each row to `row_sink`.
+    fn read_tile(
+        &self,
+        width: u32,
+        height: u32,
+        mut row_sink: impl FnMut(u32, &[f32], &[u32]),
+    ) -> Result<()> {
+        let gpu = &self.gpu;
+        let color_row = padded_bytes_per_row(TILE, 16);
+        let prim_row = padded_bytes_per_row(TILE, 4);
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        let extent = wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        };
+        for (texture, buffer, row_bytes) in [
+            (&self.color_texture, &self.color_staging, color_row),
+            (&self.prim_texture, &self.prim_staging, prim_row),
+        ] {
+            encoder.copy_texture_to_buffer(
+                texture.as_image_copy(),
+                wgpu::TexelCopyBufferInfo {
+                    buffer,
+                    layout: wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(row_bytes),
+                        rows_per_image: Some(height),
+                    },
+                },
+                extent,
+            );
+        }
+        gpu.queue.submit([encoder.finish()]);
+
+        let (sender, receiver) = mpsc::channel();
+        for buffer in [&self.color_staging, &self.prim_staging] {
+            let sender = sender.clone();
+            buffer.map_async(wgpu::MapMode::Read, .., move |r| {
+                let _ = sender.send(r);
+            });
+        }
+        gpu.wait()?;
+        for _ in 0..2 {
+            receiver
+                .recv()
+                .map_err(|e| Error::Gpu(format!("readback: {e}")))?
+                .map_err(|e| Error::Gpu(format!("readback: {e}")))?;
+        }
+        {
+            let map = |buffer: &wgpu::Buffer| {
+                buffer
+                    .get_mapped_range(..)
+                    .map_err(|e| Error::Gpu(format!("readback: {e}")))
+            };
+            let colors = map(&self.color_staging)?;
+            let ids = map(&self.prim_staging)?;
+            for row in 0..height {
+                let c = (row * color_row) as usize;
+                let p = (row * prim_row) as usize;
+                row_sink(
+                    row,
+                    bytemuck::cast_slice(&colors[c..c + width as usize * 16]),
+                    bytemuck::cast_slice(&ids[p..p + width as usize * 4]),
+                );
+            }
+        }
+        self.color_staging.unmap();
+        self.prim_staging.unmap();
+        Ok(())
+    }
+}
+
+/// Pipeline-overridable constants that strip what `scene` does not use.
+pub fn specialisation(scene: &Scene) -> Vec<(&'static str, f64)> {
+    let flag = |b: bool| if b { 1.0 } else { 0.0 };
+    vec![
+        ("HAS_TRIANGLES", flag(!scene.triangles.is_empty())),
+        ("HAS_SPHERES", flag(!scene.spheres.is_empty())),
+        ("HAS_SHADOWS", flag(scene.shadows && !scene.lights.is_empty())),
+    ]
+}

@@ -1,0 +1,106 @@
+//! Structs shared by the host, the GPU shader (`shaders/trace.wgsl`) and the
+//! CPU reference. Each mirrors the WGSL struct of the same name byte for byte
+//! (vec3 fields take 16 bytes with the following scalar in their padding);
+//! `tests/layout.rs` checks sizes and offsets against naga's reflection.
+
+use bytemuck::{Pod, Zeroable};
+
+/// Primitive id of a miss.
+pub const NO_HIT: u32 = u32::MAX;
+/// `Light::kind` of a point light.
+pub const LIGHT_POINT: u32 = 0;
+/// `Light::kind` of a directional light.
+pub const LIGHT_DIRECTIONAL: u32 = 1;
+/// `Triangle::flags` bit: interpolate `TriangleNormals` for shading.
+pub const FLAG_SMOOTH: u32 = 1;
+/// The shader's "no hit yet" distance (WGSL has no infinity literal).
+pub const FAR: f32 = f32::MAX;
+
+/// Per-render uniform: camera basis, background, counts, current tile.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Params {
+    pub eye: [f32; 3],
+    pub width: u32,
+    pub right: [f32; 3],
+    pub height: u32,
+    pub up: [f32; 3],
+    /// tan(vfov/2)·W/H
+    pub tan_half_x: f32,
+    pub forward: [f32; 3],
+    /// tan(vfov/2)
+    pub tan_half_y: f32,
+    pub background: [f32; 3],
+    pub num_triangles: u32,
+    pub ambient: [f32; 3],
+    pub num_spheres: u32,
+    pub tile_origin: [u32; 2],
+    pub num_lights: u32,
+    /// 1 to cast shadow rays, 0 not to.
+    pub shadows: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Triangle {
+    pub v0: [f32; 3],
+    pub material: u32,
+    pub v1: [f32; 3],
+    pub flags: u32,
+    pub v2: [f32; 3],
+    pub _pad: u32,
+}
+
+/// Vertex normals of one triangle (w unused), for smooth shading.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TriangleNormals {
+    pub n0: [f32; 4],
+    pub n1: [f32; 4],
+    pub n2: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Sphere {
+    pub center: [f32; 3],
+    pub radius: f32,
+    pub material: u32,
+    pub _pad: [u32; 3],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Material {
+    pub albedo: [f32; 3],
+    pub _pad: u32,
+}
+
+/// Point light: `vector` = position, `color` = intensity.
+/// Directional light: `vector` = unit direction towards the light, `color` = irradiance.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Light {
+    pub vector: [f32; 3],
+    pub kind: u32,
+    pub color: [f32; 3],
+    pub _pad: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Ray {
+    pub origin: [f32; 3],
+    pub tmin: f32,
+    pub dir: [f32; 3],
+    pub tmax: f32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct Hit {
+    pub t: f32,
+    pub prim: u32,
+    pub u: f32,
+    pub v: f32,
+}

@@ -1,0 +1,22 @@
+//! lambert: a GPU ray tracer (WGSL compute through wgpu) with a CPU reference
+//! path that mirrors the shader function by function, and an f64 oracle.
+//!
+//! Where to look: `shaders/trace.wgsl` (the kernel), `cpu::kernel` (its CPU
+//! twin: intersection in `intersect_triangle`/`intersect_sphere`, shading in
+//! `shade`), `gpu` (wgpu host code), `scene` and `loading` (input),
+//! `output` (images), `diff` (comparisons), `cli` (the `lambert` binary).
+
+pub mod cli;
+pub mod cpu;
+pub mod diff;
+pub mod error;
+pub mod gpu;
+pub mod layout;
+pub mod loading;
+pub mod output;
+pub mod progress;
+pub mod render;
+pub mod scene;
+
+pub use error::{Error, Result};
+pub use scene::Scene;

@@ -1,0 +1,131 @@
+//! Images and their files: PNG (sRGB, 8-bit, for people), EXR and PFM
+//! (linear f32, unclamped, for tools). Every file is written atomically.
+
+use std::io::{Cursor, Write};
+use std::path::{Path, PathBuf};
+
+use image::{ExtendedColorType, ImageEncoder};
+
+use crate::error::{Error, Result};
+
+/// Linear RGB, row 0 at the top.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    pub width: u32,
+    pub height: u32,
+    pub rgb: Vec<[f32; 3]>,
+}
+
+/// A render: the image and, per pixel, the primitive its camera ray hit
+/// (`layout::NO_HIT` for a miss).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Rendered {
+    pub image: Image,
+    pub prims: Vec<u32>,
+}
+
+impl Image {
+    pub fn pixel(&self, x: u32, y: u32) -> [f32; 3] {
+        self.rgb[(y * self.width + x) as usize]
+    }
+
+    /// 8-bit sRGB: clamp to [0, 1], sRGB transfer curve, round.
+    pub fn to_srgb8(&self) -> Vec<u8> {
+        self.rgb
+            .iter()
+            .flat_map(|p| p.map(linear_to_srgb8))
+            .collect()
+    }
+
+    /// Writes PNG, EXR or PFM, chosen by the extension, atomically.
+    pub fn save(&self, path: &Path) -> Result<()> {
+        let extension = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        let bytes = match extension.as_deref() {
+            Some("png") => self.encode_png(),
+            Some("exr") => self.encode_exr(),
+            Some("pfm") => Ok(self.encode_pfm()),
+            _ => {
+                return Err(Error::Usage(format!(
+                    "{}: unknown image format; use .png, .exr or .pfm",
+                    path.display()
+                )));
+            }
+        }
+        .map_err(|e| Error::Usage(format!("{}: cannot encode: {e}", path.display())))?;
+        write_atomically(path, &bytes)
+    }
+
+    fn encode_png(&self) -> image::ImageResult<Vec<u8>> {
+        let mut bytes = Vec::new();
+        image::codecs::png::PngEncoder::new(&mut bytes).write_image(
+            &self.to_srgb8(),
+            self.width,
+            self.height,
+            ExtendedColorType::Rgb8,
+        )?;
+        Ok(bytes)
+    }
+
+    fn encode_exr(&self) -> image::ImageResult<Vec<u8>> {
+        let mut bytes = Cursor::new(Vec::new());
+        image::codecs::openexr::OpenExrEncoder::new(&mut bytes).write_image(
+            bytemuck::cast_slice(&self.rgb),
+            self.width,
+            self.height,
+            ExtendedColorType::Rgb32F,
+        )?;
+        Ok(bytes.into_inner())
+    }
+
+    /// Portable float map: little-endian (negative scale), rows bottom to top.
+    fn encode_pfm(&self) -> Vec<u8> {
+        let mut bytes = format!("PF\n{} {}\n-1.0\n", self.width, self.height).into_bytes();
+        for row in self.rgb.chunks(self.width as usize).rev() {
+            for value in row.iter().flatten() {
+                bytes.extend_from_slice(&value.to_le_bytes());
+            }
+        }
+        bytes
+    }
+}
+
+pub fn linear_to_srgb8(linear: f32) -> u8 {
+    let c = linear.clamp(0.0, 1.0);
+    let encoded = if c <= 0.003_130_8 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    };
+    (encoded * 255.0).round() as u8
+}
+
+/// Writes a temporary file beside `path`, then renames it over `path`: a
+/// failure leaves any previous file untouched and no partial file behind.
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
+    let directory = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let name = path
+        .file_name()
+        .ok_or_else(|| Error::Usage(format!("{}: not a file name", path.display())))?;
+    let temporary: PathBuf = directory.join(format!(
+        ".{}.{}.tmp",
+        name.to_string_lossy(),
+        std::process::id()
+    ));
+    let result = (|| {
+        let mut file = std::fs::File::create(&temporary)?;
+        file.write_all(bytes)?;
+        file.sync_all()?;
+        std::fs::rename(&temporary, path)
+    })();
+    if let Err(e) = result {
+        let _ = std::fs::remove_file(&temporary);
+        return Err(Error::io(path, e));
+    }
+    Ok(())
+}

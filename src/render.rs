@@ -1,0 +1,111 @@
+//! Choosing where a scene renders (GPU through wgpu, or the CPU reference)
+//! and rendering it there.
+
+use std::time::{Duration, Instant};
+
+use crate::cpu::{self, Precision};
+use crate::error::Result;
+use crate::gpu::{AdapterRequest, Gpu, GpuRenderer};
+use crate::output::Rendered;
+use crate::progress::Progress;
+use crate::scene::Scene;
+
+/// `--device`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum DeviceChoice {
+    /// A hardware GPU if there is one (or the adapter named), else the CPU path.
+    #[default]
+    Auto,
+    /// Any wgpu adapter, software ones such as lavapipe included.
+    Gpu,
+    /// The CPU reference path.
+    Cpu,
+}
+
+/// A scene ready to render, resident on its device.
+pub enum Engine {
+    Gpu(Box<GpuRenderer>),
+    Cpu,
+}
+
+/// Time spent in each stage of one render.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RenderTimings {
+    pub render: Duration,
+    pub readback: Duration,
+}
+
+impl Engine {
+    /// Opens the device `choice` asks for and uploads `scene`. The string
+    /// returned, if any, explains a fallback to the CPU path.
+    pub fn open(
+        scene: &Scene,
+        choice: DeviceChoice,
+        request: &AdapterRequest,
+    ) -> Result<(Engine, Option<String>)> {
+        let gpu = match choice {
+            DeviceChoice::Cpu => return Ok((Engine::Cpu, None)),
+            DeviceChoice::Gpu => Gpu::open(request, false)?,
+            DeviceChoice::Auto => match Gpu::open(request, !request.names_adapter()) {
+                Ok(gpu) => gpu,
+                Err(e) => {
+                    let note = format!(
+                        "{e}\nnote: rendering on the CPU path instead (--device gpu uses a software adapter such as lavapipe)"
+                    );
+                    return Ok((Engine::Cpu, Some(note)));
+                }
+            },
+        };
+        Ok((Engine::Gpu(Box::new(GpuRenderer::new(gpu, scene)?)), None))
+    }
+
+    pub fn describe(&self) -> String {
+        match self {
+            Engine::Gpu(r) => format!("GPU: {}", r.gpu().describe()),
+            Engine::Cpu => format!(
+                "CPU reference path ({} threads)",
+                rayon::current_num_threads()
+            ),
+        }
+    }
+
+    /// Renders `scene` from its current camera.
+    pub fn render(&mut self, scene: &Scene, show_progress: bool) -> Result<(Rendered, RenderTimings)> {
+        match self {
+            Engine::Gpu(renderer) => {
+                renderer.set_camera(scene, &scene.camera);
+                let progress = if show_progress {
+                    Progress::new(renderer.tile_count(), "tiles")
+                } else {
+                    Progress::hidden()
+                };
+                let (rendered, t) = renderer.render(&progress)?;
+                progress.finish();
+                Ok((
+                    rendered,
+                    RenderTimings {
+                        render: t.render,
+                        readback: t.readback,
+                    },
+                ))
+            }
+            Engine::Cpu => {
+                let progress = if show_progress {
+                    Progress::new(scene.camera.height as u64, "rows")
+                } else {
+                    Progress::hidden()
+                };
+                let start = Instant::now();
+                let rendered = cpu::render(scene, Precision::F32, &progress);
+                progress.finish();
+                Ok((
+                    rendered,
+                    RenderTimings {
+                        render: start.elapsed(),
+                        readback: Duration::ZERO,
+                    },
+                ))
+            }
+        }
+    }
+}

@@ -1,0 +1,436 @@
+//! The scene: its TOML file format (see docs/scene-format.md), validation, and
+//! the flattened geometry that both render paths read.
+
+use std::path::{Path, PathBuf};
+
+use glam::{DMat3, DVec3};
+use serde::Deserialize;
+
+use crate::error::{Error, Result};
+use crate::layout::{
+    FLAG_SMOOTH, LIGHT_DIRECTIONAL, LIGHT_POINT, Light, Material, Sphere, Triangle,
+    TriangleNormals,
+};
+use crate::loading::{self, NormalMode};
+
+/// Coordinates beyond this magnitude are rejected: the f32 edge tests take
+/// fourth powers of lengths and would overflow.
+pub const MAX_COORDINATE: f64 = 1e9;
+/// Largest image side, in pixels.
+pub const MAX_SIDE: u32 = 65_536;
+/// Largest image, in pixels (16K × 16K): 5 GiB of host buffers.
+pub const MAX_PIXELS: u64 = 1 << 28;
+
+// ---------------------------------------------------------------- file format
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    camera: Camera,
+    #[serde(default)]
+    render: RenderSettings,
+    #[serde(default)]
+    mesh: Vec<MeshEntry>,
+    #[serde(default)]
+    sphere: Vec<SphereEntry>,
+    #[serde(default)]
+    point_light: Vec<PointLightEntry>,
+    #[serde(default)]
+    directional_light: Vec<DirectionalLightEntry>,
+}
+
+/// The `[camera]` table. Kept in f64 so the oracle can use it at full
+/// precision; the f32 paths round it once.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Camera {
+    pub eye: [f64; 3],
+    pub look_at: [f64; 3],
+    #[serde(default = "default_up")]
+    pub up: [f64; 3],
+    /// Vertical field of view, degrees.
+    pub vfov: f64,
+    pub width: u32,
+    pub height: u32,
+}
+
+fn default_up() -> [f64; 3] {
+    [0.0, 1.0, 0.0]
+}
+
+/// The `[render]` table.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct RenderSettings {
+    pub background: Rgb,
+    pub ambient: Rgb,
+    pub shadows: bool,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        RenderSettings {
+            background: Rgb::Uniform(0.0),
+            ambient: Rgb::Uniform(0.0),
+            shadows: true,
+        }
+    }
+}
+
+/// A colour given as one number (grey) or as `[r, g, b]`.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(untagged, expecting = "a number or an array of 3 numbers")]
+pub enum Rgb {
+    Uniform(f64),
+    PerChannel([f64; 3]),
+}
+
+impl Rgb {
+    pub fn to_array(self) -> [f64; 3] {
+        match self {
+            Rgb::Uniform(v) => [v; 3],
+            Rgb::PerChannel(v) => v,
+        }
+    }
+}
+
+/// `scale = s` or `scale = [sx, sy, sz]`.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(untagged, expecting = "a number or an array of 3 numbers")]
+enum Scale {
+    Uniform(f64),
+    PerAxis([f64; 3]),
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MeshEntry {
+    obj: PathBuf,
+    #[serde(default = "default_albedo")]
+    albedo: Rgb,
+    #[serde(default)]
+    normals: NormalMode,
+    #[serde(default)]
+    translate: Option<[f64; 3]>,
+    #[serde(default)]
+    scale: Option<Scale>,
+    #[serde(default)]
+    rotate_deg: Option<[f64; 3]>,
+}
+
+fn default_albedo() -> Rgb {
+    Rgb::Uniform(0.8)
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SphereEntry {
+    center: [f64; 3],
+    radius: f64,
+    #[serde(default = "default_albedo")]
+    albedo: Rgb,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PointLightEntry {
+    position: [f64; 3],
+    intensity: Rgb,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DirectionalLightEntry {
+    direction: [f64; 3],
+    irradiance: Rgb,
+}
+
+// ---------------------------------------------------------------- loaded scene
+
+/// A loaded, validated scene, flattened into the buffers the GPU receives.
+///
+/// Primitive ids: triangles in file order across meshes in scene order
+/// (polygons fan-triangulated), then spheres.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub camera: Camera,
+    pub background: [f32; 3],
+    pub ambient: [f32; 3],
+    pub shadows: bool,
+    pub triangles: Vec<Triangle>,
+    /// One entry per triangle when any mesh is smooth, else empty.
+    pub normals: Vec<TriangleNormals>,
+    pub spheres: Vec<Sphere>,
+    pub materials: Vec<Material>,
+    pub lights: Vec<Light>,
+}
+
+impl Scene {
+    /// Loads a scene file; mesh paths are relative to its folder.
+    pub fn load(path: &Path) -> Result<Scene> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        Scene::from_toml(&text, path)
+    }
+
+    /// Parses scene text; `path` names it in errors and anchors relative paths.
+    pub fn from_toml(text: &str, path: &Path) -> Result<Scene> {
+        let file: SceneFile =
+            toml::from_str(text).map_err(|e| Error::scene(path, e.to_string().trim_end()))?;
+        let base = path.parent().unwrap_or(Path::new("."));
+        let fail = |message: String| Error::scene(path, message);
+
+        validate_camera(&file.camera).map_err(fail)?;
+        let background = colour("render.background", file.render.background).map_err(fail)?;
+        let ambient = colour("render.ambient", file.render.ambient).map_err(fail)?;
+
+        let mut scene = Scene {
+            camera: file.camera,
+            background,
+            ambient,
+            shadows: file.render.shadows,
+            triangles: Vec::new(),
+            normals: Vec::new(),
+            spheres: Vec::new(),
+            materials: Vec::new(),
+            lights: Vec::new(),
+        };
+
+        for (i, entry) in file.mesh.iter().enumerate() {
+            let field = format!("mesh[{i}]");
+            let albedo = colour(&format!("{field}.albedo"), entry.albedo).map_err(fail)?;
+            let transform = mesh_transform(&field, entry).map_err(fail)?;
+            let obj_path = base.join(&entry.obj);
+            let mesh = loading::load_obj(&obj_path, entry.normals)?;
+            scene.add_mesh(&obj_path, mesh, &transform, albedo)?;
+        }
+        for (i, entry) in file.sphere.iter().enumerate() {
+            let field = format!("sphere[{i}]");
+            let center = point(&format!("{field}.center"), entry.center).map_err(fail)?;
+            if !(entry.radius.is_finite() && entry.radius > 0.0 && entry.radius <= MAX_COORDINATE)
+            {
+                return Err(fail(format!(
+                    "{field}.radius = {} must be positive and at most {MAX_COORDINATE:e}",
+                    entry.radius
+                )));
+            }
+            let albedo = colour(&format!("{field}.albedo"), entry.albedo).map_err(fail)?;
+            let material = scene.add_material(albedo);
+            scene.spheres.push(Sphere {
+                center,
+                radius: entry.radius as f32,
+                material,
+                _pad: [0; 3],
+            });
+        }
+        for (i, entry) in file.point_light.iter().enumerate() {
+            let field = format!("point_light[{i}]");
+            scene.lights.push(Light {
+                vector: point(&format!("{field}.position"), entry.position).map_err(fail)?,
+                kind: LIGHT_POINT,
+                color: colour(&format!("{field}.intensity"), entry.intensity).map_err(fail)?,
+                _pad: 0,
+            });
+        }
+        for (i, entry) in file.directional_light.iter().enumerate() {
+            let field = format!("directional_light[{i}]");
+            let direction = DVec3::from(entry.direction);
+            if !direction.is_finite() || direction.length_squared() == 0.0 {
+                return Err(fail(format!(
+                    "{field}.direction = {:?} must be a finite, non-zero vector",
+                    entry.direction
+                )));
+            }
+            scene.lights.push(Light {
+                vector: (-direction.normalize()).as_vec3().to_array(),
+                kind: LIGHT_DIRECTIONAL,
+                color: colour(&format!("{field}.irradiance"), entry.irradiance).map_err(fail)?,
+                _pad: 0,
+            });
+        }
+        if scene.triangles.is_empty() && scene.spheres.is_empty() {
+            return Err(fail(
+                "the scene is empty: it needs a [[mesh]] with faces or a [[sphere]]".into(),
+            ));
+        }
+        Ok(scene)
+    }
+
+    fn add_material(&mut self, albedo: [f32; 3]) -> u32 {
+        self.materials.push(Material { albedo, _pad: 0 });
+        (self.materials.len() - 1) as u32
+    }
+
+    fn add_mesh(
+        &mut self,
+        obj_path: &Path,
+        mesh: loading::Mesh,
+        transform: &Transform,
+        albedo: [f32; 3],
+    ) -> Result<()> {
+        let material = self.add_material(albedo);
+        let to_f32 = |p: DVec3| -> Result<[f32; 3]> {
+            let q = transform.point(p);
+            if !q.is_finite() || q.abs().max_element() > MAX_COORDINATE {
+                return Err(Error::scene(
+                    obj_path,
+                    format!(
+                        "a transformed vertex {q:?} exceeds the supported magnitude {MAX_COORDINATE:e}"
+                    ),
+                ));
+            }
+            Ok(q.as_vec3().to_array())
+        };
+        let smooth = mesh.normals.is_some();
+        if smooth && self.normals.len() < self.triangles.len() {
+            self.normals
+                .resize(self.triangles.len(), TriangleNormals::default());
+        }
+        self.triangles.reserve(mesh.triangles.len());
+        for (i, tri) in mesh.triangles.iter().enumerate() {
+            let [a, b, c] = tri.map(|v| mesh.positions[v as usize]);
+            self.triangles.push(Triangle {
+                v0: to_f32(a)?,
+                material,
+                v1: to_f32(b)?,
+                flags: if smooth { FLAG_SMOOTH } else { 0 },
+                v2: to_f32(c)?,
+                _pad: 0,
+            });
+            if let Some(normals) = &mesh.normals {
+                let n = normals[i].map(|n| {
+                    let m = transform.normal(n);
+                    [m.x as f32, m.y as f32, m.z as f32, 0.0]
+                });
+                self.normals.push(TriangleNormals {
+                    n0: n[0],
+                    n1: n[1],
+                    n2: n[2],
+                });
+            } else if !self.normals.is_empty() {
+                self.normals.push(TriangleNormals::default());
+            }
+        }
+        Ok(())
+    }
+
+    pub fn primitive_count(&self) -> usize {
+        self.triangles.len() + self.spheres.len()
+    }
+}
+
+/// Object-to-world transform of a mesh: scale, then rotate about X, Y, Z (in
+/// that order, fixed axes), then translate.
+struct Transform {
+    linear: DMat3,
+    normal: DMat3,
+    translate: DVec3,
+}
+
+impl Transform {
+    fn point(&self, p: DVec3) -> DVec3 {
+        self.linear * p + self.translate
+    }
+
+    fn normal(&self, n: DVec3) -> DVec3 {
+        (self.normal * n).normalize_or_zero()
+    }
+}
+
+fn mesh_transform(field: &str, entry: &MeshEntry) -> Result<Transform, String> {
+    let scale = match entry.scale {
+        None => DVec3::ONE,
+        Some(Scale::Uniform(s)) => DVec3::splat(s),
+        Some(Scale::PerAxis(s)) => DVec3::from(s),
+    };
+    if !scale.is_finite() || scale.abs().min_element() == 0.0 {
+        return Err(format!(
+            "{field}.scale = {scale:?} must be finite and non-zero on every axis"
+        ));
+    }
+    let rotate = DVec3::from(entry.rotate_deg.unwrap_or([0.0; 3]));
+    if !rotate.is_finite() {
+        return Err(format!("{field}.rotate_deg = {rotate:?} must be finite"));
+    }
+    let translate = entry.translate.unwrap_or([0.0; 3]);
+    let translate = DVec3::from(checked_point(&format!("{field}.translate"), translate)?);
+    let rotation = DMat3::from_rotation_z(rotate.z.to_radians())
+        * DMat3::from_rotation_y(rotate.y.to_radians())
+        * DMat3::from_rotation_x(rotate.x.to_radians());
+    let linear = rotation * DMat3::from_diagonal(scale);
+    Ok(Transform {
+        linear,
+        normal: linear.inverse().transpose(),
+        translate,
+    })
+}
+
+fn validate_camera(camera: &Camera) -> Result<(), String> {
+    for (name, v) in [
+        ("eye", camera.eye),
+        ("look_at", camera.look_at),
+        ("up", camera.up),
+    ] {
+        checked_point(&format!("camera.{name}"), v)?;
+    }
+    let eye = DVec3::from(camera.eye);
+    let forward = DVec3::from(camera.look_at) - eye;
+    if forward.length_squared() == 0.0 {
+        return Err("camera.eye and camera.look_at are the same point".into());
+    }
+    let up = DVec3::from(camera.up);
+    if up.length_squared() == 0.0 {
+        return Err("camera.up is the zero vector".into());
+    }
+    let sine = forward.normalize().cross(up.normalize()).length();
+    if sine < 1e-6 {
+        return Err(format!(
+            "camera.up = {:?} is parallel to the view direction (look_at − eye)",
+            camera.up
+        ));
+    }
+    if !(camera.vfov > 0.0 && camera.vfov < 180.0) {
+        return Err(format!(
+            "camera.vfov = {} must be in (0, 180) degrees",
+            camera.vfov
+        ));
+    }
+    validate_resolution(camera.width, camera.height).map_err(|e| format!("camera: {e}"))
+}
+
+/// Checks an image size against what memory and tiling can serve.
+pub fn validate_resolution(width: u32, height: u32) -> Result<(), String> {
+    if width == 0 || height == 0 {
+        return Err(format!("resolution {width}×{height} has a zero side"));
+    }
+    if width > MAX_SIDE || height > MAX_SIDE || width as u64 * height as u64 > MAX_PIXELS {
+        return Err(format!(
+            "resolution {width}×{height} is beyond the supported maximum \
+             ({MAX_SIDE} per side, {MAX_PIXELS} pixels in all)"
+        ));
+    }
+    Ok(())
+}
+
+/// A position: finite and within MAX_COORDINATE, rounded to f32.
+fn point(field: &str, v: [f64; 3]) -> Result<[f32; 3], String> {
+    Ok(DVec3::from(checked_point(field, v)?).as_vec3().to_array())
+}
+
+fn checked_point(field: &str, v: [f64; 3]) -> Result<[f64; 3], String> {
+    if v.iter().all(|c| c.is_finite() && c.abs() <= MAX_COORDINATE) {
+        Ok(v)
+    } else {
+        Err(format!(
+            "{field} = {v:?} must be finite with magnitude at most {MAX_COORDINATE:e}"
+        ))
+    }
+}
+
+fn colour(field: &str, rgb: Rgb) -> Result<[f32; 3], String> {
+    let v = rgb.to_array();
+    if v.iter().all(|c| c.is_finite() && *c >= 0.0 && *c <= f32::MAX as f64) {
+        Ok(v.map(|c| c as f32))
+    } else {
+        Err(format!("{field} = {v:?} must be finite and non-negative"))
+    }
+}
