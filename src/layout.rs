@@ -66,7 +66,9 @@ pub struct Sphere {
     pub center: [f32; 3],
     pub radius: f32,
     pub material: u32,
-    pub _pad: [u32; 3],
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
 }
 
 #[repr(C)]

@@ -219,7 +219,9 @@ impl Scene {
                 center,
                 radius: entry.radius as f32,
                 material,
-                _pad: [0; 3],
+                _pad0: 0,
+                _pad1: 0,
+                _pad2: 0,
             });
         }
         for (i, entry) in file.point_light.iter().enumerate() {

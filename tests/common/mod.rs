@@ -1,0 +1,58 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+
+use lambert::Scene;
+use lambert::cpu::{self, Precision};
+use lambert::gpu::{AdapterRequest, Gpu, GpuRenderer};
+use lambert::output::Rendered;
+use lambert::progress::Progress;
+
+pub fn asset(path: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("assets").join(path)
+}
+
+pub fn load(name: &str) -> Scene {
+    Scene::load(&asset(&format!("scenes/{name}.toml"))).expect("bundled scene loads")
+}
+
+/// Parses scene text as if it sat in assets/scenes (so meshes/… resolves).
+pub fn scene(toml: &str) -> Scene {
+    Scene::from_toml(toml, &asset("scenes/inline.toml")).expect("test scene is valid")
+}
+
+/// Opens a GPU adapter, software ones included. A GPU test never passes
+/// for lack of one: it fails and says what to install.
+pub fn open_gpu() -> Gpu {
+    match Gpu::open(&AdapterRequest::default(), false) {
+        Ok(gpu) => gpu,
+        Err(e) => panic!(
+            "GPU tests need a wgpu adapter and found none ({e}).\n\
+             Install Mesa's lavapipe: sudo apt-get install mesa-vulkan-drivers"
+        ),
+    }
+}
+
+pub fn render_gpu(scene: &Scene) -> Rendered {
+    let mut renderer = GpuRenderer::new(open_gpu(), scene).expect("scene uploads");
+    renderer.render(&Progress::hidden()).expect("GPU render").0
+}
+
+pub fn render_cpu(scene: &Scene) -> Rendered {
+    cpu::render(scene, Precision::F32, &Progress::hidden())
+}
+
+pub fn render_oracle(scene: &Scene) -> Rendered {
+    cpu::render(scene, Precision::F64, &Progress::hidden())
+}
+
+pub fn assert_close(actual: [f32; 3], expected: [f64; 3], rel: f64, what: &str) {
+    for c in 0..3 {
+        let (a, e) = (actual[c] as f64, expected[c]);
+        assert!(
+            (a - e).abs() <= rel * e.abs().max(1e-6),
+            "{what}: channel {c} is {a}, expected {e} (relative tolerance {rel})"
+        );
+    }
+}

@@ -1,0 +1,97 @@
+//! GPU (wgpu; lavapipe on CI) against the CPU reference on every bundled
+//! scene, with the tolerance `lambert diff` uses (docs/accuracy.md).
+
+mod common;
+
+use common::*;
+use lambert::diff::{Tolerance, compare};
+
+fn check(name: &str) {
+    let scene = load(name);
+    let gpu = render_gpu(&scene);
+    let cpu = render_cpu(&scene);
+    let stats = compare(&gpu, &cpu, &Tolerance::default()).unwrap();
+    println!("{name}: GPU vs CPU\n{stats}");
+    assert!(stats.passed, "{name}: GPU and CPU differ beyond tolerance:\n{stats}");
+    // Not a free pass for mismatched hits: they are bounded explicitly.
+    assert!(
+        stats.prim_mismatches as f64 <= 1e-3 * stats.pixels as f64,
+        "{name}: {} pixels hit different primitives",
+        stats.prim_mismatches
+    );
+    // Something was actually drawn: the scene's geometry is on screen.
+    let hits = cpu.prims.iter().filter(|&&p| p != lambert::layout::NO_HIT).count();
+    assert!(hits > 0, "{name}: no camera ray hit anything");
+}
+
+#[test]
+fn triangle_head_on() {
+    check("triangle_head_on");
+}
+
+#[test]
+fn triangle_oblique() {
+    check("triangle_oblique");
+}
+
+#[test]
+fn triangle_back_facing() {
+    check("triangle_back");
+}
+
+#[test]
+fn edge_cases() {
+    check("edge_cases");
+}
+
+#[test]
+fn spheres() {
+    check("spheres");
+}
+
+#[test]
+fn cornell_room() {
+    check("cornell");
+}
+
+#[test]
+fn closed_mesh_with_shadows() {
+    check("bunny");
+}
+
+#[test]
+fn mesh_of_11k_triangles() {
+    let scene = load("dragon");
+    assert!(scene.triangles.len() >= 10_000);
+    check("dragon");
+}
+
+#[test]
+fn cpu_reference_agrees_with_f64_oracle() {
+    for name in ["cornell", "spheres", "edge_cases", "triangle_oblique"] {
+        let scene = load(name);
+        let stats = compare(&render_cpu(&scene), &render_oracle(&scene), &Tolerance::default())
+            .unwrap();
+        println!("{name}: CPU f32 vs f64 oracle\n{stats}");
+        assert!(stats.passed, "{name}: f32 and f64 differ beyond tolerance:\n{stats}");
+    }
+}
+
+#[test]
+fn edge_case_scene_behaves() {
+    let scene = load("edge_cases");
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    for r in [render_gpu(&scene), render_cpu(&scene)] {
+        // The triangle whose plane holds the eye (mesh 1, primitive 4) is
+        // never hit: its rays start in its plane or run parallel to it.
+        assert!(!r.prims.contains(&4), "the in-plane triangle was hit");
+        // Rays along the shared edges and through the shared vertex hit the
+        // fan (primitives 0–3) rather than slipping through.
+        for (x, y) in [(w / 2, h / 2), (w / 2, h / 2 - 3), (w / 2 + 3, h / 2), (w / 2, h / 2 + 3)] {
+            let prim = r.prims[(y * w + x) as usize];
+            assert!(prim < 4, "pixel ({x}, {y}) on a shared edge hit {prim}");
+        }
+        // No NaN anywhere.
+        assert!(r.image.rgb.iter().flatten().all(|v| v.is_finite()));
+    }
+}

@@ -1,0 +1,111 @@
+//! Every WGSL file parses and validates with naga, and every host struct that
+//! crosses to the GPU matches naga's reflection of the WGSL: size and member
+//! offsets. No GPU needed.
+
+use std::mem::{offset_of, size_of};
+
+use lambert::layout::*;
+
+fn module() -> naga::Module {
+    naga::front::wgsl::parse_str(lambert::gpu::SHADER_SOURCE)
+        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(lambert::gpu::SHADER_SOURCE)))
+}
+
+#[test]
+fn every_wgsl_file_validates() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
+    let mut count = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "wgsl") {
+            let source = std::fs::read_to_string(&path).unwrap();
+            let module = naga::front::wgsl::parse_str(&source)
+                .unwrap_or_else(|e| panic!("{}: {}", path.display(), e.emit_to_string(&source)));
+            naga::valid::Validator::new(
+                naga::valid::ValidationFlags::all(),
+                naga::valid::Capabilities::default(),
+            )
+            .validate(&module)
+            .unwrap_or_else(|e| panic!("{}: {}", path.display(), e.emit_to_string(&source)));
+            count += 1;
+        }
+    }
+    assert!(count >= 1, "no WGSL files found in {}", dir.display());
+}
+
+/// (size, [(member name, offset)]) of a WGSL struct, as naga lays it out.
+fn reflect(module: &naga::Module, name: &str) -> (u32, Vec<(String, u32)>) {
+    let mut layouter = naga::proc::Layouter::default();
+    layouter.update(module.to_ctx()).unwrap();
+    let (handle, ty) = module
+        .types
+        .iter()
+        .find(|(_, t)| t.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("WGSL has no struct {name}"));
+    let naga::TypeInner::Struct { members, .. } = &ty.inner else {
+        panic!("{name} is not a struct")
+    };
+    let offsets = members
+        .iter()
+        .map(|m| (m.name.clone().unwrap(), m.offset))
+        .collect();
+    (layouter[handle].size, offsets)
+}
+
+macro_rules! check_layout {
+    ($module:expr, $ty:ident { $($field:ident),* $(,)? }) => {{
+        let (size, members) = reflect($module, stringify!($ty));
+        assert_eq!(size as usize, size_of::<$ty>(), "size of {}", stringify!($ty));
+        let host: Vec<(String, u32)> = vec![$((stringify!($field).to_string(), offset_of!($ty, $field) as u32)),*];
+        assert_eq!(members, host, "member offsets of {}", stringify!($ty));
+    }};
+}
+
+#[test]
+fn host_structs_match_wgsl_layout() {
+    let m = &module();
+    check_layout!(m, Params {
+        eye, width, right, height, up, tan_half_x, forward, tan_half_y,
+        background, num_triangles, ambient, num_spheres, tile_origin, num_lights, shadows,
+    });
+    check_layout!(m, Triangle { v0, material, v1, flags, v2, _pad });
+    check_layout!(m, TriangleNormals { n0, n1, n2 });
+    check_layout!(m, Sphere { center, radius, material, _pad0, _pad1, _pad2 });
+    check_layout!(m, Material { albedo, _pad });
+    check_layout!(m, Light { vector, kind, color, _pad });
+    check_layout!(m, Ray { origin, tmin, dir, tmax });
+    check_layout!(m, Hit { t, prim, u, v });
+}
+
+#[test]
+fn shader_constants_match_host() {
+    let m = module();
+    let constant = |name: &str| -> String {
+        let (_, c) = m
+            .constants
+            .iter()
+            .find(|(_, c)| c.name.as_deref() == Some(name))
+            .unwrap_or_else(|| panic!("WGSL has no const {name}"));
+        format!("{:?}", m.global_expressions[c.init])
+    };
+    assert_eq!(constant("NO_HIT"), format!("Literal(U32({NO_HIT}))"));
+    assert_eq!(constant("LIGHT_POINT"), format!("Literal(U32({LIGHT_POINT}))"));
+    assert_eq!(constant("LIGHT_DIRECTIONAL"), format!("Literal(U32({LIGHT_DIRECTIONAL}))"));
+    assert_eq!(constant("FLAG_SMOOTH"), format!("Literal(U32({FLAG_SMOOTH}))"));
+    assert_eq!(constant("FAR"), format!("Literal(F32({FAR:?}))"));
+}
+
+#[test]
+fn overrides_named_by_the_host_exist() {
+    let m = module();
+    let scene = lambert::Scene::load(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/spheres.toml"),
+    )
+    .unwrap();
+    for (name, _) in lambert::gpu::specialisation(&scene) {
+        assert!(
+            m.overrides.iter().any(|(_, o)| o.name.as_deref() == Some(name)),
+            "the host sets override {name}, which the shader lacks"
+        );
+    }
+}
