@@ -9,6 +9,8 @@
 override HAS_TRIANGLES: bool = true;
 override HAS_SPHERES: bool = true;
 override HAS_SHADOWS: bool = true;
+// false: test every primitive (the reference that tests the BVH).
+override USE_BVH: bool = true;
 
 const NO_HIT: u32 = 0xffffffffu;
 // WGSL has no infinity literal; the largest finite f32 serves as "no hit yet".
@@ -16,6 +18,11 @@ const FAR: f32 = 3.40282347e38;
 const LIGHT_POINT: u32 = 0u;
 const LIGHT_DIRECTIONAL: u32 = 1u;
 const FLAG_SMOOTH: u32 = 1u;
+// Traversal stack entries: bvh::MAX_DEPTH, which bounds the tree's depth.
+const STACK_SIZE: u32 = 64u;
+// Widens a box's exit distance by 2·gamma(3) (pbrt-v4) so that rounding in
+// the slab test cannot cull a box the ray grazes.
+const BOX_SLACK: f32 = 1.0000004;
 
 // Layouts: each struct here has a #[repr(C)] twin in src/layout.rs, checked
 // against naga's reflection of this file by tests/layout.rs.
@@ -92,6 +99,15 @@ struct Hit {
     v: f32,
 }
 
+// Leaf: count > 0, primitives bvh_prims[first .. first + count].
+// Interior: count = 0, children are nodes first and first + 1.
+struct BvhNode {
+    min: vec3<f32>,
+    first: u32,
+    max: vec3<f32>,
+    count: u32,
+}
+
 struct Surface {
     position: vec3<f32>,
     geometric_normal: vec3<f32>,
@@ -107,6 +123,8 @@ struct Surface {
 @group(0) @binding(5) var<storage, read> lights: array<Light>;
 @group(0) @binding(6) var out_color: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(7) var out_prim: texture_storage_2d<r32uint, write>;
+@group(0) @binding(8) var<storage, read> bvh_nodes: array<BvhNode>;
+@group(0) @binding(9) var<storage, read> bvh_prims: array<u32>;
 
 fn miss() -> Hit {
     return Hit(FAR, NO_HIT, 0.0, 0.0);
@@ -177,53 +195,122 @@ fn sign_nonzero(x: f32) -> f32 {
     return select(1.0, -1.0, x < 0.0);
 }
 
-fn trace_closest(ray_in: Ray) -> Hit {
+// (t, u, v) of primitive `prim` (triangles first, then spheres).
+fn intersect_primitive(ray: Ray, prim: u32) -> vec3<f32> {
+    if HAS_TRIANGLES && prim < params.num_triangles {
+        let tri = triangles[prim];
+        return intersect_triangle(ray, tri.v0, tri.v1, tri.v2);
+    }
+    if HAS_SPHERES && prim >= params.num_triangles {
+        let sphere = spheres[prim - params.num_triangles];
+        return vec3<f32>(intersect_sphere(ray, sphere.center, sphere.radius), 0.0, 0.0);
+    }
+    return vec3<f32>(FAR, 0.0, 0.0);
+}
+
+// Distance at which the ray enters the box within (tmin, tmax), or FAR.
+fn intersect_box(ray: Ray, inv_dir: vec3<f32>, lo: vec3<f32>, hi: vec3<f32>) -> f32 {
+    let t0 = (lo - ray.origin) * inv_dir;
+    let t1 = (hi - ray.origin) * inv_dir;
+    let t_near = max(max(min(t0.x, t1.x), min(t0.y, t1.y)), max(min(t0.z, t1.z), ray.tmin));
+    let t_far = min(min(max(t0.x, t1.x), max(t0.y, t1.y)), max(t0.z, t1.z)) * BOX_SLACK;
+    if t_near <= min(t_far, ray.tmax) {
+        return t_near;
+    }
+    return FAR;
+}
+
+// Closest hit through the BVH, nearer child first; with `any_hit`, the first
+// hit found. A ray that misses the root box does no further work.
+fn trace_bvh(ray_in: Ray, any_hit: bool) -> Hit {
     var ray = ray_in;
-    // Misses report FAR, so an infinite tmax must not let them through.
-    ray.tmax = min(ray.tmax, FAR);
     var hit = miss();
-    if HAS_TRIANGLES {
-        for (var i = 0u; i < params.num_triangles; i++) {
-            let tri = triangles[i];
-            let tuv = intersect_triangle(ray, tri.v0, tri.v1, tri.v2);
-            if tuv.x < ray.tmax {
-                ray.tmax = tuv.x;
-                hit = Hit(tuv.x, i, tuv.y, tuv.z);
+    let inv_dir = 1.0 / ray.dir;
+    var stack_node: array<u32, STACK_SIZE>;
+    var stack_t: array<f32, STACK_SIZE>;
+    var sp = 0u;
+    let t_root = intersect_box(ray, inv_dir, bvh_nodes[0].min, bvh_nodes[0].max);
+    if t_root < ray.tmax {
+        stack_node[0] = 0u;
+        stack_t[0] = t_root;
+        sp = 1u;
+    }
+    while sp > 0u {
+        sp -= 1u;
+        // A hit found since this node was pushed may already be nearer.
+        if stack_t[sp] >= ray.tmax {
+            continue;
+        }
+        let node = bvh_nodes[stack_node[sp]];
+        if node.count > 0u {
+            for (var i = node.first; i < node.first + node.count; i++) {
+                let prim = bvh_prims[i];
+                let tuv = intersect_primitive(ray, prim);
+                if tuv.x < ray.tmax {
+                    ray.tmax = tuv.x;
+                    hit = Hit(tuv.x, prim, tuv.y, tuv.z);
+                    if any_hit {
+                        return hit;
+                    }
+                }
             }
+            continue;
+        }
+        let left = node.first;
+        let t_left = intersect_box(ray, inv_dir, bvh_nodes[left].min, bvh_nodes[left].max);
+        let t_right = intersect_box(ray, inv_dir, bvh_nodes[left + 1u].min, bvh_nodes[left + 1u].max);
+        // Push the farther child first so that the nearer is visited next.
+        let left_first = t_left <= t_right;
+        let t_near = min(t_left, t_right);
+        let t_far = max(t_left, t_right);
+        if t_far < ray.tmax {
+            stack_node[sp] = select(left, left + 1u, left_first);
+            stack_t[sp] = t_far;
+            sp += 1u;
+        }
+        if t_near < ray.tmax {
+            stack_node[sp] = select(left + 1u, left, left_first);
+            stack_t[sp] = t_near;
+            sp += 1u;
         }
     }
-    if HAS_SPHERES {
-        for (var i = 0u; i < params.num_spheres; i++) {
-            let t = intersect_sphere(ray, spheres[i].center, spheres[i].radius);
-            if t < ray.tmax {
-                ray.tmax = t;
-                hit = Hit(t, params.num_triangles + i, 0.0, 0.0);
+    return hit;
+}
+
+// Every primitive in turn: the reference the BVH is tested against.
+fn trace_brute_force(ray_in: Ray, any_hit: bool) -> Hit {
+    var ray = ray_in;
+    var hit = miss();
+    for (var prim = 0u; prim < params.num_triangles + params.num_spheres; prim++) {
+        let tuv = intersect_primitive(ray, prim);
+        if tuv.x < ray.tmax {
+            ray.tmax = tuv.x;
+            hit = Hit(tuv.x, prim, tuv.y, tuv.z);
+            if any_hit {
+                return hit;
             }
         }
     }
     return hit;
 }
 
-// Any hit in (tmin, tmax): stops at the first blocker.
-fn trace_any(ray_in: Ray) -> bool {
+fn trace(ray_in: Ray, any_hit: bool) -> Hit {
     var ray = ray_in;
+    // Misses report FAR, so an infinite tmax must not let them through.
     ray.tmax = min(ray.tmax, FAR);
-    if HAS_TRIANGLES {
-        for (var i = 0u; i < params.num_triangles; i++) {
-            let tri = triangles[i];
-            if intersect_triangle(ray, tri.v0, tri.v1, tri.v2).x < ray.tmax {
-                return true;
-            }
-        }
+    if USE_BVH {
+        return trace_bvh(ray, any_hit);
     }
-    if HAS_SPHERES {
-        for (var i = 0u; i < params.num_spheres; i++) {
-            if intersect_sphere(ray, spheres[i].center, spheres[i].radius) < ray.tmax {
-                return true;
-            }
-        }
-    }
-    return false;
+    return trace_brute_force(ray, any_hit);
+}
+
+fn trace_closest(ray: Ray) -> Hit {
+    return trace(ray, false);
+}
+
+// Any hit in (tmin, tmax): stops at the first blocker.
+fn trace_any(ray: Ray) -> bool {
+    return trace(ray, true).prim != NO_HIT;
 }
 
 fn face_forward(n: vec3<f32>, dir: vec3<f32>) -> vec3<f32> {

@@ -11,7 +11,7 @@ use crate::error::{Error, Result};
 use crate::layout::{Params, Sphere, Triangle, TriangleNormals};
 use crate::output::{Image, Rendered};
 use crate::progress::Progress;
-use crate::scene::{Camera, Scene};
+use crate::scene::{Accel, Camera, Scene};
 
 /// The kernel's source, validated by naga in tests/shaders.rs.
 pub const SHADER_SOURCE: &str = include_str!("../shaders/trace.wgsl");
@@ -284,6 +284,8 @@ impl GpuRenderer {
             gpu.storage_buffer("spheres", &non_empty::<Sphere>(&scene.spheres))?,
             gpu.storage_buffer("materials", &non_empty(&scene.materials))?,
             gpu.storage_buffer("lights", &non_empty(&scene.lights))?,
+            gpu.storage_buffer("BVH nodes", &non_empty(&scene.bvh.nodes))?,
+            gpu.storage_buffer("BVH primitive list", &non_empty(&scene.bvh.prims))?,
         ];
         let device_bytes = buffers.iter().map(|b| b.size()).sum();
 
@@ -356,6 +358,8 @@ impl GpuRenderer {
                 storage(5),
                 storage_texture(6, wgpu::TextureFormat::Rgba32Float),
                 storage_texture(7, wgpu::TextureFormat::R32Uint),
+                storage(8),
+                storage(9),
             ],
         });
         let color_view = color_texture.create_view(&Default::default());
@@ -364,8 +368,10 @@ impl GpuRenderer {
             binding: 0,
             resource: params_buffer.as_entire_binding(),
         }];
-        entries.extend(buffers.iter().enumerate().map(|(i, b)| wgpu::BindGroupEntry {
-            binding: i as u32 + 1,
+        // Storage buffers sit at bindings 1–5 and 8–9, around the textures.
+        let buffer_bindings = [1, 2, 3, 4, 5, 8, 9];
+        entries.extend(buffers.iter().zip(buffer_bindings).map(|(b, binding)| wgpu::BindGroupEntry {
+            binding,
             resource: b.as_entire_binding(),
         }));
         entries.push(wgpu::BindGroupEntry {
@@ -570,5 +576,6 @@ pub fn specialisation(scene: &Scene) -> Vec<(&'static str, f64)> {
         ("HAS_TRIANGLES", flag(!scene.triangles.is_empty())),
         ("HAS_SPHERES", flag(!scene.spheres.is_empty())),
         ("HAS_SHADOWS", flag(scene.shadows && !scene.lights.is_empty())),
+        ("USE_BVH", flag(scene.accel == Accel::Bvh)),
     ]
 }

@@ -106,3 +106,15 @@ pub struct Hit {
     pub u: f32,
     pub v: f32,
 }
+
+/// One BVH node; see `bvh` for how the shader decodes it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct BvhNode {
+    pub min: [f32; 3],
+    /// Leaf: first index into the primitive list. Interior: left child.
+    pub first: u32,
+    pub max: [f32; 3],
+    /// Leaf: number of primitives (> 0). Interior: 0.
+    pub count: u32,
+}

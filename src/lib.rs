@@ -6,6 +6,7 @@
 //! `shade`), `gpu` (wgpu host code), `scene` and `loading` (input),
 //! `output` (images), `diff` (comparisons), `cli` (the `lambert` binary).
 
+pub mod bvh;
 pub mod cli;
 pub mod cpu;
 pub mod diff;

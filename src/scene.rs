@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use glam::{DMat3, DVec3};
 use serde::Deserialize;
 
+use crate::bvh::Bvh;
 use crate::error::{Error, Result};
 use crate::layout::{
     FLAG_SMOOTH, LIGHT_DIRECTIONAL, LIGHT_POINT, Light, Material, Sphere, Triangle,
@@ -163,6 +164,19 @@ pub struct Scene {
     pub spheres: Vec<Sphere>,
     pub materials: Vec<Material>,
     pub lights: Vec<Light>,
+    /// Over all primitives; built by `load`/`from_toml`.
+    pub bvh: Bvh,
+    /// How rays find their hits; both paths follow it.
+    pub accel: Accel,
+}
+
+/// `--accel`: the BVH, or testing every primitive (the reference that tests
+/// the BVH).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Accel {
+    #[default]
+    Bvh,
+    BruteForce,
 }
 
 impl Scene {
@@ -193,6 +207,8 @@ impl Scene {
             spheres: Vec::new(),
             materials: Vec::new(),
             lights: Vec::new(),
+            bvh: Bvh::default(),
+            accel: Accel::default(),
         };
 
         for (i, entry) in file.mesh.iter().enumerate() {
@@ -254,6 +270,7 @@ impl Scene {
                 "the scene is empty: it needs a [[mesh]] with faces or a [[sphere]]".into(),
             ));
         }
+        scene.rebuild_bvh();
         Ok(scene)
     }
 
@@ -313,6 +330,11 @@ impl Scene {
             }
         }
         Ok(())
+    }
+
+    /// Rebuilds the BVH after the geometry changed.
+    pub fn rebuild_bvh(&mut self) {
+        self.bvh = Bvh::build(&self.triangles, &self.spheres);
     }
 
     pub fn primitive_count(&self) -> usize {

@@ -3,8 +3,12 @@
 // reference the GPU is diffed against) and once with `Real = f64` (the
 // oracle). The including module defines `Real`, `Vec3` and `add_ulps`.
 
+use crate::bvh::MAX_DEPTH;
 use crate::layout::{FLAG_SMOOTH, LIGHT_POINT, NO_HIT};
-use crate::scene::{Camera, Scene};
+use crate::scene::{Accel, Camera, Scene};
+
+/// Widens a box's exit distance by 2·gamma(3) (pbrt-v4), as in the shader.
+const BOX_SLACK: Real = 1.0000004;
 
 /// "No hit yet" distance, as in the shader.
 pub const FAR: Real = Real::MAX;
@@ -116,49 +120,101 @@ impl<'a> Kernel<'a> {
         }
     }
 
-    pub fn trace_closest(&self, ray_in: Ray) -> Hit {
-        let mut ray = ray_in;
-        ray.tmax = ray.tmax.min(FAR);
-        let mut hit = miss();
-        for (i, tri) in self.scene.triangles.iter().enumerate() {
-            let (t, u, v) = intersect_triangle(&ray, vec3(tri.v0), vec3(tri.v1), vec3(tri.v2));
-            if t < ray.tmax {
-                ray.tmax = t;
-                hit = Hit {
-                    t,
-                    prim: i as u32,
-                    u,
-                    v,
-                };
-            }
+    /// (t, u, v) of primitive `prim` (triangles first, then spheres).
+    pub fn intersect_primitive(&self, ray: &Ray, prim: u32) -> (Real, Real, Real) {
+        let triangles = &self.scene.triangles;
+        if (prim as usize) < triangles.len() {
+            let tri = &triangles[prim as usize];
+            return intersect_triangle(ray, vec3(tri.v0), vec3(tri.v1), vec3(tri.v2));
         }
-        let num_triangles = self.scene.triangles.len() as u32;
-        for (i, sphere) in self.scene.spheres.iter().enumerate() {
-            let t = intersect_sphere(&ray, vec3(sphere.center), sphere.radius as Real);
-            if t < ray.tmax {
-                ray.tmax = t;
-                hit = Hit {
-                    t,
-                    prim: num_triangles + i as u32,
-                    u: 0.0,
-                    v: 0.0,
-                };
+        let sphere = &self.scene.spheres[prim as usize - triangles.len()];
+        (intersect_sphere(ray, vec3(sphere.center), sphere.radius as Real), 0.0, 0.0)
+    }
+
+    /// Closest hit through the BVH, nearer child first; with `any_hit`, the
+    /// first hit found.
+    pub fn trace_bvh(&self, ray_in: Ray, any_hit: bool) -> Hit {
+        let nodes = &self.scene.bvh.nodes;
+        let mut ray = ray_in;
+        let mut hit = miss();
+        let inv_dir = ray.dir.recip();
+        let mut stack = [(0u32, 0.0 as Real); MAX_DEPTH];
+        let mut sp = 0;
+        let t_root = intersect_box(&ray, inv_dir, &nodes[0]);
+        if t_root < ray.tmax {
+            stack[0] = (0, t_root);
+            sp = 1;
+        }
+        while sp > 0 {
+            sp -= 1;
+            let (index, t_entry) = stack[sp];
+            if t_entry >= ray.tmax {
+                continue;
+            }
+            let node = &nodes[index as usize];
+            if node.count > 0 {
+                for &prim in &self.scene.bvh.prims[node.first as usize..(node.first + node.count) as usize] {
+                    let (t, u, v) = self.intersect_primitive(&ray, prim);
+                    if t < ray.tmax {
+                        ray.tmax = t;
+                        hit = Hit { t, prim, u, v };
+                        if any_hit {
+                            return hit;
+                        }
+                    }
+                }
+                continue;
+            }
+            let left = node.first;
+            let t_left = intersect_box(&ray, inv_dir, &nodes[left as usize]);
+            let t_right = intersect_box(&ray, inv_dir, &nodes[left as usize + 1]);
+            let left_first = t_left <= t_right;
+            let (t_near, t_far) = (t_left.min(t_right), t_left.max(t_right));
+            if t_far < ray.tmax {
+                stack[sp] = (if left_first { left + 1 } else { left }, t_far);
+                sp += 1;
+            }
+            if t_near < ray.tmax {
+                stack[sp] = (if left_first { left } else { left + 1 }, t_near);
+                sp += 1;
             }
         }
         hit
     }
 
-    /// Any hit in (tmin, tmax): stops at the first blocker.
-    pub fn trace_any(&self, ray_in: Ray) -> bool {
+    /// Every primitive in turn: the reference the BVH is tested against.
+    pub fn trace_brute_force(&self, ray_in: Ray, any_hit: bool) -> Hit {
+        let mut ray = ray_in;
+        let mut hit = miss();
+        for prim in 0..self.scene.primitive_count() as u32 {
+            let (t, u, v) = self.intersect_primitive(&ray, prim);
+            if t < ray.tmax {
+                ray.tmax = t;
+                hit = Hit { t, prim, u, v };
+                if any_hit {
+                    return hit;
+                }
+            }
+        }
+        hit
+    }
+
+    pub fn trace(&self, ray_in: Ray, any_hit: bool) -> Hit {
         let mut ray = ray_in;
         ray.tmax = ray.tmax.min(FAR);
-        self.scene
-            .triangles
-            .iter()
-            .any(|tri| intersect_triangle(&ray, vec3(tri.v0), vec3(tri.v1), vec3(tri.v2)).0 < ray.tmax)
-            || self.scene.spheres.iter().any(|sphere| {
-                intersect_sphere(&ray, vec3(sphere.center), sphere.radius as Real) < ray.tmax
-            })
+        match self.scene.accel {
+            Accel::Bvh => self.trace_bvh(ray, any_hit),
+            Accel::BruteForce => self.trace_brute_force(ray, any_hit),
+        }
+    }
+
+    pub fn trace_closest(&self, ray: Ray) -> Hit {
+        self.trace(ray, false)
+    }
+
+    /// Any hit in (tmin, tmax): stops at the first blocker.
+    pub fn trace_any(&self, ray: Ray) -> bool {
+        self.trace(ray, true).prim != NO_HIT
     }
 
     pub fn surface_at(&self, ray: &Ray, hit: &Hit) -> Surface {
@@ -305,6 +361,15 @@ pub fn intersect_sphere(ray: &Ray, center: Vec3, radius: Real) -> Real {
         return far;
     }
     FAR
+}
+
+/// Distance at which the ray enters the node's box within (tmin, tmax), or FAR.
+pub fn intersect_box(ray: &Ray, inv_dir: Vec3, node: &crate::layout::BvhNode) -> Real {
+    let t0 = (vec3(node.min) - ray.origin) * inv_dir;
+    let t1 = (vec3(node.max) - ray.origin) * inv_dir;
+    let t_near = t0.min(t1).max_element().max(ray.tmin);
+    let t_far = t0.max(t1).min_element() * BOX_SLACK;
+    if t_near <= t_far.min(ray.tmax) { t_near } else { FAR }
 }
 
 fn sign_nonzero(x: Real) -> Real {
