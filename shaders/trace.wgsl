@@ -209,15 +209,22 @@ fn intersect_primitive(ray: Ray, prim: u32) -> vec3<f32> {
 }
 
 // Distance at which the ray enters the box within (tmin, tmax), or FAR.
+// Written with comparisons rather than min/max: a slab whose plane holds the
+// origin of a ray parallel to it gives 0·∞ = NaN, and a NaN comparison is
+// false on every device, so such a slab is ignored the same way everywhere.
 fn intersect_box(ray: Ray, inv_dir: vec3<f32>, lo: vec3<f32>, hi: vec3<f32>) -> f32 {
     let t0 = (lo - ray.origin) * inv_dir;
     let t1 = (hi - ray.origin) * inv_dir;
-    let t_near = max(max(min(t0.x, t1.x), min(t0.y, t1.y)), max(min(t0.z, t1.z), ray.tmin));
-    let t_far = min(min(max(t0.x, t1.x), max(t0.y, t1.y)), max(t0.z, t1.z)) * BOX_SLACK;
-    if t_near <= min(t_far, ray.tmax) {
-        return t_near;
+    let swap = t0 > t1;
+    let near = select(t0, t1, swap);
+    let far = select(t1, t0, swap) * BOX_SLACK;
+    var t_near = ray.tmin;
+    var t_far = ray.tmax;
+    for (var axis = 0; axis < 3; axis++) {
+        t_near = select(t_near, near[axis], near[axis] > t_near);
+        t_far = select(t_far, far[axis], far[axis] < t_far);
     }
-    return FAR;
+    return select(FAR, t_near, t_near <= t_far);
 }
 
 // Closest hit through the BVH, nearer child first; with `any_hit`, the first

@@ -105,7 +105,13 @@ impl Bvh {
         let sphere_items = spheres.par_iter().enumerate().map(|(i, s)| {
             let c = Vec3::from(s.center);
             let r = Vec3::splat(s.radius);
-            (offset + i as u32, Aabb { min: c - r, max: c + r })
+            (
+                offset + i as u32,
+                Aabb {
+                    min: c - r,
+                    max: c + r,
+                },
+            )
         });
         let items: Vec<Item> = triangle_items
             .chain(sphere_items)
@@ -157,11 +163,13 @@ impl Bvh {
         let Some(root) = self.nodes.first() else {
             return 0.0;
         };
-        let area = |n: &BvhNode| Aabb {
-            min: Vec3::from(n.min),
-            max: Vec3::from(n.max),
-        }
-        .half_area() as f64;
+        let area = |n: &BvhNode| {
+            Aabb {
+                min: Vec3::from(n.min),
+                max: Vec3::from(n.max),
+            }
+            .half_area() as f64
+        };
         let root_area = area(root).max(f64::MIN_POSITIVE);
         self.nodes
             .iter()
@@ -186,7 +194,11 @@ impl Bvh {
                 1 + depth_of(bvh, n.first as usize).max(depth_of(bvh, n.first as usize + 1))
             }
         }
-        if self.nodes.is_empty() { 0 } else { depth_of(self, 0) }
+        if self.nodes.is_empty() {
+            0
+        } else {
+            depth_of(self, 0)
+        }
     }
 
     /// Bytes on the device: nodes plus the primitive index list.

@@ -13,10 +13,14 @@ use crate::gpu::{self, AdapterRequest, Gpu, GpuRenderer};
 use crate::output::Rendered;
 use crate::progress::Progress;
 use crate::render::{DeviceChoice, Engine};
-use crate::scene::Scene;
+use crate::scene::{Accel, Scene};
 
 #[derive(Parser)]
-#[command(name = "lambert", version, about = "A GPU ray tracer with a CPU reference path")]
+#[command(
+    name = "lambert",
+    version,
+    about = "A GPU ray tracer with a CPU reference path"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -59,6 +63,8 @@ struct RenderArgs {
     output: PathBuf,
     #[arg(long, value_enum, default_value_t)]
     device: DeviceChoice,
+    #[arg(long, value_enum, default_value_t)]
+    accel: Accel,
     #[command(flatten)]
     adapter: AdapterArgs,
     /// Print nothing but errors.
@@ -98,6 +104,8 @@ struct DiffArgs {
     /// Fraction of pixels allowed to hit a different primitive.
     #[arg(long, default_value_t = Tolerance::default().max_prim_mismatch_fraction)]
     max_prim_mismatch: f64,
+    #[arg(long, value_enum, default_value_t)]
+    accel: Accel,
     #[command(flatten)]
     adapter: AdapterArgs,
 }
@@ -118,7 +126,8 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
     // Fail on a bad output name before spending time on the render.
     check_output_path(&args.output)?;
     let start = Instant::now();
-    let scene = Scene::load(&args.scene)?;
+    let mut scene = Scene::load(&args.scene)?;
+    scene.accel = args.accel;
     let load = start.elapsed();
 
     let start = Instant::now();
@@ -181,7 +190,8 @@ pub fn render_gpu(scene: &Scene, request: &AdapterRequest) -> Result<Rendered> {
 }
 
 fn diff(args: &DiffArgs) -> Result<ExitCode> {
-    let scene = Scene::load(&args.scene)?;
+    let mut scene = Scene::load(&args.scene)?;
+    scene.accel = args.accel;
     let tolerance = Tolerance {
         abs: args.tol_abs,
         rel: args.tol_rel,
@@ -224,7 +234,10 @@ fn info(args: &AdapterArgs) -> Result<ExitCode> {
         let info = adapter.get_info();
         let limits = adapter.limits();
         println!("adapter: {}", info.name);
-        println!("  backend: {:?}, type: {:?}", info.backend, info.device_type);
+        println!(
+            "  backend: {:?}, type: {:?}",
+            info.backend, info.device_type
+        );
         println!("  driver: {} {}", info.driver, info.driver_info);
         println!(
             "  limits: storage binding {} MiB, buffer {} MiB, texture 2D {} px, workgroup invocations {}",

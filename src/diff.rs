@@ -110,7 +110,11 @@ pub fn heatmap(a: &Rendered, b: &Rendered, tol: &Tolerance) -> Image {
             if pixel_beyond(*pa, *pb, tol) {
                 return [1.0, 0.0, 0.0];
             }
-            let d = pa.iter().zip(pb).map(|(x, y)| (x - y).abs()).fold(0.0, f32::max);
+            let d = pa
+                .iter()
+                .zip(pb)
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0, f32::max);
             let level = if d > 0.0 {
                 ((d.log10() + 7.0) / 7.0).clamp(0.02, 1.0)
             } else {

@@ -76,7 +76,11 @@ pub fn enumerate_adapters(request: &AdapterRequest) -> Result<Vec<wgpu::Adapter>
         Some(backends) => Ok(find(backends)),
         None => {
             let primary = find(wgpu::Backends::PRIMARY);
-            Ok(if primary.is_empty() { find(wgpu::Backends::SECONDARY) } else { primary })
+            Ok(if primary.is_empty() {
+                find(wgpu::Backends::SECONDARY)
+            } else {
+                primary
+            })
         }
     }
 }
@@ -137,7 +141,9 @@ impl Gpu {
             } else {
                 available.join(", ")
             };
-            return Err(Error::Gpu(format!("{wanted}; adapters available: {available}")));
+            return Err(Error::Gpu(format!(
+                "{wanted}; adapters available: {available}"
+            )));
         };
         let info = adapter.get_info();
         // The adapter's real limits, not wgpu's conservative defaults: large
@@ -370,9 +376,11 @@ impl GpuRenderer {
         }];
         // Storage buffers sit at bindings 1–5 and 8–9, around the textures.
         let buffer_bindings = [1, 2, 3, 4, 5, 8, 9];
-        entries.extend(buffers.iter().zip(buffer_bindings).map(|(b, binding)| wgpu::BindGroupEntry {
-            binding,
-            resource: b.as_entire_binding(),
+        entries.extend(buffers.iter().zip(buffer_bindings).map(|(b, binding)| {
+            wgpu::BindGroupEntry {
+                binding,
+                resource: b.as_entire_binding(),
+            }
         }));
         entries.push(wgpu::BindGroupEntry {
             binding: 6,
@@ -575,7 +583,10 @@ pub fn specialisation(scene: &Scene) -> Vec<(&'static str, f64)> {
     vec![
         ("HAS_TRIANGLES", flag(!scene.triangles.is_empty())),
         ("HAS_SPHERES", flag(!scene.spheres.is_empty())),
-        ("HAS_SHADOWS", flag(scene.shadows && !scene.lights.is_empty())),
+        (
+            "HAS_SHADOWS",
+            flag(scene.shadows && !scene.lights.is_empty()),
+        ),
         ("USE_BVH", flag(scene.accel == Accel::Bvh)),
     ]
 }

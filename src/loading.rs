@@ -57,7 +57,9 @@ pub fn parse_obj(text: &str, path: &Path, mode: NormalMode) -> Result<Mesh> {
         let line = line.split('#').next().unwrap_or("");
         let mut tokens = line.split_whitespace();
         match tokens.next() {
-            Some("v") => mesh.positions.push(parse_vector(&mut tokens).map_err(fail)?),
+            Some("v") => mesh
+                .positions
+                .push(parse_vector(&mut tokens).map_err(fail)?),
             Some("vn") => vertex_normals.push(parse_vector(&mut tokens).map_err(fail)?),
             Some("f") => {
                 corners.clear();

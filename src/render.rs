@@ -70,7 +70,11 @@ impl Engine {
     }
 
     /// Renders `scene` from its current camera.
-    pub fn render(&mut self, scene: &Scene, show_progress: bool) -> Result<(Rendered, RenderTimings)> {
+    pub fn render(
+        &mut self,
+        scene: &Scene,
+        show_progress: bool,
+    ) -> Result<(Rendered, RenderTimings)> {
         match self {
             Engine::Gpu(renderer) => {
                 renderer.set_camera(scene, &scene.camera);

@@ -9,8 +9,7 @@ use serde::Deserialize;
 use crate::bvh::Bvh;
 use crate::error::{Error, Result};
 use crate::layout::{
-    FLAG_SMOOTH, LIGHT_DIRECTIONAL, LIGHT_POINT, Light, Material, Sphere, Triangle,
-    TriangleNormals,
+    FLAG_SMOOTH, LIGHT_DIRECTIONAL, LIGHT_POINT, Light, Material, Sphere, Triangle, TriangleNormals,
 };
 use crate::loading::{self, NormalMode};
 
@@ -222,8 +221,7 @@ impl Scene {
         for (i, entry) in file.sphere.iter().enumerate() {
             let field = format!("sphere[{i}]");
             let center = point(&format!("{field}.center"), entry.center).map_err(fail)?;
-            if !(entry.radius.is_finite() && entry.radius > 0.0 && entry.radius <= MAX_COORDINATE)
-            {
+            if !(entry.radius.is_finite() && entry.radius > 0.0 && entry.radius <= MAX_COORDINATE) {
                 return Err(fail(format!(
                     "{field}.radius = {} must be positive and at most {MAX_COORDINATE:e}",
                     entry.radius
@@ -452,7 +450,9 @@ fn checked_point(field: &str, v: [f64; 3]) -> Result<[f64; 3], String> {
 
 fn colour(field: &str, rgb: Rgb) -> Result<[f32; 3], String> {
     let v = rgb.to_array();
-    if v.iter().all(|c| c.is_finite() && *c >= 0.0 && *c <= f32::MAX as f64) {
+    if v.iter()
+        .all(|c| c.is_finite() && *c >= 0.0 && *c <= f32::MAX as f64)
+    {
         Ok(v.map(|c| c as f32))
     } else {
         Err(format!("{field} = {v:?} must be finite and non-negative"))

@@ -41,7 +41,10 @@ fn centre(r: &Rendered) -> [f32; 3] {
 fn directional_light_head_on_gives_k_times_e() {
     let k = [0.8, 0.5, 0.25];
     let e = [1.5, 2.0, 0.5];
-    let s = plane_scene(k, &format!("[[directional_light]]\ndirection = [0.0, 0.0, -1.0]\nirradiance = {e:?}"));
+    let s = plane_scene(
+        k,
+        &format!("[[directional_light]]\ndirection = [0.0, 0.0, -1.0]\nirradiance = {e:?}"),
+    );
     for (path, r) in both(&s) {
         // Head-on: every pixel sees the same k·E.
         for p in &r.image.rgb {
@@ -56,14 +59,25 @@ fn directional_light_at_angle_gives_k_e_cos_theta() {
     for theta_deg in [0.0f64, 30.0, 60.0, 85.0] {
         let theta = theta_deg.to_radians();
         let dir = [theta.sin(), 0.0, -theta.cos()];
-        let s = plane_scene(k, &format!("[[directional_light]]\ndirection = {dir:?}\nirradiance = 2.0"));
+        let s = plane_scene(
+            k,
+            &format!("[[directional_light]]\ndirection = {dir:?}\nirradiance = 2.0"),
+        );
         for (path, r) in both(&s) {
             let expected = 0.9 * 2.0 * theta.cos();
-            assert_close(centre(&r), [expected; 3], 1e-5, &format!("{path} θ = {theta_deg}°"));
+            assert_close(
+                centre(&r),
+                [expected; 3],
+                1e-5,
+                &format!("{path} θ = {theta_deg}°"),
+            );
         }
     }
     // Light from behind the plane: the camera's side is unlit.
-    let s = plane_scene(k, "[[directional_light]]\ndirection = [0.0, 0.0, 1.0]\nirradiance = 2.0");
+    let s = plane_scene(
+        k,
+        "[[directional_light]]\ndirection = [0.0, 0.0, 1.0]\nirradiance = 2.0",
+    );
     for (path, r) in both(&s) {
         assert_eq!(centre(&r), [0.0; 3], "{path}: lit from behind");
     }
@@ -74,7 +88,9 @@ fn point_light_head_on_gives_k_i_over_r_squared() {
     for r_dist in [0.5f64, 2.0, 7.0] {
         let s = plane_scene(
             [0.6, 0.7, 0.8],
-            &format!("[[point_light]]\nposition = [0.0, 0.0, {r_dist}]\nintensity = [10.0, 20.0, 30.0]"),
+            &format!(
+                "[[point_light]]\nposition = [0.0, 0.0, {r_dist}]\nintensity = [10.0, 20.0, 30.0]"
+            ),
         );
         for (path, r) in both(&s) {
             let e = 1.0 / (r_dist * r_dist);
@@ -99,7 +115,10 @@ fn yellow_under_red_light_looks_red_and_no_light_is_black() {
     }
     let s = plane_scene([1.0, 1.0, 0.0], "");
     for (path, r) in both(&s) {
-        assert!(r.image.rgb.iter().all(|p| *p == [0.0; 3]), "{path}: no light is black");
+        assert!(
+            r.image.rgb.iter().all(|p| *p == [0.0; 3]),
+            "{path}: no light is black"
+        );
     }
 }
 
@@ -125,17 +144,34 @@ fn misses_get_the_background_and_ambient_adds_k_times_a() {
     for (path, r) in both(&s) {
         assert_eq!(r.image.pixel(0, 0), [0.1, 0.2, 0.3], "{path}: background");
         assert_eq!(r.prims[0], NO_HIT);
-        assert_close(centre(&r), [0.2, 0.3, 0.4], 1e-6, &format!("{path}: ambient"));
+        assert_close(
+            centre(&r),
+            [0.2, 0.3, 0.4],
+            1e-6,
+            &format!("{path}: ambient"),
+        );
     }
 }
 
 /// Projects a world point to pixel coordinates by the documented convention,
 /// computed here independently in f64.
-fn project(eye: [f64; 3], look_at: [f64; 3], up: [f64; 3], vfov: f64, w: u32, h: u32, p: [f64; 3]) -> (f64, f64) {
+fn project(
+    eye: [f64; 3],
+    look_at: [f64; 3],
+    up: [f64; 3],
+    vfov: f64,
+    w: u32,
+    h: u32,
+    p: [f64; 3],
+) -> (f64, f64) {
     let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
     let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
     let cross = |a: [f64; 3], b: [f64; 3]| {
-        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
     };
     let norm = |a: [f64; 3]| {
         let l = dot(a, a).sqrt();
@@ -162,7 +198,8 @@ fn a_known_point_lands_on_the_pixel_the_convention_predicts() {
         let (x, y) = project(eye, look_at, up, vfov, w, h, p);
         // Radius: 0.8 of a pixel's footprint at that distance, so the pixel
         // centre nearest the point's image always hits the sphere.
-        let distance = ((p[0] - eye[0]).powi(2) + (p[1] - eye[1]).powi(2) + (p[2] - eye[2]).powi(2)).sqrt();
+        let distance =
+            ((p[0] - eye[0]).powi(2) + (p[1] - eye[1]).powi(2) + (p[2] - eye[2]).powi(2)).sqrt();
         let radius = 0.8 * 2.0 * distance * (vfov / 2.0f64).to_radians().tan() / h as f64;
         let s = scene(&format!(
             r#"
@@ -190,7 +227,10 @@ fn a_known_point_lands_on_the_pixel_the_convention_predicts() {
             );
             for (hx, hy) in &hit {
                 let d = ((*hx as f64 + 0.5 - x).powi(2) + (*hy as f64 + 0.5 - y).powi(2)).sqrt();
-                assert!(d < 1.6, "{path}: pixel ({hx}, {hy}) is {d:.2} px from the point's image");
+                assert!(
+                    d < 1.6,
+                    "{path}: pixel ({hx}, {hy}) is {d:.2} px from the point's image"
+                );
             }
         }
     }
@@ -222,11 +262,28 @@ fn shadows_fall_and_can_be_switched_off() {
     let lit = |shadows: bool| {
         let s = scene(&format!("{side}\n[render]\nshadows = {shadows}\n"));
         let target = (0.0, 0.0, 0.0);
-        let (x, y) = project([3.0, 0.0, 4.0], [0.0, 0.0, 0.0], [0.0, 1.0, 0.0], 40.0, 41, 41, [target.0, target.1, target.2]);
-        both(&s).map(|(path, r)| (path, r.image.pixel(x as u32, y as u32), r.prims[(y as u32 * 41 + x as u32) as usize]))
+        let (x, y) = project(
+            [3.0, 0.0, 4.0],
+            [0.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            40.0,
+            41,
+            41,
+            [target.0, target.1, target.2],
+        );
+        both(&s).map(|(path, r)| {
+            (
+                path,
+                r.image.pixel(x as u32, y as u32),
+                r.prims[(y as u32 * 41 + x as u32) as usize],
+            )
+        })
     };
     for (path, colour, prim) in lit(true) {
-        assert!(prim < 2, "{path}: expected the plane at the shadowed point, hit {prim}");
+        assert!(
+            prim < 2,
+            "{path}: expected the plane at the shadowed point, hit {prim}"
+        );
         assert_eq!(colour, [0.0; 3], "{path}: the sphere's shadow");
     }
     for (path, colour, _) in lit(false) {

@@ -62,7 +62,10 @@ fn s(p: &Path) -> &str {
 fn expect_failure(output: &Output, expected: &[&str]) {
     let stderr = String::from_utf8_lossy(&output.stderr);
     println!("{stderr}");
-    assert!(!output.status.success(), "expected failure, got success; stderr:\n{stderr}");
+    assert!(
+        !output.status.success(),
+        "expected failure, got success; stderr:\n{stderr}"
+    );
     assert_eq!(output.status.code(), Some(1), "stderr:\n{stderr}");
     assert!(!stderr.contains("panicked"), "panic:\n{stderr}");
     for e in expected {
@@ -80,7 +83,10 @@ fn renders_png_exr_and_pfm() {
         let stderr = String::from_utf8_lossy(&output.stderr);
         assert!(output.status.success(), "{stderr}");
         for stage in ["load", "upload", "render", "readback", "write", "Mrays/s"] {
-            assert!(stderr.contains(stage), "timing report lacks {stage}:\n{stderr}");
+            assert!(
+                stderr.contains(stage),
+                "timing report lacks {stage}:\n{stderr}"
+            );
         }
         assert!(std::fs::metadata(&out).unwrap().len() > 0);
     }
@@ -98,18 +104,29 @@ fn renders_png_exr_and_pfm() {
 fn png_is_srgb_encoded_and_exr_linear() {
     let case = Case::new();
     // Head-on directional light on a plane: linear value k·E = 0.2 everywhere.
-    case.file("quad.obj", "v -9 -9 0\nv 9 -9 0\nv 9 9 0\nv -9 9 0\nf 1 2 3 4\n");
+    case.file(
+        "quad.obj",
+        "v -9 -9 0\nv 9 -9 0\nv 9 9 0\nv -9 9 0\nf 1 2 3 4\n",
+    );
     let scene = case.file(
         "scene.toml",
         &format!("{CAMERA}[[mesh]]\nobj = \"quad.obj\"\nalbedo = 0.5\n[[directional_light]]\ndirection = [0.0, 0.0, -1.0]\nirradiance = 0.4\n"),
     );
     for ext in ["png", "exr"] {
         let out = case.path(&format!("out.{ext}"));
-        assert!(lambert(&["render", s(&scene), "-o", s(&out), "--device", "cpu"]).status.success());
+        assert!(
+            lambert(&["render", s(&scene), "-o", s(&out), "--device", "cpu"])
+                .status
+                .success()
+        );
     }
     // sRGB(0.2) = 1.055·0.2^(1/2.4) − 0.055 = 0.48453 → 123.56 → 124.
     let png = image::open(case.path("out.png")).unwrap().to_rgb8();
-    assert!(png.pixels().all(|p| p.0 == [124, 124, 124]), "{:?}", png.get_pixel(0, 0));
+    assert!(
+        png.pixels().all(|p| p.0 == [124, 124, 124]),
+        "{:?}",
+        png.get_pixel(0, 0)
+    );
     let exr = image::open(case.path("out.exr")).unwrap().to_rgb32f();
     assert!(exr.pixels().all(|p| (p.0[0] - 0.2).abs() < 1e-6));
 }
@@ -118,8 +135,14 @@ fn png_is_srgb_encoded_and_exr_linear() {
 fn a_failed_render_leaves_the_previous_output_untouched() {
     let case = Case::new();
     let out = case.file("out.png", "previous contents");
-    let bad = case.file("bad.toml", &format!("{CAMERA}[[sphere]]\ncenter = [0.0, 0.0, 0.0]\nradius = -1.0\n"));
-    expect_failure(&lambert(&["render", s(&bad), "-o", s(&out), "--device", "cpu"]), &["radius"]);
+    let bad = case.file(
+        "bad.toml",
+        &format!("{CAMERA}[[sphere]]\ncenter = [0.0, 0.0, 0.0]\nradius = -1.0\n"),
+    );
+    expect_failure(
+        &lambert(&["render", s(&bad), "-o", s(&out), "--device", "cpu"]),
+        &["radius"],
+    );
     assert_eq!(std::fs::read_to_string(&out).unwrap(), "previous contents");
     // No temporary file is left behind.
     assert_eq!(std::fs::read_dir(case.dir.path()).unwrap().count(), 2);
@@ -133,21 +156,39 @@ fn missing_files() {
         &lambert(&["render", "no/such/scene.toml", "-o", s(&out)]),
         &["no/such/scene.toml", "No such file"],
     );
-    case.fails(&format!("{CAMERA}[[mesh]]\nobj = \"missing.obj\"\n"), &["missing.obj", "No such file"]);
+    case.fails(
+        &format!("{CAMERA}[[mesh]]\nobj = \"missing.obj\"\n"),
+        &["missing.obj", "No such file"],
+    );
 }
 
 #[test]
 fn malformed_toml_names_the_line() {
-    Case::new().fails(&format!("{CAMERA}\n[[sphere]]\ncenter = [0.0, 0.0\n"), &["scene.toml", "line 10"]);
+    Case::new().fails(
+        &format!("{CAMERA}\n[[sphere]]\ncenter = [0.0, 0.0\n"),
+        &["scene.toml", "line 10"],
+    );
 }
 
 #[test]
 fn unknown_keys_and_wrong_lengths() {
     let case = Case::new();
-    case.fails(&format!("{CAMERA}{SPHERE}colour = 1\n"), &["unknown field `colour`"]);
-    case.fails(&format!("{CAMERA}{SPHERE}[render]\nfog = true\n"), &["unknown field `fog`"]);
-    case.fails(&format!("{CAMERA}[[sphere]]\ncenter = [0.0, 0.0]\nradius = 1.0\n"), &["center", "length 3"]);
-    case.fails(&format!("{CAMERA}{SPHERE}albedo = [0.1, 0.2]\n"), &["albedo", "a number or an array of 3 numbers"]);
+    case.fails(
+        &format!("{CAMERA}{SPHERE}colour = 1\n"),
+        &["unknown field `colour`"],
+    );
+    case.fails(
+        &format!("{CAMERA}{SPHERE}[render]\nfog = true\n"),
+        &["unknown field `fog`"],
+    );
+    case.fails(
+        &format!("{CAMERA}[[sphere]]\ncenter = [0.0, 0.0]\nradius = 1.0\n"),
+        &["center", "length 3"],
+    );
+    case.fails(
+        &format!("{CAMERA}{SPHERE}albedo = [0.1, 0.2]\n"),
+        &["albedo", "a number or an array of 3 numbers"],
+    );
 }
 
 #[test]
@@ -157,14 +198,32 @@ fn malformed_obj_names_file_and_line() {
     for (obj, expected) in [
         ("v 0 0 0\nv 1 0 x\n", "m.obj:2: 'x' is not a number"),
         ("v 0 0 0\nv 1 0\n", "m.obj:2: expected 3 coordinates"),
-        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", "m.obj:4: vertex index 4 is out of range"),
-        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -4\n", "m.obj:4: vertex index -4 is out of range"),
-        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", "m.obj:4: vertex index 0 is out of range"),
-        ("v 0 0 0\nv 1 0 0\n\nf 1 2\n", "m.obj:4: a face needs at least 3 vertices"),
+        (
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n",
+            "m.obj:4: vertex index 4 is out of range",
+        ),
+        (
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -4\n",
+            "m.obj:4: vertex index -4 is out of range",
+        ),
+        (
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n",
+            "m.obj:4: vertex index 0 is out of range",
+        ),
+        (
+            "v 0 0 0\nv 1 0 0\n\nf 1 2\n",
+            "m.obj:4: a face needs at least 3 vertices",
+        ),
         ("v 0 0 nan\n", "m.obj:1: coordinate nan must be finite"),
         ("v 0 0 inf\n", "m.obj:1: coordinate inf must be finite"),
-        ("v 0 0 1e39\n", "m.obj:1: coordinate 1e39 must be finite with magnitude at most"),
-        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3/1/x\n", "m.obj:4: 'x' is not a normal index"),
+        (
+            "v 0 0 1e39\n",
+            "m.obj:1: coordinate 1e39 must be finite with magnitude at most",
+        ),
+        (
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3/1/x\n",
+            "m.obj:4: 'x' is not a normal index",
+        ),
     ] {
         case.file("m.obj", obj);
         case.fails(&scene, &[expected]);
@@ -176,16 +235,43 @@ fn bad_numbers_in_the_scene() {
     let case = Case::new();
     case.file("t.obj", TRIANGLE_OBJ);
     for (extra, expected) in [
-        ("[[sphere]]\ncenter = [nan, 0.0, 0.0]\nradius = 1.0\n", "sphere[1].center"),
-        ("[[sphere]]\ncenter = [inf, 0.0, 0.0]\nradius = 1.0\n", "sphere[1].center"),
-        ("[[sphere]]\ncenter = [1e300, 0.0, 0.0]\nradius = 1.0\n", "sphere[1].center"),
-        ("[[sphere]]\ncenter = [0.0, 0.0, 0.0]\nradius = 0.0\n", "sphere[1].radius = 0 must be positive"),
-        ("[[sphere]]\ncenter = [0.0, 0.0, 0.0]\nradius = -2.0\n", "sphere[1].radius = -2 must be positive"),
-        ("[[mesh]]\nobj = \"t.obj\"\nscale = 1e30\n", "exceeds the supported magnitude"),
+        (
+            "[[sphere]]\ncenter = [nan, 0.0, 0.0]\nradius = 1.0\n",
+            "sphere[1].center",
+        ),
+        (
+            "[[sphere]]\ncenter = [inf, 0.0, 0.0]\nradius = 1.0\n",
+            "sphere[1].center",
+        ),
+        (
+            "[[sphere]]\ncenter = [1e300, 0.0, 0.0]\nradius = 1.0\n",
+            "sphere[1].center",
+        ),
+        (
+            "[[sphere]]\ncenter = [0.0, 0.0, 0.0]\nradius = 0.0\n",
+            "sphere[1].radius = 0 must be positive",
+        ),
+        (
+            "[[sphere]]\ncenter = [0.0, 0.0, 0.0]\nradius = -2.0\n",
+            "sphere[1].radius = -2 must be positive",
+        ),
+        (
+            "[[mesh]]\nobj = \"t.obj\"\nscale = 1e30\n",
+            "exceeds the supported magnitude",
+        ),
         ("[[mesh]]\nobj = \"t.obj\"\nscale = 0.0\n", "mesh[0].scale"),
-        ("[[mesh]]\nobj = \"t.obj\"\nalbedo = -0.5\n", "mesh[0].albedo"),
-        ("[[point_light]]\nposition = [0.0, 0.0, nan]\nintensity = 1.0\n", "point_light[0].position"),
-        ("[[directional_light]]\ndirection = [0.0, 0.0, 0.0]\nirradiance = 1.0\n", "directional_light[0].direction"),
+        (
+            "[[mesh]]\nobj = \"t.obj\"\nalbedo = -0.5\n",
+            "mesh[0].albedo",
+        ),
+        (
+            "[[point_light]]\nposition = [0.0, 0.0, nan]\nintensity = 1.0\n",
+            "point_light[0].position",
+        ),
+        (
+            "[[directional_light]]\ndirection = [0.0, 0.0, 0.0]\nirradiance = 1.0\n",
+            "directional_light[0].direction",
+        ),
     ] {
         case.fails(&format!("{CAMERA}{SPHERE}{extra}"), &[expected]);
     }
@@ -195,17 +281,34 @@ fn bad_numbers_in_the_scene() {
 fn bad_cameras_and_resolutions() {
     let case = Case::new();
     let camera = |eye: &str, look_at: &str, up: &str, vfov: &str, w: &str, h: &str| {
-        format!("[camera]\neye = {eye}\nlook_at = {look_at}\nup = {up}\nvfov = {vfov}\nwidth = {w}\nheight = {h}\n{SPHERE}")
+        format!(
+            "[camera]\neye = {eye}\nlook_at = {look_at}\nup = {up}\nvfov = {vfov}\nwidth = {w}\nheight = {h}\n{SPHERE}"
+        )
     };
     let (e, l, u) = ("[0.0, 0.0, 3.0]", "[0.0, 0.0, 0.0]", "[0.0, 1.0, 0.0]");
-    case.fails(&camera(e, e, u, "40", "8", "8"), &["camera.eye and camera.look_at are the same point"]);
-    case.fails(&camera(e, l, "[0.0, 0.0, 1.0]", "40", "8", "8"), &["camera.up", "parallel"]);
-    case.fails(&camera(e, l, "[0.0, 0.0, 0.0]", "40", "8", "8"), &["camera.up is the zero vector"]);
+    case.fails(
+        &camera(e, e, u, "40", "8", "8"),
+        &["camera.eye and camera.look_at are the same point"],
+    );
+    case.fails(
+        &camera(e, l, "[0.0, 0.0, 1.0]", "40", "8", "8"),
+        &["camera.up", "parallel"],
+    );
+    case.fails(
+        &camera(e, l, "[0.0, 0.0, 0.0]", "40", "8", "8"),
+        &["camera.up is the zero vector"],
+    );
     for vfov in ["0", "180", "-5", "nan", "400"] {
-        case.fails(&camera(e, l, u, vfov, "8", "8"), &["camera.vfov", "(0, 180)"]);
+        case.fails(
+            &camera(e, l, u, vfov, "8", "8"),
+            &["camera.vfov", "(0, 180)"],
+        );
     }
     case.fails(&camera(e, l, u, "40", "0", "8"), &["zero side"]);
-    case.fails(&camera(e, l, u, "40", "100000", "100000"), &["beyond the supported maximum"]);
+    case.fails(
+        &camera(e, l, u, "40", "100000", "100000"),
+        &["beyond the supported maximum"],
+    );
     case.fails(&camera(e, l, u, "40", "-1", "8"), &["width"]);
     case.fails(&camera(e, l, u, "40", "9999999999", "8"), &["width"]);
     case.fails(&format!("{SPHERE}"), &["missing field `camera`"]);
@@ -216,7 +319,10 @@ fn empty_scenes() {
     let case = Case::new();
     case.fails(CAMERA, &["the scene is empty"]);
     case.file("empty.obj", "# nothing\nv 0 0 0\n");
-    case.fails(&format!("{CAMERA}[[mesh]]\nobj = \"empty.obj\"\n"), &["the scene is empty"]);
+    case.fails(
+        &format!("{CAMERA}[[mesh]]\nobj = \"empty.obj\"\n"),
+        &["the scene is empty"],
+    );
 }
 
 #[test]
@@ -224,16 +330,40 @@ fn bad_output_names_and_options() {
     let case = Case::new();
     let scene = case.file("scene.toml", &format!("{CAMERA}{SPHERE}"));
     let out = case.path("out.jpg");
-    expect_failure(&lambert(&["render", s(&scene), "-o", s(&out)]), &["out.jpg", "unknown image format"]);
+    expect_failure(
+        &lambert(&["render", s(&scene), "-o", s(&out)]),
+        &["out.jpg", "unknown image format"],
+    );
     let out = case.path("no/such/dir/out.png");
-    expect_failure(&lambert(&["render", s(&scene), "-o", s(&out), "--device", "cpu"]), &["no/such/dir/out.png"]);
+    expect_failure(
+        &lambert(&["render", s(&scene), "-o", s(&out), "--device", "cpu"]),
+        &["no/such/dir/out.png"],
+    );
     let out = case.path("out.png");
     expect_failure(
-        &lambert(&["render", s(&scene), "-o", s(&out), "--device", "gpu", "--backend", "glide"]),
+        &lambert(&[
+            "render",
+            s(&scene),
+            "-o",
+            s(&out),
+            "--device",
+            "gpu",
+            "--backend",
+            "glide",
+        ]),
         &["unknown backend 'glide'"],
     );
     expect_failure(
-        &lambert(&["render", s(&scene), "-o", s(&out), "--device", "gpu", "--adapter", "no-such-adapter"]),
+        &lambert(&[
+            "render",
+            s(&scene),
+            "-o",
+            s(&out),
+            "--device",
+            "gpu",
+            "--adapter",
+            "no-such-adapter",
+        ]),
         &["no adapter whose name contains 'no-such-adapter'"],
     );
 }
@@ -244,18 +374,41 @@ fn diff_reports_statistics_and_json() {
     let scene = case.file("scene.toml", &format!("{CAMERA}{SPHERE}{LIGHT}"));
     let heatmap = case.path("heat.png");
     let output = lambert(&["diff", s(&scene), "--json", "--heatmap", s(&heatmap)]);
-    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
     let stats: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
     assert_eq!(stats["pixels"], 16 * 12);
     assert_eq!(stats["passed"], true);
-    for key in ["max_abs", "max_8bit_steps", "rmse", "psnr_db", "beyond_tolerance", "prim_mismatches"] {
+    for key in [
+        "max_abs",
+        "max_8bit_steps",
+        "rmse",
+        "psnr_db",
+        "beyond_tolerance",
+        "prim_mismatches",
+    ] {
         assert!(stats.get(key).is_some(), "JSON lacks {key}");
     }
-    assert_eq!(image::open(&heatmap).unwrap().to_rgb8().dimensions(), (16, 12));
+    assert_eq!(
+        image::open(&heatmap).unwrap().to_rgb8().dimensions(),
+        (16, 12)
+    );
 
     // An impossible tolerance makes the same comparison fail, with exit 1.
     let output = lambert(&[
-        "diff", s(&scene), "--compare", "cpu-oracle", "--tol-abs", "0", "--tol-rel", "0", "--max-bad", "0",
+        "diff",
+        s(&scene),
+        "--compare",
+        "cpu-oracle",
+        "--tol-abs",
+        "0",
+        "--tol-rel",
+        "0",
+        "--max-bad",
+        "0",
     ]);
     let stdout = String::from_utf8_lossy(&output.stdout);
     assert_eq!(output.status.code(), Some(1), "{stdout}");
@@ -267,6 +420,9 @@ fn info_lists_adapters() {
     let output = lambert(&["info"]);
     let stdout = String::from_utf8_lossy(&output.stdout);
     assert!(output.status.success());
-    assert!(stdout.contains("adapter:"), "no adapter listed (install mesa-vulkan-drivers):\n{stdout}");
+    assert!(
+        stdout.contains("adapter:"),
+        "no adapter listed (install mesa-vulkan-drivers):\n{stdout}"
+    );
     assert!(stdout.contains("limits:"), "{stdout}");
 }

@@ -12,7 +12,10 @@ fn check(name: &str) {
     let cpu = render_cpu(&scene);
     let stats = compare(&gpu, &cpu, &Tolerance::default()).unwrap();
     println!("{name}: GPU vs CPU\n{stats}");
-    assert!(stats.passed, "{name}: GPU and CPU differ beyond tolerance:\n{stats}");
+    assert!(
+        stats.passed,
+        "{name}: GPU and CPU differ beyond tolerance:\n{stats}"
+    );
     // Not a free pass for mismatched hits: they are bounded explicitly.
     assert!(
         stats.prim_mismatches as f64 <= 1e-3 * stats.pixels as f64,
@@ -20,7 +23,11 @@ fn check(name: &str) {
         stats.prim_mismatches
     );
     // Something was actually drawn: the scene's geometry is on screen.
-    let hits = cpu.prims.iter().filter(|&&p| p != lambert::layout::NO_HIT).count();
+    let hits = cpu
+        .prims
+        .iter()
+        .filter(|&&p| p != lambert::layout::NO_HIT)
+        .count();
     assert!(hits > 0, "{name}: no camera ray hit anything");
 }
 
@@ -70,10 +77,17 @@ fn mesh_of_11k_triangles() {
 fn cpu_reference_agrees_with_f64_oracle() {
     for name in ["cornell", "spheres", "edge_cases", "triangle_oblique"] {
         let scene = load(name);
-        let stats = compare(&render_cpu(&scene), &render_oracle(&scene), &Tolerance::default())
-            .unwrap();
+        let stats = compare(
+            &render_cpu(&scene),
+            &render_oracle(&scene),
+            &Tolerance::default(),
+        )
+        .unwrap();
         println!("{name}: CPU f32 vs f64 oracle\n{stats}");
-        assert!(stats.passed, "{name}: f32 and f64 differ beyond tolerance:\n{stats}");
+        assert!(
+            stats.passed,
+            "{name}: f32 and f64 differ beyond tolerance:\n{stats}"
+        );
     }
 }
 
@@ -87,7 +101,12 @@ fn edge_case_scene_behaves() {
         assert!(!r.prims.contains(&4), "the in-plane triangle was hit");
         // Rays along the shared edges and through the shared vertex hit the
         // fan (primitives 0–3) rather than slipping through.
-        for (x, y) in [(w / 2, h / 2), (w / 2, h / 2 - 3), (w / 2 + 3, h / 2), (w / 2, h / 2 + 3)] {
+        for (x, y) in [
+            (w / 2, h / 2),
+            (w / 2, h / 2 - 3),
+            (w / 2 + 3, h / 2),
+            (w / 2, h / 2 + 3),
+        ] {
             let prim = r.prims[(y * w + x) as usize];
             assert!(prim < 4, "pixel ({x}, {y}) on a shared edge hit {prim}");
         }

@@ -64,16 +64,68 @@ macro_rules! check_layout {
 #[test]
 fn host_structs_match_wgsl_layout() {
     let m = &module();
-    check_layout!(m, Params {
-        eye, width, right, height, up, tan_half_x, forward, tan_half_y,
-        background, num_triangles, ambient, num_spheres, tile_origin, num_lights, shadows,
-    });
-    check_layout!(m, Triangle { v0, material, v1, flags, v2, _pad });
+    check_layout!(
+        m,
+        Params {
+            eye,
+            width,
+            right,
+            height,
+            up,
+            tan_half_x,
+            forward,
+            tan_half_y,
+            background,
+            num_triangles,
+            ambient,
+            num_spheres,
+            tile_origin,
+            num_lights,
+            shadows,
+        }
+    );
+    check_layout!(
+        m,
+        Triangle {
+            v0,
+            material,
+            v1,
+            flags,
+            v2,
+            _pad
+        }
+    );
     check_layout!(m, TriangleNormals { n0, n1, n2 });
-    check_layout!(m, Sphere { center, radius, material, _pad0, _pad1, _pad2 });
+    check_layout!(
+        m,
+        Sphere {
+            center,
+            radius,
+            material,
+            _pad0,
+            _pad1,
+            _pad2
+        }
+    );
     check_layout!(m, Material { albedo, _pad });
-    check_layout!(m, Light { vector, kind, color, _pad });
-    check_layout!(m, Ray { origin, tmin, dir, tmax });
+    check_layout!(
+        m,
+        Light {
+            vector,
+            kind,
+            color,
+            _pad
+        }
+    );
+    check_layout!(
+        m,
+        Ray {
+            origin,
+            tmin,
+            dir,
+            tmax
+        }
+    );
     check_layout!(m, Hit { t, prim, u, v });
 }
 
@@ -89,9 +141,18 @@ fn shader_constants_match_host() {
         format!("{:?}", m.global_expressions[c.init])
     };
     assert_eq!(constant("NO_HIT"), format!("Literal(U32({NO_HIT}))"));
-    assert_eq!(constant("LIGHT_POINT"), format!("Literal(U32({LIGHT_POINT}))"));
-    assert_eq!(constant("LIGHT_DIRECTIONAL"), format!("Literal(U32({LIGHT_DIRECTIONAL}))"));
-    assert_eq!(constant("FLAG_SMOOTH"), format!("Literal(U32({FLAG_SMOOTH}))"));
+    assert_eq!(
+        constant("LIGHT_POINT"),
+        format!("Literal(U32({LIGHT_POINT}))")
+    );
+    assert_eq!(
+        constant("LIGHT_DIRECTIONAL"),
+        format!("Literal(U32({LIGHT_DIRECTIONAL}))")
+    );
+    assert_eq!(
+        constant("FLAG_SMOOTH"),
+        format!("Literal(U32({FLAG_SMOOTH}))")
+    );
     assert_eq!(constant("FAR"), format!("Literal(F32({FAR:?}))"));
 }
 
@@ -104,7 +165,9 @@ fn overrides_named_by_the_host_exist() {
     .unwrap();
     for (name, _) in lambert::gpu::specialisation(&scene) {
         assert!(
-            m.overrides.iter().any(|(_, o)| o.name.as_deref() == Some(name)),
+            m.overrides
+                .iter()
+                .any(|(_, o)| o.name.as_deref() == Some(name)),
             "the host sets override {name}, which the shader lacks"
         );
     }

@@ -363,13 +363,25 @@ pub fn intersect_sphere(ray: &Ray, center: Vec3, radius: Real) -> Real {
     FAR
 }
 
-/// Distance at which the ray enters the node's box within (tmin, tmax), or FAR.
+/// Distance at which the ray enters the node's box within (tmin, tmax), or
+/// FAR. Comparisons, not min/max, so that a NaN slab is ignored as on the GPU.
 pub fn intersect_box(ray: &Ray, inv_dir: Vec3, node: &crate::layout::BvhNode) -> Real {
     let t0 = (vec3(node.min) - ray.origin) * inv_dir;
     let t1 = (vec3(node.max) - ray.origin) * inv_dir;
-    let t_near = t0.min(t1).max_element().max(ray.tmin);
-    let t_far = t0.max(t1).min_element() * BOX_SLACK;
-    if t_near <= t_far.min(ray.tmax) { t_near } else { FAR }
+    let mut t_near = ray.tmin;
+    let mut t_far = ray.tmax;
+    for axis in 0..3 {
+        let swap = t0[axis] > t1[axis];
+        let near = if swap { t1[axis] } else { t0[axis] };
+        let far = if swap { t0[axis] } else { t1[axis] } * BOX_SLACK;
+        if near > t_near {
+            t_near = near;
+        }
+        if far < t_far {
+            t_far = far;
+        }
+    }
+    if t_near <= t_far { t_near } else { FAR }
 }
 
 fn sign_nonzero(x: Real) -> Real {

@@ -10,7 +10,9 @@ use lambert::output::Rendered;
 use lambert::progress::Progress;
 
 pub fn asset(path: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("assets").join(path)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets")
+        .join(path)
 }
 
 pub fn load(name: &str) -> Scene {
