@@ -31,6 +31,7 @@ pub struct Bvh {
     pub nodes: Vec<BvhNode>,
     /// Primitive ids in leaf order.
     pub prims: Vec<u32>,
+    pub build_time: std::time::Duration,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -94,6 +95,7 @@ struct Item {
 
 impl Bvh {
     pub fn build(triangles: &[Triangle], spheres: &[Sphere]) -> Bvh {
+        let start = std::time::Instant::now();
         let triangle_items = triangles.par_iter().enumerate().map(|(i, t)| {
             let mut b = Aabb::EMPTY;
             for v in [t.v0, t.v1, t.v2] {
@@ -128,6 +130,7 @@ impl Bvh {
         let mut bvh = Bvh::default();
         bvh.nodes.push(BvhNode::default());
         bvh.flatten(root, 0);
+        bvh.build_time = start.elapsed();
         bvh
     }
 

@@ -153,6 +153,15 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
             scene.camera.height,
             scene.primitive_count()
         );
+        let bvh = &scene.bvh;
+        eprintln!(
+            "BVH: {} nodes, depth {}, SAH cost {:.1}, built in {} (part of load), {:.1} MiB on the device",
+            bvh.nodes.len(),
+            bvh.depth(),
+            bvh.sah_cost(),
+            seconds(bvh.build_time),
+            bvh.device_bytes() as f64 / (1 << 20) as f64
+        );
         eprintln!(
             "time: load {}, upload {}, render {}, readback {}, write {}",
             seconds(load),

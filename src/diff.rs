@@ -49,8 +49,9 @@ pub struct DiffStats {
 fn pixel_beyond(a: [f32; 3], b: [f32; 3], tol: &Tolerance) -> bool {
     a.iter().zip(&b).any(|(x, y)| {
         let d = (x - y).abs();
-        // NaN in either image always counts.
-        !(d <= tol.abs + tol.rel * x.abs().max(y.abs()))
+        // NaN in either image always counts: only a comparable, small d passes.
+        d.partial_cmp(&(tol.abs + tol.rel * x.abs().max(y.abs())))
+            .is_none_or(|o| o == std::cmp::Ordering::Greater)
     })
 }
 

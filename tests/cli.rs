@@ -311,7 +311,7 @@ fn bad_cameras_and_resolutions() {
     );
     case.fails(&camera(e, l, u, "40", "-1", "8"), &["width"]);
     case.fails(&camera(e, l, u, "40", "9999999999", "8"), &["width"]);
-    case.fails(&format!("{SPHERE}"), &["missing field `camera`"]);
+    case.fails(SPHERE, &["missing field `camera`"]);
 }
 
 #[test]
