@@ -208,6 +208,18 @@ fn intersect_primitive(ray: Ray, prim: u32) -> vec3<f32> {
     return vec3<f32>(FAR, 0.0, 0.0);
 }
 
+// Tests `prim`; if it is hit nearer than ray.tmax, makes it the hit and
+// shortens the ray. Returns whether it did.
+fn record_hit(ray: ptr<function, Ray>, hit: ptr<function, Hit>, prim: u32) -> bool {
+    let tuv = intersect_primitive(*ray, prim);
+    if tuv.x < (*ray).tmax {
+        (*ray).tmax = tuv.x;
+        *hit = Hit(tuv.x, prim, tuv.y, tuv.z);
+        return true;
+    }
+    return false;
+}
+
 // Distance at which the ray enters the box within (tmin, tmax), or FAR.
 // Written with comparisons rather than min/max: a slab whose plane holds the
 // origin of a ray parallel to it gives 0·∞ = NaN, and a NaN comparison is
@@ -251,14 +263,8 @@ fn trace_bvh(ray_in: Ray, any_hit: bool) -> Hit {
         let node = bvh_nodes[stack_node[sp]];
         if node.count > 0u {
             for (var i = node.first; i < node.first + node.count; i++) {
-                let prim = bvh_prims[i];
-                let tuv = intersect_primitive(ray, prim);
-                if tuv.x < ray.tmax {
-                    ray.tmax = tuv.x;
-                    hit = Hit(tuv.x, prim, tuv.y, tuv.z);
-                    if any_hit {
-                        return hit;
-                    }
+                if record_hit(&ray, &hit, bvh_prims[i]) && any_hit {
+                    return hit;
                 }
             }
             continue;
@@ -289,13 +295,8 @@ fn trace_brute_force(ray_in: Ray, any_hit: bool) -> Hit {
     var ray = ray_in;
     var hit = miss();
     for (var prim = 0u; prim < params.num_triangles + params.num_spheres; prim++) {
-        let tuv = intersect_primitive(ray, prim);
-        if tuv.x < ray.tmax {
-            ray.tmax = tuv.x;
-            hit = Hit(tuv.x, prim, tuv.y, tuv.z);
-            if any_hit {
-                return hit;
-            }
+        if record_hit(&ray, &hit, prim) && any_hit {
+            return hit;
         }
     }
     return hit;

@@ -131,6 +131,18 @@ impl<'a> Kernel<'a> {
         (intersect_sphere(ray, vec3(sphere.center), sphere.radius as Real), 0.0, 0.0)
     }
 
+    /// Tests `prim`; if it is hit nearer than ray.tmax, makes it the hit and
+    /// shortens the ray. Returns whether it did.
+    pub fn record_hit(&self, ray: &mut Ray, hit: &mut Hit, prim: u32) -> bool {
+        let (t, u, v) = self.intersect_primitive(ray, prim);
+        if t < ray.tmax {
+            ray.tmax = t;
+            *hit = Hit { t, prim, u, v };
+            return true;
+        }
+        false
+    }
+
     /// Closest hit through the BVH, nearer child first; with `any_hit`, the
     /// first hit found.
     pub fn trace_bvh(&self, ray_in: Ray, any_hit: bool) -> Hit {
@@ -154,13 +166,8 @@ impl<'a> Kernel<'a> {
             let node = &nodes[index as usize];
             if node.count > 0 {
                 for &prim in &self.scene.bvh.prims[node.first as usize..(node.first + node.count) as usize] {
-                    let (t, u, v) = self.intersect_primitive(&ray, prim);
-                    if t < ray.tmax {
-                        ray.tmax = t;
-                        hit = Hit { t, prim, u, v };
-                        if any_hit {
-                            return hit;
-                        }
+                    if self.record_hit(&mut ray, &mut hit, prim) && any_hit {
+                        return hit;
                     }
                 }
                 continue;
@@ -187,13 +194,8 @@ impl<'a> Kernel<'a> {
         let mut ray = ray_in;
         let mut hit = miss();
         for prim in 0..self.scene.primitive_count() as u32 {
-            let (t, u, v) = self.intersect_primitive(&ray, prim);
-            if t < ray.tmax {
-                ray.tmax = t;
-                hit = Hit { t, prim, u, v };
-                if any_hit {
-                    return hit;
-                }
+            if self.record_hit(&mut ray, &mut hit, prim) && any_hit {
+                return hit;
             }
         }
         hit
