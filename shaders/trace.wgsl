@@ -9,8 +9,16 @@
 override HAS_TRIANGLES: bool = true;
 override HAS_SPHERES: bool = true;
 override HAS_SHADOWS: bool = true;
+override HAS_POINT_LIGHTS: bool = true;
+override HAS_DIRECTIONAL_LIGHTS: bool = true;
 // false: test every primitive (the reference that tests the BVH).
 override USE_BVH: bool = true;
+// Ray/triangle test: INTERSECT_SEED, INTERSECT_MOLLER_TRUMBORE or
+// INTERSECT_WATERTIGHT.
+override INTERSECT: u32 = 2u;
+// Entry point `trace_rays`: stop at the first hit found rather than the
+// closest.
+override ANY_HIT: bool = false;
 
 const NO_HIT: u32 = 0xffffffffu;
 // WGSL has no infinity literal; the largest finite f32 serves as "no hit yet".
@@ -18,11 +26,18 @@ const FAR: f32 = 3.40282347e38;
 const LIGHT_POINT: u32 = 0u;
 const LIGHT_DIRECTIONAL: u32 = 1u;
 const FLAG_SMOOTH: u32 = 1u;
+const INTERSECT_SEED: u32 = 0u;
+const INTERSECT_MOLLER_TRUMBORE: u32 = 1u;
+const INTERSECT_WATERTIGHT: u32 = 2u;
+// Unit roundoff of f32 (pbrt's MachineEpsilon), for error bounds.
+const MACHINE_EPSILON: f32 = 5.96046448e-8;
 // Traversal stack entries: bvh::MAX_DEPTH, which bounds the tree's depth.
 const STACK_SIZE: u32 = 64u;
-// Widens a box's exit distance by 2·gamma(3) (pbrt-v4) so that rounding in
-// the slab test cannot cull a box the ray grazes.
-const BOX_SLACK: f32 = 1.0000004;
+// Widens a box's exit distance so that rounding in the slab test cannot cull
+// a box the ray grazes: pbrt-v4's 1 + 2·gamma(3), with room for a GPU's
+// reciprocal being up to a few ULPs off (WGSL allows 2.5). The watertight
+// triangle test relies on it: no box may drop a ray its triangles catch.
+const BOX_SLACK: f32 = 1.000001;
 
 // Layouts: each struct here has a #[repr(C)] twin in src/layout.rs, checked
 // against naga's reflection of this file by tests/layout.rs.
@@ -42,6 +57,12 @@ struct Params {
     tile_origin: vec2<u32>,
     num_lights: u32,
     shadows: u32,
+    // Samples per pixel and the seed of their jitter.
+    spp: u32,
+    seed: u32,
+    // Columns of the spp-sample stratified grid (a divisor of spp).
+    strata_x: u32,
+    _pad: u32,
 }
 
 struct Triangle {
@@ -108,8 +129,18 @@ struct BvhNode {
     count: u32,
 }
 
+// Precomputed per ray for the watertight test: the axes permuted so that
+// the direction's largest component is z (kx, ky, kz), and the shear that
+// maps the direction onto +z.
+struct Shear {
+    axes: vec3<u32>,
+    s: vec3<f32>,
+}
+
 struct Surface {
     position: vec3<f32>,
+    // How far `position` may be off the surface, per axis: see self_hit_bound.
+    error: vec3<f32>,
     geometric_normal: vec3<f32>,
     shading_normal: vec3<f32>,
     albedo: vec3<f32>,
@@ -121,10 +152,14 @@ struct Surface {
 @group(0) @binding(3) var<storage, read> spheres: array<Sphere>;
 @group(0) @binding(4) var<storage, read> materials: array<Material>;
 @group(0) @binding(5) var<storage, read> lights: array<Light>;
-@group(0) @binding(6) var out_color: texture_storage_2d<rgba32float, write>;
-@group(0) @binding(7) var out_prim: texture_storage_2d<r32uint, write>;
-@group(0) @binding(8) var<storage, read> bvh_nodes: array<BvhNode>;
-@group(0) @binding(9) var<storage, read> bvh_prims: array<u32>;
+@group(0) @binding(6) var<storage, read> bvh_nodes: array<BvhNode>;
+@group(0) @binding(7) var<storage, read> bvh_prims: array<u32>;
+// Group 1 holds what one entry point reads and writes: an image tile for
+// `render`, a batch of rays for `trace_rays`.
+@group(1) @binding(0) var out_color: texture_storage_2d<rgba32float, write>;
+@group(1) @binding(1) var out_prim: texture_storage_2d<r32uint, write>;
+@group(1) @binding(2) var<storage, read> rays: array<Ray>;
+@group(1) @binding(3) var<storage, read_write> hits: array<Hit>;
 
 fn miss() -> Hit {
     return Hit(FAR, NO_HIT, 0.0, 0.0);
@@ -139,18 +174,32 @@ fn camera_ray(pixel: vec2<f32>) -> Ray {
     return Ray(params.eye, 0.0, dir, FAR);
 }
 
+fn intersect_triangle(ray: Ray, shear: Shear, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> vec3<f32> {
+    if INTERSECT == INTERSECT_SEED {
+        return intersect_triangle_seed(ray, a, b, c);
+    }
+    if INTERSECT == INTERSECT_MOLLER_TRUMBORE {
+        return intersect_triangle_moller_trumbore(ray, a, b, c);
+    }
+    return intersect_triangle_watertight(ray, shear, a, b, c);
+}
+
+fn no_triangle_hit() -> vec3<f32> {
+    return vec3<f32>(FAR, 0.0, 0.0);
+}
+
 // The lecture's test: plane hit t = n·(a − o)/(n·d), then three edge tests
 // that must all agree in sign. Returns (t, u, v); t = FAR on a miss.
-fn intersect_triangle(ray: Ray, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> vec3<f32> {
+fn intersect_triangle_seed(ray: Ray, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> vec3<f32> {
     let n = cross(b - a, c - a);
     let n_dot_d = dot(n, ray.dir);
     if n_dot_d == 0.0 {
-        return vec3<f32>(FAR, 0.0, 0.0);
+        return no_triangle_hit();
     }
     let t = dot(n, a - ray.origin) / n_dot_d;
     // Written so that a NaN t is a miss too.
     if !(t > ray.tmin && t < ray.tmax) {
-        return vec3<f32>(FAR, 0.0, 0.0);
+        return no_triangle_hit();
     }
     let p = ray.origin + t * ray.dir;
     let e0 = dot(cross(b - a, p - a), n);
@@ -158,11 +207,94 @@ fn intersect_triangle(ray: Ray, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> vec
     let e2 = dot(cross(a - c, p - c), n);
     let inside = (e0 >= 0.0 && e1 >= 0.0 && e2 >= 0.0) || (e0 <= 0.0 && e1 <= 0.0 && e2 <= 0.0);
     if !inside {
-        return vec3<f32>(FAR, 0.0, 0.0);
+        return no_triangle_hit();
     }
     // Edge values are twice the sub-triangle areas times |n|: barycentrics.
     let nn = dot(n, n);
     return vec3<f32>(t, e2 / nn, e0 / nn);
+}
+
+// Möller and Trumbore (1997), without the epsilon on the determinant so that
+// it works at every scale: only an exactly parallel ray is rejected.
+fn intersect_triangle_moller_trumbore(ray: Ray, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> vec3<f32> {
+    let e1 = b - a;
+    let e2 = c - a;
+    let p = cross(ray.dir, e2);
+    let det = dot(e1, p);
+    if det == 0.0 {
+        return no_triangle_hit();
+    }
+    let inv_det = 1.0 / det;
+    let s = ray.origin - a;
+    let u = dot(s, p) * inv_det;
+    if !(u >= 0.0 && u <= 1.0) {
+        return no_triangle_hit();
+    }
+    let q = cross(s, e1);
+    let v = dot(ray.dir, q) * inv_det;
+    if !(v >= 0.0 && u + v <= 1.0) {
+        return no_triangle_hit();
+    }
+    let t = dot(e2, q) * inv_det;
+    if !(t > ray.tmin && t < ray.tmax) {
+        return no_triangle_hit();
+    }
+    return vec3<f32>(t, u, v);
+}
+
+fn ray_shear(dir: vec3<f32>) -> Shear {
+    let m = abs(dir);
+    var kz = 2u;
+    if m.x >= m.y && m.x >= m.z {
+        kz = 0u;
+    } else if m.y >= m.z {
+        kz = 1u;
+    }
+    var kx = (kz + 1u) % 3u;
+    var ky = (kx + 1u) % 3u;
+    // Keep the winding: swapping x and y mirrors when d points down z.
+    if dir[kz] < 0.0 {
+        let k = kx;
+        kx = ky;
+        ky = k;
+    }
+    return Shear(vec3<u32>(kx, ky, kz), vec3<f32>(dir[kx] / dir[kz], dir[ky] / dir[kz], 1.0 / dir[kz]));
+}
+
+// Woop, Benthin and Wald, "Watertight Ray/Triangle Intersection" (JCGT
+// 2013): vertices moved into a frame where the ray is the +z axis through
+// the origin, so that an edge shared by two triangles gives both of them the
+// same edge value, up to sign. A ray cannot pass between them.
+// Edge values of exactly 0 count as inside for both (the paper recomputes
+// them in f64, which GPUs may lack; a tie then hits both, never neither).
+fn intersect_triangle_watertight(ray: Ray, shear: Shear, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> vec3<f32> {
+    let k = shear.axes;
+    let oa = a - ray.origin;
+    let ob = b - ray.origin;
+    let oc = c - ray.origin;
+    let ax = oa[k.x] - shear.s.x * oa[k.z];
+    let ay = oa[k.y] - shear.s.y * oa[k.z];
+    let bx = ob[k.x] - shear.s.x * ob[k.z];
+    let by = ob[k.y] - shear.s.y * ob[k.z];
+    let cx = oc[k.x] - shear.s.x * oc[k.z];
+    let cy = oc[k.y] - shear.s.y * oc[k.z];
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        return no_triangle_hit();
+    }
+    let det = u + v + w;
+    if det == 0.0 {
+        return no_triangle_hit();
+    }
+    let t_scaled = u * shear.s.z * oa[k.z] + v * shear.s.z * ob[k.z] + w * shear.s.z * oc[k.z];
+    let t = t_scaled / det;
+    if !(t > ray.tmin && t < ray.tmax) {
+        return no_triangle_hit();
+    }
+    // u, v and w weigh a, b and c: the hit is (1 − u' − v')·a + u'·b + v'·c.
+    return vec3<f32>(t, v / det, w / det);
 }
 
 // Nearest root of |o + t·d − c|² = r² inside (tmin, tmax); FAR on a miss.
@@ -196,22 +328,22 @@ fn sign_nonzero(x: f32) -> f32 {
 }
 
 // (t, u, v) of primitive `prim` (triangles first, then spheres).
-fn intersect_primitive(ray: Ray, prim: u32) -> vec3<f32> {
+fn intersect_primitive(ray: Ray, shear: Shear, prim: u32) -> vec3<f32> {
     if HAS_TRIANGLES && prim < params.num_triangles {
         let tri = triangles[prim];
-        return intersect_triangle(ray, tri.v0, tri.v1, tri.v2);
+        return intersect_triangle(ray, shear, tri.v0, tri.v1, tri.v2);
     }
     if HAS_SPHERES && prim >= params.num_triangles {
         let sphere = spheres[prim - params.num_triangles];
         return vec3<f32>(intersect_sphere(ray, sphere.center, sphere.radius), 0.0, 0.0);
     }
-    return vec3<f32>(FAR, 0.0, 0.0);
+    return no_triangle_hit();
 }
 
 // Tests `prim`; if it is hit nearer than ray.tmax, makes it the hit and
 // shortens the ray. Returns whether it did.
-fn record_hit(ray: ptr<function, Ray>, hit: ptr<function, Hit>, prim: u32) -> bool {
-    let tuv = intersect_primitive(*ray, prim);
+fn record_hit(ray: ptr<function, Ray>, shear: Shear, hit: ptr<function, Hit>, prim: u32) -> bool {
+    let tuv = intersect_primitive(*ray, shear, prim);
     if tuv.x < (*ray).tmax {
         (*ray).tmax = tuv.x;
         *hit = Hit(tuv.x, prim, tuv.y, tuv.z);
@@ -241,7 +373,7 @@ fn intersect_box(ray: Ray, inv_dir: vec3<f32>, lo: vec3<f32>, hi: vec3<f32>) -> 
 
 // Closest hit through the BVH, nearer child first; with `any_hit`, the first
 // hit found. A ray that misses the root box does no further work.
-fn trace_bvh(ray_in: Ray, any_hit: bool) -> Hit {
+fn trace_bvh(ray_in: Ray, shear: Shear, any_hit: bool) -> Hit {
     var ray = ray_in;
     var hit = miss();
     let inv_dir = 1.0 / ray.dir;
@@ -263,7 +395,7 @@ fn trace_bvh(ray_in: Ray, any_hit: bool) -> Hit {
         let node = bvh_nodes[stack_node[sp]];
         if node.count > 0u {
             for (var i = node.first; i < node.first + node.count; i++) {
-                if record_hit(&ray, &hit, bvh_prims[i]) && any_hit {
+                if record_hit(&ray, shear, &hit, bvh_prims[i]) && any_hit {
                     return hit;
                 }
             }
@@ -291,11 +423,11 @@ fn trace_bvh(ray_in: Ray, any_hit: bool) -> Hit {
 }
 
 // Every primitive in turn: the reference the BVH is tested against.
-fn trace_brute_force(ray_in: Ray, any_hit: bool) -> Hit {
+fn trace_brute_force(ray_in: Ray, shear: Shear, any_hit: bool) -> Hit {
     var ray = ray_in;
     var hit = miss();
     for (var prim = 0u; prim < params.num_triangles + params.num_spheres; prim++) {
-        if record_hit(&ray, &hit, prim) && any_hit {
+        if record_hit(&ray, shear, &hit, prim) && any_hit {
             return hit;
         }
     }
@@ -306,10 +438,11 @@ fn trace(ray_in: Ray, any_hit: bool) -> Hit {
     var ray = ray_in;
     // Misses report FAR, so an infinite tmax must not let them through.
     ray.tmax = min(ray.tmax, FAR);
+    let shear = ray_shear(ray.dir);
     if USE_BVH {
-        return trace_bvh(ray, any_hit);
+        return trace_bvh(ray, shear, any_hit);
     }
-    return trace_brute_force(ray, any_hit);
+    return trace_brute_force(ray, shear, any_hit);
 }
 
 fn trace_closest(ray: Ray) -> Hit {
@@ -325,12 +458,28 @@ fn face_forward(n: vec3<f32>, dir: vec3<f32>) -> vec3<f32> {
     return select(n, -n, dot(n, dir) > 0.0);
 }
 
+fn gamma(n: f32) -> f32 {
+    return n * MACHINE_EPSILON / (1.0 - n * MACHINE_EPSILON);
+}
+
+// How far a point computed on a primitive whose coordinates reach `extent`
+// (per axis) may lie off it, plus how far a ray starting there must be from
+// it for the intersection test's own rounding (of differences of such
+// coordinates) to see it as clear: both are a few ULPs of the largest
+// coordinate. pbrt-v4 bounds the first alone (gamma(7)·Σ|bᵢ·vᵢ|) because its
+// tests carry a conservative t bound; ours do not, so the bound is
+// isotropic and 32 ULPs wide. See docs/accuracy.md.
+fn self_hit_bound(extent: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(gamma(32.0) * max(max(extent.x, extent.y), extent.z));
+}
+
 fn surface_at(ray: Ray, hit: Hit) -> Surface {
     if hit.prim < params.num_triangles {
         let tri = triangles[hit.prim];
         let w = 1.0 - hit.u - hit.v;
         // From barycentrics, not o + t·d: the point lies closer to the plane.
         let position = w * tri.v0 + hit.u * tri.v1 + hit.v * tri.v2;
+        let error = self_hit_bound(max(max(abs(tri.v0), abs(tri.v1)), abs(tri.v2)));
         let geometric = face_forward(normalize(cross(tri.v1 - tri.v0, tri.v2 - tri.v0)), ray.dir);
         var shading = geometric;
         if (tri.flags & FLAG_SMOOTH) != 0u {
@@ -340,24 +489,43 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
                 shading = face_forward(normalize(interpolated), ray.dir);
             }
         }
-        return Surface(position, geometric, shading, materials[tri.material].albedo);
+        return Surface(position, error, geometric, shading, materials[tri.material].albedo);
     }
     let sphere = spheres[hit.prim - params.num_triangles];
     let outward = normalize(ray.origin + hit.t * ray.dir - sphere.center);
     // Re-projected onto the sphere to undo the rounding of t.
     let position = sphere.center + sphere.radius * outward;
+    let error = self_hit_bound(abs(sphere.center) + sphere.radius);
     let normal = face_forward(outward, ray.dir);
-    return Surface(position, normal, normal, materials[sphere.material].albedo);
+    return Surface(position, error, normal, normal, materials[sphere.material].albedo);
 }
 
-// Ray Tracing Gems ch. 6 (Wächter & Binder): move p off its surface along n
-// by a few ULPs of p (or a fixed amount near the origin), so that a ray
-// leaving p towards n's side cannot hit the surface it starts on.
-fn offset_ray_origin(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
-    let of_i = vec3<i32>(256.0 * n);
-    let p_i = bitcast<vec3<f32>>(bitcast<vec3<i32>>(p) + select(of_i, -of_i, p < vec3<f32>(0.0)));
-    let p_f = p + (1.0 / 65536.0) * n;
-    return select(p_i, p_f, abs(p) < vec3<f32>(1.0 / 32.0));
+// The next f32 away from zero in the direction of `towards` (+1 or −1).
+fn next_float(x: f32, towards: f32) -> f32 {
+    // −0 and +0 step alike.
+    let y = select(x, 0.0, x == 0.0);
+    let bits = bitcast<u32>(y);
+    let away_from_zero = (y >= 0.0) == (towards > 0.0);
+    if y == 0.0 {
+        return select(-bitcast<f32>(1u), bitcast<f32>(1u), towards > 0.0);
+    }
+    return bitcast<f32>(select(bits - 1u, bits + 1u, away_from_zero));
+}
+
+// pbrt-v4's OffsetRayOrigin: move p off its surface along n by the
+// projection of its error bound onto n, then one more ULP per axis so that
+// the rounding of the sum cannot bring it back. A ray leaving towards n's
+// side then cannot hit the surface it starts on, at any scale.
+fn offset_ray_origin(p: vec3<f32>, error: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    let d = dot(abs(n), error);
+    let offset = d * n;
+    var po = p + offset;
+    for (var axis = 0; axis < 3; axis++) {
+        if offset[axis] != 0.0 {
+            po[axis] = next_float(po[axis], sign(offset[axis]));
+        }
+    }
+    return po;
 }
 
 // Lambert: ambient·k + Σ k·E·max(0, n·l)·visible, linear RGB.
@@ -367,13 +535,14 @@ fn shade(ray: Ray, hit: Hit) -> vec3<f32> {
     }
     let surface = surface_at(ray, hit);
     var color = params.ambient * surface.albedo;
-    let origin = offset_ray_origin(surface.position, surface.geometric_normal);
+    let origin = offset_ray_origin(surface.position, surface.error, surface.geometric_normal);
     for (var i = 0u; i < params.num_lights; i++) {
         let light = lights[i];
         var to_light: vec3<f32>;
         var irradiance: vec3<f32>;
         var shadow_ray: Ray;
-        if light.kind == LIGHT_POINT {
+        // Specialisation drops the branch of a light kind the scene lacks.
+        if HAS_POINT_LIGHTS && (!HAS_DIRECTIONAL_LIGHTS || light.kind == LIGHT_POINT) {
             let d = light.vector - surface.position;
             let distance_squared = dot(d, d);
             to_light = d / sqrt(distance_squared);
@@ -399,6 +568,54 @@ fn shade(ray: Ray, hit: Hit) -> vec3<f32> {
     return color;
 }
 
+// PCG hash (Jarzynski and Olano, "Hash Functions for GPU Rendering", JCGT
+// 2020): integer only, so the CPU path draws the very same numbers.
+fn pcg_hash(x: u32) -> u32 {
+    let state = x * 747796405u + 2891336453u;
+    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+// A uniform number in [0, 1) from the top 24 bits: exact in f32.
+fn unit_float(h: u32) -> f32 {
+    return f32(h >> 8u) * (1.0 / 16777216.0);
+}
+
+// Position of sample `sample` in `pixel`: the centre when spp = 1, else a
+// jittered point in its cell of a strata_x × (spp / strata_x) grid.
+fn sample_position(pixel: vec2<u32>, sample: u32) -> vec2<f32> {
+    let corner = vec2<f32>(pixel);
+    if params.spp == 1u {
+        return corner + 0.5;
+    }
+    let h = pcg_hash(pixel.x ^ pcg_hash(pixel.y ^ pcg_hash(sample ^ pcg_hash(params.seed))));
+    let jitter = vec2<f32>(unit_float(h), unit_float(pcg_hash(h)));
+    let strata_y = params.spp / params.strata_x;
+    let cell = vec2<f32>(vec2<u32>(sample % params.strata_x, sample / params.strata_x));
+    return corner + (cell + jitter) / vec2<f32>(f32(params.strata_x), f32(strata_y));
+}
+
+struct PixelResult {
+    color: vec3<f32>,
+    prim: u32,
+}
+
+// One pixel: the box-filtered mean of its samples, and the primitive its
+// first sample hit.
+fn render_pixel(pixel: vec2<u32>) -> PixelResult {
+    var sum = vec3<f32>(0.0);
+    var first_prim = NO_HIT;
+    for (var sample = 0u; sample < params.spp; sample++) {
+        let ray = camera_ray(sample_position(pixel, sample));
+        let hit = trace_closest(ray);
+        if sample == 0u {
+            first_prim = hit.prim;
+        }
+        sum += shade(ray, hit);
+    }
+    return PixelResult(sum / f32(params.spp), first_prim);
+}
+
 @compute @workgroup_size(8, 8)
 fn render(@builtin(global_invocation_id) id: vec3<u32>) {
     let size = textureDimensions(out_color);
@@ -406,8 +623,16 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= size.x || id.y >= size.y || pixel.x >= params.width || pixel.y >= params.height {
         return;
     }
-    let ray = camera_ray(vec2<f32>(pixel) + 0.5);
-    let hit = trace_closest(ray);
-    textureStore(out_color, id.xy, vec4<f32>(shade(ray, hit), 1.0));
-    textureStore(out_prim, id.xy, vec4<u32>(hit.prim, 0u, 0u, 0u));
+    let result = render_pixel(pixel);
+    textureStore(out_color, id.xy, vec4<f32>(result.color, 1.0));
+    textureStore(out_prim, id.xy, vec4<u32>(result.prim, 0u, 0u, 0u));
+}
+
+// One ray of a `lambert trace` batch. Misses leave t = FAR, prim = NO_HIT.
+@compute @workgroup_size(64)
+fn trace_rays(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= arrayLength(&rays) {
+        return;
+    }
+    hits[id.x] = trace(rays[id.x], ANY_HIT);
 }

@@ -13,7 +13,9 @@ use crate::gpu::{self, AdapterRequest, Gpu, GpuRenderer};
 use crate::output::Rendered;
 use crate::progress::Progress;
 use crate::render::{DeviceChoice, Engine};
-use crate::scene::{Accel, Scene};
+use crate::layout::NO_HIT;
+use crate::rays;
+use crate::scene::{Accel, Intersect, Scene, validate_spp};
 
 #[derive(Parser)]
 #[command(
@@ -32,6 +34,10 @@ enum Command {
     Render(RenderArgs),
     /// Render a scene on two paths and compare the images.
     Diff(DiffArgs),
+    /// Trace a ray file against a scene or OBJ meshes and write the hits.
+    Trace(TraceArgs),
+    /// Write a scene's camera rays (pixel centres, row by row) as a ray file.
+    CameraRays(CameraRaysArgs),
     /// List adapters, backends and limits.
     Info(AdapterArgs),
 }
@@ -55,6 +61,53 @@ impl AdapterArgs {
     }
 }
 
+/// Settings that override the scene file's.
+#[derive(Args, Clone)]
+struct SceneOptions {
+    #[arg(long, value_enum, default_value_t)]
+    accel: Accel,
+    /// Ray/triangle test [default: the scene's render.intersect, else watertight].
+    #[arg(long, value_enum)]
+    intersect: Option<Intersect>,
+    /// Samples per pixel [default: the scene's render.spp, else 1].
+    #[arg(long)]
+    spp: Option<u32>,
+    /// Seed of the sample jitter [default: the scene's render.seed, else 0].
+    #[arg(long)]
+    seed: Option<u32>,
+}
+
+impl SceneOptions {
+    fn load(&self, path: &Path) -> Result<Scene> {
+        let mut scene = Scene::load(path)?;
+        self.apply(&mut scene)?;
+        Ok(scene)
+    }
+
+    fn apply(&self, scene: &mut Scene) -> Result<()> {
+        scene.accel = self.accel;
+        if let Some(intersect) = self.intersect {
+            scene.intersect = intersect;
+        }
+        if let Some(spp) = self.spp {
+            validate_spp(spp).map_err(|e| Error::Usage(format!("--{e}")))?;
+            scene.spp = spp;
+        }
+        if let Some(seed) = self.seed {
+            scene.seed = seed;
+        }
+        Ok(())
+    }
+}
+
+/// The f64 oracle's version of `scene`: the watertight test, in double
+/// precision, is the reference every variant and device is measured against.
+pub fn oracle_scene(scene: &Scene) -> Scene {
+    let mut oracle = scene.clone();
+    oracle.intersect = Intersect::Watertight;
+    oracle
+}
+
 #[derive(Args)]
 struct RenderArgs {
     scene: PathBuf,
@@ -63,8 +116,8 @@ struct RenderArgs {
     output: PathBuf,
     #[arg(long, value_enum, default_value_t)]
     device: DeviceChoice,
-    #[arg(long, value_enum, default_value_t)]
-    accel: Accel,
+    #[command(flatten)]
+    options: SceneOptions,
     #[command(flatten)]
     adapter: AdapterArgs,
     /// Print nothing but errors.
@@ -104,16 +157,59 @@ struct DiffArgs {
     /// Fraction of pixels allowed to hit a different primitive.
     #[arg(long, default_value_t = Tolerance::default().max_prim_mismatch_fraction)]
     max_prim_mismatch: f64,
-    #[arg(long, value_enum, default_value_t)]
-    accel: Accel,
+    #[command(flatten)]
+    options: SceneOptions,
     #[command(flatten)]
     adapter: AdapterArgs,
+}
+
+#[derive(Args)]
+#[command(group = clap::ArgGroup::new("geometry").required(true).args(["scene", "obj"]))]
+struct TraceArgs {
+    /// Scene file whose meshes and spheres the rays are traced against.
+    #[arg(long)]
+    scene: Option<PathBuf>,
+    /// OBJ files, in order (primitive ids run across them in this order).
+    #[arg(long, num_args = 1..)]
+    obj: Vec<PathBuf>,
+    /// Ray file: 8 little-endian f32 per ray (ox oy oz tmin dx dy dz tmax).
+    #[arg(long)]
+    rays: PathBuf,
+    /// Hit file: t (f32), primitive (u32), u, v (f32) per ray.
+    #[arg(short, long)]
+    output: PathBuf,
+    #[arg(long, value_enum, default_value_t)]
+    device: DeviceChoice,
+    /// Report whether each ray hits anything (the first hit found), not the closest.
+    #[arg(long)]
+    any_hit: bool,
+    #[command(flatten)]
+    options: SceneOptions,
+    /// Also trace in f64 (watertight) and report agreement and t error.
+    #[arg(long)]
+    oracle: bool,
+    /// Print the report as JSON on stdout.
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    adapter: AdapterArgs,
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+#[derive(Args)]
+struct CameraRaysArgs {
+    scene: PathBuf,
+    #[arg(short, long)]
+    output: PathBuf,
 }
 
 pub fn run() -> Result<ExitCode> {
     match Cli::parse().command {
         Command::Render(args) => render(&args),
         Command::Diff(args) => diff(&args),
+        Command::Trace(args) => trace(&args),
+        Command::CameraRays(args) => camera_rays(&args),
         Command::Info(args) => info(&args),
     }
 }
@@ -126,8 +222,7 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
     // Fail on a bad output name before spending time on the render.
     check_output_path(&args.output)?;
     let start = Instant::now();
-    let mut scene = Scene::load(&args.scene)?;
-    scene.accel = args.accel;
+    let scene = args.options.load(&args.scene)?;
     let load = start.elapsed();
 
     let start = Instant::now();
@@ -145,7 +240,7 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
     rendered.image.save(&args.output)?;
     let write = start.elapsed();
     if !args.quiet {
-        let rays = scene.camera.width as f64 * scene.camera.height as f64;
+        let rays = scene.camera.width as f64 * scene.camera.height as f64 * scene.spp as f64;
         eprintln!(
             "wrote {} ({}×{}, {} primitives)",
             args.output.display(),
@@ -199,8 +294,7 @@ pub fn render_gpu(scene: &Scene, request: &AdapterRequest) -> Result<Rendered> {
 }
 
 fn diff(args: &DiffArgs) -> Result<ExitCode> {
-    let mut scene = Scene::load(&args.scene)?;
-    scene.accel = args.accel;
+    let scene = args.options.load(&args.scene)?;
     let tolerance = Tolerance {
         abs: args.tol_abs,
         rel: args.tol_rel,
@@ -208,11 +302,12 @@ fn diff(args: &DiffArgs) -> Result<ExitCode> {
         max_prim_mismatch_fraction: args.max_prim_mismatch,
     };
     let request = args.adapter.request();
-    let cpu = |precision| cpu::render(&scene, precision, &Progress::hidden());
+    let cpu = || cpu::render(&scene, Precision::F32, &Progress::hidden());
+    let oracle = || cpu::render(&oracle_scene(&scene), Precision::F64, &Progress::hidden());
     let (a, b) = match args.compare {
-        Comparison::GpuCpu => (render_gpu(&scene, &request)?, cpu(Precision::F32)),
-        Comparison::GpuOracle => (render_gpu(&scene, &request)?, cpu(Precision::F64)),
-        Comparison::CpuOracle => (cpu(Precision::F32), cpu(Precision::F64)),
+        Comparison::GpuCpu => (render_gpu(&scene, &request)?, cpu()),
+        Comparison::GpuOracle => (render_gpu(&scene, &request)?, oracle()),
+        Comparison::CpuOracle => (cpu(), oracle()),
     };
     let stats = diff::compare(&a, &b, &tolerance)?;
     if let Some(path) = &args.heatmap {
@@ -231,6 +326,82 @@ fn diff(args: &DiffArgs) -> Result<ExitCode> {
     } else {
         ExitCode::FAILURE
     })
+}
+
+/// What `lambert trace --json` prints.
+#[derive(serde::Serialize)]
+struct TraceReport {
+    device: String,
+    intersect: &'static str,
+    any_hit: bool,
+    rays: usize,
+    hits: usize,
+    trace_seconds: f64,
+    mrays_per_second: f64,
+    oracle: Option<rays::Agreement>,
+}
+
+fn trace(args: &TraceArgs) -> Result<ExitCode> {
+    let rays = rays::read_rays(&args.rays)?;
+    let mut scene = match &args.scene {
+        Some(path) => Scene::load(path)?,
+        None => Scene::from_objs(&args.obj)?,
+    };
+    args.options.apply(&mut scene)?;
+    let (mut engine, note) = Engine::open(&scene, args.device, &args.adapter.request())?;
+    if let Some(note) = note {
+        eprintln!("{note}");
+    }
+    engine.prepare_trace(args.any_hit)?;
+    let start = Instant::now();
+    let hits = engine.trace(&scene, &rays, args.any_hit)?;
+    let elapsed = start.elapsed();
+    rays::write_hits(&args.output, &hits)?;
+    let oracle = args.oracle.then(|| {
+        let truth = cpu::trace_rays_f64(&oracle_scene(&scene), &rays, args.any_hit);
+        rays::Agreement::measure(&hits, &truth)
+    });
+    let report = TraceReport {
+        device: engine.describe(),
+        intersect: scene.intersect.name(),
+        any_hit: args.any_hit,
+        rays: rays.len(),
+        hits: hits.iter().filter(|h| h.prim != NO_HIT).count(),
+        trace_seconds: elapsed.as_secs_f64(),
+        mrays_per_second: rays.len() as f64 / elapsed.as_secs_f64() / 1e6,
+        oracle,
+    };
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&report).expect("report serialises")
+        );
+    }
+    if !args.quiet {
+        eprintln!(
+            "traced {} rays ({}, {}) on {}: {} hit; {} ({:.2} Mrays/s); wrote {}",
+            report.rays,
+            report.intersect,
+            if args.any_hit { "any hit" } else { "closest hit" },
+            report.device,
+            report.hits,
+            seconds(elapsed),
+            report.mrays_per_second,
+            args.output.display()
+        );
+        if let Some(agreement) = &report.oracle {
+            eprintln!("{agreement}");
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn camera_rays(args: &CameraRaysArgs) -> Result<ExitCode> {
+    let scene = Scene::load(&args.scene)?;
+    let rays = rays::camera_rays(&scene);
+    rays::write_rays(&args.output, &rays)?;
+    eprintln!("wrote {} camera rays to {}", rays.len(), args.output.display());
+    Ok(ExitCode::SUCCESS)
 }
 
 fn info(args: &AdapterArgs) -> Result<ExitCode> {

@@ -1,6 +1,7 @@
 //! The GPU path: adapter choice, scene upload, and tiled dispatch of
 //! `shaders/trace.wgsl` through wgpu.
 
+use std::borrow::Cow;
 use std::sync::{Arc, Mutex, mpsc};
 use std::time::{Duration, Instant};
 
@@ -8,7 +9,7 @@ use wgpu::util::DeviceExt;
 
 use crate::cpu::f32::CameraBasis;
 use crate::error::{Error, Result};
-use crate::layout::{Params, Sphere, Triangle, TriangleNormals};
+use crate::layout::{Hit, LIGHT_DIRECTIONAL, LIGHT_POINT, NO_HIT, Params, Ray, Sphere, Triangle, TriangleNormals};
 use crate::output::{Image, Rendered};
 use crate::progress::Progress;
 use crate::scene::{Accel, Camera, Scene};
@@ -223,8 +224,15 @@ pub struct GpuTimings {
 /// a new camera only rewrites the uniform.
 pub struct GpuRenderer {
     gpu: Gpu,
+    module: wgpu::ShaderModule,
+    constants: Vec<(&'static str, f64)>,
+    scene_layout: wgpu::BindGroupLayout,
+    rays_layout: wgpu::BindGroupLayout,
     pipeline: wgpu::ComputePipeline,
-    bind_group: wgpu::BindGroup,
+    scene_group: wgpu::BindGroup,
+    image_group: wgpu::BindGroup,
+    /// `trace_rays` pipelines, closest hit and any hit, built on first use.
+    trace_pipelines: [Option<wgpu::ComputePipeline>; 2],
     params: Params,
     params_buffer: wgpu::Buffer,
     color_texture: wgpu::Texture,
@@ -262,16 +270,92 @@ pub fn params_for(scene: &Scene, camera: &Camera) -> Params {
         tile_origin: [0, 0],
         num_lights: scene.lights.len() as u32,
         shadows: scene.shadows as u32,
+        spp: scene.spp,
+        seed: scene.seed,
+        strata_x: crate::scene::strata_columns(scene.spp),
+        _pad: 0,
     }
 }
 
-/// At least one element: wgpu rejects empty storage bindings.
-fn non_empty<T: bytemuck::Pod + Default>(items: &[T]) -> Vec<u8> {
+/// At least one element: wgpu rejects empty storage bindings. Borrows the
+/// scene's own memory otherwise, so that upload makes no host copy.
+fn non_empty<T: bytemuck::Pod + Default>(items: &[T]) -> Cow<'_, [u8]> {
     if items.is_empty() {
-        bytemuck::bytes_of(&T::default()).to_vec()
+        Cow::Owned(bytemuck::bytes_of(&T::default()).to_vec())
     } else {
-        bytemuck::cast_slice(items).to_vec()
+        Cow::Borrowed(bytemuck::cast_slice(items))
     }
+}
+
+enum BindingKind {
+    Uniform,
+    Storage,
+    StorageWrite,
+    Image(wgpu::TextureFormat),
+}
+
+fn bind_group_layout(
+    device: &wgpu::Device,
+    label: &str,
+    bindings: &[(u32, BindingKind)],
+) -> wgpu::BindGroupLayout {
+    let buffer = |ty| wgpu::BindingType::Buffer {
+        ty,
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    };
+    let entries: Vec<wgpu::BindGroupLayoutEntry> = bindings
+        .iter()
+        .map(|(binding, kind)| wgpu::BindGroupLayoutEntry {
+            binding: *binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: match kind {
+                BindingKind::Uniform => buffer(wgpu::BufferBindingType::Uniform),
+                BindingKind::Storage => {
+                    buffer(wgpu::BufferBindingType::Storage { read_only: true })
+                }
+                BindingKind::StorageWrite => {
+                    buffer(wgpu::BufferBindingType::Storage { read_only: false })
+                }
+                BindingKind::Image(format) => wgpu::BindingType::StorageTexture {
+                    access: wgpu::StorageTextureAccess::WriteOnly,
+                    format: *format,
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                },
+            },
+            count: None,
+        })
+        .collect();
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(label),
+        entries: &entries,
+    })
+}
+
+fn compute_pipeline(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    entry_point: &str,
+    layouts: &[&wgpu::BindGroupLayout],
+    constants: &[(&str, f64)],
+) -> wgpu::ComputePipeline {
+    let layouts: Vec<Option<&wgpu::BindGroupLayout>> = layouts.iter().copied().map(Some).collect();
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(entry_point),
+        bind_group_layouts: &layouts,
+        immediate_size: 0,
+    });
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(entry_point),
+        layout: Some(&pipeline_layout),
+        module,
+        entry_point: Some(entry_point),
+        compilation_options: wgpu::PipelineCompilationOptions {
+            constants,
+            zero_initialize_workgroup_memory: false,
+        },
+        cache: None,
+    })
 }
 
 impl GpuRenderer {
@@ -324,108 +408,95 @@ impl GpuRenderer {
         let color_staging = staging("color readback", 16);
         let prim_staging = staging("prim readback", 4);
 
-        let storage = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only: true },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
-        let storage_texture = |binding, format| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::StorageTexture {
-                access: wgpu::StorageTextureAccess::WriteOnly,
-                format,
-                view_dimension: wgpu::TextureViewDimension::D2,
-            },
-            count: None,
-        };
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("scene"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
-                storage(1),
-                storage(2),
-                storage(3),
-                storage(4),
-                storage(5),
-                storage_texture(6, wgpu::TextureFormat::Rgba32Float),
-                storage_texture(7, wgpu::TextureFormat::R32Uint),
-                storage(8),
-                storage(9),
+        let scene_layout = bind_group_layout(
+            device,
+            "scene",
+            &[
+                (0, BindingKind::Uniform),
+                (1, BindingKind::Storage),
+                (2, BindingKind::Storage),
+                (3, BindingKind::Storage),
+                (4, BindingKind::Storage),
+                (5, BindingKind::Storage),
+                (6, BindingKind::Storage),
+                (7, BindingKind::Storage),
             ],
-        });
-        let color_view = color_texture.create_view(&Default::default());
-        let prim_view = prim_texture.create_view(&Default::default());
+        );
+        let image_layout = bind_group_layout(
+            device,
+            "image tile",
+            &[
+                (0, BindingKind::Image(wgpu::TextureFormat::Rgba32Float)),
+                (1, BindingKind::Image(wgpu::TextureFormat::R32Uint)),
+            ],
+        );
+        let rays_layout = bind_group_layout(
+            device,
+            "rays",
+            &[(2, BindingKind::Storage), (3, BindingKind::StorageWrite)],
+        );
         let mut entries = vec![wgpu::BindGroupEntry {
             binding: 0,
             resource: params_buffer.as_entire_binding(),
         }];
-        // Storage buffers sit at bindings 1–5 and 8–9, around the textures.
-        let buffer_bindings = [1, 2, 3, 4, 5, 8, 9];
-        entries.extend(buffers.iter().zip(buffer_bindings).map(|(b, binding)| {
-            wgpu::BindGroupEntry {
-                binding,
-                resource: b.as_entire_binding(),
-            }
-        }));
-        entries.push(wgpu::BindGroupEntry {
-            binding: 6,
-            resource: wgpu::BindingResource::TextureView(&color_view),
-        });
-        entries.push(wgpu::BindGroupEntry {
-            binding: 7,
-            resource: wgpu::BindingResource::TextureView(&prim_view),
-        });
+        entries.extend(
+            buffers
+                .iter()
+                .zip(1..)
+                .map(|(b, binding)| wgpu::BindGroupEntry {
+                    binding,
+                    resource: b.as_entire_binding(),
+                }),
+        );
+        let color_view = color_texture.create_view(&Default::default());
+        let prim_view = prim_texture.create_view(&Default::default());
 
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let scene_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("scene"),
-            layout: &layout,
+            layout: &scene_layout,
             entries: &entries,
+        });
+        let image_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("image tile"),
+            layout: &image_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(&color_view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&prim_view),
+                },
+            ],
         });
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("trace.wgsl"),
             source: wgpu::ShaderSource::Wgsl(SHADER_SOURCE.into()),
         });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("scene"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
         let constants = specialisation(scene);
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("render"),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("render"),
-            compilation_options: wgpu::PipelineCompilationOptions {
-                constants: &constants,
-                zero_initialize_workgroup_memory: false,
-            },
-            cache: None,
-        });
+        let pipeline = compute_pipeline(
+            device,
+            &module,
+            "render",
+            &[&scene_layout, &image_layout],
+            &constants,
+        );
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu(format!("building the pipeline: {e}")));
         }
         gpu.wait()?;
         Ok(GpuRenderer {
             gpu,
+            module,
+            constants,
+            scene_layout,
+            rays_layout,
             pipeline,
-            bind_group,
+            scene_group,
+            image_group,
+            trace_pipelines: [None, None],
             params,
             params_buffer,
             color_texture,
@@ -452,10 +523,11 @@ impl GpuRenderer {
         let mut rgb = vec![[0.0f32; 3]; width as usize * height as usize];
         let mut prims = vec![0u32; width as usize * height as usize];
         let mut timings = GpuTimings::default();
-        for tile_y in (0..height).step_by(TILE as usize) {
-            for tile_x in (0..width).step_by(TILE as usize) {
-                let tile_width = TILE.min(width - tile_x);
-                let tile_height = TILE.min(height - tile_y);
+        let side = self.tile_side();
+        for tile_y in (0..height).step_by(side as usize) {
+            for tile_x in (0..width).step_by(side as usize) {
+                let tile_width = side.min(width - tile_x);
+                let tile_height = side.min(height - tile_y);
                 let start = Instant::now();
                 self.dispatch_tile(tile_x, tile_y, tile_width, tile_height)?;
                 timings.render += start.elapsed();
@@ -482,9 +554,18 @@ impl GpuRenderer {
         ))
     }
 
+    /// Side of the tiles `render` dispatches: TILE at 1 sample per pixel,
+    /// smaller as samples grow, so that a dispatch traces about as many
+    /// camera rays (TILE²) at any spp.
+    pub fn tile_side(&self) -> u32 {
+        let side = TILE / self.params.spp.isqrt().max(1);
+        side.next_multiple_of(WORKGROUP).clamp(WORKGROUP, TILE)
+    }
+
     /// Number of tiles `render` dispatches for the current camera.
     pub fn tile_count(&self) -> u64 {
-        self.params.width.div_ceil(TILE) as u64 * self.params.height.div_ceil(TILE) as u64
+        let side = self.tile_side();
+        self.params.width.div_ceil(side) as u64 * self.params.height.div_ceil(side) as u64
     }
 
     fn dispatch_tile(&mut self, x: u32, y: u32, width: u32, height: u32) -> Result<()> {
@@ -496,7 +577,8 @@ impl GpuRenderer {
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
             pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &self.bind_group, &[]);
+            pass.set_bind_group(0, &self.scene_group, &[]);
+            pass.set_bind_group(1, &self.image_group, &[]);
             pass.dispatch_workgroups(width.div_ceil(WORKGROUP), height.div_ceil(WORKGROUP), 1);
         }
         gpu.queue.submit([encoder.finish()]);
@@ -575,11 +657,125 @@ impl GpuRenderer {
         self.prim_staging.unmap();
         Ok(())
     }
+
+    /// Builds the `trace_rays` pipeline for closest or any hit, if not built
+    /// yet (so that timing a trace can leave the compile out).
+    pub fn prepare_trace(&mut self, any_hit: bool) -> Result<()> {
+        let index = any_hit as usize;
+        if self.trace_pipelines[index].is_some() {
+            return Ok(());
+        }
+        let mut constants = self.constants.clone();
+        constants.push(("ANY_HIT", if any_hit { 1.0 } else { 0.0 }));
+        let scope = self.gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let pipeline = compute_pipeline(
+            &self.gpu.device,
+            &self.module,
+            "trace_rays",
+            &[&self.scene_layout, &self.rays_layout],
+            &constants,
+        );
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(Error::Gpu(format!("building the trace pipeline: {e}")));
+        }
+        self.trace_pipelines[index] = Some(pipeline);
+        self.gpu.wait()
+    }
+
+    /// Traces `rays` against the resident scene: closest hits, or with
+    /// `any_hit` the first hit each ray finds. Misses come back as t = +inf,
+    /// prim = NO_HIT. Rays go up in batches so that no dispatch runs long.
+    pub fn trace_rays(&mut self, rays: &[Ray], any_hit: bool) -> Result<Vec<Hit>> {
+        const BATCH: usize = 1 << 20;
+        const RAY_WORKGROUP: usize = 64;
+        let pipeline_index = any_hit as usize;
+        self.prepare_trace(any_hit)?;
+        let gpu = &self.gpu;
+        let batch = BATCH.min(rays.len()).max(1);
+        let ray_bytes = (batch * size_of::<Ray>()) as u64;
+        let hit_bytes = (batch * size_of::<Hit>()) as u64;
+        let buffer = |label, size, usage| {
+            gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        use wgpu::BufferUsages as U;
+        let ray_buffer = buffer("rays", ray_bytes, U::STORAGE | U::COPY_DST);
+        let hit_buffer = buffer("hits", hit_bytes, U::STORAGE | U::COPY_SRC);
+        let staging = buffer("hits readback", hit_bytes, U::COPY_DST | U::MAP_READ);
+        let mut hits = Vec::with_capacity(rays.len());
+        for chunk in rays.chunks(batch) {
+            let ray_len = (chunk.len() * size_of::<Ray>()) as u64;
+            let hit_len = (chunk.len() * size_of::<Hit>()) as u64;
+            gpu.queue
+                .write_buffer(&ray_buffer, 0, bytemuck::cast_slice(chunk));
+            // Bound to the batch's length: the shader stops at arrayLength.
+            let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("rays"),
+                layout: &self.rays_layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                            buffer: &ray_buffer,
+                            offset: 0,
+                            size: wgpu::BufferSize::new(ray_len),
+                        }),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 3,
+                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                            buffer: &hit_buffer,
+                            offset: 0,
+                            size: wgpu::BufferSize::new(hit_len),
+                        }),
+                    },
+                ],
+            });
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            {
+                let mut pass = encoder.begin_compute_pass(&Default::default());
+                pass.set_pipeline(self.trace_pipelines[pipeline_index].as_ref().unwrap());
+                pass.set_bind_group(0, &self.scene_group, &[]);
+                pass.set_bind_group(1, &group, &[]);
+                pass.dispatch_workgroups(chunk.len().div_ceil(RAY_WORKGROUP) as u32, 1, 1);
+            }
+            encoder.copy_buffer_to_buffer(&hit_buffer, 0, &staging, 0, hit_len);
+            gpu.queue.submit([encoder.finish()]);
+            let (sender, receiver) = mpsc::channel();
+            staging.map_async(wgpu::MapMode::Read, ..hit_len, move |r| {
+                let _ = sender.send(r);
+            });
+            gpu.wait()?;
+            receiver
+                .recv()
+                .map_err(|e| Error::Gpu(format!("readback: {e}")))?
+                .map_err(|e| Error::Gpu(format!("readback: {e}")))?;
+            {
+                let mapped = staging
+                    .get_mapped_range(..hit_len)
+                    .map_err(|e| Error::Gpu(format!("readback: {e}")))?;
+                hits.extend(bytemuck::cast_slice::<u8, Hit>(&mapped).iter().map(|h| {
+                    if h.prim == NO_HIT {
+                        Hit::MISS
+                    } else {
+                        *h
+                    }
+                }));
+            }
+            staging.unmap();
+        }
+        Ok(hits)
+    }
 }
 
 /// Pipeline-overridable constants that strip what `scene` does not use.
 pub fn specialisation(scene: &Scene) -> Vec<(&'static str, f64)> {
     let flag = |b: bool| if b { 1.0 } else { 0.0 };
+    let has_light = |kind| scene.lights.iter().any(|l| l.kind == kind);
     vec![
         ("HAS_TRIANGLES", flag(!scene.triangles.is_empty())),
         ("HAS_SPHERES", flag(!scene.spheres.is_empty())),
@@ -587,6 +783,9 @@ pub fn specialisation(scene: &Scene) -> Vec<(&'static str, f64)> {
             "HAS_SHADOWS",
             flag(scene.shadows && !scene.lights.is_empty()),
         ),
+        ("HAS_POINT_LIGHTS", flag(has_light(LIGHT_POINT))),
+        ("HAS_DIRECTIONAL_LIGHTS", flag(has_light(LIGHT_DIRECTIONAL))),
         ("USE_BVH", flag(scene.accel == Accel::Bvh)),
+        ("INTERSECT", scene.intersect.shader_value() as f64),
     ]
 }

@@ -38,6 +38,13 @@ pub struct Params {
     pub num_lights: u32,
     /// 1 to cast shadow rays, 0 not to.
     pub shadows: u32,
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Seed of the sample jitter.
+    pub seed: u32,
+    /// Columns of the stratified sample grid (a divisor of spp).
+    pub strata_x: u32,
+    pub _pad: u32,
 }
 
 #[repr(C)]
@@ -98,6 +105,8 @@ pub struct Ray {
     pub tmax: f32,
 }
 
+/// A ray-query answer: the hit point is (1−u−v)·v0 + u·v1 + v·v2 of triangle
+/// `prim` (u = v = 0 for spheres).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct Hit {
@@ -105,6 +114,16 @@ pub struct Hit {
     pub prim: u32,
     pub u: f32,
     pub v: f32,
+}
+
+impl Hit {
+    /// What a ray that hits nothing reports.
+    pub const MISS: Hit = Hit {
+        t: f32::INFINITY,
+        prim: NO_HIT,
+        u: 0.0,
+        v: 0.0,
+    };
 }
 
 /// One BVH node; see `bvh` for how the shader decodes it.

@@ -4,7 +4,7 @@
 //! Where to look: `shaders/trace.wgsl` (the kernel), `cpu::kernel` (its CPU
 //! twin: intersection in `intersect_triangle`/`intersect_sphere`, shading in
 //! `shade`), `gpu` (wgpu host code), `scene` and `loading` (input),
-//! `output` (images), `diff` (comparisons), `cli` (the `lambert` binary).
+//! `output` (images), `diff` (comparisons), `rays` (ray queries), `cli` (the `lambert` binary).
 
 pub mod bvh;
 pub mod cli;
@@ -16,6 +16,7 @@ pub mod layout;
 pub mod loading;
 pub mod output;
 pub mod progress;
+pub mod rays;
 pub mod render;
 pub mod scene;
 

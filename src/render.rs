@@ -6,6 +6,7 @@ use std::time::{Duration, Instant};
 use crate::cpu::{self, Precision};
 use crate::error::Result;
 use crate::gpu::{AdapterRequest, Gpu, GpuRenderer};
+use crate::layout::{Hit, Ray};
 use crate::output::Rendered;
 use crate::progress::Progress;
 use crate::scene::Scene;
@@ -110,6 +111,23 @@ impl Engine {
                     },
                 ))
             }
+        }
+    }
+
+    /// Readies the device for `trace` (builds its pipeline).
+    pub fn prepare_trace(&mut self, any_hit: bool) -> Result<()> {
+        match self {
+            Engine::Gpu(renderer) => renderer.prepare_trace(any_hit),
+            Engine::Cpu => Ok(()),
+        }
+    }
+
+    /// Traces a ray query against `scene` (which must be the scene the
+    /// engine was opened with).
+    pub fn trace(&mut self, scene: &Scene, rays: &[Ray], any_hit: bool) -> Result<Vec<Hit>> {
+        match self {
+            Engine::Gpu(renderer) => renderer.trace_rays(rays, any_hit),
+            Engine::Cpu => Ok(cpu::trace_rays(scene, rays, any_hit)),
         }
     }
 }

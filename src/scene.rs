@@ -65,6 +65,9 @@ pub struct RenderSettings {
     pub background: Rgb,
     pub ambient: Rgb,
     pub shadows: bool,
+    pub spp: u32,
+    pub seed: u32,
+    pub intersect: Intersect,
 }
 
 impl Default for RenderSettings {
@@ -73,9 +76,15 @@ impl Default for RenderSettings {
             background: Rgb::Uniform(0.0),
             ambient: Rgb::Uniform(0.0),
             shadows: true,
+            spp: 1,
+            seed: 0,
+            intersect: Intersect::default(),
         }
     }
 }
+
+/// Most samples per pixel a render may ask for.
+pub const MAX_SPP: u32 = 4096;
 
 /// A colour given as one number (grey) or as `[r, g, b]`.
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
@@ -167,6 +176,54 @@ pub struct Scene {
     pub bvh: Bvh,
     /// How rays find their hits; both paths follow it.
     pub accel: Accel,
+    /// The ray/triangle test both paths use.
+    pub intersect: Intersect,
+    /// Samples per pixel (1: the pixel centre).
+    pub spp: u32,
+    /// Seed of the sample jitter.
+    pub seed: u32,
+}
+
+/// `--intersect`: the ray/triangle test. See docs/accuracy.md for what each
+/// costs and how far each can be trusted.
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Deserialize, serde::Serialize, clap::ValueEnum,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum Intersect {
+    /// The lecture's plane intersection and three edge tests.
+    Seed,
+    /// Möller–Trumbore.
+    MollerTrumbore,
+    /// Woop, Benthin and Wald (JCGT 2013): no ray passes between triangles
+    /// that share an edge.
+    #[default]
+    Watertight,
+}
+
+impl Intersect {
+    pub const ALL: [Intersect; 3] = [
+        Intersect::Seed,
+        Intersect::MollerTrumbore,
+        Intersect::Watertight,
+    ];
+
+    /// The shader's INTERSECT override value.
+    pub fn shader_value(self) -> u32 {
+        match self {
+            Intersect::Seed => 0,
+            Intersect::MollerTrumbore => 1,
+            Intersect::Watertight => 2,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Intersect::Seed => "seed",
+            Intersect::MollerTrumbore => "moller-trumbore",
+            Intersect::Watertight => "watertight",
+        }
+    }
 }
 
 /// `--accel`: the BVH, or testing every primitive (the reference that tests
@@ -195,6 +252,7 @@ impl Scene {
         validate_camera(&file.camera).map_err(fail)?;
         let background = colour("render.background", file.render.background).map_err(fail)?;
         let ambient = colour("render.ambient", file.render.ambient).map_err(fail)?;
+        validate_spp(file.render.spp).map_err(|e| fail(format!("render.{e}")))?;
 
         let mut scene = Scene {
             camera: file.camera,
@@ -208,6 +266,9 @@ impl Scene {
             lights: Vec::new(),
             bvh: Bvh::default(),
             accel: Accel::default(),
+            intersect: file.render.intersect,
+            spp: file.render.spp,
+            seed: file.render.seed,
         };
 
         for (i, entry) in file.mesh.iter().enumerate() {
@@ -267,6 +328,55 @@ impl Scene {
             return Err(fail(
                 "the scene is empty: it needs a [[mesh]] with faces or a [[sphere]]".into(),
             ));
+        }
+        scene.rebuild_bvh();
+        Ok(scene)
+    }
+
+    /// A scene of OBJ meshes alone, in the given order, for ray queries
+    /// (`lambert trace --obj`): no lights, and a camera that nothing uses.
+    pub fn from_objs(paths: &[PathBuf]) -> Result<Scene> {
+        let mut scene = Scene {
+            camera: Camera {
+                eye: [0.0, 0.0, 1.0],
+                look_at: [0.0; 3],
+                up: default_up(),
+                vfov: 60.0,
+                width: 1,
+                height: 1,
+            },
+            background: [0.0; 3],
+            ambient: [0.0; 3],
+            shadows: false,
+            triangles: Vec::new(),
+            normals: Vec::new(),
+            spheres: Vec::new(),
+            materials: Vec::new(),
+            lights: Vec::new(),
+            bvh: Bvh::default(),
+            accel: Accel::default(),
+            intersect: Intersect::default(),
+            spp: 1,
+            seed: 0,
+        };
+        let identity = Transform {
+            linear: DMat3::IDENTITY,
+            normal: DMat3::IDENTITY,
+            translate: DVec3::ZERO,
+        };
+        for path in paths {
+            let mesh = loading::load_obj(path, NormalMode::Face)?;
+            scene.add_mesh(path, mesh, &identity, [0.8; 3])?;
+        }
+        if scene.triangles.is_empty() {
+            return Err(Error::Usage(format!(
+                "{}: no faces to trace against",
+                paths
+                    .iter()
+                    .map(|p| p.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )));
         }
         scene.rebuild_bvh();
         Ok(scene)
@@ -417,6 +527,21 @@ fn validate_camera(camera: &Camera) -> Result<(), String> {
         ));
     }
     validate_resolution(camera.width, camera.height).map_err(|e| format!("camera: {e}"))
+}
+
+/// Columns of the stratified sample grid: the largest divisor of `spp` not
+/// above its square root, so that the grid is as square as `spp` allows and
+/// every cell holds one sample.
+pub fn strata_columns(spp: u32) -> u32 {
+    (1..=spp.isqrt().max(1)).rev().find(|d| spp % d == 0).unwrap_or(1)
+}
+
+/// Checks a sample count.
+pub fn validate_spp(spp: u32) -> Result<(), String> {
+    if spp == 0 || spp > MAX_SPP {
+        return Err(format!("spp = {spp} must be between 1 and {MAX_SPP}"));
+    }
+    Ok(())
 }
 
 /// Checks an image size against what memory and tiling can serve.

@@ -1,14 +1,18 @@
 // The CPU twin of shaders/trace.wgsl, function by function with the same
 // names. Included twice by src/cpu/mod.rs: once with `Real = f32` (the
 // reference the GPU is diffed against) and once with `Real = f64` (the
-// oracle). The including module defines `Real`, `Vec3` and `add_ulps`.
+// oracle). The including module defines `Real` and `Vec3`.
 
 use crate::bvh::MAX_DEPTH;
 use crate::layout::{FLAG_SMOOTH, LIGHT_POINT, NO_HIT};
-use crate::scene::{Accel, Camera, Scene};
+use crate::scene::{Accel, Camera, Intersect, Scene};
 
-/// Widens a box's exit distance by 2·gamma(3) (pbrt-v4), as in the shader.
-const BOX_SLACK: Real = 1.0000004;
+/// Widens a box's exit distance so that rounding cannot cull a box the ray
+/// grazes, as in the shader.
+const BOX_SLACK: Real = 1.000001;
+
+/// Unit roundoff (pbrt's MachineEpsilon), for error bounds.
+const MACHINE_EPSILON: Real = Real::EPSILON * 0.5;
 
 /// "No hit yet" distance, as in the shader.
 pub const FAR: Real = Real::MAX;
@@ -21,6 +25,18 @@ pub struct Ray {
     pub tmax: Real,
 }
 
+impl Ray {
+    /// A ray of a ray query, in this precision.
+    pub fn from_query(ray: &crate::layout::Ray) -> Ray {
+        Ray {
+            origin: vec3(ray.origin),
+            tmin: ray.tmin as Real,
+            dir: vec3(ray.dir),
+            tmax: ray.tmax as Real,
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
     pub t: Real,
@@ -29,8 +45,18 @@ pub struct Hit {
     pub v: Real,
 }
 
+/// Precomputed per ray for the watertight test: axes permuted so that the
+/// direction's largest component is z, and the shear onto +z.
+#[derive(Clone, Copy, Debug)]
+pub struct Shear {
+    pub axes: [usize; 3],
+    pub s: Vec3,
+}
+
 pub struct Surface {
     pub position: Vec3,
+    /// How far `position` may be off the surface, per axis (self_hit_bound).
+    pub error: Vec3,
     pub geometric_normal: Vec3,
     pub shading_normal: Vec3,
     pub albedo: Vec3,
@@ -94,6 +120,7 @@ pub struct Kernel<'a> {
     pub scene: &'a Scene,
     background: Vec3,
     ambient: Vec3,
+    strata_x: u32,
 }
 
 impl<'a> Kernel<'a> {
@@ -103,6 +130,7 @@ impl<'a> Kernel<'a> {
             scene,
             background: vec3(scene.background),
             ambient: vec3(scene.ambient),
+            strata_x: crate::scene::strata_columns(scene.spp),
         }
     }
 
@@ -120,12 +148,28 @@ impl<'a> Kernel<'a> {
         }
     }
 
+    /// The scene's ray/triangle test.
+    pub fn intersect_triangle(
+        &self,
+        ray: &Ray,
+        shear: &Shear,
+        a: Vec3,
+        b: Vec3,
+        c: Vec3,
+    ) -> (Real, Real, Real) {
+        match self.scene.intersect {
+            Intersect::Seed => intersect_triangle_seed(ray, a, b, c),
+            Intersect::MollerTrumbore => intersect_triangle_moller_trumbore(ray, a, b, c),
+            Intersect::Watertight => intersect_triangle_watertight(ray, shear, a, b, c),
+        }
+    }
+
     /// (t, u, v) of primitive `prim` (triangles first, then spheres).
-    pub fn intersect_primitive(&self, ray: &Ray, prim: u32) -> (Real, Real, Real) {
+    pub fn intersect_primitive(&self, ray: &Ray, shear: &Shear, prim: u32) -> (Real, Real, Real) {
         let triangles = &self.scene.triangles;
         if (prim as usize) < triangles.len() {
             let tri = &triangles[prim as usize];
-            return intersect_triangle(ray, vec3(tri.v0), vec3(tri.v1), vec3(tri.v2));
+            return self.intersect_triangle(ray, shear, vec3(tri.v0), vec3(tri.v1), vec3(tri.v2));
         }
         let sphere = &self.scene.spheres[prim as usize - triangles.len()];
         (intersect_sphere(ray, vec3(sphere.center), sphere.radius as Real), 0.0, 0.0)
@@ -133,8 +177,8 @@ impl<'a> Kernel<'a> {
 
     /// Tests `prim`; if it is hit nearer than ray.tmax, makes it the hit and
     /// shortens the ray. Returns whether it did.
-    pub fn record_hit(&self, ray: &mut Ray, hit: &mut Hit, prim: u32) -> bool {
-        let (t, u, v) = self.intersect_primitive(ray, prim);
+    pub fn record_hit(&self, ray: &mut Ray, shear: &Shear, hit: &mut Hit, prim: u32) -> bool {
+        let (t, u, v) = self.intersect_primitive(ray, shear, prim);
         if t < ray.tmax {
             ray.tmax = t;
             *hit = Hit { t, prim, u, v };
@@ -145,7 +189,7 @@ impl<'a> Kernel<'a> {
 
     /// Closest hit through the BVH, nearer child first; with `any_hit`, the
     /// first hit found.
-    pub fn trace_bvh(&self, ray_in: Ray, any_hit: bool) -> Hit {
+    pub fn trace_bvh(&self, ray_in: Ray, shear: &Shear, any_hit: bool) -> Hit {
         let nodes = &self.scene.bvh.nodes;
         let mut ray = ray_in;
         let mut hit = miss();
@@ -166,7 +210,7 @@ impl<'a> Kernel<'a> {
             let node = &nodes[index as usize];
             if node.count > 0 {
                 for &prim in &self.scene.bvh.prims[node.first as usize..(node.first + node.count) as usize] {
-                    if self.record_hit(&mut ray, &mut hit, prim) && any_hit {
+                    if self.record_hit(&mut ray, shear, &mut hit, prim) && any_hit {
                         return hit;
                     }
                 }
@@ -190,11 +234,11 @@ impl<'a> Kernel<'a> {
     }
 
     /// Every primitive in turn: the reference the BVH is tested against.
-    pub fn trace_brute_force(&self, ray_in: Ray, any_hit: bool) -> Hit {
+    pub fn trace_brute_force(&self, ray_in: Ray, shear: &Shear, any_hit: bool) -> Hit {
         let mut ray = ray_in;
         let mut hit = miss();
         for prim in 0..self.scene.primitive_count() as u32 {
-            if self.record_hit(&mut ray, &mut hit, prim) && any_hit {
+            if self.record_hit(&mut ray, shear, &mut hit, prim) && any_hit {
                 return hit;
             }
         }
@@ -204,9 +248,10 @@ impl<'a> Kernel<'a> {
     pub fn trace(&self, ray_in: Ray, any_hit: bool) -> Hit {
         let mut ray = ray_in;
         ray.tmax = ray.tmax.min(FAR);
+        let shear = ray_shear(ray.dir);
         match self.scene.accel {
-            Accel::Bvh => self.trace_bvh(ray, any_hit),
-            Accel::BruteForce => self.trace_brute_force(ray, any_hit),
+            Accel::Bvh => self.trace_bvh(ray, &shear, any_hit),
+            Accel::BruteForce => self.trace_brute_force(ray, &shear, any_hit),
         }
     }
 
@@ -227,6 +272,7 @@ impl<'a> Kernel<'a> {
             let (v0, v1, v2) = (vec3(tri.v0), vec3(tri.v1), vec3(tri.v2));
             let w = 1.0 - hit.u - hit.v;
             let position = w * v0 + hit.u * v1 + hit.v * v2;
+            let error = self_hit_bound(v0.abs().max(v1.abs()).max(v2.abs()));
             let geometric = face_forward((v1 - v0).cross(v2 - v0).normalize(), ray.dir);
             let mut shading = geometric;
             if tri.flags & FLAG_SMOOTH != 0 {
@@ -240,6 +286,7 @@ impl<'a> Kernel<'a> {
             }
             return Surface {
                 position,
+                error,
                 geometric_normal: geometric,
                 shading_normal: shading,
                 albedo: vec3(scene.materials[tri.material as usize].albedo),
@@ -249,9 +296,11 @@ impl<'a> Kernel<'a> {
         let center = vec3(sphere.center);
         let outward = (ray.origin + hit.t * ray.dir - center).normalize();
         let position = center + (sphere.radius as Real) * outward;
+        let error = self_hit_bound(center.abs() + sphere.radius as Real);
         let normal = face_forward(outward, ray.dir);
         Surface {
             position,
+            error,
             geometric_normal: normal,
             shading_normal: normal,
             albedo: vec3(scene.materials[sphere.material as usize].albedo),
@@ -265,7 +314,7 @@ impl<'a> Kernel<'a> {
         }
         let surface = self.surface_at(ray, hit);
         let mut color = self.ambient * surface.albedo;
-        let origin = offset_ray_origin(surface.position, surface.geometric_normal);
+        let origin = offset_ray_origin(surface.position, surface.error, surface.geometric_normal);
         for light in &self.scene.lights {
             let light_vector = vec3(light.vector);
             let (to_light, irradiance, shadow_ray) = if light.kind == LIGHT_POINT {
@@ -307,25 +356,52 @@ impl<'a> Kernel<'a> {
         color
     }
 
-    /// One pixel at its centre: colour and the primitive the camera ray hit.
+    /// Position of sample `sample` in pixel (x, y): the centre when spp = 1,
+    /// else a jittered point in its cell of the stratified grid.
+    pub fn sample_position(&self, x: u32, y: u32, sample: u32) -> (Real, Real) {
+        let scene = self.scene;
+        if scene.spp == 1 {
+            return (x as Real + 0.5, y as Real + 0.5);
+        }
+        let h = pcg_hash(x ^ pcg_hash(y ^ pcg_hash(sample ^ pcg_hash(scene.seed))));
+        let (jx, jy) = (unit_float(h), unit_float(pcg_hash(h)));
+        let strata_y = scene.spp / self.strata_x;
+        let (cx, cy) = ((sample % self.strata_x) as Real, (sample / self.strata_x) as Real);
+        (
+            x as Real + (cx + jx) / self.strata_x as Real,
+            y as Real + (cy + jy) / strata_y as Real,
+        )
+    }
+
+    /// One pixel: the box-filtered mean of its samples, and the primitive
+    /// its first sample hit.
     pub fn render_pixel(&self, x: u32, y: u32) -> (Vec3, u32) {
-        let ray = self.camera_ray(x as Real + 0.5, y as Real + 0.5);
-        let hit = self.trace_closest(ray);
-        (self.shade(&ray, &hit), hit.prim)
+        let mut sum = Vec3::ZERO;
+        let mut first_prim = NO_HIT;
+        for sample in 0..self.scene.spp {
+            let (px, py) = self.sample_position(x, y, sample);
+            let ray = self.camera_ray(px, py);
+            let hit = self.trace_closest(ray);
+            if sample == 0 {
+                first_prim = hit.prim;
+            }
+            sum += self.shade(&ray, &hit);
+        }
+        (sum / self.scene.spp as Real, first_prim)
     }
 }
 
 /// The lecture's test: plane hit t = n·(a − o)/(n·d), then three edge tests
 /// that must all agree in sign. Returns (t, u, v); t = FAR on a miss.
-pub fn intersect_triangle(ray: &Ray, a: Vec3, b: Vec3, c: Vec3) -> (Real, Real, Real) {
+pub fn intersect_triangle_seed(ray: &Ray, a: Vec3, b: Vec3, c: Vec3) -> (Real, Real, Real) {
     let n = (b - a).cross(c - a);
     let n_dot_d = n.dot(ray.dir);
     if n_dot_d == 0.0 {
-        return (FAR, 0.0, 0.0);
+        return NO_TRIANGLE_HIT;
     }
     let t = n.dot(a - ray.origin) / n_dot_d;
     if !(t > ray.tmin && t < ray.tmax) {
-        return (FAR, 0.0, 0.0);
+        return NO_TRIANGLE_HIT;
     }
     let p = ray.origin + t * ray.dir;
     let e0 = (b - a).cross(p - a).dot(n);
@@ -334,10 +410,101 @@ pub fn intersect_triangle(ray: &Ray, a: Vec3, b: Vec3, c: Vec3) -> (Real, Real, 
     let inside =
         (e0 >= 0.0 && e1 >= 0.0 && e2 >= 0.0) || (e0 <= 0.0 && e1 <= 0.0 && e2 <= 0.0);
     if !inside {
-        return (FAR, 0.0, 0.0);
+        return NO_TRIANGLE_HIT;
     }
     let nn = n.dot(n);
     (t, e2 / nn, e0 / nn)
+}
+
+const NO_TRIANGLE_HIT: (Real, Real, Real) = (FAR, 0.0, 0.0);
+
+/// Möller–Trumbore, with no epsilon on the determinant.
+pub fn intersect_triangle_moller_trumbore(
+    ray: &Ray,
+    a: Vec3,
+    b: Vec3,
+    c: Vec3,
+) -> (Real, Real, Real) {
+    let e1 = b - a;
+    let e2 = c - a;
+    let p = ray.dir.cross(e2);
+    let det = e1.dot(p);
+    if det == 0.0 {
+        return NO_TRIANGLE_HIT;
+    }
+    let inv_det = 1.0 / det;
+    let s = ray.origin - a;
+    let u = s.dot(p) * inv_det;
+    if !(u >= 0.0 && u <= 1.0) {
+        return NO_TRIANGLE_HIT;
+    }
+    let q = s.cross(e1);
+    let v = ray.dir.dot(q) * inv_det;
+    if !(v >= 0.0 && u + v <= 1.0) {
+        return NO_TRIANGLE_HIT;
+    }
+    let t = e2.dot(q) * inv_det;
+    if !(t > ray.tmin && t < ray.tmax) {
+        return NO_TRIANGLE_HIT;
+    }
+    (t, u, v)
+}
+
+pub fn ray_shear(dir: Vec3) -> Shear {
+    let m = dir.abs();
+    let kz = if m.x >= m.y && m.x >= m.z {
+        0
+    } else if m.y >= m.z {
+        1
+    } else {
+        2
+    };
+    let mut kx = (kz + 1) % 3;
+    let mut ky = (kx + 1) % 3;
+    if dir[kz] < 0.0 {
+        std::mem::swap(&mut kx, &mut ky);
+    }
+    Shear {
+        axes: [kx, ky, kz],
+        s: Vec3::new(dir[kx] / dir[kz], dir[ky] / dir[kz], 1.0 / dir[kz]),
+    }
+}
+
+/// Woop, Benthin and Wald (JCGT 2013), as in the shader: edge values of
+/// exactly 0 count as inside.
+pub fn intersect_triangle_watertight(
+    ray: &Ray,
+    shear: &Shear,
+    a: Vec3,
+    b: Vec3,
+    c: Vec3,
+) -> (Real, Real, Real) {
+    let [kx, ky, kz] = shear.axes;
+    let oa = a - ray.origin;
+    let ob = b - ray.origin;
+    let oc = c - ray.origin;
+    let ax = oa[kx] - shear.s.x * oa[kz];
+    let ay = oa[ky] - shear.s.y * oa[kz];
+    let bx = ob[kx] - shear.s.x * ob[kz];
+    let by = ob[ky] - shear.s.y * ob[kz];
+    let cx = oc[kx] - shear.s.x * oc[kz];
+    let cy = oc[ky] - shear.s.y * oc[kz];
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        return NO_TRIANGLE_HIT;
+    }
+    let det = u + v + w;
+    if det == 0.0 {
+        return NO_TRIANGLE_HIT;
+    }
+    let t_scaled = u * shear.s.z * oa[kz] + v * shear.s.z * ob[kz] + w * shear.s.z * oc[kz];
+    let t = t_scaled / det;
+    if !(t > ray.tmin && t < ray.tmax) {
+        return NO_TRIANGLE_HIT;
+    }
+    (t, v / det, w / det)
 }
 
 /// Nearest root of |o + t·d − c|² = r² inside (tmin, tmax); FAR on a miss.
@@ -394,16 +561,44 @@ fn face_forward(n: Vec3, dir: Vec3) -> Vec3 {
     if n.dot(dir) > 0.0 { -n } else { n }
 }
 
-/// Ray Tracing Gems ch. 6: move p off its surface along n by a few ULPs of p
-/// (or a fixed amount near the origin).
-pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
-    let offset = |p: Real, n: Real| -> Real {
-        if p.abs() < 1.0 / 32.0 {
-            p + (1.0 / 65536.0) * n
-        } else {
-            let of_i = (256.0 * n) as i32;
-            add_ulps(p, if p < 0.0 { -of_i } else { of_i })
+fn gamma(n: Real) -> Real {
+    n * MACHINE_EPSILON / (1.0 - n * MACHINE_EPSILON)
+}
+
+/// How far a point on a primitive whose coordinates reach `extent` may be
+/// off it, with the margin our intersection tests need to see a ray leaving
+/// it as clear: 32 ULPs of the largest coordinate (see the shader).
+fn self_hit_bound(extent: Vec3) -> Vec3 {
+    Vec3::splat(gamma(32.0) * extent.max_element())
+}
+
+/// The next float away from `x` in the direction of `towards`'s sign.
+fn next_float(x: Real, towards: Real) -> Real {
+    if towards > 0.0 { x.next_up() } else { x.next_down() }
+}
+
+/// pbrt-v4's OffsetRayOrigin: move p off its surface along n by the
+/// projection of its error bound onto n, then one ULP further per axis.
+pub fn offset_ray_origin(p: Vec3, error: Vec3, n: Vec3) -> Vec3 {
+    let d = n.abs().dot(error);
+    let offset = d * n;
+    let mut po = p + offset;
+    for axis in 0..3 {
+        if offset[axis] != 0.0 {
+            po[axis] = next_float(po[axis], offset[axis]);
         }
-    };
-    Vec3::new(offset(p.x, n.x), offset(p.y, n.y), offset(p.z, n.z))
+    }
+    po
+}
+
+/// PCG hash (Jarzynski and Olano, JCGT 2020), as in the shader.
+pub fn pcg_hash(x: u32) -> u32 {
+    let state = x.wrapping_mul(747796405).wrapping_add(2891336453);
+    let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277803737);
+    (word >> 22) ^ word
+}
+
+/// A uniform number in [0, 1) from the top 24 bits of `h`.
+fn unit_float(h: u32) -> Real {
+    (h >> 8) as Real * (1.0 / 16777216.0)
 }

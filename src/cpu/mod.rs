@@ -4,6 +4,7 @@
 
 use rayon::prelude::*;
 
+use crate::layout::{self, NO_HIT};
 use crate::output::{Image, Rendered};
 use crate::progress::Progress;
 use crate::scene::Scene;
@@ -14,11 +15,6 @@ pub mod f32 {
     pub type Real = f32;
     pub type Vec3 = glam::Vec3;
 
-    /// Steps `x` by `k` units in the last place (Ray Tracing Gems ch. 6).
-    fn add_ulps(x: Real, k: i32) -> Real {
-        Real::from_bits((x.to_bits() as i32).wrapping_add(k) as u32)
-    }
-
     include!("kernel.rs");
 }
 
@@ -27,10 +23,6 @@ pub mod f32 {
 pub mod f64 {
     pub type Real = f64;
     pub type Vec3 = glam::DVec3;
-
-    fn add_ulps(x: Real, k: i32) -> Real {
-        Real::from_bits((x.to_bits() as i64).wrapping_add(k as i64) as u64)
-    }
 
     include!("kernel.rs");
 }
@@ -77,4 +69,46 @@ pub fn render(scene: &Scene, precision: Precision, progress: &Progress) -> Rende
         },
         prims,
     }
+}
+
+/// Traces a ray query on the CPU in single precision, as the GPU does:
+/// closest hits, or with `any_hit` the first hit found. Misses report
+/// `layout::Hit::MISS`.
+pub fn trace_rays(scene: &Scene, rays: &[layout::Ray], any_hit: bool) -> Vec<layout::Hit> {
+    let kernel = f32::Kernel::new(scene);
+    rays.par_iter()
+        .with_min_len(1024)
+        .map(|ray| {
+            let hit = kernel.trace(f32::Ray::from_query(ray), any_hit);
+            if hit.prim == NO_HIT {
+                layout::Hit::MISS
+            } else {
+                layout::Hit {
+                    t: hit.t,
+                    prim: hit.prim,
+                    u: hit.u,
+                    v: hit.v,
+                }
+            }
+        })
+        .collect()
+}
+
+/// The same query in double precision: the oracle. Misses have t = +inf.
+pub fn trace_rays_f64(scene: &Scene, rays: &[layout::Ray], any_hit: bool) -> Vec<f64::Hit> {
+    let kernel = f64::Kernel::new(scene);
+    rays.par_iter()
+        .with_min_len(1024)
+        .map(|ray| {
+            let hit = kernel.trace(f64::Ray::from_query(ray), any_hit);
+            if hit.prim == NO_HIT {
+                f64::Hit {
+                    t: ::core::primitive::f64::INFINITY,
+                    ..hit
+                }
+            } else {
+                hit
+            }
+        })
+        .collect()
 }
