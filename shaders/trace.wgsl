@@ -492,7 +492,9 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
         return Surface(position, error, geometric, shading, materials[tri.material].albedo);
     }
     let sphere = spheres[hit.prim - params.num_triangles];
-    let outward = normalize(ray.origin + hit.t * ray.dir - sphere.center);
+    // Relative to the centre first: o − c is exact when both are near each
+    // other, so far from the origin the normal keeps its precision.
+    let outward = normalize((ray.origin - sphere.center) + hit.t * ray.dir);
     // Re-projected onto the sphere to undo the rounding of t.
     let position = sphere.center + sphere.radius * outward;
     let error = self_hit_bound(abs(sphere.center) + sphere.radius);

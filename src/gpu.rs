@@ -227,8 +227,11 @@ pub struct GpuRenderer {
     module: wgpu::ShaderModule,
     constants: Vec<(&'static str, f64)>,
     scene_layout: wgpu::BindGroupLayout,
+    image_layout: wgpu::BindGroupLayout,
     rays_layout: wgpu::BindGroupLayout,
-    pipeline: wgpu::ComputePipeline,
+    /// Built on first use, as are the trace pipelines: a ray query never
+    /// compiles the render entry point, nor a render the query's.
+    render_pipeline: Option<wgpu::ComputePipeline>,
     scene_group: wgpu::BindGroup,
     image_group: wgpu::BindGroup,
     /// `trace_rays` pipelines, closest hit and any hit, built on first use.
@@ -476,15 +479,8 @@ impl GpuRenderer {
             source: wgpu::ShaderSource::Wgsl(SHADER_SOURCE.into()),
         });
         let constants = specialisation(scene);
-        let pipeline = compute_pipeline(
-            device,
-            &module,
-            "render",
-            &[&scene_layout, &image_layout],
-            &constants,
-        );
         if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(Error::Gpu(format!("building the pipeline: {e}")));
+            return Err(Error::Gpu(format!("uploading the scene: {e}")));
         }
         gpu.wait()?;
         Ok(GpuRenderer {
@@ -492,8 +488,9 @@ impl GpuRenderer {
             module,
             constants,
             scene_layout,
+            image_layout,
             rays_layout,
-            pipeline,
+            render_pipeline: None,
             scene_group,
             image_group,
             trace_pipelines: [None, None],
@@ -523,6 +520,7 @@ impl GpuRenderer {
         let mut rgb = vec![[0.0f32; 3]; width as usize * height as usize];
         let mut prims = vec![0u32; width as usize * height as usize];
         let mut timings = GpuTimings::default();
+        self.prepare_render()?;
         let side = self.tile_side();
         for tile_y in (0..height).step_by(side as usize) {
             for tile_x in (0..width).step_by(side as usize) {
@@ -576,7 +574,7 @@ impl GpuRenderer {
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&self.pipeline);
+            pass.set_pipeline(self.render_pipeline.as_ref().expect("prepared"));
             pass.set_bind_group(0, &self.scene_group, &[]);
             pass.set_bind_group(1, &self.image_group, &[]);
             pass.dispatch_workgroups(width.div_ceil(WORKGROUP), height.div_ceil(WORKGROUP), 1);
@@ -658,28 +656,48 @@ impl GpuRenderer {
         Ok(())
     }
 
-    /// Builds the `trace_rays` pipeline for closest or any hit, if not built
-    /// yet (so that timing a trace can leave the compile out).
-    pub fn prepare_trace(&mut self, any_hit: bool) -> Result<()> {
-        let index = any_hit as usize;
-        if self.trace_pipelines[index].is_some() {
-            return Ok(());
-        }
-        let mut constants = self.constants.clone();
-        constants.push(("ANY_HIT", if any_hit { 1.0 } else { 0.0 }));
+    fn build_pipeline(
+        &self,
+        entry_point: &str,
+        output_layout: &wgpu::BindGroupLayout,
+        constants: &[(&str, f64)],
+    ) -> Result<wgpu::ComputePipeline> {
         let scope = self.gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let pipeline = compute_pipeline(
             &self.gpu.device,
             &self.module,
-            "trace_rays",
-            &[&self.scene_layout, &self.rays_layout],
-            &constants,
+            entry_point,
+            &[&self.scene_layout, output_layout],
+            constants,
         );
         if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(Error::Gpu(format!("building the trace pipeline: {e}")));
+            return Err(Error::Gpu(format!("building the {entry_point} pipeline: {e}")));
         }
-        self.trace_pipelines[index] = Some(pipeline);
-        self.gpu.wait()
+        self.gpu.wait()?;
+        Ok(pipeline)
+    }
+
+    /// Builds the render pipeline if not built yet (so that timing a render
+    /// can leave the compile out).
+    pub fn prepare_render(&mut self) -> Result<()> {
+        if self.render_pipeline.is_none() {
+            let pipeline = self.build_pipeline("render", &self.image_layout, &self.constants)?;
+            self.render_pipeline = Some(pipeline);
+        }
+        Ok(())
+    }
+
+    /// Builds the `trace_rays` pipeline for closest or any hit, if not built
+    /// yet.
+    pub fn prepare_trace(&mut self, any_hit: bool) -> Result<()> {
+        let index = any_hit as usize;
+        if self.trace_pipelines[index].is_none() {
+            let mut constants = self.constants.clone();
+            constants.push(("ANY_HIT", if any_hit { 1.0 } else { 0.0 }));
+            let pipeline = self.build_pipeline("trace_rays", &self.rays_layout, &constants)?;
+            self.trace_pipelines[index] = Some(pipeline);
+        }
+        Ok(())
     }
 
     /// Traces `rays` against the resident scene: closest hits, or with

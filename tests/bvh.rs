@@ -5,7 +5,7 @@ mod common;
 use common::*;
 use lambert::Scene;
 use lambert::bvh::{Bvh, MAX_DEPTH};
-use lambert::cpu::f32::{Kernel, Ray};
+use lambert::cpu::f32::{Kernel, Ray, ray_shear};
 use lambert::layout::{NO_HIT, Sphere, Triangle};
 use lambert::scene::Accel;
 use proptest::prelude::*;
@@ -56,24 +56,6 @@ fn triangle(a: [f32; 3], b: [f32; 3], c: [f32; 3]) -> Triangle {
     }
 }
 
-/// A scene of the given primitives, camera and lights irrelevant.
-fn scene_of(triangles: Vec<Triangle>, spheres: Vec<Sphere>) -> Scene {
-    let mut s = scene(
-        "[camera]\neye = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\nvfov = 40.0\nwidth = 8\nheight = 8\n[[sphere]]\ncenter = [0.0, 0.0, 0.0]\nradius = 1.0\n",
-    );
-    let material = s.spheres[0].material;
-    s.triangles = triangles
-        .into_iter()
-        .map(|t| Triangle { material, ..t })
-        .collect();
-    s.spheres = spheres
-        .into_iter()
-        .map(|sp| Sphere { material, ..sp })
-        .collect();
-    s.rebuild_bvh();
-    s
-}
-
 /// Closest hits through the BVH and by brute force agree (prim and t) for
 /// each ray; any-hit agrees on occlusion.
 fn check_rays(scene: &Scene, rays: &[Ray]) {
@@ -93,7 +75,9 @@ fn check_rays(scene: &Scene, rays: &[Ray]) {
             b.t
         );
         if a.prim != b.prim {
-            let t_other = fast.intersect_primitive(ray, a.prim).0;
+            let t_other = fast
+                .intersect_primitive(ray, &ray_shear(ray.dir), a.prim)
+                .0;
             assert!(
                 (t_other - b.t).abs() <= 1e-5 * b.t.abs(),
                 "prim {} vs {} for {ray:?}",

@@ -82,6 +82,10 @@ fn host_structs_match_wgsl_layout() {
             tile_origin,
             num_lights,
             shadows,
+            spp,
+            seed,
+            strata_x,
+            _pad,
         }
     );
     check_layout!(

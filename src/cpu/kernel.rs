@@ -294,7 +294,7 @@ impl<'a> Kernel<'a> {
         }
         let sphere = &scene.spheres[(hit.prim - num_triangles) as usize];
         let center = vec3(sphere.center);
-        let outward = (ray.origin + hit.t * ray.dir - center).normalize();
+        let outward = ((ray.origin - center) + hit.t * ray.dir).normalize();
         let position = center + (sphere.radius as Real) * outward;
         let error = self_hit_bound(center.abs() + sphere.radius as Real);
         let normal = face_forward(outward, ray.dir);

@@ -1,0 +1,667 @@
+//! Numerical stress suite (docs/accuracy.md): watertightness, self-
+//! intersection, edge cases, scale invariance, agreement with the f64 oracle,
+//! and GPU against CPU on ray sets. Every test runs on the CPU path and on
+//! the GPU (lavapipe in CI) and prints its figures (`--nocapture`).
+
+mod common;
+
+use common::*;
+use glam::{DVec3, Vec3};
+use lambert::Scene;
+use lambert::cpu;
+use lambert::layout::{Hit, NO_HIT, Ray, Triangle};
+use lambert::rays::{Agreement, ulp_distance};
+use lambert::scene::Intersect;
+use proptest::prelude::{ProptestConfig, prop, prop_assert, prop_assert_eq, prop_assume, proptest};
+
+fn triangle(v: [Vec3; 3]) -> Triangle {
+    Triangle {
+        v0: v[0].to_array(),
+        v1: v[1].to_array(),
+        v2: v[2].to_array(),
+        ..Default::default()
+    }
+}
+
+fn with_intersect(scene: &Scene, intersect: Intersect) -> Scene {
+    let mut s = scene.clone();
+    s.intersect = intersect;
+    s
+}
+
+fn ray(origin: Vec3, dir: Vec3) -> Ray {
+    Ray {
+        origin: origin.to_array(),
+        tmin: 0.0,
+        dir: dir.to_array(),
+        tmax: f32::INFINITY,
+    }
+}
+
+fn misses(hits: &[Hit]) -> usize {
+    hits.iter().filter(|h| h.prim == NO_HIT).count()
+}
+
+// ------------------------------------------------------------ watertightness
+
+/// The closed meshes of the leak test, as f64 vertices and faces, about 20
+/// units across.
+fn closed_meshes() -> Vec<(&'static str, Vec<DVec3>, Vec<[u32; 3]>)> {
+    let (ico_v, ico_f) = icosphere(10.0, 3);
+    let cube = lambert::loading::load_obj(
+        &asset("scenes/meshes/cube.obj"),
+        lambert::loading::NormalMode::Face,
+    )
+    .unwrap();
+    let bunny = lambert::loading::load_obj(
+        &asset("scenes/meshes/bunny_lowres.obj"),
+        lambert::loading::NormalMode::Face,
+    )
+    .unwrap();
+    let scale = |m: lambert::loading::Mesh, size: f64| {
+        let lo = m.positions.iter().fold(DVec3::MAX, |a, &b| a.min(b));
+        let hi = m.positions.iter().fold(DVec3::MIN, |a, &b| a.max(b));
+        let k = size / (hi - lo).max_element();
+        let centre = 0.5 * (lo + hi);
+        let v = m.positions.iter().map(|&p| (p - centre) * k).collect();
+        (v, m.triangles)
+    };
+    let (cube_v, cube_f) = scale(cube, 20.0);
+    let (bunny_v, bunny_f) = scale(bunny, 20.0);
+    vec![
+        ("icosphere", ico_v, ico_f),
+        ("cube", cube_v, cube_f),
+        ("bunny_lowres", bunny_v, bunny_f),
+    ]
+}
+
+const OFFSETS: [[f64; 3]; 3] = [[0.0; 3], [1.5e5, 1.2e3, -2.2e5], [1e6, 1e6, 1e6]];
+
+/// Rays from the mesh's centre aimed exactly at every vertex, every edge
+/// midpoint and three random points on every edge (all rounded to f32, as
+/// a user would compute them).
+fn edge_aimed_rays(vertices: &[Vec3], faces: &[[u32; 3]], rng: &mut Rng) -> Vec<Ray> {
+    let centre = vertices.iter().map(|v| v.as_dvec3()).sum::<DVec3>() / vertices.len() as f64;
+    let origin = centre.as_vec3();
+    let mut targets: Vec<Vec3> = vertices.to_vec();
+    for f in faces {
+        for (a, b) in [(f[0], f[1]), (f[1], f[2]), (f[2], f[0])] {
+            // Each edge once: from its lower-numbered vertex.
+            if a > b {
+                continue;
+            }
+            let (a, b) = (vertices[a as usize], vertices[b as usize]);
+            targets.push((a + b) * 0.5);
+            for _ in 0..3 {
+                targets.push(a.lerp(b, rng.unit() as f32));
+            }
+        }
+    }
+    targets.iter().map(|&t| ray(origin, t - origin)).collect()
+}
+
+#[test]
+fn watertight_meshes_do_not_leak() {
+    let mut rng = Rng(11);
+    let mut watertight_leaks = 0;
+    println!("leaks (rays from inside that escape), BVH traversal:");
+    println!("{:<14} {:>22} {:>7} {:>16} {:>16}", "mesh", "offset", "rays", "variant", "CPU / GPU");
+    for (name, vertices, faces) in closed_meshes() {
+        for offset in OFFSETS {
+            let offset = DVec3::from(offset);
+            let v32: Vec<Vec3> = vertices.iter().map(|&v| (v + offset).as_vec3()).collect();
+            let triangles: Vec<Triangle> = faces
+                .iter()
+                .map(|f| triangle(f.map(|i| v32[i as usize])))
+                .collect();
+            let scene = scene_of(triangles, vec![]);
+            let rays = edge_aimed_rays(&v32, &faces, &mut rng);
+            // Every ray is aimed at the surface: the oracle must hit with all.
+            let oracle = cpu::trace_rays_f64(&scene, &rays, false);
+            assert_eq!(
+                oracle.iter().filter(|h| h.prim == NO_HIT).count(),
+                0,
+                "{name} at {offset}: the f64 oracle leaks"
+            );
+            for intersect in Intersect::ALL {
+                let s = with_intersect(&scene, intersect);
+                let cpu_leaks = misses(&trace_cpu(&s, &rays, false));
+                let gpu_leaks = misses(&trace_gpu(&s, &rays, false));
+                println!(
+                    "{name:<14} {:>22} {:>7} {:>16} {:>7} / {:<7}",
+                    format!("{offset}"),
+                    rays.len(),
+                    intersect.name(),
+                    cpu_leaks,
+                    gpu_leaks
+                );
+                if intersect == Intersect::Watertight {
+                    watertight_leaks += cpu_leaks + gpu_leaks;
+                }
+            }
+        }
+    }
+    assert_eq!(watertight_leaks, 0, "the watertight test let rays through");
+}
+
+// --------------------------------------------------------- self-intersection
+
+/// Triangles at random scales from 1e-8 to 1e8, each placed at a random
+/// distance of up to a few times its size from the origin.
+fn random_scale_triangles(rng: &mut Rng, n: usize) -> Vec<Triangle> {
+    (0..n)
+        .map(|_| {
+            let scale = 10f64.powf(rng.range(-8.0, 8.0));
+            let centre = rng.direction() * scale * rng.range(0.0, 4.0);
+            triangle([0, 1, 2].map(|_| {
+                (centre + rng.direction() * scale * rng.range(0.2, 1.0)).as_vec3()
+            }))
+        })
+        .collect()
+}
+
+#[test]
+fn rays_spawned_from_hits_never_hit_their_own_triangle() {
+    let mut rng = Rng(5);
+    let triangles = random_scale_triangles(&mut rng, 3000);
+    let base = scene_of(triangles.clone(), vec![]);
+    // Aim a ray at a random interior point of each triangle from its front.
+    let primary: Vec<Ray> = triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = [t.v0, t.v1, t.v2].map(|v| Vec3::from(v).as_dvec3());
+            let n = (b - a).cross(c - a).normalize();
+            let (u, v) = (rng.range(0.1, 0.45), rng.range(0.1, 0.45));
+            let p = a + u * (b - a) + v * (c - a);
+            let size = (b - a).length().max((c - a).length());
+            let origin = p + n * size;
+            ray(origin.as_vec3(), (p - origin).as_vec3())
+        })
+        .collect();
+    println!("self-hits of spawned rays (3000 triangles, scales 1e-8..1e8, 4 rays each):");
+    let mut default_self_hits = 0;
+    for intersect in Intersect::ALL {
+        let scene = with_intersect(&base, intersect);
+        let kernel = cpu::f32::Kernel::new(&scene);
+        let hits = trace_cpu(&scene, &primary, false);
+        // Spawn from each hit as shading does: the hit point, its error
+        // bound and the offset along the normal facing the incoming ray.
+        let mut spawned = Vec::new();
+        let mut sources = Vec::new();
+        for (r, h) in primary.iter().zip(&hits) {
+            if h.prim == NO_HIT {
+                continue;
+            }
+            let kr = cpu::f32::Ray::from_query(r);
+            let kh = cpu::f32::Hit {
+                t: h.t,
+                prim: h.prim,
+                u: h.u,
+                v: h.v,
+            };
+            let surface = kernel.surface_at(&kr, &kh);
+            let n = surface.geometric_normal;
+            let origin = cpu::f32::offset_ray_origin(surface.position, surface.error, n);
+            for _ in 0..4 {
+                let mut d = rng.direction().as_vec3();
+                if d.dot(n) < 0.0 {
+                    d = -d;
+                }
+                spawned.push(ray(origin, d));
+                sources.push(h.prim);
+            }
+        }
+        assert!(spawned.len() > 4 * 2900, "too few primary hits: {}", spawned.len());
+        let count = |hits: Vec<Hit>| {
+            hits.iter()
+                .zip(&sources)
+                .filter(|(h, s)| h.prim == **s)
+                .count()
+        };
+        let cpu_self = count(trace_cpu(&scene, &spawned, false));
+        let gpu_self = count(trace_gpu(&scene, &spawned, false));
+        println!(
+            "  {:<16} CPU {cpu_self} / GPU {gpu_self} of {}",
+            intersect.name(),
+            spawned.len()
+        );
+        if intersect == Intersect::default() {
+            default_self_hits = cpu_self + gpu_self;
+        }
+    }
+    assert_eq!(default_self_hits, 0, "spawned rays hit their own triangle");
+}
+
+/// A quad scaled by `scale` and moved by `translate`, lit at 60° by a
+/// directional light, seen from above at an angle; shadows on.
+fn lit_plane(scale: f64, translate: [f64; 3], intersect: Intersect) -> Scene {
+    let at = |p: [f64; 3]| {
+        format!(
+            "[{:e}, {:e}, {:e}]",
+            p[0] * scale + translate[0],
+            p[1] * scale + translate[1],
+            p[2] * scale + translate[2]
+        )
+    };
+    let mut s = scene(&format!(
+        "[camera]\neye = {}\nlook_at = {}\nvfov = 40.0\nwidth = 48\nheight = 48\n\
+         [[mesh]]\nobj = \"meshes/quad.obj\"\nscale = {:e}\ntranslate = {}\nalbedo = 0.5\n\
+         [[directional_light]]\ndirection = [0.0, -0.5, -0.8660254037844386]\nirradiance = 2.0\n",
+        at([0.0, 1.0, 1.2]),
+        at([0.0; 3]),
+        4.0 * scale,
+        at([0.0; 3]),
+    ));
+    s.intersect = intersect;
+    s
+}
+
+#[test]
+fn a_lit_plane_has_no_shadow_acne_at_any_scale() {
+    // Every pixel on the plane is k·E·cos 60° = 0.5·2·0.5 exactly lit.
+    let expected = 0.5f32;
+    println!("shadow acne: plane pixels darker than k·E·cosθ");
+    for (scale, translate) in [
+        (1e-6, [0.0; 3]),
+        (1e-3, [0.0; 3]),
+        (1.0, [0.0; 3]),
+        (1e3, [0.0; 3]),
+        (1e6, [0.0; 3]),
+        (1.0, [1e5, 1e5, 1e5]),
+        (1e3, [1.5e5, 1.2e3, -2.2e5]),
+    ] {
+        for intersect in Intersect::ALL {
+            let scene = lit_plane(scale, translate, intersect);
+            for (path, image) in [("CPU", render_cpu(&scene)), ("GPU", render_gpu(&scene))] {
+                let on_plane: Vec<f32> = image
+                    .image
+                    .rgb
+                    .iter()
+                    .zip(&image.prims)
+                    .filter(|(_, p)| **p != NO_HIT)
+                    .map(|(c, _)| c[1])
+                    .collect();
+                let acne = on_plane
+                    .iter()
+                    .filter(|&&v| (v - expected).abs() > 1e-5)
+                    .count();
+                assert!(on_plane.len() > 1000, "the camera misses the plane");
+                if acne > 0 || intersect == Intersect::default() {
+                    println!(
+                        "  scale {scale:e}, translate {translate:?}, {} on {path}: {acne} of {}",
+                        intersect.name(),
+                        on_plane.len()
+                    );
+                }
+                if intersect == Intersect::default() {
+                    assert_eq!(acne, 0, "shadow acne at scale {scale}, translate {translate:?} on {path}");
+                }
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------- edge cases
+
+#[test]
+fn parallel_in_plane_and_degenerate_cases_give_no_false_hits() {
+    let unit = [
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(1.0, 0.0, 0.0),
+        Vec3::new(0.0, 1.0, 0.0),
+    ];
+    let z = Vec3::Z;
+    let cases: Vec<(&str, Vec<Triangle>, Vec<Ray>)> = vec![
+        (
+            "ray in the triangle's plane (n·d = 0)",
+            vec![triangle(unit)],
+            vec![
+                ray(Vec3::new(-1.0, 0.25, 0.0), Vec3::X),
+                ray(Vec3::new(0.25, -1.0, 0.0), Vec3::Y),
+                ray(Vec3::new(0.2, 0.2, 0.0), Vec3::new(1.0, 1.0, 0.0)),
+            ],
+        ),
+        (
+            "ray parallel above the plane",
+            vec![triangle(unit)],
+            vec![ray(Vec3::new(-1.0, 0.25, 1e-3), Vec3::X)],
+        ),
+        (
+            "n·d within 1e-7 of 0, crossing the plane far outside",
+            vec![triangle(unit)],
+            vec![
+                ray(Vec3::new(-1.0, 0.25, 1.0), Vec3::new(1.0, 0.0, -1e-7)),
+                ray(Vec3::new(-1.0, 0.25, -1.0), Vec3::new(1.0, 0.0, 1e-7)),
+            ],
+        ),
+        (
+            "origin in the plane, leaving it",
+            vec![triangle(unit)],
+            vec![
+                ray(Vec3::new(0.25, 0.25, 0.0), z),
+                ray(Vec3::new(0.25, 0.25, 0.0), -z),
+                ray(Vec3::new(0.25, 0.25, 0.0), Vec3::new(1.0, 0.0, 1.0)),
+            ],
+        ),
+        (
+            "zero-area, collinear and repeated-vertex triangles",
+            vec![
+                triangle([unit[0], unit[0], unit[0]]),
+                triangle([unit[0], unit[1], Vec3::new(2.0, 0.0, 0.0)]),
+                triangle([unit[0], unit[1], unit[1]]),
+            ],
+            vec![
+                ray(Vec3::new(0.0, 0.0, 1.0), -z),
+                ray(Vec3::new(0.5, 0.0, 1.0), -z),
+                ray(Vec3::new(1.0, 0.0, 1.0), -z),
+                ray(Vec3::new(-1.0, 0.0, 0.0), Vec3::X),
+                ray(Vec3::new(0.5, 1.0, 0.0), -Vec3::Y),
+            ],
+        ),
+    ];
+    for (what, triangles, rays) in cases {
+        let base = scene_of(triangles, vec![]);
+        for intersect in Intersect::ALL {
+            let scene = with_intersect(&base, intersect);
+            for (path, hits) in [
+                ("CPU", trace_cpu(&scene, &rays, false)),
+                ("GPU", trace_gpu(&scene, &rays, false)),
+            ] {
+                for (r, h) in rays.iter().zip(&hits) {
+                    assert_eq!(
+                        h.prim,
+                        NO_HIT,
+                        "{what}: {} on {path} hits at t = {} with {r:?}",
+                        intersect.name(),
+                        h.t
+                    );
+                    assert!(h.t.is_infinite() && !h.u.is_nan() && !h.v.is_nan());
+                }
+            }
+        }
+        println!("{what}: no hits on either path, any variant");
+    }
+    // A nearly parallel ray that does cross the triangle still hits it.
+    let scene = scene_of(vec![triangle(unit)], vec![]);
+    let grazing = [ray(Vec3::new(-1.0, 0.25, 1e-7), Vec3::new(1.0, 0.0, -1e-7 / 1.25))];
+    for intersect in Intersect::ALL {
+        let s = with_intersect(&scene, intersect);
+        let oracle = cpu::trace_rays_f64(&s, &grazing, false)[0];
+        assert_eq!(oracle.prim, 0, "the oracle misses the grazing ray");
+        for hits in [trace_cpu(&s, &grazing, false), trace_gpu(&s, &grazing, false)] {
+            assert_eq!(hits[0].prim, 0, "{} misses a grazing ray that crosses it", intersect.name());
+        }
+    }
+}
+
+#[test]
+fn invalid_rays_are_rejected_with_the_ray_and_field_named() {
+    let good = ray(Vec3::ZERO, Vec3::Z);
+    let path = std::path::Path::new("probe.rays");
+    let bytes = |rays: &[Ray]| lambert::rays::rays_to_bytes(rays);
+    assert!(lambert::rays::parse_rays(&bytes(&[good]), path).is_ok());
+    let cases: Vec<(Ray, &str)> = vec![
+        (Ray { origin: [f32::NAN, 0.0, 0.0], ..good }, "ox is NaN"),
+        (Ray { dir: [0.0, f32::INFINITY, 0.0], ..good }, "dy is inf"),
+        (Ray { tmin: f32::NAN, ..good }, "tmin is NaN"),
+        (Ray { tmax: f32::NAN, ..good }, "tmax is NaN"),
+        (Ray { dir: [0.0; 3], ..good }, "direction (dx, dy, dz) is zero"),
+        (Ray { tmin: 2.0, tmax: 1.0, ..good }, "tmin = 2 is greater than tmax = 1"),
+    ];
+    for (bad, expected) in cases {
+        let err = lambert::rays::parse_rays(&bytes(&[good, bad]), path)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("probe.rays") && err.contains("ray 1 (byte offset 32)") && err.contains(expected),
+            "{err}"
+        );
+    }
+    let err = lambert::rays::parse_rays(&bytes(&[good])[..30], path).unwrap_err().to_string();
+    assert!(err.contains("30 bytes is not a whole number of rays"), "{err}");
+}
+
+#[test]
+fn degenerate_geometry_renders_without_nan_pixels() {
+    let mut s = load("edge_cases");
+    let extra = [
+        triangle([Vec3::ZERO; 3]),
+        triangle([Vec3::ZERO, Vec3::X, Vec3::X * 2.0]),
+        triangle([Vec3::ZERO, Vec3::Y, Vec3::Y]),
+    ];
+    let material = s.triangles[0].material;
+    s.triangles
+        .extend(extra.iter().map(|t| Triangle { material, ..*t }));
+    if !s.normals.is_empty() {
+        s.normals.resize(s.triangles.len(), Default::default());
+    }
+    s.rebuild_bvh();
+    for intersect in Intersect::ALL {
+        let scene = with_intersect(&s, intersect);
+        for (path, r) in [("CPU", render_cpu(&scene)), ("GPU", render_gpu(&scene))] {
+            assert!(
+                r.image.rgb.iter().flatten().all(|c| c.is_finite()),
+                "{} on {path}: a pixel is not finite",
+                intersect.name()
+            );
+        }
+    }
+}
+
+// ----------------------------------------------------------- scale invariance
+
+/// The spheres scene with every length multiplied by `scale`, then moved by
+/// `translate`; point-light intensities scale by scale² so that irradiance
+/// stays the same.
+fn transformed_spheres(scale: f64, translate: f64) -> Scene {
+    let mut s = load("spheres");
+    let map = |p: [f32; 3]| p.map(|c| (c as f64 * scale + translate) as f32);
+    let map64 = |p: [f64; 3]| p.map(|c| c * scale + translate);
+    s.camera.eye = map64(s.camera.eye);
+    s.camera.look_at = map64(s.camera.look_at);
+    for t in &mut s.triangles {
+        t.v0 = map(t.v0);
+        t.v1 = map(t.v1);
+        t.v2 = map(t.v2);
+    }
+    for sp in &mut s.spheres {
+        sp.center = map(sp.center);
+        sp.radius = (sp.radius as f64 * scale) as f32;
+    }
+    for l in &mut s.lights {
+        if l.kind == lambert::layout::LIGHT_POINT {
+            l.vector = map(l.vector);
+            l.color = l.color.map(|c| (c as f64 * scale * scale) as f32);
+        }
+    }
+    s.rebuild_bvh();
+    s
+}
+
+#[test]
+fn scaled_and_translated_scenes_render_the_same_image() {
+    let original = transformed_spheres(1.0, 0.0);
+    let reference = render_cpu(&original);
+    // Scaling alone (by powers far from 1) changes nothing but rounding:
+    // at most 0.5% of pixels may differ by more than 1e-3 per channel, and
+    // 0.5% hit another primitive.
+    let scaled = lambert::diff::Tolerance {
+        abs: 1e-3,
+        rel: 1e-3,
+        max_bad_fraction: 5e-3,
+        max_prim_mismatch_fraction: 5e-3,
+    };
+    // A translation T puts every coordinate on a grid of spacing ~T·2⁻²⁴:
+    // the scene itself moves by up to half of that, which no renderer can
+    // undo. Where that is 1/1000 of the scene (T = 1e5, 12-unit floor),
+    // silhouettes and shadow edges move by up to ~0.1 pixel: at most 2% of
+    // pixels (those edges) may differ by more than 0.1 and 1% hit another
+    // primitive, and the image as a whole stays within an RMSE of 0.05.
+    let translated = lambert::diff::Tolerance {
+        abs: 0.1,
+        rel: 0.05,
+        max_bad_fraction: 2e-2,
+        max_prim_mismatch_fraction: 1e-2,
+    };
+    for (scale, translate) in [(1e-6, 0.0), (1e6, 0.0), (1.0, 1e5), (1e3, 1e5), (1e-6, 1e-1)] {
+        let scene = transformed_spheres(scale, translate);
+        let grid = translate / scale * f64::EPSILON * (1u64 << 29) as f64;
+        let (tolerance, rmse) = if grid < 1e-4 { (&scaled, 1e-3) } else { (&translated, 5e-2) };
+        for (path, image) in [("CPU", render_cpu(&scene)), ("GPU", render_gpu(&scene))] {
+            let stats = lambert::diff::compare(&image, &reference, tolerance).unwrap();
+            println!(
+                "scale {scale:e}, translate {translate:e} on {path}: {} pixels beyond {}, {} other primitive, RMSE {:.2e}",
+                stats.beyond_tolerance, tolerance.abs, stats.prim_mismatches, stats.rmse
+            );
+            assert!(stats.passed && stats.rmse <= rmse, "scale {scale}, translate {translate} on {path}:\n{stats}");
+        }
+    }
+}
+
+// ------------------------------------------------------------ against oracle
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+    /// Away from edges (barycentric band 1e-4) and grazing angles, every
+    /// variant agrees with the oracle on hit or miss, and t within 1e-5.
+    #[test]
+    fn each_variant_agrees_with_the_oracle_away_from_edges(
+        v in prop::array::uniform9(-10.0f32..10.0),
+        origin in prop::array::uniform3(-20.0f32..20.0),
+        target in prop::array::uniform3(-10.0f32..10.0),
+    ) {
+        let t = Triangle { v0: [v[0], v[1], v[2]], v1: [v[3], v[4], v[5]], v2: [v[6], v[7], v[8]], ..Default::default() };
+        let [a, b, c] = [t.v0, t.v1, t.v2].map(|p| Vec3::from(p).as_dvec3());
+        let n = (b - a).cross(c - a);
+        prop_assume!(n.length() > 1e-3);
+        let r = ray(Vec3::from(origin), Vec3::from(target) - Vec3::from(origin));
+        let d = Vec3::from(r.dir).as_dvec3();
+        prop_assume!(d.length() > 1e-3);
+        // Exact (f64) barycentrics of where the ray meets the plane.
+        let o = Vec3::from(r.origin).as_dvec3();
+        let cos = n.normalize().dot(d.normalize()).abs();
+        prop_assume!(cos > 1e-3);
+        let t_plane = n.dot(a - o) / n.dot(d);
+        let p = o + t_plane * d;
+        let area = |x: DVec3, y: DVec3, z: DVec3| (y - x).cross(z - x).dot(n) / n.length_squared();
+        let bary = [area(p, b, c), area(a, p, c), area(a, b, p)];
+        let margin = bary.iter().cloned().fold(f64::INFINITY, f64::min);
+        let outside = bary.iter().cloned().fold(f64::INFINITY, |m, x| m.min(x.abs()));
+        prop_assume!(outside > 1e-4 && t_plane.abs() > 1e-3);
+        let expect_hit = margin > 0.0 && t_plane > 0.0;
+        let base = scene_of(vec![t], vec![]);
+        for intersect in Intersect::ALL {
+            let s = with_intersect(&base, intersect);
+            let h = trace_cpu(&s, &[r], false)[0];
+            prop_assert_eq!(h.prim != NO_HIT, expect_hit, "{} disagrees with the oracle", intersect.name());
+            if expect_hit {
+                prop_assert!(((h.t as f64 - t_plane) / t_plane).abs() < 1e-5, "{}: t {} vs {}", intersect.name(), h.t, t_plane);
+            }
+        }
+    }
+}
+
+#[test]
+fn gpu_and_cpu_agree_on_ray_sets_for_the_default_variant() {
+    let mut rng = Rng(99);
+    let mut total = 0;
+    let mut same = 0;
+    let mut worst_ulps = 0;
+    let mut ulps = Vec::new();
+    for name in ["bunny", "dragon", "cornell", "spheres"] {
+        let scene = load(name);
+        let root = scene.bvh.nodes[0];
+        let lo = Vec3::from(root.min).as_dvec3();
+        let hi = Vec3::from(root.max).as_dvec3();
+        let size = (hi - lo).max_element();
+        let rays: Vec<Ray> = (0..20_000)
+            .map(|_| {
+                let inside = |rng: &mut Rng| lo + (hi - lo) * DVec3::new(rng.unit(), rng.unit(), rng.unit());
+                let origin = inside(&mut rng) + rng.direction() * size;
+                ray(origin.as_vec3(), (inside(&mut rng) - origin).as_vec3())
+            })
+            .collect();
+        let cpu_hits = trace_cpu(&scene, &rays, false);
+        let gpu_hits = trace_gpu(&scene, &rays, false);
+        let oracle = Agreement::measure(&gpu_hits, &cpu::trace_rays_f64(&scene, &rays, false));
+        let mut scene_same = 0;
+        for (c, g) in cpu_hits.iter().zip(&gpu_hits) {
+            if c.prim == g.prim {
+                scene_same += 1;
+                if c.prim != NO_HIT {
+                    let d = ulp_distance(c.t, g.t);
+                    worst_ulps = worst_ulps.max(d);
+                    ulps.push(d);
+                }
+            }
+        }
+        println!(
+            "{name}: GPU and CPU hit the same primitive for {scene_same} of {} rays; GPU {oracle}",
+            rays.len()
+        );
+        total += rays.len();
+        same += scene_same;
+    }
+    ulps.sort();
+    let p999 = ulps[(ulps.len() - 1) * 999 / 1000];
+    println!(
+        "all: {same} of {total} same primitive ({:.4}%); t differs by at most {worst_ulps} ULPs (99.9% within {p999})",
+        100.0 * same as f64 / total as f64
+    );
+    assert!(same as f64 >= 0.9999 * total as f64, "GPU and CPU disagree on too many rays");
+    assert!(worst_ulps <= 16, "GPU and CPU t differ by {worst_ulps} ULPs");
+}
+
+// ------------------------------------------------------ BVH on the GPU path
+
+#[test]
+fn gpu_bvh_traces_rays_like_gpu_brute_force() {
+    let mut rng = Rng(3);
+    for name in ["bunny", "cornell", "spheres", "edge_cases"] {
+        let scene = load(name);
+        let mut brute = scene.clone();
+        brute.accel = lambert::scene::Accel::BruteForce;
+        let root = scene.bvh.nodes[0];
+        let centre = Vec3::from(root.min).lerp(Vec3::from(root.max), 0.5).as_dvec3();
+        let size = (Vec3::from(root.max) - Vec3::from(root.min)).max_element() as f64;
+        let rays: Vec<Ray> = (0..5000)
+            .map(|_| {
+                let origin = centre + rng.direction() * size;
+                let target = centre + rng.direction() * size * 0.3 * rng.unit();
+                ray(origin.as_vec3(), (target - origin).as_vec3())
+            })
+            .collect();
+        let (fast, slow) = (trace_gpu(&scene, &rays, false), trace_gpu(&brute, &rays, false));
+        let kernel = cpu::f32::Kernel::new(&scene);
+        let mut ties = 0;
+        for (r, (a, b)) in rays.iter().zip(fast.iter().zip(&slow)) {
+            assert!(
+                a.t == b.t || (a.t - b.t).abs() <= 1e-5 * b.t.abs(),
+                "{name}: BVH t {} vs brute force {} for {r:?}",
+                a.t,
+                b.t
+            );
+            if a.prim != b.prim {
+                // Another id only where both primitives are hit at that t
+                // (a shared edge, or coplanar faces): either is the closest.
+                let kr = cpu::f32::Ray::from_query(r);
+                let shear = cpu::f32::ray_shear(kr.dir);
+                let t_other = kernel.intersect_primitive(&kr, &shear, b.prim).0;
+                assert!(
+                    (t_other - a.t).abs() <= 1e-5 * a.t.abs(),
+                    "{name}: BVH hits {} at {}, brute force {} at {}",
+                    a.prim,
+                    a.t,
+                    b.prim,
+                    b.t
+                );
+                ties += 1;
+            }
+        }
+        let any_fast = trace_gpu(&scene, &rays, true);
+        for (a, b) in any_fast.iter().zip(&slow) {
+            assert_eq!(a.prim == NO_HIT, b.prim == NO_HIT, "{name}: any-hit disagrees with closest hit");
+        }
+        println!("{name}: 5000 rays, GPU BVH = GPU brute force ({ties} ties on t)");
+    }
+}
