@@ -6,6 +6,7 @@ use std::time::{Duration, Instant};
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
+use crate::bench::{self, BenchDevices};
 use crate::cpu::{self, Precision};
 use crate::diff::{self, Tolerance};
 use crate::error::{Error, Result};
@@ -15,7 +16,7 @@ use crate::progress::Progress;
 use crate::render::{DeviceChoice, Engine};
 use crate::layout::NO_HIT;
 use crate::rays;
-use crate::scene::{Accel, Intersect, Scene, validate_spp};
+use crate::scene::{Accel, Camera, Intersect, Scene, validate_spp};
 
 #[derive(Parser)]
 #[command(
@@ -40,6 +41,9 @@ enum Command {
     CameraRays(CameraRaysArgs),
     /// List adapters, backends and limits.
     Info(AdapterArgs),
+    /// Measure trace speed over a ladder of models, or run time against
+    /// error over the settings (--time-vs-error).
+    Bench(BenchArgs),
 }
 
 #[derive(Args, Clone)]
@@ -120,9 +124,55 @@ struct RenderArgs {
     options: SceneOptions,
     #[command(flatten)]
     adapter: AdapterArgs,
+    /// Render N frames orbiting camera.look_at about camera.up; the scene
+    /// stays on the device and only the camera changes. The output name
+    /// holds the frame number as {}, {:04} (zero-padded to 4) or similar.
+    #[arg(long, value_name = "N")]
+    turntable: Option<u32>,
     /// Print nothing but errors.
     #[arg(short, long)]
     quiet: bool,
+}
+
+/// `frames/frame_{:04}.png` with frame 7 → `frames/frame_0007.png`.
+pub fn frame_path(pattern: &Path, frame: u32) -> Result<PathBuf> {
+    let text = pattern.to_string_lossy();
+    let (Some(open), Some(close)) = (text.find('{'), text.find('}')) else {
+        return Err(Error::Usage(format!(
+            "{}: --turntable needs a frame number in the output name, as {{}} or {{:04}}",
+            pattern.display()
+        )));
+    };
+    let spec = &text[open + 1..close];
+    let width = match spec.strip_prefix(":0").or_else(|| spec.strip_prefix(':')) {
+        None if spec.is_empty() => 0,
+        Some(w) => w.parse::<usize>().map_err(|_| {
+            Error::Usage(format!("{}: cannot read the frame number format {{{spec}}}", pattern.display()))
+        })?,
+        None => {
+            return Err(Error::Usage(format!(
+                "{}: cannot read the frame number format {{{spec}}}; use {{}} or {{:04}}",
+                pattern.display()
+            )));
+        }
+    };
+    Ok(PathBuf::from(format!(
+        "{}{frame:0width$}{}",
+        &text[..open],
+        &text[close + 1..]
+    )))
+}
+
+/// The camera of frame `frame` of `frames`, orbiting look_at about up.
+fn orbit(camera: &Camera, frame: u32, frames: u32) -> Camera {
+    let centre = glam::DVec3::from(camera.look_at);
+    let axis = glam::DVec3::from(camera.up).normalize();
+    let angle = std::f64::consts::TAU * frame as f64 / frames as f64;
+    let eye = centre + glam::DQuat::from_axis_angle(axis, angle) * (glam::DVec3::from(camera.eye) - centre);
+    Camera {
+        eye: eye.to_array(),
+        ..camera.clone()
+    }
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -198,6 +248,42 @@ struct TraceArgs {
 }
 
 #[derive(Args)]
+struct BenchArgs {
+    /// Scene files or OBJ models [default: the ladder in ../shared/models
+    /// when present, else the bundled scenes].
+    inputs: Vec<PathBuf>,
+    /// Measure run time against error over spp, intersection test, device
+    /// and precision, and the skips (BVH, specialisation).
+    #[arg(long)]
+    time_vs_error: bool,
+    /// Write every measured point as JSON.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Write plots (PNG and SVG) into this folder.
+    #[arg(long)]
+    plot: Option<PathBuf>,
+    #[arg(long, value_enum, default_value = "both")]
+    device: BenchDevices,
+    /// Image side for OBJ models (pixels).
+    #[arg(long, default_value_t = 1024)]
+    size: u32,
+    /// Timed runs per measurement (median), after one warm-up.
+    #[arg(long, default_value_t = 3)]
+    runs: usize,
+    /// Samples per pixel to measure (--time-vs-error).
+    #[arg(long, value_delimiter = ',', default_value = "1,2,4,8,16")]
+    spp_list: Vec<u32>,
+    /// Samples per pixel of the converged f64 reference [default: 4 × the largest of --spp-list].
+    #[arg(long)]
+    reference_spp: Option<u32>,
+    /// With --time-vs-error: also name the cheapest measured setting whose RMSE is at most this.
+    #[arg(long)]
+    target_error: Option<f64>,
+    #[command(flatten)]
+    adapter: AdapterArgs,
+}
+
+#[derive(Args)]
 struct CameraRaysArgs {
     scene: PathBuf,
     #[arg(short, long)]
@@ -211,6 +297,7 @@ pub fn run() -> Result<ExitCode> {
         Command::Trace(args) => trace(&args),
         Command::CameraRays(args) => camera_rays(&args),
         Command::Info(args) => info(&args),
+        Command::Bench(args) => bench(&args),
     }
 }
 
@@ -219,6 +306,9 @@ fn seconds(d: Duration) -> String {
 }
 
 fn render(args: &RenderArgs) -> Result<ExitCode> {
+    if let Some(frames) = args.turntable {
+        return turntable(args, frames);
+    }
     // Fail on a bad output name before spending time on the render.
     check_output_path(&args.output)?;
     let start = Instant::now();
@@ -268,6 +358,45 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
         eprintln!(
             "{:.2} Mrays/s (primary rays, render stage)",
             rays / timings.render.as_secs_f64() / 1e6
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn turntable(args: &RenderArgs, frames: u32) -> Result<ExitCode> {
+    if frames == 0 {
+        return Err(Error::Usage("--turntable needs at least 1 frame".into()));
+    }
+    check_output_path(&frame_path(&args.output, 0)?)?;
+    let mut scene = args.options.load(&args.scene)?;
+    let (mut engine, note) = Engine::open(&scene, args.device, &args.adapter.request())?;
+    if let Some(note) = note {
+        eprintln!("{note}");
+    }
+    if !args.quiet {
+        eprintln!("rendering {frames} frames on {}", engine.describe());
+    }
+    let start_camera = scene.camera.clone();
+    let mut total = Duration::ZERO;
+    for frame in 0..frames {
+        scene.camera = orbit(&start_camera, frame, frames);
+        let start = Instant::now();
+        let (rendered, _) = engine.render(&scene, false)?;
+        let elapsed = start.elapsed();
+        total += elapsed;
+        let path = frame_path(&args.output, frame)?;
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        }
+        rendered.image.save(&path)?;
+        if !args.quiet {
+            eprintln!("frame {frame}: {} ({})", seconds(elapsed), path.display());
+        }
+    }
+    if !args.quiet {
+        eprintln!(
+            "{frames} frames, {} per frame on average (render and readback; the scene was uploaded once)",
+            seconds(total / frames)
         );
     }
     Ok(ExitCode::SUCCESS)
@@ -401,6 +530,152 @@ fn camera_rays(args: &CameraRaysArgs) -> Result<ExitCode> {
     let rays = rays::camera_rays(&scene);
     rays::write_rays(&args.output, &rays)?;
     eprintln!("wrote {} camera rays to {}", rays.len(), args.output.display());
+    Ok(ExitCode::SUCCESS)
+}
+
+fn bench(args: &BenchArgs) -> Result<ExitCode> {
+    if args.time_vs_error {
+        return bench_time_vs_error(args);
+    }
+    let inputs = if args.inputs.is_empty() {
+        let ladder = bench::default_ladder(Path::new("../shared/models"));
+        if ladder.is_empty() {
+            vec![PathBuf::from("assets/scenes/dragon.toml")]
+        } else {
+            ladder
+        }
+    } else {
+        args.inputs.clone()
+    };
+    let request = args.adapter.request();
+    let mut rows = Vec::new();
+    println!(
+        "{:<18} {:>9} {:>11} {:>11} {:>8} {:>7} {:>6} {:>9} {:>8}  device",
+        "model", "triangles", "primary", "shadow", "build", "SAH", "depth", "memory", "B/tri"
+    );
+    println!(
+        "{:<18} {:>9} {:>11} {:>11} {:>8} {:>7} {:>6} {:>9} {:>8}",
+        "", "", "Mrays/s", "Mrays/s", "s", "", "", "MiB", ""
+    );
+    for input in &inputs {
+        let scene = bench::load_input(input, args.size)?;
+        let name = input
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        for row in bench::ladder_rows(&name, &scene, args.device, &request, args.runs)? {
+            println!(
+                "{:<18} {:>9} {:>11.2} {:>11.2} {:>8.3} {:>7.1} {:>6} {:>9.1} {:>8.1}  {}",
+                row.model,
+                row.triangles,
+                row.primary_mrays_per_s,
+                row.shadow_mrays_per_s,
+                row.bvh_build_seconds,
+                row.sah_cost,
+                row.bvh_depth,
+                row.device_bytes as f64 / (1 << 20) as f64,
+                row.device_bytes_per_triangle,
+                row.device
+            );
+            rows.push(row);
+        }
+    }
+    if let Some(path) = &args.json {
+        write_json(path, &rows)?;
+    }
+    if let Some(dir) = &args.plot {
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        crate::plot::ladder(&rows, &dir.join("time_per_ray"))?;
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<()> {
+    let text = serde_json::to_string_pretty(value).expect("bench results serialise");
+    crate::output::write_atomically(path, text.as_bytes())
+}
+
+fn bench_time_vs_error(args: &BenchArgs) -> Result<ExitCode> {
+    bench::check_spp_list(&args.spp_list)?;
+    let reference_spp = args
+        .reference_spp
+        .unwrap_or(4 * args.spp_list.iter().max().copied().unwrap_or(1));
+    validate_spp(reference_spp).map_err(|e| Error::Usage(format!("--reference-{e}")))?;
+    let inputs = if args.inputs.is_empty() {
+        ["edge_cases", "spheres", "triangle_oblique"]
+            .iter()
+            .map(|n| PathBuf::from(format!("assets/scenes/{n}.toml")))
+            .collect()
+    } else {
+        args.inputs.clone()
+    };
+    let request = args.adapter.request();
+    let gpu = match args.device {
+        BenchDevices::Cpu => false,
+        _ => match Gpu::open(&request, false) {
+            Ok(_) => true,
+            Err(e) if args.device == BenchDevices::Both => {
+                eprintln!("{e}\nnote: measuring the CPU paths only");
+                false
+            }
+            Err(e) => return Err(e),
+        },
+    };
+    let knobs = bench::Knobs {
+        spp: args.spp_list.clone(),
+        reference_spp,
+        runs: args.runs,
+        gpu,
+    };
+    let mut all = Vec::new();
+    for input in &inputs {
+        let scene = bench::load_input(input, args.size)?;
+        let name = input
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let points = bench::time_vs_error(&name, &scene, &knobs, &request, &mut |line| {
+            eprintln!("{line}")
+        })?;
+        println!("{name}: Pareto front (fastest first)");
+        let mut front: Vec<&bench::Point> = points.iter().filter(|p| p.on_pareto_front).collect();
+        front.sort_by(|a, b| a.seconds.total_cmp(&b.seconds));
+        for p in front {
+            println!(
+                "  {:?} {:<16} spp {:>3} {:<11} {:<11} {:>9.4} s  RMSE {:.3e}  PSNR {}  leaks {}",
+                p.path,
+                p.intersect.name(),
+                p.spp,
+                p.accel,
+                p.shader,
+                p.seconds,
+                p.rmse,
+                p.psnr_db.map_or("inf".to_string(), |v| format!("{v:.1} dB")),
+                p.leaks
+            );
+        }
+        if let Some(target) = args.target_error {
+            match bench::cheapest_within(&points, target) {
+                Some(p) => println!(
+                    "  cheapest within RMSE {target:e}: {:?} {} spp {} ({:.4} s, expected RMSE {:.3e})",
+                    p.path,
+                    p.intersect.name(),
+                    p.spp,
+                    p.seconds,
+                    p.rmse
+                ),
+                None => println!("  no measured setting reaches RMSE {target:e}"),
+            }
+        }
+        if let Some(dir) = &args.plot {
+            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+            crate::plot::time_vs_error(&points, &dir.join(format!("time_vs_error_{name}")))?;
+        }
+        all.extend(points);
+    }
+    if let Some(path) = &args.json {
+        write_json(path, &all)?;
+    }
     Ok(ExitCode::SUCCESS)
 }
 

@@ -362,7 +362,23 @@ fn compute_pipeline(
 }
 
 impl GpuRenderer {
+    /// Uploads `scene` with a shader specialised to it.
     pub fn new(gpu: Gpu, scene: &Scene) -> Result<GpuRenderer> {
+        GpuRenderer::build(gpu, scene, specialisation(scene))
+    }
+
+    /// Uploads `scene` with the full shader: every feature compiled in, only
+    /// the acceleration and the intersection test chosen. The benchmarks
+    /// measure what specialisation saves against it.
+    pub fn with_full_shader(gpu: Gpu, scene: &Scene) -> Result<GpuRenderer> {
+        let constants = specialisation(scene)
+            .into_iter()
+            .filter(|(name, _)| matches!(*name, "USE_BVH" | "INTERSECT"))
+            .collect();
+        GpuRenderer::build(gpu, scene, constants)
+    }
+
+    fn build(gpu: Gpu, scene: &Scene, constants: Vec<(&'static str, f64)>) -> Result<GpuRenderer> {
         let start = Instant::now();
         let device = &gpu.device;
         let params = params_for(scene, &scene.camera);
@@ -478,7 +494,6 @@ impl GpuRenderer {
             label: Some("trace.wgsl"),
             source: wgpu::ShaderSource::Wgsl(SHADER_SOURCE.into()),
         });
-        let constants = specialisation(scene);
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu(format!("uploading the scene: {e}")));
         }

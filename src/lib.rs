@@ -6,6 +6,7 @@
 //! `shade`), `gpu` (wgpu host code), `scene` and `loading` (input),
 //! `output` (images), `diff` (comparisons), `rays` (ray queries), `cli` (the `lambert` binary).
 
+pub mod bench;
 pub mod bvh;
 pub mod cli;
 pub mod cpu;
@@ -15,6 +16,8 @@ pub mod gpu;
 pub mod layout;
 pub mod loading;
 pub mod output;
+pub mod plot;
+pub mod probe;
 pub mod progress;
 pub mod rays;
 pub mod render;

@@ -59,14 +59,7 @@ impl Image {
     }
 
     fn encode_png(&self) -> image::ImageResult<Vec<u8>> {
-        let mut bytes = Vec::new();
-        image::codecs::png::PngEncoder::new(&mut bytes).write_image(
-            &self.to_srgb8(),
-            self.width,
-            self.height,
-            ExtendedColorType::Rgb8,
-        )?;
-        Ok(bytes)
+        encode_rgb8(self.width, self.height, &self.to_srgb8())
     }
 
     fn encode_exr(&self) -> image::ImageResult<Vec<u8>> {
@@ -100,6 +93,22 @@ pub fn linear_to_srgb8(linear: f32) -> u8 {
         1.055 * c.powf(1.0 / 2.4) - 0.055
     };
     (encoded * 255.0).round() as u8
+}
+
+fn encode_rgb8(width: u32, height: u32, rgb: &[u8]) -> image::ImageResult<Vec<u8>> {
+    let mut bytes = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut bytes).write_image(
+        rgb,
+        width,
+        height,
+        ExtendedColorType::Rgb8,
+    )?;
+    Ok(bytes)
+}
+
+/// PNG bytes of 8-bit RGB pixels, rows from the top.
+pub fn encode_png_rgb8(width: u32, height: u32, rgb: &[u8]) -> Result<Vec<u8>> {
+    encode_rgb8(width, height, rgb).map_err(|e| Error::Usage(format!("encoding PNG: {e}")))
 }
 
 /// Writes a temporary file beside `path`, then renames it over `path`: a

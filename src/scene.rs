@@ -333,10 +333,21 @@ impl Scene {
         Ok(scene)
     }
 
-    /// A scene of OBJ meshes alone, in the given order, for ray queries
-    /// (`lambert trace --obj`): no lights, and a camera that nothing uses.
-    pub fn from_objs(paths: &[PathBuf]) -> Result<Scene> {
-        let mut scene = Scene {
+    /// A scene of bare triangles (one grey material), for probes.
+    pub fn from_triangles(triangles: Vec<Triangle>) -> Scene {
+        let mut scene = Scene::bare();
+        let material = scene.add_material([0.8; 3]);
+        scene.triangles = triangles
+            .into_iter()
+            .map(|t| Triangle { material, ..t })
+            .collect();
+        scene.rebuild_bvh();
+        scene
+    }
+
+    /// No geometry, no lights, and a camera that nothing uses yet.
+    fn bare() -> Scene {
+        Scene {
             camera: Camera {
                 eye: [0.0, 0.0, 1.0],
                 look_at: [0.0; 3],
@@ -358,7 +369,13 @@ impl Scene {
             intersect: Intersect::default(),
             spp: 1,
             seed: 0,
-        };
+        }
+    }
+
+    /// A scene of OBJ meshes alone, in the given order, for ray queries
+    /// (`lambert trace --obj`): no lights, and a camera that nothing uses.
+    pub fn from_objs(paths: &[PathBuf]) -> Result<Scene> {
+        let mut scene = Scene::bare();
         let identity = Transform {
             linear: DMat3::IDENTITY,
             normal: DMat3::IDENTITY,

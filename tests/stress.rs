@@ -10,6 +10,7 @@ use glam::{DVec3, Vec3};
 use lambert::Scene;
 use lambert::cpu;
 use lambert::layout::{Hit, NO_HIT, Ray, Triangle};
+use lambert::probe::edge_aimed_rays;
 use lambert::rays::{Agreement, ulp_distance};
 use lambert::scene::Intersect;
 use proptest::prelude::{ProptestConfig, prop, prop_assert, prop_assert_eq, prop_assume, proptest};
@@ -76,29 +77,6 @@ fn closed_meshes() -> Vec<(&'static str, Vec<DVec3>, Vec<[u32; 3]>)> {
 }
 
 const OFFSETS: [[f64; 3]; 3] = [[0.0; 3], [1.5e5, 1.2e3, -2.2e5], [1e6, 1e6, 1e6]];
-
-/// Rays from the mesh's centre aimed exactly at every vertex, every edge
-/// midpoint and three random points on every edge (all rounded to f32, as
-/// a user would compute them).
-fn edge_aimed_rays(vertices: &[Vec3], faces: &[[u32; 3]], rng: &mut Rng) -> Vec<Ray> {
-    let centre = vertices.iter().map(|v| v.as_dvec3()).sum::<DVec3>() / vertices.len() as f64;
-    let origin = centre.as_vec3();
-    let mut targets: Vec<Vec3> = vertices.to_vec();
-    for f in faces {
-        for (a, b) in [(f[0], f[1]), (f[1], f[2]), (f[2], f[0])] {
-            // Each edge once: from its lower-numbered vertex.
-            if a > b {
-                continue;
-            }
-            let (a, b) = (vertices[a as usize], vertices[b as usize]);
-            targets.push((a + b) * 0.5);
-            for _ in 0..3 {
-                targets.push(a.lerp(b, rng.unit() as f32));
-            }
-        }
-    }
-    targets.iter().map(|&t| ray(origin, t - origin)).collect()
-}
 
 #[test]
 fn watertight_meshes_do_not_leak() {

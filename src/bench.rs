@@ -1,0 +1,420 @@
+//! Whole-render benchmarks (`lambert bench`): trace speed over a ladder of
+//! models, and run time against error over the settings that trade one for
+//! the other (docs/benchmarks.md).
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use glam::Vec3;
+use serde::Serialize;
+
+use crate::cpu::{self, Precision};
+use crate::diff::{self, Tolerance};
+use crate::error::{Error, Result};
+use crate::gpu::{AdapterRequest, Gpu, GpuRenderer};
+use crate::layout::{LIGHT_DIRECTIONAL, Light, NO_HIT, Ray};
+use crate::output::Rendered;
+use crate::probe;
+use crate::progress::Progress;
+use crate::render::Engine;
+use crate::scene::{Accel, Camera, Intersect, Scene};
+
+/// Median of `runs` timed calls after one untimed warm-up.
+pub fn median_time<T>(runs: usize, mut f: impl FnMut() -> Result<T>) -> Result<(Duration, T)> {
+    f()?;
+    let mut times = Vec::with_capacity(runs);
+    let mut last = None;
+    for _ in 0..runs.max(1) {
+        let start = Instant::now();
+        last = Some(f()?);
+        times.push(start.elapsed());
+    }
+    times.sort();
+    Ok((times[times.len() / 2], last.expect("at least one run")))
+}
+
+/// A model loaded as a scene: framed by a camera looking at it from the
+/// front (+z) and slightly above, lit by one directional light, shadows on.
+pub fn scene_for_obj(path: &Path, size: u32) -> Result<Scene> {
+    let mut scene = Scene::from_objs(&[path.to_path_buf()])?;
+    let root = scene.bvh.nodes[0];
+    let (lo, hi) = (Vec3::from(root.min), Vec3::from(root.max));
+    let centre = (lo + hi) * 0.5;
+    let radius = (hi - lo).length() * 0.5;
+    let vfov: f32 = 30.0;
+    let distance = radius / (vfov.to_radians() * 0.5).sin();
+    let eye = centre + Vec3::new(0.0, 0.3, 1.0).normalize() * distance;
+    scene.camera = Camera {
+        eye: eye.as_dvec3().to_array(),
+        look_at: centre.as_dvec3().to_array(),
+        up: [0.0, 1.0, 0.0],
+        vfov: vfov as f64,
+        width: size,
+        height: size,
+    };
+    scene.lights.push(Light {
+        vector: Vec3::new(0.4, 0.8, 0.45).normalize().to_array(),
+        kind: LIGHT_DIRECTIONAL,
+        color: [3.0; 3],
+        _pad: 0,
+    });
+    scene.ambient = [0.05; 3];
+    scene.shadows = true;
+    Ok(scene)
+}
+
+/// A bench input: a scene file, or an OBJ framed by `scene_for_obj`.
+pub fn load_input(path: &Path, size: u32) -> Result<Scene> {
+    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj")) {
+        scene_for_obj(path, size)
+    } else {
+        Scene::load(path)
+    }
+}
+
+/// The ladder of issue 3, from `models` (normally ../shared/models), in
+/// order of size; those missing are skipped.
+pub fn default_ladder(models: &Path) -> Vec<PathBuf> {
+    ["dragon_res4", "dragon_res3", "stanford_bunny", "dragon_res2", "dragon"]
+        .iter()
+        .map(|name| models.join(format!("{name}.obj")))
+        .filter(|p| p.exists())
+        .collect()
+}
+
+/// Which engines a benchmark runs on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum BenchDevices {
+    /// The GPU adapter (any, lavapipe included) and the CPU path.
+    Both,
+    Gpu,
+    Cpu,
+}
+
+impl BenchDevices {
+    fn engines(self, scene: &Scene, request: &AdapterRequest) -> Result<Vec<Engine>> {
+        let mut engines = Vec::new();
+        if self != BenchDevices::Cpu {
+            engines.push(Engine::Gpu(Box::new(GpuRenderer::new(
+                Gpu::open(request, false)?,
+                scene,
+            )?)));
+        }
+        if self != BenchDevices::Gpu {
+            engines.push(Engine::Cpu);
+        }
+        Ok(engines)
+    }
+}
+
+/// One model on one engine.
+#[derive(Clone, Debug, Serialize)]
+pub struct LadderRow {
+    pub model: String,
+    pub triangles: usize,
+    pub device: String,
+    pub primary_rays: usize,
+    pub primary_mrays_per_s: f64,
+    pub shadow_rays: usize,
+    pub shadow_mrays_per_s: f64,
+    pub bvh_build_seconds: f64,
+    pub bvh_nodes: usize,
+    pub bvh_depth: usize,
+    pub sah_cost: f64,
+    /// Bytes of triangles, normals, BVH nodes and primitive list on the device.
+    pub device_bytes: usize,
+    pub device_bytes_per_triangle: f64,
+}
+
+/// Shadow rays of the primary hits towards the scene's first light, spawned
+/// as `shade` spawns them.
+pub fn shadow_rays(scene: &Scene, primary: &[Ray], hits: &[crate::layout::Hit]) -> Vec<Ray> {
+    let kernel = cpu::f32::Kernel::new(scene);
+    let Some(light) = scene.lights.first() else {
+        return Vec::new();
+    };
+    primary
+        .iter()
+        .zip(hits)
+        .filter(|(_, h)| h.prim != NO_HIT)
+        .filter_map(|(r, h)| {
+            let ray = cpu::f32::Ray::from_query(r);
+            let hit = cpu::f32::Hit {
+                t: h.t,
+                prim: h.prim,
+                u: h.u,
+                v: h.v,
+            };
+            let surface = kernel.surface_at(&ray, &hit);
+            let origin = cpu::f32::offset_ray_origin(
+                surface.position,
+                surface.error,
+                surface.geometric_normal,
+            );
+            let (dir, tmax) = if light.kind == LIGHT_DIRECTIONAL {
+                (Vec3::from(light.vector), f32::INFINITY)
+            } else {
+                let d = Vec3::from(light.vector) - origin;
+                (d / d.length(), d.length())
+            };
+            (surface.geometric_normal.dot(dir) > 0.0).then_some(Ray {
+                origin: origin.to_array(),
+                tmin: 0.0,
+                dir: dir.to_array(),
+                tmax,
+            })
+        })
+        .collect()
+}
+
+/// Primary and shadow ray throughput of `scene` on each engine.
+pub fn ladder_rows(
+    name: &str,
+    scene: &Scene,
+    devices: BenchDevices,
+    request: &AdapterRequest,
+    runs: usize,
+) -> Result<Vec<LadderRow>> {
+    let primary = crate::rays::camera_rays(scene);
+    let hits = cpu::trace_rays(scene, &primary, false);
+    let shadow = shadow_rays(scene, &primary, &hits);
+    let device_bytes = std::mem::size_of_val(scene.triangles.as_slice())
+        + std::mem::size_of_val(scene.normals.as_slice())
+        + scene.bvh.device_bytes();
+    let mut rows = Vec::new();
+    for mut engine in devices.engines(scene, request)? {
+        engine.prepare_trace(false)?;
+        engine.prepare_trace(true)?;
+        let (t_primary, _) = median_time(runs, || engine.trace(scene, &primary, false))?;
+        let (t_shadow, _) = median_time(runs, || engine.trace(scene, &shadow, true))?;
+        rows.push(LadderRow {
+            model: name.to_string(),
+            triangles: scene.triangles.len(),
+            device: engine.describe(),
+            primary_rays: primary.len(),
+            primary_mrays_per_s: primary.len() as f64 / t_primary.as_secs_f64() / 1e6,
+            shadow_rays: shadow.len(),
+            shadow_mrays_per_s: shadow.len() as f64 / t_shadow.as_secs_f64() / 1e6,
+            bvh_build_seconds: scene.bvh.build_time.as_secs_f64(),
+            bvh_nodes: scene.bvh.nodes.len(),
+            bvh_depth: scene.bvh.depth(),
+            sah_cost: scene.bvh.sah_cost(),
+            device_bytes,
+            device_bytes_per_triangle: device_bytes as f64 / scene.triangles.len().max(1) as f64,
+        });
+    }
+    Ok(rows)
+}
+
+// ------------------------------------------------------------ time vs error
+
+/// Where and in what precision a point renders.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Path32 {
+    /// The GPU adapter, f32.
+    GpuF32,
+    /// The CPU reference, f32.
+    CpuF32,
+    /// The CPU oracle, f64.
+    CpuF64,
+}
+
+/// One setting of the knobs, measured.
+#[derive(Clone, Debug, Serialize)]
+pub struct Point {
+    pub scene: String,
+    pub path: Path32,
+    pub intersect: Intersect,
+    pub spp: u32,
+    pub accel: &'static str,
+    /// "specialised" or "full" (GPU only; the CPU path has no variants).
+    pub shader: &'static str,
+    /// Median wall time of a render, seconds (GPU: dispatch and readback).
+    pub seconds: f64,
+    pub rmse: f64,
+    pub psnr_db: Option<f64>,
+    pub max_error: f32,
+    pub mismatched_primitives: u64,
+    /// Rays of the leak probe that escape, on this path with this test.
+    pub leaks: usize,
+    pub on_pareto_front: bool,
+}
+
+/// What `--time-vs-error` varies.
+#[derive(Clone, Debug)]
+pub struct Knobs {
+    pub spp: Vec<u32>,
+    pub reference_spp: u32,
+    pub runs: usize,
+    pub gpu: bool,
+}
+
+fn accel_name(accel: Accel) -> &'static str {
+    match accel {
+        Accel::Bvh => "bvh",
+        Accel::BruteForce => "brute-force",
+    }
+}
+
+/// Leak counts of each path and test on the probe meshes.
+fn leaks(path: Path32, intersect: Intersect, request: &AdapterRequest) -> Result<usize> {
+    let mut total = 0;
+    for (triangles, rays) in probe::leak_probe() {
+        let mut scene = Scene::from_triangles(triangles);
+        scene.intersect = intersect;
+        total += match path {
+            Path32::CpuF32 => probe::count_misses(&cpu::trace_rays(&scene, &rays, false)),
+            Path32::CpuF64 => cpu::trace_rays_f64(&scene, &rays, false)
+                .iter()
+                .filter(|h| h.prim == NO_HIT)
+                .count(),
+            Path32::GpuF32 => {
+                let mut r = GpuRenderer::new(Gpu::open(request, false)?, &scene)?;
+                probe::count_misses(&r.trace_rays(&rays, false)?)
+            }
+        };
+    }
+    Ok(total)
+}
+
+/// Renders `scene` at every setting of `knobs`, timing each and measuring
+/// its error against a converged reference: the f64 oracle (watertight) at
+/// `reference_spp` with another seed.
+pub fn time_vs_error(
+    name: &str,
+    scene: &Scene,
+    knobs: &Knobs,
+    request: &AdapterRequest,
+    log: &mut dyn FnMut(&str),
+) -> Result<Vec<Point>> {
+    let mut reference_scene = scene.clone();
+    reference_scene.intersect = Intersect::Watertight;
+    reference_scene.spp = knobs.reference_spp;
+    reference_scene.seed = scene.seed.wrapping_add(0x9e37_79b9);
+    log(&format!(
+        "{name}: reference = f64 oracle at {} spp",
+        knobs.reference_spp
+    ));
+    let reference = cpu::render(&reference_scene, Precision::F64, &Progress::hidden());
+    let tolerance = Tolerance::default();
+    let mut paths = vec![Path32::CpuF32, Path32::CpuF64];
+    if knobs.gpu {
+        paths.insert(0, Path32::GpuF32);
+    }
+    let mut points = Vec::new();
+    for &path in &paths {
+        for intersect in Intersect::ALL {
+            let leak_count = leaks(path, intersect, request)?;
+            for &spp in &knobs.spp {
+                let mut s = scene.clone();
+                s.intersect = intersect;
+                s.spp = spp;
+                let mut variants = vec![(Accel::Bvh, "specialised")];
+                // The skips change time, not the image: measured once, at
+                // the default test and one sample.
+                if intersect == Intersect::Watertight && spp == knobs.spp[0] {
+                    variants.push((Accel::BruteForce, "specialised"));
+                    if path == Path32::GpuF32 {
+                        variants.push((Accel::Bvh, "full"));
+                    }
+                }
+                for (accel, shader) in variants {
+                    s.accel = accel;
+                    let (seconds, image) = time_render(&s, path, shader == "full", knobs.runs, request)?;
+                    let stats = diff::compare(&image, &reference, &tolerance)?;
+                    let point = Point {
+                        scene: name.to_string(),
+                        path,
+                        intersect,
+                        spp,
+                        accel: accel_name(accel),
+                        shader: if path == Path32::GpuF32 { shader } else { "-" },
+                        seconds: seconds.as_secs_f64(),
+                        rmse: stats.rmse,
+                        psnr_db: stats.psnr_db,
+                        max_error: stats.max_abs,
+                        mismatched_primitives: stats.prim_mismatches,
+                        leaks: leak_count,
+                        on_pareto_front: false,
+                    };
+                    log(&format!(
+                        "  {:?} {:<16} spp {:>3} {:<11} {:<11} {:>9.4} s  RMSE {:.3e}",
+                        point.path,
+                        intersect.name(),
+                        spp,
+                        point.accel,
+                        point.shader,
+                        point.seconds,
+                        point.rmse
+                    ));
+                    points.push(point);
+                }
+            }
+        }
+    }
+    mark_pareto_front(&mut points);
+    Ok(points)
+}
+
+fn time_render(
+    scene: &Scene,
+    path: Path32,
+    full_shader: bool,
+    runs: usize,
+    request: &AdapterRequest,
+) -> Result<(Duration, Rendered)> {
+    match path {
+        Path32::GpuF32 => {
+            let gpu = Gpu::open(request, false)?;
+            let mut r = if full_shader {
+                GpuRenderer::with_full_shader(gpu, scene)?
+            } else {
+                GpuRenderer::new(gpu, scene)?
+            };
+            r.prepare_render()?;
+            median_time(runs, || Ok(r.render(&Progress::hidden())?.0))
+        }
+        Path32::CpuF32 => median_time(runs, || Ok(cpu::render(scene, Precision::F32, &Progress::hidden()))),
+        Path32::CpuF64 => median_time(runs, || Ok(cpu::render(scene, Precision::F64, &Progress::hidden()))),
+    }
+}
+
+/// A point is on the front when no other point is both no slower and no
+/// less accurate (by RMSE), and better in one of the two. RMSEs within 0.1%
+/// count as equal: below that, settings differ by rounding, not accuracy.
+pub fn mark_pareto_front(points: &mut [Point]) {
+    let no_worse = |q: f64, p: f64| q <= p * 1.001;
+    let dominated: Vec<bool> = points
+        .iter()
+        .map(|p| {
+            points.iter().any(|q| {
+                q.scene == p.scene
+                    && q.seconds <= p.seconds
+                    && no_worse(q.rmse, p.rmse)
+                    && (q.seconds < p.seconds || q.rmse < p.rmse / 1.001)
+            })
+        })
+        .collect();
+    for (p, d) in points.iter_mut().zip(dominated) {
+        p.on_pareto_front = !d;
+    }
+}
+
+/// The cheapest measured setting whose error is at most `target` RMSE.
+pub fn cheapest_within(points: &[Point], target: f64) -> Option<&Point> {
+    points
+        .iter()
+        .filter(|p| p.rmse <= target)
+        .min_by(|a, b| a.seconds.total_cmp(&b.seconds))
+}
+
+pub fn check_spp_list(list: &[u32]) -> Result<()> {
+    if list.is_empty() {
+        return Err(Error::Usage("--spp-list needs at least one value".into()));
+    }
+    for &spp in list {
+        crate::scene::validate_spp(spp).map_err(|e| Error::Usage(format!("--spp-list: {e}")))?;
+    }
+    Ok(())
+}

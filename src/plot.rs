@@ -1,0 +1,217 @@
+//! Benchmark plots (plotters), each written as PNG and SVG: error against
+//! time with the Pareto front marked, and time per ray against triangle
+//! count.
+
+use std::path::Path;
+use std::sync::Once;
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+use crate::bench::{LadderRow, Path32, Point};
+use crate::error::{Error, Result};
+use crate::output::write_atomically;
+use crate::scene::Intersect;
+
+const SIZE: (u32, u32) = (900, 600);
+
+/// plotters draws text with a font we ship, so that plots look the same on
+/// every machine and need no system font library.
+fn register_font() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        let font = include_bytes!("../assets/fonts/DejaVuSans.ttf");
+        // A font that ships inside the binary always parses.
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, font);
+    });
+}
+
+fn plot_error(e: impl std::fmt::Display) -> Error {
+    Error::Usage(format!("plotting: {e}"))
+}
+
+/// Draws with `draw` into `stem.png` and `stem.svg`, each written atomically.
+fn png_and_svg(
+    stem: &Path,
+    draw_svg: impl FnOnce(DrawingArea<SVGBackend, Shift>) -> Result<()>,
+    draw_png: impl FnOnce(DrawingArea<BitMapBackend, Shift>) -> Result<()>,
+) -> Result<()> {
+    register_font();
+    let mut svg = String::new();
+    draw_svg(SVGBackend::with_string(&mut svg, SIZE).into_drawing_area())?;
+    write_atomically(&stem.with_extension("svg"), svg.as_bytes())?;
+    let mut rgb = vec![0u8; (SIZE.0 * SIZE.1 * 3) as usize];
+    draw_png(BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area())?;
+    let image = crate::output::encode_png_rgb8(SIZE.0, SIZE.1, &rgb)?;
+    write_atomically(&stem.with_extension("png"), &image)
+}
+
+fn series_colour(path: Path32, intersect: Intersect) -> RGBColor {
+    let base = match path {
+        Path32::GpuF32 => (31, 119, 180),
+        Path32::CpuF32 => (44, 160, 44),
+        Path32::CpuF64 => (214, 39, 40),
+    };
+    let shade = match intersect {
+        Intersect::Seed => 0.55,
+        Intersect::MollerTrumbore => 0.8,
+        Intersect::Watertight => 1.0,
+    };
+    let f = |c: u8| (c as f64 * shade) as u8;
+    RGBColor(f(base.0), f(base.1), f(base.2))
+}
+
+/// Error (RMSE, log) against time (s, log) for one scene's points; points
+/// on the Pareto front are ringed and joined.
+pub fn time_vs_error(points: &[Point], stem: &Path) -> Result<()> {
+    let Some(first) = points.first() else {
+        return Ok(());
+    };
+    let title = format!("{}: error against time", first.scene);
+    let floor = 1e-7;
+    let bounds = |f: &dyn Fn(&Point) -> f64| {
+        let lo = points.iter().map(f).fold(f64::INFINITY, f64::min);
+        let hi = points.iter().map(f).fold(0.0, f64::max);
+        (lo / 1.5, hi * 1.5)
+    };
+    let (t_lo, t_hi) = bounds(&|p| p.seconds.max(1e-6));
+    let (e_lo, e_hi) = bounds(&|p| p.rmse.max(floor));
+    let mut front: Vec<&Point> = points.iter().filter(|p| p.on_pareto_front).collect();
+    front.sort_by(|a, b| a.seconds.total_cmp(&b.seconds));
+    macro_rules! draw {
+        ($area:expr) => {{
+            let area = $area;
+            area.fill(&WHITE).map_err(plot_error)?;
+            let mut chart = ChartBuilder::on(&area)
+                .caption(&title, ("sans-serif", 24))
+                .margin(15)
+                .x_label_area_size(45)
+                .y_label_area_size(70)
+                .build_cartesian_2d((t_lo..t_hi).log_scale(), (e_lo..e_hi).log_scale())
+                .map_err(plot_error)?;
+            chart
+                .configure_mesh()
+                .x_desc("render time (s, median)")
+                .x_label_formatter(&|v| format!("{v:.3}"))
+                .y_label_formatter(&|v| format!("{v:.0e}"))
+                .y_desc("RMSE against the converged reference")
+                .draw()
+                .map_err(plot_error)?;
+            for path in [Path32::GpuF32, Path32::CpuF32, Path32::CpuF64] {
+                for intersect in Intersect::ALL {
+                    let colour = series_colour(path, intersect);
+                    let series: Vec<(f64, f64)> = points
+                        .iter()
+                        .filter(|p| p.path == path && p.intersect == intersect)
+                        .map(|p| (p.seconds.max(1e-6), p.rmse.max(floor)))
+                        .collect();
+                    if series.is_empty() {
+                        continue;
+                    }
+                    chart
+                        .draw_series(series.iter().map(|&(x, y)| Circle::new((x, y), 4, colour.filled())))
+                        .map_err(plot_error)?
+                        .label(format!("{path:?} {}", intersect.name()))
+                        .legend(move |(x, y)| Circle::new((x, y), 4, colour.filled()));
+                }
+            }
+            chart
+                .draw_series(LineSeries::new(
+                    front.iter().map(|p| (p.seconds.max(1e-6), p.rmse.max(floor))),
+                    BLACK.stroke_width(2),
+                ))
+                .map_err(plot_error)?
+                .label("Pareto front")
+                .legend(|(x, y)| PathElement::new([(x - 8, y), (x + 8, y)], BLACK.stroke_width(2)));
+            chart
+                .draw_series(front.iter().map(|p| {
+                    Circle::new((p.seconds.max(1e-6), p.rmse.max(floor)), 8, BLACK.stroke_width(2))
+                }))
+                .map_err(plot_error)?;
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .position(SeriesLabelPosition::UpperRight)
+                .draw()
+                .map_err(plot_error)?;
+            area.present().map_err(plot_error)?;
+            Ok(())
+        }};
+    }
+    png_and_svg(stem, |a: DrawingArea<SVGBackend, Shift>| draw!(a), |a: DrawingArea<BitMapBackend, Shift>| draw!(a))
+}
+
+/// Time per ray (ns, log) against triangle count (log), one line per device
+/// and ray kind.
+pub fn ladder(rows: &[LadderRow], stem: &Path) -> Result<()> {
+    if rows.is_empty() {
+        return Ok(());
+    }
+    let mut devices: Vec<String> = rows.iter().map(|r| r.device.clone()).collect();
+    devices.dedup();
+    let ns = |mrays: f64| 1e3 / mrays.max(1e-9);
+    let x_lo = rows.iter().map(|r| r.triangles).min().unwrap() as f64 / 1.5;
+    let x_hi = rows.iter().map(|r| r.triangles).max().unwrap() as f64 * 1.5;
+    let all_ns: Vec<f64> = rows
+        .iter()
+        .flat_map(|r| [ns(r.primary_mrays_per_s), ns(r.shadow_mrays_per_s)])
+        .collect();
+    let y_lo = all_ns.iter().cloned().fold(f64::INFINITY, f64::min) / 1.5;
+    let y_hi = all_ns.iter().cloned().fold(0.0, f64::max) * 1.5;
+    let palette = [RGBColor(31, 119, 180), RGBColor(44, 160, 44), RGBColor(214, 39, 40), RGBColor(148, 103, 189)];
+    macro_rules! draw {
+        ($area:expr) => {{
+            let area = $area;
+            area.fill(&WHITE).map_err(plot_error)?;
+            let mut chart = ChartBuilder::on(&area)
+                .caption("Time per ray against scene size", ("sans-serif", 24))
+                .margin(15)
+                .x_label_area_size(45)
+                .y_label_area_size(70)
+                .build_cartesian_2d((x_lo..x_hi).log_scale(), (y_lo..y_hi).log_scale())
+                .map_err(plot_error)?;
+            chart
+                .configure_mesh()
+                .x_desc("triangles")
+                .x_label_formatter(&|v| format!("{v:.0}"))
+                .y_label_formatter(&|v| format!("{v:.0}"))
+                .y_desc("ns per ray (median)")
+                .draw()
+                .map_err(plot_error)?;
+            for (i, device) in devices.iter().enumerate() {
+                let colour = palette[i % palette.len()];
+                for (kind, dashed) in [("primary", false), ("shadow", true)] {
+                    let mut series: Vec<(f64, f64)> = rows
+                        .iter()
+                        .filter(|r| &r.device == device)
+                        .map(|r| {
+                            let m = if dashed { r.shadow_mrays_per_s } else { r.primary_mrays_per_s };
+                            (r.triangles as f64, ns(m))
+                        })
+                        .collect();
+                    series.sort_by(|a, b| a.0.total_cmp(&b.0));
+                    let style = if dashed { colour.stroke_width(1) } else { colour.stroke_width(3) };
+                    chart
+                        .draw_series(LineSeries::new(series.clone(), style))
+                        .map_err(plot_error)?
+                        .label(format!("{device}: {kind}"))
+                        .legend(move |(x, y)| PathElement::new([(x - 8, y), (x + 8, y)], style));
+                    chart
+                        .draw_series(series.iter().map(|&p| Circle::new(p, 4, colour.filled())))
+                        .map_err(plot_error)?;
+                }
+            }
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .position(SeriesLabelPosition::UpperLeft)
+                .draw()
+                .map_err(plot_error)?;
+            area.present().map_err(plot_error)?;
+            Ok(())
+        }};
+    }
+    png_and_svg(stem, |a: DrawingArea<SVGBackend, Shift>| draw!(a), |a: DrawingArea<BitMapBackend, Shift>| draw!(a))
+}
