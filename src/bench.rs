@@ -65,7 +65,10 @@ pub fn scene_for_obj(path: &Path, size: u32) -> Result<Scene> {
 
 /// A bench input: a scene file, or an OBJ framed by `scene_for_obj`.
 pub fn load_input(path: &Path, size: u32) -> Result<Scene> {
-    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj")) {
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("obj"))
+    {
         scene_for_obj(path, size)
     } else {
         Scene::load(path)
@@ -75,11 +78,17 @@ pub fn load_input(path: &Path, size: u32) -> Result<Scene> {
 /// The ladder of issue 3, from `models` (normally ../shared/models), in
 /// order of size; those missing are skipped.
 pub fn default_ladder(models: &Path) -> Vec<PathBuf> {
-    ["dragon_res4", "dragon_res3", "stanford_bunny", "dragon_res2", "dragon"]
-        .iter()
-        .map(|name| models.join(format!("{name}.obj")))
-        .filter(|p| p.exists())
-        .collect()
+    [
+        "dragon_res4",
+        "dragon_res3",
+        "stanford_bunny",
+        "dragon_res2",
+        "dragon",
+    ]
+    .iter()
+    .map(|name| models.join(format!("{name}.obj")))
+    .filter(|p| p.exists())
+    .collect()
 }
 
 /// Which engines a benchmark runs on.
@@ -321,7 +330,8 @@ pub fn time_vs_error(
                 }
                 for (accel, shader) in variants {
                     s.accel = accel;
-                    let (seconds, image) = time_render(&s, path, shader == "full", knobs.runs, request)?;
+                    let (seconds, image) =
+                        time_render(&s, path, shader == "full", knobs.runs, request)?;
                     let stats = diff::compare(&image, &reference, &tolerance)?;
                     let point = Point {
                         scene: name.to_string(),
@@ -375,8 +385,12 @@ fn time_render(
             r.prepare_render()?;
             median_time(runs, || Ok(r.render(&Progress::hidden())?.0))
         }
-        Path32::CpuF32 => median_time(runs, || Ok(cpu::render(scene, Precision::F32, &Progress::hidden()))),
-        Path32::CpuF64 => median_time(runs, || Ok(cpu::render(scene, Precision::F64, &Progress::hidden()))),
+        Path32::CpuF32 => median_time(runs, || {
+            Ok(cpu::render(scene, Precision::F32, &Progress::hidden()))
+        }),
+        Path32::CpuF64 => median_time(runs, || {
+            Ok(cpu::render(scene, Precision::F64, &Progress::hidden()))
+        }),
     }
 }
 

@@ -11,11 +11,11 @@ use crate::cpu::{self, Precision};
 use crate::diff::{self, Tolerance};
 use crate::error::{Error, Result};
 use crate::gpu::{self, AdapterRequest, Gpu, GpuRenderer};
+use crate::layout::NO_HIT;
 use crate::output::Rendered;
 use crate::progress::Progress;
-use crate::render::{DeviceChoice, Engine};
-use crate::layout::NO_HIT;
 use crate::rays;
+use crate::render::{DeviceChoice, Engine};
 use crate::scene::{Accel, Camera, Intersect, Scene, validate_spp};
 
 #[derive(Parser)]
@@ -147,7 +147,10 @@ pub fn frame_path(pattern: &Path, frame: u32) -> Result<PathBuf> {
     let width = match spec.strip_prefix(":0").or_else(|| spec.strip_prefix(':')) {
         None if spec.is_empty() => 0,
         Some(w) => w.parse::<usize>().map_err(|_| {
-            Error::Usage(format!("{}: cannot read the frame number format {{{spec}}}", pattern.display()))
+            Error::Usage(format!(
+                "{}: cannot read the frame number format {{{spec}}}",
+                pattern.display()
+            ))
         })?,
         None => {
             return Err(Error::Usage(format!(
@@ -168,7 +171,8 @@ fn orbit(camera: &Camera, frame: u32, frames: u32) -> Camera {
     let centre = glam::DVec3::from(camera.look_at);
     let axis = glam::DVec3::from(camera.up).normalize();
     let angle = std::f64::consts::TAU * frame as f64 / frames as f64;
-    let eye = centre + glam::DQuat::from_axis_angle(axis, angle) * (glam::DVec3::from(camera.eye) - centre);
+    let eye = centre
+        + glam::DQuat::from_axis_angle(axis, angle) * (glam::DVec3::from(camera.eye) - centre);
     Camera {
         eye: eye.to_array(),
         ..camera.clone()
@@ -511,7 +515,11 @@ fn trace(args: &TraceArgs) -> Result<ExitCode> {
             "traced {} rays ({}, {}) on {}: {} hit; {} ({:.2} Mrays/s); wrote {}",
             report.rays,
             report.intersect,
-            if args.any_hit { "any hit" } else { "closest hit" },
+            if args.any_hit {
+                "any hit"
+            } else {
+                "closest hit"
+            },
             report.device,
             report.hits,
             seconds(elapsed),
@@ -529,7 +537,11 @@ fn camera_rays(args: &CameraRaysArgs) -> Result<ExitCode> {
     let scene = Scene::load(&args.scene)?;
     let rays = rays::camera_rays(&scene);
     rays::write_rays(&args.output, &rays)?;
-    eprintln!("wrote {} camera rays to {}", rays.len(), args.output.display());
+    eprintln!(
+        "wrote {} camera rays to {}",
+        rays.len(),
+        args.output.display()
+    );
     Ok(ExitCode::SUCCESS)
 }
 
@@ -650,7 +662,8 @@ fn bench_time_vs_error(args: &BenchArgs) -> Result<ExitCode> {
                 p.shader,
                 p.seconds,
                 p.rmse,
-                p.psnr_db.map_or("inf".to_string(), |v| format!("{v:.1} dB")),
+                p.psnr_db
+                    .map_or("inf".to_string(), |v| format!("{v:.1} dB")),
                 p.leaks
             );
         }

@@ -9,7 +9,9 @@ use wgpu::util::DeviceExt;
 
 use crate::cpu::f32::CameraBasis;
 use crate::error::{Error, Result};
-use crate::layout::{Hit, LIGHT_DIRECTIONAL, LIGHT_POINT, NO_HIT, Params, Ray, Sphere, Triangle, TriangleNormals};
+use crate::layout::{
+    Hit, LIGHT_DIRECTIONAL, LIGHT_POINT, NO_HIT, Params, Ray, Sphere, Triangle, TriangleNormals,
+};
 use crate::output::{Image, Rendered};
 use crate::progress::Progress;
 use crate::scene::{Accel, Camera, Scene};
@@ -677,7 +679,10 @@ impl GpuRenderer {
         output_layout: &wgpu::BindGroupLayout,
         constants: &[(&str, f64)],
     ) -> Result<wgpu::ComputePipeline> {
-        let scope = self.gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let scope = self
+            .gpu
+            .device
+            .push_error_scope(wgpu::ErrorFilter::Validation);
         let pipeline = compute_pipeline(
             &self.gpu.device,
             &self.module,
@@ -686,7 +691,9 @@ impl GpuRenderer {
             constants,
         );
         if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(Error::Gpu(format!("building the {entry_point} pipeline: {e}")));
+            return Err(Error::Gpu(format!(
+                "building the {entry_point} pipeline: {e}"
+            )));
         }
         self.gpu.wait()?;
         Ok(pipeline)
@@ -791,13 +798,11 @@ impl GpuRenderer {
                 let mapped = staging
                     .get_mapped_range(..hit_len)
                     .map_err(|e| Error::Gpu(format!("readback: {e}")))?;
-                hits.extend(bytemuck::cast_slice::<u8, Hit>(&mapped).iter().map(|h| {
-                    if h.prim == NO_HIT {
-                        Hit::MISS
-                    } else {
-                        *h
-                    }
-                }));
+                hits.extend(
+                    bytemuck::cast_slice::<u8, Hit>(&mapped)
+                        .iter()
+                        .map(|h| if h.prim == NO_HIT { Hit::MISS } else { *h }),
+                );
             }
             staging.unmap();
         }

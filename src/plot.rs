@@ -109,7 +109,11 @@ pub fn time_vs_error(points: &[Point], stem: &Path) -> Result<()> {
                         continue;
                     }
                     chart
-                        .draw_series(series.iter().map(|&(x, y)| Circle::new((x, y), 4, colour.filled())))
+                        .draw_series(
+                            series
+                                .iter()
+                                .map(|&(x, y)| Circle::new((x, y), 4, colour.filled())),
+                        )
                         .map_err(plot_error)?
                         .label(format!("{path:?} {}", intersect.name()))
                         .legend(move |(x, y)| Circle::new((x, y), 4, colour.filled()));
@@ -117,7 +121,9 @@ pub fn time_vs_error(points: &[Point], stem: &Path) -> Result<()> {
             }
             chart
                 .draw_series(LineSeries::new(
-                    front.iter().map(|p| (p.seconds.max(1e-6), p.rmse.max(floor))),
+                    front
+                        .iter()
+                        .map(|p| (p.seconds.max(1e-6), p.rmse.max(floor))),
                     BLACK.stroke_width(2),
                 ))
                 .map_err(plot_error)?
@@ -125,7 +131,11 @@ pub fn time_vs_error(points: &[Point], stem: &Path) -> Result<()> {
                 .legend(|(x, y)| PathElement::new([(x - 8, y), (x + 8, y)], BLACK.stroke_width(2)));
             chart
                 .draw_series(front.iter().map(|p| {
-                    Circle::new((p.seconds.max(1e-6), p.rmse.max(floor)), 8, BLACK.stroke_width(2))
+                    Circle::new(
+                        (p.seconds.max(1e-6), p.rmse.max(floor)),
+                        8,
+                        BLACK.stroke_width(2),
+                    )
                 }))
                 .map_err(plot_error)?;
             chart
@@ -139,7 +149,11 @@ pub fn time_vs_error(points: &[Point], stem: &Path) -> Result<()> {
             Ok(())
         }};
     }
-    png_and_svg(stem, |a: DrawingArea<SVGBackend, Shift>| draw!(a), |a: DrawingArea<BitMapBackend, Shift>| draw!(a))
+    png_and_svg(
+        stem,
+        |a: DrawingArea<SVGBackend, Shift>| draw!(a),
+        |a: DrawingArea<BitMapBackend, Shift>| draw!(a),
+    )
 }
 
 /// Time per ray (ns, log) against triangle count (log), one line per device
@@ -159,7 +173,12 @@ pub fn ladder(rows: &[LadderRow], stem: &Path) -> Result<()> {
         .collect();
     let y_lo = all_ns.iter().cloned().fold(f64::INFINITY, f64::min) / 1.5;
     let y_hi = all_ns.iter().cloned().fold(0.0, f64::max) * 1.5;
-    let palette = [RGBColor(31, 119, 180), RGBColor(44, 160, 44), RGBColor(214, 39, 40), RGBColor(148, 103, 189)];
+    let palette = [
+        RGBColor(31, 119, 180),
+        RGBColor(44, 160, 44),
+        RGBColor(214, 39, 40),
+        RGBColor(148, 103, 189),
+    ];
     macro_rules! draw {
         ($area:expr) => {{
             let area = $area;
@@ -186,12 +205,20 @@ pub fn ladder(rows: &[LadderRow], stem: &Path) -> Result<()> {
                         .iter()
                         .filter(|r| &r.device == device)
                         .map(|r| {
-                            let m = if dashed { r.shadow_mrays_per_s } else { r.primary_mrays_per_s };
+                            let m = if dashed {
+                                r.shadow_mrays_per_s
+                            } else {
+                                r.primary_mrays_per_s
+                            };
                             (r.triangles as f64, ns(m))
                         })
                         .collect();
                     series.sort_by(|a, b| a.0.total_cmp(&b.0));
-                    let style = if dashed { colour.stroke_width(1) } else { colour.stroke_width(3) };
+                    let style = if dashed {
+                        colour.stroke_width(1)
+                    } else {
+                        colour.stroke_width(3)
+                    };
                     chart
                         .draw_series(LineSeries::new(series.clone(), style))
                         .map_err(plot_error)?
@@ -213,5 +240,9 @@ pub fn ladder(rows: &[LadderRow], stem: &Path) -> Result<()> {
             Ok(())
         }};
     }
-    png_and_svg(stem, |a: DrawingArea<SVGBackend, Shift>| draw!(a), |a: DrawingArea<BitMapBackend, Shift>| draw!(a))
+    png_and_svg(
+        stem,
+        |a: DrawingArea<SVGBackend, Shift>| draw!(a),
+        |a: DrawingArea<BitMapBackend, Shift>| draw!(a),
+    )
 }

@@ -38,8 +38,9 @@ pub fn parse_rays(bytes: &[u8], path: &Path) -> Result<Vec<Ray>> {
     let rays: Vec<Ray> = bytes
         .chunks_exact(RAY_BYTES)
         .map(|chunk| {
-            let f: [f32; 8] =
-                std::array::from_fn(|i| f32::from_le_bytes(chunk[4 * i..4 * i + 4].try_into().unwrap()));
+            let f: [f32; 8] = std::array::from_fn(|i| {
+                f32::from_le_bytes(chunk[4 * i..4 * i + 4].try_into().unwrap())
+            });
             Ray {
                 origin: [f[0], f[1], f[2]],
                 tmin: f[3],
@@ -233,5 +234,7 @@ pub fn ulp_distance(a: f32, b: f32) -> u32 {
         let bits = x.to_bits() as i32;
         if bits < 0 { i32::MIN - bits } else { bits }
     };
-    (key(a) as i64 - key(b) as i64).unsigned_abs().min(u32::MAX as u64) as u32
+    (key(a) as i64 - key(b) as i64)
+        .unsigned_abs()
+        .min(u32::MAX as u64) as u32
 }

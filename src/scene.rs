@@ -550,7 +550,10 @@ fn validate_camera(camera: &Camera) -> Result<(), String> {
 /// above its square root, so that the grid is as square as `spp` allows and
 /// every cell holds one sample.
 pub fn strata_columns(spp: u32) -> u32 {
-    (1..=spp.isqrt().max(1)).rev().find(|d| spp % d == 0).unwrap_or(1)
+    (1..=spp.isqrt().max(1))
+        .rev()
+        .find(|d| spp % d == 0)
+        .unwrap_or(1)
 }
 
 /// Checks a sample count.

@@ -75,9 +75,7 @@ fn check_rays(scene: &Scene, rays: &[Ray]) {
             b.t
         );
         if a.prim != b.prim {
-            let t_other = fast
-                .intersect_primitive(ray, &ray_shear(ray.dir), a.prim)
-                .0;
+            let t_other = fast.intersect_primitive(ray, &ray_shear(ray.dir), a.prim).0;
             assert!(
                 (t_other - b.t).abs() <= 1e-5 * b.t.abs(),
                 "prim {} vs {} for {ray:?}",

@@ -426,3 +426,205 @@ fn info_lists_adapters() {
     );
     assert!(stdout.contains("limits:"), "{stdout}");
 }
+
+#[test]
+fn trace_writes_hits_in_the_documented_format() {
+    let case = Case::new();
+    let obj = case.file("tri.obj", TRIANGLE_OBJ);
+    // One ray hits (0.25, 0.25) from z = 1 with a direction of length 2, one misses.
+    let rays: Vec<f32> = vec![
+        0.25,
+        0.25,
+        1.0,
+        0.0,
+        0.0,
+        0.0,
+        -2.0,
+        f32::INFINITY, //
+        5.0,
+        5.0,
+        1.0,
+        0.0,
+        0.0,
+        0.0,
+        -1.0,
+        f32::INFINITY,
+    ];
+    let rays_path = case.path("rays.bin");
+    std::fs::write(
+        &rays_path,
+        rays.iter()
+            .flat_map(|f| f.to_le_bytes())
+            .collect::<Vec<u8>>(),
+    )
+    .unwrap();
+    for device in ["cpu", "gpu"] {
+        let hits_path = case.path(&format!("hits_{device}.bin"));
+        let out = lambert(&[
+            "trace",
+            "--obj",
+            obj.to_str().unwrap(),
+            "--rays",
+            rays_path.to_str().unwrap(),
+            "-o",
+            hits_path.to_str().unwrap(),
+            "--device",
+            device,
+            "--oracle",
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let bytes = std::fs::read(&hits_path).unwrap();
+        assert_eq!(bytes.len(), 32);
+        let f = |i: usize| f32::from_le_bytes(bytes[i..i + 4].try_into().unwrap());
+        let u = |i: usize| u32::from_le_bytes(bytes[i..i + 4].try_into().unwrap());
+        // t in units of |d|: the plane is 1 away, |d| = 2.
+        assert_eq!((f(0), u(4)), (0.5, 0));
+        assert!(
+            (f(8) - 0.25).abs() < 1e-6 && (f(12) - 0.25).abs() < 1e-6,
+            "u, v"
+        );
+        assert_eq!((f(16), u(20)), (f32::INFINITY, u32::MAX));
+    }
+}
+
+#[test]
+fn trace_rejects_bad_ray_files() {
+    let case = Case::new();
+    let obj = case.file("tri.obj", TRIANGLE_OBJ);
+    let short = case.file("short.bin", "0123456789");
+    let mut nan = vec![0u8; 32];
+    nan[16..20].copy_from_slice(&f32::NAN.to_le_bytes());
+    let nan_path = case.path("nan.bin");
+    std::fs::write(&nan_path, nan).unwrap();
+    for (rays, expected) in [
+        (&short, "10 bytes is not a whole number of rays"),
+        (&nan_path, "ray 0 (byte offset 0): dx is NaN"),
+    ] {
+        let out = lambert(&[
+            "trace",
+            "--obj",
+            obj.to_str().unwrap(),
+            "--rays",
+            rays.to_str().unwrap(),
+            "-o",
+            case.path("hits.bin").to_str().unwrap(),
+            "--device",
+            "cpu",
+        ]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{stderr}");
+        assert!(
+            stderr.contains(expected) && stderr.contains(rays.to_str().unwrap()),
+            "{stderr}"
+        );
+        assert!(!case.path("hits.bin").exists(), "a failed trace wrote hits");
+    }
+}
+
+#[test]
+fn turntable_writes_numbered_frames() {
+    let case = Case::new();
+    let scene = case.file("scene.toml", &format!("{CAMERA}{SPHERE}{LIGHT}"));
+    let pattern = case.path("frames/frame_{:04}.png");
+    let out = lambert(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--turntable",
+        "3",
+        "-o",
+        pattern.to_str().unwrap(),
+        "--device",
+        "cpu",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for frame in 0..3 {
+        assert!(case.path(&format!("frames/frame_{frame:04}.png")).exists());
+    }
+    assert!(String::from_utf8_lossy(&out.stderr).contains("per frame"));
+}
+
+#[test]
+fn bench_time_vs_error_runs_end_to_end() {
+    let case = Case::new();
+    let json = case.path("points.json");
+    let plots = case.path("plots");
+    let out = lambert(&[
+        "bench",
+        "--time-vs-error",
+        "assets/scenes/edge_cases.toml",
+        "--spp-list",
+        "1,4,16",
+        "--runs",
+        "1",
+        "--json",
+        json.to_str().unwrap(),
+        "--plot",
+        plots.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let points: Vec<serde_json::Value> =
+        serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    for field in [
+        "scene",
+        "path",
+        "intersect",
+        "spp",
+        "accel",
+        "shader",
+        "seconds",
+        "rmse",
+        "psnr_db",
+        "max_error",
+        "mismatched_primitives",
+        "leaks",
+        "on_pareto_front",
+    ] {
+        assert!(
+            points.iter().all(|p| p.get(field).is_some()),
+            "a point lacks {field}"
+        );
+    }
+    // Three paths (GPU on lavapipe, CPU f32, CPU f64) × three tests × three spp,
+    // plus brute force on each path and the full shader on the GPU.
+    assert_eq!(points.len(), 3 * 3 * 3 + 3 + 1);
+    assert!(points.iter().any(|p| p["on_pareto_front"] == true));
+    // Error falls with spp for every path and test.
+    for path in ["gpu-f32", "cpu-f32", "cpu-f64"] {
+        for test in ["seed", "moller-trumbore", "watertight"] {
+            let rmse: Vec<f64> = points
+                .iter()
+                .filter(|p| {
+                    p["path"] == path
+                        && p["intersect"] == test
+                        && p["accel"] == "bvh"
+                        && p["shader"] != "full"
+                })
+                .map(|p| p["rmse"].as_f64().unwrap())
+                .collect();
+            assert_eq!(rmse.len(), 3);
+            assert!(
+                rmse[0] > rmse[1] && rmse[1] > rmse[2],
+                "{path} {test}: {rmse:?}"
+            );
+        }
+    }
+    for ext in ["png", "svg"] {
+        assert!(
+            plots
+                .join(format!("time_vs_error_edge_cases.{ext}"))
+                .exists()
+        );
+    }
+}

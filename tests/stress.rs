@@ -83,7 +83,10 @@ fn watertight_meshes_do_not_leak() {
     let mut rng = Rng(11);
     let mut watertight_leaks = 0;
     println!("leaks (rays from inside that escape), BVH traversal:");
-    println!("{:<14} {:>22} {:>7} {:>16} {:>16}", "mesh", "offset", "rays", "variant", "CPU / GPU");
+    println!(
+        "{:<14} {:>22} {:>7} {:>16} {:>16}",
+        "mesh", "offset", "rays", "variant", "CPU / GPU"
+    );
     for (name, vertices, faces) in closed_meshes() {
         for offset in OFFSETS {
             let offset = DVec3::from(offset);
@@ -131,9 +134,10 @@ fn random_scale_triangles(rng: &mut Rng, n: usize) -> Vec<Triangle> {
         .map(|_| {
             let scale = 10f64.powf(rng.range(-8.0, 8.0));
             let centre = rng.direction() * scale * rng.range(0.0, 4.0);
-            triangle([0, 1, 2].map(|_| {
-                (centre + rng.direction() * scale * rng.range(0.2, 1.0)).as_vec3()
-            }))
+            triangle(
+                [0, 1, 2]
+                    .map(|_| (centre + rng.direction() * scale * rng.range(0.2, 1.0)).as_vec3()),
+            )
         })
         .collect()
 }
@@ -189,7 +193,11 @@ fn rays_spawned_from_hits_never_hit_their_own_triangle() {
                 sources.push(h.prim);
             }
         }
-        assert!(spawned.len() > 4 * 2900, "too few primary hits: {}", spawned.len());
+        assert!(
+            spawned.len() > 4 * 2900,
+            "too few primary hits: {}",
+            spawned.len()
+        );
         let count = |hits: Vec<Hit>| {
             hits.iter()
                 .zip(&sources)
@@ -272,7 +280,10 @@ fn a_lit_plane_has_no_shadow_acne_at_any_scale() {
                     );
                 }
                 if intersect == Intersect::default() {
-                    assert_eq!(acne, 0, "shadow acne at scale {scale}, translate {translate:?} on {path}");
+                    assert_eq!(
+                        acne, 0,
+                        "shadow acne at scale {scale}, translate {translate:?} on {path}"
+                    );
                 }
             }
         }
@@ -361,13 +372,24 @@ fn parallel_in_plane_and_degenerate_cases_give_no_false_hits() {
     }
     // A nearly parallel ray that does cross the triangle still hits it.
     let scene = scene_of(vec![triangle(unit)], vec![]);
-    let grazing = [ray(Vec3::new(-1.0, 0.25, 1e-7), Vec3::new(1.0, 0.0, -1e-7 / 1.25))];
+    let grazing = [ray(
+        Vec3::new(-1.0, 0.25, 1e-7),
+        Vec3::new(1.0, 0.0, -1e-7 / 1.25),
+    )];
     for intersect in Intersect::ALL {
         let s = with_intersect(&scene, intersect);
         let oracle = cpu::trace_rays_f64(&s, &grazing, false)[0];
         assert_eq!(oracle.prim, 0, "the oracle misses the grazing ray");
-        for hits in [trace_cpu(&s, &grazing, false), trace_gpu(&s, &grazing, false)] {
-            assert_eq!(hits[0].prim, 0, "{} misses a grazing ray that crosses it", intersect.name());
+        for hits in [
+            trace_cpu(&s, &grazing, false),
+            trace_gpu(&s, &grazing, false),
+        ] {
+            assert_eq!(
+                hits[0].prim,
+                0,
+                "{} misses a grazing ray that crosses it",
+                intersect.name()
+            );
         }
     }
 }
@@ -379,24 +401,68 @@ fn invalid_rays_are_rejected_with_the_ray_and_field_named() {
     let bytes = |rays: &[Ray]| lambert::rays::rays_to_bytes(rays);
     assert!(lambert::rays::parse_rays(&bytes(&[good]), path).is_ok());
     let cases: Vec<(Ray, &str)> = vec![
-        (Ray { origin: [f32::NAN, 0.0, 0.0], ..good }, "ox is NaN"),
-        (Ray { dir: [0.0, f32::INFINITY, 0.0], ..good }, "dy is inf"),
-        (Ray { tmin: f32::NAN, ..good }, "tmin is NaN"),
-        (Ray { tmax: f32::NAN, ..good }, "tmax is NaN"),
-        (Ray { dir: [0.0; 3], ..good }, "direction (dx, dy, dz) is zero"),
-        (Ray { tmin: 2.0, tmax: 1.0, ..good }, "tmin = 2 is greater than tmax = 1"),
+        (
+            Ray {
+                origin: [f32::NAN, 0.0, 0.0],
+                ..good
+            },
+            "ox is NaN",
+        ),
+        (
+            Ray {
+                dir: [0.0, f32::INFINITY, 0.0],
+                ..good
+            },
+            "dy is inf",
+        ),
+        (
+            Ray {
+                tmin: f32::NAN,
+                ..good
+            },
+            "tmin is NaN",
+        ),
+        (
+            Ray {
+                tmax: f32::NAN,
+                ..good
+            },
+            "tmax is NaN",
+        ),
+        (
+            Ray {
+                dir: [0.0; 3],
+                ..good
+            },
+            "direction (dx, dy, dz) is zero",
+        ),
+        (
+            Ray {
+                tmin: 2.0,
+                tmax: 1.0,
+                ..good
+            },
+            "tmin = 2 is greater than tmax = 1",
+        ),
     ];
     for (bad, expected) in cases {
         let err = lambert::rays::parse_rays(&bytes(&[good, bad]), path)
             .unwrap_err()
             .to_string();
         assert!(
-            err.contains("probe.rays") && err.contains("ray 1 (byte offset 32)") && err.contains(expected),
+            err.contains("probe.rays")
+                && err.contains("ray 1 (byte offset 32)")
+                && err.contains(expected),
             "{err}"
         );
     }
-    let err = lambert::rays::parse_rays(&bytes(&[good])[..30], path).unwrap_err().to_string();
-    assert!(err.contains("30 bytes is not a whole number of rays"), "{err}");
+    let err = lambert::rays::parse_rays(&bytes(&[good])[..30], path)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("30 bytes is not a whole number of rays"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -481,17 +547,30 @@ fn scaled_and_translated_scenes_render_the_same_image() {
         max_bad_fraction: 2e-2,
         max_prim_mismatch_fraction: 1e-2,
     };
-    for (scale, translate) in [(1e-6, 0.0), (1e6, 0.0), (1.0, 1e5), (1e3, 1e5), (1e-6, 1e-1)] {
+    for (scale, translate) in [
+        (1e-6, 0.0),
+        (1e6, 0.0),
+        (1.0, 1e5),
+        (1e3, 1e5),
+        (1e-6, 1e-1),
+    ] {
         let scene = transformed_spheres(scale, translate);
         let grid = translate / scale * f64::EPSILON * (1u64 << 29) as f64;
-        let (tolerance, rmse) = if grid < 1e-4 { (&scaled, 1e-3) } else { (&translated, 5e-2) };
+        let (tolerance, rmse) = if grid < 1e-4 {
+            (&scaled, 1e-3)
+        } else {
+            (&translated, 5e-2)
+        };
         for (path, image) in [("CPU", render_cpu(&scene)), ("GPU", render_gpu(&scene))] {
             let stats = lambert::diff::compare(&image, &reference, tolerance).unwrap();
             println!(
                 "scale {scale:e}, translate {translate:e} on {path}: {} pixels beyond {}, {} other primitive, RMSE {:.2e}",
                 stats.beyond_tolerance, tolerance.abs, stats.prim_mismatches, stats.rmse
             );
-            assert!(stats.passed && stats.rmse <= rmse, "scale {scale}, translate {translate} on {path}:\n{stats}");
+            assert!(
+                stats.passed && stats.rmse <= rmse,
+                "scale {scale}, translate {translate} on {path}:\n{stats}"
+            );
         }
     }
 }
@@ -554,7 +633,8 @@ fn gpu_and_cpu_agree_on_ray_sets_for_the_default_variant() {
         let size = (hi - lo).max_element();
         let rays: Vec<Ray> = (0..20_000)
             .map(|_| {
-                let inside = |rng: &mut Rng| lo + (hi - lo) * DVec3::new(rng.unit(), rng.unit(), rng.unit());
+                let inside =
+                    |rng: &mut Rng| lo + (hi - lo) * DVec3::new(rng.unit(), rng.unit(), rng.unit());
                 let origin = inside(&mut rng) + rng.direction() * size;
                 ray(origin.as_vec3(), (inside(&mut rng) - origin).as_vec3())
             })
@@ -586,8 +666,14 @@ fn gpu_and_cpu_agree_on_ray_sets_for_the_default_variant() {
         "all: {same} of {total} same primitive ({:.4}%); t differs by at most {worst_ulps} ULPs (99.9% within {p999})",
         100.0 * same as f64 / total as f64
     );
-    assert!(same as f64 >= 0.9999 * total as f64, "GPU and CPU disagree on too many rays");
-    assert!(worst_ulps <= 16, "GPU and CPU t differ by {worst_ulps} ULPs");
+    assert!(
+        same as f64 >= 0.9999 * total as f64,
+        "GPU and CPU disagree on too many rays"
+    );
+    assert!(
+        worst_ulps <= 16,
+        "GPU and CPU t differ by {worst_ulps} ULPs"
+    );
 }
 
 // ------------------------------------------------------ BVH on the GPU path
@@ -600,7 +686,9 @@ fn gpu_bvh_traces_rays_like_gpu_brute_force() {
         let mut brute = scene.clone();
         brute.accel = lambert::scene::Accel::BruteForce;
         let root = scene.bvh.nodes[0];
-        let centre = Vec3::from(root.min).lerp(Vec3::from(root.max), 0.5).as_dvec3();
+        let centre = Vec3::from(root.min)
+            .lerp(Vec3::from(root.max), 0.5)
+            .as_dvec3();
         let size = (Vec3::from(root.max) - Vec3::from(root.min)).max_element() as f64;
         let rays: Vec<Ray> = (0..5000)
             .map(|_| {
@@ -609,7 +697,10 @@ fn gpu_bvh_traces_rays_like_gpu_brute_force() {
                 ray(origin.as_vec3(), (target - origin).as_vec3())
             })
             .collect();
-        let (fast, slow) = (trace_gpu(&scene, &rays, false), trace_gpu(&brute, &rays, false));
+        let (fast, slow) = (
+            trace_gpu(&scene, &rays, false),
+            trace_gpu(&brute, &rays, false),
+        );
         let kernel = cpu::f32::Kernel::new(&scene);
         let mut ties = 0;
         for (r, (a, b)) in rays.iter().zip(fast.iter().zip(&slow)) {
@@ -638,7 +729,11 @@ fn gpu_bvh_traces_rays_like_gpu_brute_force() {
         }
         let any_fast = trace_gpu(&scene, &rays, true);
         for (a, b) in any_fast.iter().zip(&slow) {
-            assert_eq!(a.prim == NO_HIT, b.prim == NO_HIT, "{name}: any-hit disagrees with closest hit");
+            assert_eq!(
+                a.prim == NO_HIT,
+                b.prim == NO_HIT,
+                "{name}: any-hit disagrees with closest hit"
+            );
         }
         println!("{name}: 5000 rays, GPU BVH = GPU brute force ({ties} ties on t)");
     }

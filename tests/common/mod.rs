@@ -4,9 +4,9 @@
 use std::path::{Path, PathBuf};
 
 use lambert::Scene;
-use lambert::layout::{Sphere, Triangle};
 use lambert::cpu::{self, Precision};
 use lambert::gpu::{AdapterRequest, Gpu, GpuRenderer};
+use lambert::layout::{Sphere, Triangle};
 use lambert::output::Rendered;
 use lambert::progress::Progress;
 
@@ -61,12 +61,20 @@ pub fn assert_close(actual: [f32; 3], expected: [f64; 3], rel: f64, what: &str) 
 }
 
 /// Traces a ray query on the GPU (any adapter, lavapipe included).
-pub fn trace_gpu(scene: &Scene, rays: &[lambert::layout::Ray], any_hit: bool) -> Vec<lambert::layout::Hit> {
+pub fn trace_gpu(
+    scene: &Scene,
+    rays: &[lambert::layout::Ray],
+    any_hit: bool,
+) -> Vec<lambert::layout::Hit> {
     let mut renderer = GpuRenderer::new(open_gpu(), scene).expect("scene uploads");
     renderer.trace_rays(rays, any_hit).expect("GPU trace")
 }
 
-pub fn trace_cpu(scene: &Scene, rays: &[lambert::layout::Ray], any_hit: bool) -> Vec<lambert::layout::Hit> {
+pub fn trace_cpu(
+    scene: &Scene,
+    rays: &[lambert::layout::Ray],
+    any_hit: bool,
+) -> Vec<lambert::layout::Hit> {
     cpu::trace_rays(scene, rays, any_hit)
 }
 

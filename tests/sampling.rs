@@ -1,0 +1,120 @@
+//! Anti-aliasing: stratified jittered samples drawn from an integer hash
+//! that both paths compute identically, and error that falls as spp rises.
+
+mod common;
+
+use common::*;
+use lambert::Scene;
+use lambert::cpu::{self, Precision};
+use lambert::diff::{Tolerance, compare};
+use lambert::progress::Progress;
+use lambert::scene::{Intersect, strata_columns};
+
+fn at_spp(scene: &Scene, spp: u32) -> Scene {
+    let mut s = scene.clone();
+    s.spp = spp;
+    s
+}
+
+#[test]
+fn strata_form_a_full_grid() {
+    for (spp, columns) in [
+        (1, 1),
+        (2, 1),
+        (4, 2),
+        (8, 2),
+        (9, 3),
+        (12, 3),
+        (16, 4),
+        (17, 1),
+        (64, 8),
+    ] {
+        assert_eq!(strata_columns(spp), columns, "spp {spp}");
+        assert_eq!(spp % strata_columns(spp), 0);
+    }
+}
+
+#[test]
+fn samples_stay_in_their_pixel_and_cover_its_cells() {
+    let mut s = load("edge_cases");
+    s.spp = 16;
+    let kernel = cpu::f32::Kernel::new(&s);
+    for (x, y) in [(0, 0), (7, 3), (64, 64)] {
+        let mut cells = [false; 16];
+        for sample in 0..16 {
+            let (px, py) = kernel.sample_position(x, y, sample);
+            assert!(px >= x as f32 && px < x as f32 + 1.0 && py >= y as f32 && py < y as f32 + 1.0);
+            let (cx, cy) = (
+                ((px - x as f32) * 4.0) as usize,
+                ((py - y as f32) * 4.0) as usize,
+            );
+            cells[cy * 4 + cx] = true;
+        }
+        assert!(
+            cells.iter().all(|&c| c),
+            "pixel ({x}, {y}): a stratum has no sample"
+        );
+    }
+    // spp = 1 keeps the pixel centre.
+    s.spp = 1;
+    assert_eq!(
+        cpu::f32::Kernel::new(&s).sample_position(3, 5, 0),
+        (3.5, 5.5)
+    );
+}
+
+#[test]
+fn error_falls_as_spp_rises_on_hard_edges() {
+    // edge_cases and spheres: silhouettes and shadow edges everywhere.
+    for name in ["edge_cases", "spheres"] {
+        let scene = load(name);
+        let mut reference = at_spp(&scene, 256);
+        reference.seed = 12345;
+        reference.intersect = Intersect::Watertight;
+        let reference = cpu::render(&reference, Precision::F64, &Progress::hidden());
+        let mut last = f64::INFINITY;
+        for spp in [1, 4, 16, 64] {
+            let image = render_cpu(&at_spp(&scene, spp));
+            let rmse = compare(&image, &reference, &Tolerance::default())
+                .unwrap()
+                .rmse;
+            println!("{name}: spp {spp:>2}: RMSE {rmse:.3e} against the 256-spp f64 reference");
+            assert!(
+                rmse < last,
+                "{name}: RMSE at spp {spp} ({rmse}) is not below {last}"
+            );
+            last = rmse;
+        }
+    }
+}
+
+#[test]
+fn gpu_and_cpu_agree_at_4_spp() {
+    for name in ["edge_cases", "spheres", "bunny", "cornell"] {
+        let scene = at_spp(&load(name), 4);
+        let stats = compare(
+            &render_gpu(&scene),
+            &render_cpu(&scene),
+            &Tolerance::default(),
+        )
+        .unwrap();
+        println!("{name} at 4 spp, GPU vs CPU:\n{stats}");
+        assert!(stats.passed, "{name}:\n{stats}");
+    }
+}
+
+#[test]
+fn specialised_and_full_shaders_render_the_same_image() {
+    use lambert::gpu::GpuRenderer;
+    for name in ["spheres", "bunny", "triangle_oblique"] {
+        let scene = load(name);
+        let mut full = GpuRenderer::with_full_shader(open_gpu(), &scene).unwrap();
+        let full = full.render(&Progress::hidden()).unwrap().0;
+        let stats = compare(&render_gpu(&scene), &full, &Tolerance::default()).unwrap();
+        assert_eq!(
+            stats.max_abs, 0.0,
+            "{name}: specialisation changed the image\n{stats}"
+        );
+        assert_eq!(stats.prim_mismatches, 0);
+    }
+}
