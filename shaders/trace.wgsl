@@ -19,6 +19,11 @@ override INTERSECT: u32 = 2u;
 // Entry point `trace_rays`: stop at the first hit found rather than the
 // closest.
 override ANY_HIT: bool = false;
+// Arrays too large for one storage binding are split over two: the first
+// this many elements in `triangles` (and `triangle_normals`) or `bvh_nodes`,
+// the rest in the `_hi` binding. Unsplit: all.
+override TRIANGLES_PER_BINDING: u32 = 0xffffffffu;
+override NODES_PER_BINDING: u32 = 0xffffffffu;
 
 const NO_HIT: u32 = 0xffffffffu;
 // WGSL has no infinity literal; the largest finite f32 serves as "no hit yet".
@@ -154,12 +159,37 @@ struct Surface {
 @group(0) @binding(5) var<storage, read> lights: array<Light>;
 @group(0) @binding(6) var<storage, read> bvh_nodes: array<BvhNode>;
 @group(0) @binding(7) var<storage, read> bvh_prims: array<u32>;
+@group(0) @binding(8) var<storage, read> triangles_hi: array<Triangle>;
+@group(0) @binding(9) var<storage, read> triangle_normals_hi: array<TriangleNormals>;
+@group(0) @binding(10) var<storage, read> bvh_nodes_hi: array<BvhNode>;
 // Group 1 holds what one entry point reads and writes: an image tile for
 // `render`, a batch of rays for `trace_rays`.
 @group(1) @binding(0) var out_color: texture_storage_2d<rgba32float, write>;
 @group(1) @binding(1) var out_prim: texture_storage_2d<r32uint, write>;
 @group(1) @binding(2) var<storage, read> rays: array<Ray>;
 @group(1) @binding(3) var<storage, read_write> hits: array<Hit>;
+
+// Storage access across the split (no CPU twin: the CPU reads one array).
+fn triangle_at(i: u32) -> Triangle {
+    if i < TRIANGLES_PER_BINDING {
+        return triangles[i];
+    }
+    return triangles_hi[i - TRIANGLES_PER_BINDING];
+}
+
+fn triangle_normals_at(i: u32) -> TriangleNormals {
+    if i < TRIANGLES_PER_BINDING {
+        return triangle_normals[i];
+    }
+    return triangle_normals_hi[i - TRIANGLES_PER_BINDING];
+}
+
+fn bvh_node_at(i: u32) -> BvhNode {
+    if i < NODES_PER_BINDING {
+        return bvh_nodes[i];
+    }
+    return bvh_nodes_hi[i - NODES_PER_BINDING];
+}
 
 fn miss() -> Hit {
     return Hit(FAR, NO_HIT, 0.0, 0.0);
@@ -330,7 +360,7 @@ fn sign_nonzero(x: f32) -> f32 {
 // (t, u, v) of primitive `prim` (triangles first, then spheres).
 fn intersect_primitive(ray: Ray, shear: Shear, prim: u32) -> vec3<f32> {
     if HAS_TRIANGLES && prim < params.num_triangles {
-        let tri = triangles[prim];
+        let tri = triangle_at(prim);
         return intersect_triangle(ray, shear, tri.v0, tri.v1, tri.v2);
     }
     if HAS_SPHERES && prim >= params.num_triangles {
@@ -380,7 +410,8 @@ fn trace_bvh(ray_in: Ray, shear: Shear, any_hit: bool) -> Hit {
     var stack_node: array<u32, STACK_SIZE>;
     var stack_t: array<f32, STACK_SIZE>;
     var sp = 0u;
-    let t_root = intersect_box(ray, inv_dir, bvh_nodes[0].min, bvh_nodes[0].max);
+    let root = bvh_node_at(0u);
+    let t_root = intersect_box(ray, inv_dir, root.min, root.max);
     if t_root < ray.tmax {
         stack_node[0] = 0u;
         stack_t[0] = t_root;
@@ -392,7 +423,7 @@ fn trace_bvh(ray_in: Ray, shear: Shear, any_hit: bool) -> Hit {
         if stack_t[sp] >= ray.tmax {
             continue;
         }
-        let node = bvh_nodes[stack_node[sp]];
+        let node = bvh_node_at(stack_node[sp]);
         if node.count > 0u {
             for (var i = node.first; i < node.first + node.count; i++) {
                 if record_hit(&ray, shear, &hit, bvh_prims[i]) && any_hit {
@@ -402,8 +433,10 @@ fn trace_bvh(ray_in: Ray, shear: Shear, any_hit: bool) -> Hit {
             continue;
         }
         let left = node.first;
-        let t_left = intersect_box(ray, inv_dir, bvh_nodes[left].min, bvh_nodes[left].max);
-        let t_right = intersect_box(ray, inv_dir, bvh_nodes[left + 1u].min, bvh_nodes[left + 1u].max);
+        let left_node = bvh_node_at(left);
+        let right_node = bvh_node_at(left + 1u);
+        let t_left = intersect_box(ray, inv_dir, left_node.min, left_node.max);
+        let t_right = intersect_box(ray, inv_dir, right_node.min, right_node.max);
         // Push the farther child first so that the nearer is visited next.
         let left_first = t_left <= t_right;
         let t_near = min(t_left, t_right);
@@ -475,7 +508,7 @@ fn self_hit_bound(extent: vec3<f32>) -> vec3<f32> {
 
 fn surface_at(ray: Ray, hit: Hit) -> Surface {
     if hit.prim < params.num_triangles {
-        let tri = triangles[hit.prim];
+        let tri = triangle_at(hit.prim);
         let w = 1.0 - hit.u - hit.v;
         // From barycentrics, not o + t·d: the point lies closer to the plane.
         let position = w * tri.v0 + hit.u * tri.v1 + hit.v * tri.v2;
@@ -483,7 +516,7 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
         let geometric = face_forward(normalize(cross(tri.v1 - tri.v0, tri.v2 - tri.v0)), ray.dir);
         var shading = geometric;
         if (tri.flags & FLAG_SMOOTH) != 0u {
-            let ns = triangle_normals[hit.prim];
+            let ns = triangle_normals_at(hit.prim);
             let interpolated = w * ns.n0.xyz + hit.u * ns.n1.xyz + hit.v * ns.n2.xyz;
             if dot(interpolated, interpolated) > 0.0 {
                 shading = face_forward(normalize(interpolated), ray.dir);

@@ -192,16 +192,19 @@ impl Gpu {
         self.check_errors()
     }
 
-    fn storage_buffer(&self, label: &str, bytes: &[u8]) -> Result<wgpu::Buffer> {
-        let limit = self
-            .limits
+    /// Largest storage binding, bytes.
+    fn binding_limit(&self) -> u64 {
+        self.limits
             .max_storage_buffer_binding_size
-            .min(self.limits.max_buffer_size) as usize;
-        if bytes.len() > limit {
+            .min(self.limits.max_buffer_size)
+    }
+
+    /// A storage buffer of `bytes`, which may be at most `max_bytes` long.
+    fn storage_buffer(&self, label: &str, bytes: &[u8], max_bytes: u64) -> Result<wgpu::Buffer> {
+        if bytes.len() as u64 > max_bytes {
             return Err(Error::Gpu(format!(
-                "the scene's {label} take {} bytes, more than the {} bytes one storage binding of {} may hold",
+                "the scene's {label} take {} bytes, more than the {max_bytes} bytes {} can bind for them",
                 bytes.len(),
-                limit,
                 self.describe()
             )));
         }
@@ -212,6 +215,61 @@ impl Gpu {
                 contents: bytes,
                 usage: wgpu::BufferUsages::STORAGE,
             }))
+    }
+
+    /// An array that may exceed one storage binding: one buffer, bound as
+    /// two ranges (see TRIANGLES_PER_BINDING in the shader).
+    fn split_buffer(&self, label: &str, bytes: &[u8], stride: u64) -> Result<SplitBuffer> {
+        let limit = self.binding_limit();
+        let len = bytes.len() as u64;
+        let max_bytes = (2 * limit).min(self.limits.max_buffer_size);
+        let buffer = self.storage_buffer(label, bytes, max_bytes)?;
+        if len <= limit {
+            return Ok(SplitBuffer {
+                buffer,
+                per_binding: u32::MAX,
+                low: len,
+            });
+        }
+        // Whole elements, and an offset every device accepts (a multiple of
+        // 256 elements is a multiple of 256 bytes).
+        let per_binding = (limit / stride) / 256 * 256;
+        Ok(SplitBuffer {
+            buffer,
+            per_binding: per_binding as u32,
+            low: per_binding * stride,
+        })
+    }
+}
+
+/// A buffer bound as a low range and, when split, a high one.
+struct SplitBuffer {
+    buffer: wgpu::Buffer,
+    /// Elements in the low binding (u32::MAX: all of them).
+    per_binding: u32,
+    /// Bytes in the low binding.
+    low: u64,
+}
+
+impl SplitBuffer {
+    fn low_binding(&self) -> wgpu::BindingResource<'_> {
+        wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer: &self.buffer,
+            offset: 0,
+            size: wgpu::BufferSize::new(self.low),
+        })
+    }
+
+    /// The rest; unsplit, the low range again (bound, never read).
+    fn high_binding(&self) -> wgpu::BindingResource<'_> {
+        if self.buffer.size() == self.low {
+            return self.low_binding();
+        }
+        wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer: &self.buffer,
+            offset: self.low,
+            size: wgpu::BufferSize::new(self.buffer.size() - self.low),
+        })
     }
 }
 
@@ -246,6 +304,8 @@ pub struct GpuRenderer {
     prim_staging: wgpu::Buffer,
     /// Bytes of the scene's buffers on the device.
     pub device_bytes: u64,
+    /// Whether an array was split over two bindings.
+    pub split_bindings: bool,
     pub upload_time: Duration,
 }
 
@@ -389,16 +449,33 @@ impl GpuRenderer {
             contents: bytemuck::bytes_of(&params),
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
-        let buffers = [
-            gpu.storage_buffer("triangles", &non_empty::<Triangle>(&scene.triangles))?,
-            gpu.storage_buffer("normals", &non_empty::<TriangleNormals>(&scene.normals))?,
-            gpu.storage_buffer("spheres", &non_empty::<Sphere>(&scene.spheres))?,
-            gpu.storage_buffer("materials", &non_empty(&scene.materials))?,
-            gpu.storage_buffer("lights", &non_empty(&scene.lights))?,
-            gpu.storage_buffer("BVH nodes", &non_empty(&scene.bvh.nodes))?,
-            gpu.storage_buffer("BVH primitive list", &non_empty(&scene.bvh.prims))?,
-        ];
-        let device_bytes = buffers.iter().map(|b| b.size()).sum();
+        let limit = gpu.binding_limit();
+        let triangles =
+            gpu.split_buffer("triangles", &non_empty::<Triangle>(&scene.triangles), 48)?;
+        let normals =
+            gpu.split_buffer("normals", &non_empty::<TriangleNormals>(&scene.normals), 48)?;
+        let nodes = gpu.split_buffer("BVH nodes", &non_empty(&scene.bvh.nodes), 32)?;
+        let spheres = gpu.storage_buffer("spheres", &non_empty::<Sphere>(&scene.spheres), limit)?;
+        let materials = gpu.storage_buffer("materials", &non_empty(&scene.materials), limit)?;
+        let lights = gpu.storage_buffer("lights", &non_empty(&scene.lights), limit)?;
+        let prims =
+            gpu.storage_buffer("BVH primitive list", &non_empty(&scene.bvh.prims), limit)?;
+        let device_bytes = [
+            &triangles.buffer,
+            &normals.buffer,
+            &nodes.buffer,
+            &spheres,
+            &materials,
+            &lights,
+            &prims,
+        ]
+        .iter()
+        .map(|b| b.size())
+        .sum();
+        let split_bindings = triangles.per_binding != u32::MAX || nodes.per_binding != u32::MAX;
+        let mut constants = constants;
+        constants.push(("TRIANGLES_PER_BINDING", triangles.per_binding as f64));
+        constants.push(("NODES_PER_BINDING", nodes.per_binding as f64));
 
         let texture = |label, format| {
             device.create_texture(&wgpu::TextureDescriptor {
@@ -441,6 +518,9 @@ impl GpuRenderer {
                 (5, BindingKind::Storage),
                 (6, BindingKind::Storage),
                 (7, BindingKind::Storage),
+                (8, BindingKind::Storage),
+                (9, BindingKind::Storage),
+                (10, BindingKind::Storage),
             ],
         );
         let image_layout = bind_group_layout(
@@ -456,19 +536,20 @@ impl GpuRenderer {
             "rays",
             &[(2, BindingKind::Storage), (3, BindingKind::StorageWrite)],
         );
-        let mut entries = vec![wgpu::BindGroupEntry {
-            binding: 0,
-            resource: params_buffer.as_entire_binding(),
-        }];
-        entries.extend(
-            buffers
-                .iter()
-                .zip(1..)
-                .map(|(b, binding)| wgpu::BindGroupEntry {
-                    binding,
-                    resource: b.as_entire_binding(),
-                }),
-        );
+        let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
+        let entries = [
+            entry(0, params_buffer.as_entire_binding()),
+            entry(1, triangles.low_binding()),
+            entry(2, normals.low_binding()),
+            entry(3, spheres.as_entire_binding()),
+            entry(4, materials.as_entire_binding()),
+            entry(5, lights.as_entire_binding()),
+            entry(6, nodes.low_binding()),
+            entry(7, prims.as_entire_binding()),
+            entry(8, triangles.high_binding()),
+            entry(9, normals.high_binding()),
+            entry(10, nodes.high_binding()),
+        ];
         let color_view = color_texture.create_view(&Default::default());
         let prim_view = prim_texture.create_view(&Default::default());
 
@@ -518,6 +599,7 @@ impl GpuRenderer {
             color_staging,
             prim_staging,
             device_bytes,
+            split_bindings,
             upload_time: start.elapsed(),
         })
     }

@@ -114,3 +114,38 @@ fn edge_case_scene_behaves() {
         assert!(r.image.rgb.iter().flatten().all(|v| v.is_finite()));
     }
 }
+
+/// Arrays larger than one storage binding are split over two bindings: a
+/// binding limit made small forces the split on the bunny and the dragon,
+/// and the images stay the same.
+#[test]
+fn scenes_split_across_bindings_render_the_same() {
+    for name in ["bunny", "dragon"] {
+        let scene = load(name);
+        let mut gpu = open_gpu();
+        let largest = (scene.triangles.len() * 48).max(scene.bvh.nodes.len() * 32) as u64;
+        // Just over half the largest array, rounded to 256 elements.
+        gpu.limits.max_storage_buffer_binding_size =
+            (largest / 2 + 256 * 48) / (256 * 48) * (256 * 48);
+        let mut renderer = lambert::gpu::GpuRenderer::new(gpu, &scene).expect("split upload");
+        assert!(
+            renderer.split_bindings,
+            "{name}: the limit did not force a split"
+        );
+        let split = renderer
+            .render(&lambert::progress::Progress::hidden())
+            .unwrap()
+            .0;
+        let stats = lambert::diff::compare(
+            &split,
+            &render_gpu(&scene),
+            &lambert::diff::Tolerance::default(),
+        )
+        .unwrap();
+        assert_eq!(
+            stats.max_abs, 0.0,
+            "{name}: splitting changed the image\n{stats}"
+        );
+        assert_eq!(stats.prim_mismatches, 0);
+    }
+}
