@@ -168,6 +168,10 @@ struct Surface {
 @group(1) @binding(1) var out_prim: texture_storage_2d<r32uint, write>;
 @group(1) @binding(2) var<storage, read> rays: array<Ray>;
 @group(1) @binding(3) var<storage, read_write> hits: array<Hit>;
+// `render_pixel_list`: pixels to (re)sample, and their mean colours with the
+// variance of the mean (in w).
+@group(1) @binding(4) var<storage, read> pixel_list: array<vec2<u32>>;
+@group(1) @binding(5) var<storage, read_write> pixel_results: array<vec4<f32>>;
 
 // Storage access across the split (no CPU twin: the CPU reads one array).
 fn triangle_at(i: u32) -> Triangle {
@@ -633,12 +637,19 @@ fn sample_position(pixel: vec2<u32>, sample: u32) -> vec2<f32> {
 struct PixelResult {
     color: vec3<f32>,
     prim: u32,
+    // Variance of the mean luminance: the square of the pixel's standard
+    // error, from the spread of its samples (0 at 1 sample). Adaptive
+    // sampling refines where it is large.
+    variance: f32,
 }
+
+const LUMINANCE: vec3<f32> = vec3<f32>(0.2126, 0.7152, 0.0722);
 
 // One pixel: the box-filtered mean of its samples, and the primitive its
 // first sample hit.
 fn render_pixel(pixel: vec2<u32>) -> PixelResult {
     var sum = vec3<f32>(0.0);
+    var sum_squares = 0.0;
     var first_prim = NO_HIT;
     for (var sample = 0u; sample < params.spp; sample++) {
         let ray = camera_ray(sample_position(pixel, sample));
@@ -646,9 +657,19 @@ fn render_pixel(pixel: vec2<u32>) -> PixelResult {
         if sample == 0u {
             first_prim = hit.prim;
         }
-        sum += shade(ray, hit);
+        let color = shade(ray, hit);
+        sum += color;
+        let y = dot(color, LUMINANCE);
+        sum_squares += y * y;
     }
-    return PixelResult(sum / f32(params.spp), first_prim);
+    let n = f32(params.spp);
+    let mean = sum / n;
+    let y = dot(mean, LUMINANCE);
+    var variance = 0.0;
+    if params.spp > 1u {
+        variance = max(0.0, sum_squares - n * y * y) / ((n - 1.0) * n);
+    }
+    return PixelResult(mean, first_prim, variance);
 }
 
 @compute @workgroup_size(8, 8)
@@ -659,7 +680,7 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let result = render_pixel(pixel);
-    textureStore(out_color, id.xy, vec4<f32>(result.color, 1.0));
+    textureStore(out_color, id.xy, vec4<f32>(result.color, result.variance));
     textureStore(out_prim, id.xy, vec4<u32>(result.prim, 0u, 0u, 0u));
 }
 
@@ -670,4 +691,15 @@ fn trace_rays(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     hits[id.x] = trace(rays[id.x], ANY_HIT);
+}
+
+// Adaptive sampling's later passes: `params.spp` more samples (seeded by
+// `params.seed`) for each listed pixel.
+@compute @workgroup_size(64)
+fn render_pixel_list(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x >= arrayLength(&pixel_list) {
+        return;
+    }
+    let result = render_pixel(pixel_list[id.x]);
+    pixel_results[id.x] = vec4<f32>(result.color, result.variance);
 }

@@ -8,6 +8,7 @@ use std::time::{Duration, Instant};
 use glam::Vec3;
 use serde::Serialize;
 
+use crate::adaptive::{AdaptiveSettings, render_adaptive};
 use crate::cpu::{self, Precision};
 use crate::diff::{self, Tolerance};
 use crate::error::{Error, Result};
@@ -239,6 +240,11 @@ pub struct Point {
     pub accel: &'static str,
     /// "specialised" or "full" (GPU only; the CPU path has no variants).
     pub shader: &'static str,
+    /// "uniform", or "adaptive" (spp is then the mean samples per pixel,
+    /// rounded; `target_error` the threshold).
+    pub sampling: &'static str,
+    pub target_error: Option<f64>,
+    pub mean_spp: f64,
     /// Median wall time of a render, seconds (GPU: dispatch and readback).
     pub seconds: f64,
     pub rmse: f64,
@@ -340,6 +346,9 @@ pub fn time_vs_error(
                         spp,
                         accel: accel_name(accel),
                         shader: if path == Path32::GpuF32 { shader } else { "-" },
+                        sampling: "uniform",
+                        target_error: None,
+                        mean_spp: spp as f64,
                         seconds: seconds.as_secs_f64(),
                         rmse: stats.rmse,
                         psnr_db: stats.psnr_db,
@@ -361,6 +370,56 @@ pub fn time_vs_error(
                     points.push(point);
                 }
             }
+        }
+    }
+    // Adaptive sampling against uniform, on the f32 paths with the default
+    // test: thresholds at which the uniform points' errors lie.
+    for &path in paths.iter().filter(|&&p| p != Path32::CpuF64) {
+        let base = 4;
+        let max_spp = 4 * knobs.spp.iter().max().copied().unwrap_or(1).max(base);
+        for target in [0.04, 0.02, 0.01, 0.005] {
+            let settings = AdaptiveSettings {
+                target_error: target,
+                base_spp: base,
+                max_spp,
+            };
+            let mut engine = match path {
+                Path32::GpuF32 => Engine::Gpu(Box::new(GpuRenderer::new(
+                    Gpu::open(request, false)?,
+                    scene,
+                )?)),
+                _ => Engine::Cpu,
+            };
+            let (seconds, (image, report)) =
+                median_time(knobs.runs, || render_adaptive(&mut engine, scene, settings))?;
+            let stats = diff::compare(&image, &reference, &tolerance)?;
+            let point = Point {
+                scene: name.to_string(),
+                path,
+                intersect: scene.intersect,
+                spp: report.mean_spp.round() as u32,
+                accel: accel_name(scene.accel),
+                shader: if path == Path32::GpuF32 {
+                    "specialised"
+                } else {
+                    "-"
+                },
+                sampling: "adaptive",
+                target_error: Some(target),
+                mean_spp: report.mean_spp,
+                seconds: seconds.as_secs_f64(),
+                rmse: stats.rmse,
+                psnr_db: stats.psnr_db,
+                max_error: stats.max_abs,
+                mismatched_primitives: stats.prim_mismatches,
+                leaks: leaks(path, scene.intersect, request)?,
+                on_pareto_front: false,
+            };
+            log(&format!(
+                "  {:?} adaptive E={target:<6} mean spp {:>6.2} {:>9.4} s  RMSE {:.3e} (expected {:.3e})",
+                path, report.mean_spp, point.seconds, point.rmse, report.expected_rmse
+            ));
+            points.push(point);
         }
     }
     mark_pareto_front(&mut points);

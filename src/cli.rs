@@ -6,6 +6,7 @@ use std::time::{Duration, Instant};
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
+use crate::adaptive::{AdaptiveSettings, render_adaptive};
 use crate::bench::{self, BenchDevices};
 use crate::cpu::{self, Precision};
 use crate::diff::{self, Tolerance};
@@ -129,6 +130,14 @@ struct RenderArgs {
     /// holds the frame number as {}, {:04} (zero-padded to 4) or similar.
     #[arg(long, value_name = "N")]
     turntable: Option<u32>,
+    /// Adaptive sampling: add samples only to pixels whose standard error
+    /// (of mean luminance) is above E, starting from --spp (at least 2,
+    /// default 4), doubling up to --max-spp. Reports the error it expects.
+    #[arg(long, value_name = "E")]
+    target_error: Option<f64>,
+    /// Cap on samples per pixel for --target-error.
+    #[arg(long, default_value_t = 256)]
+    max_spp: u32,
     /// Print nothing but errors.
     #[arg(short, long)]
     quiet: bool,
@@ -328,7 +337,43 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
     if !args.quiet {
         eprintln!("rendering on {}", engine.describe());
     }
-    let (rendered, timings) = engine.render(&scene, !args.quiet)?;
+    let (rendered, timings) = match args.target_error {
+        None => engine.render(&scene, !args.quiet)?,
+        Some(target) => {
+            if !(target.is_finite() && target > 0.0) {
+                return Err(Error::Usage(format!(
+                    "--target-error {target} must be positive"
+                )));
+            }
+            let settings = AdaptiveSettings {
+                target_error: target,
+                base_spp: if args.options.spp.is_some() {
+                    scene.spp
+                } else {
+                    4
+                },
+                max_spp: args.max_spp,
+            };
+            let start = Instant::now();
+            let (rendered, report) = render_adaptive(&mut engine, &scene, settings)?;
+            if !args.quiet {
+                eprintln!(
+                    "adaptive: {:.1} samples per pixel on average ({} samples); pixels refined per pass {:?}; {} pixels still above {target} at {} spp; expected RMSE from sampling noise {:.3e}",
+                    report.mean_spp,
+                    report.total_samples,
+                    report.refined_per_pass,
+                    report.above_target,
+                    args.max_spp,
+                    report.expected_rmse
+                );
+            }
+            let timings = crate::render::RenderTimings {
+                render: start.elapsed(),
+                readback: Duration::ZERO,
+            };
+            (rendered, timings)
+        }
+    };
 
     let start = Instant::now();
     rendered.image.save(&args.output)?;
@@ -654,10 +699,11 @@ fn bench_time_vs_error(args: &BenchArgs) -> Result<ExitCode> {
         front.sort_by(|a, b| a.seconds.total_cmp(&b.seconds));
         for p in front {
             println!(
-                "  {:?} {:<16} spp {:>3} {:<11} {:<11} {:>9.4} s  RMSE {:.3e}  PSNR {}  leaks {}",
+                "  {:?} {:<16} {:<8} spp {:>6.2} {:<11} {:<11} {:>9.4} s  RMSE {:.3e}  PSNR {}  leaks {}",
                 p.path,
                 p.intersect.name(),
-                p.spp,
+                p.sampling,
+                p.mean_spp,
                 p.accel,
                 p.shader,
                 p.seconds,

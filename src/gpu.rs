@@ -289,6 +289,8 @@ pub struct GpuRenderer {
     scene_layout: wgpu::BindGroupLayout,
     image_layout: wgpu::BindGroupLayout,
     rays_layout: wgpu::BindGroupLayout,
+    pixels_layout: wgpu::BindGroupLayout,
+    pixel_list_pipeline: Option<wgpu::ComputePipeline>,
     /// Built on first use, as are the trace pipelines: a ray query never
     /// compiles the render entry point, nor a render the query's.
     render_pipeline: Option<wgpu::ComputePipeline>,
@@ -536,6 +538,11 @@ impl GpuRenderer {
             "rays",
             &[(2, BindingKind::Storage), (3, BindingKind::StorageWrite)],
         );
+        let pixels_layout = bind_group_layout(
+            device,
+            "pixel list",
+            &[(4, BindingKind::Storage), (5, BindingKind::StorageWrite)],
+        );
         let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
         let entries = [
             entry(0, params_buffer.as_entire_binding()),
@@ -588,7 +595,9 @@ impl GpuRenderer {
             scene_layout,
             image_layout,
             rays_layout,
+            pixels_layout,
             render_pipeline: None,
+            pixel_list_pipeline: None,
             scene_group,
             image_group,
             trace_pipelines: [None, None],
@@ -618,6 +627,7 @@ impl GpuRenderer {
         let (width, height) = (self.params.width, self.params.height);
         let mut rgb = vec![[0.0f32; 3]; width as usize * height as usize];
         let mut prims = vec![0u32; width as usize * height as usize];
+        let mut variance = vec![0.0f32; width as usize * height as usize];
         let mut timings = GpuTimings::default();
         self.prepare_render()?;
         let side = self.tile_side();
@@ -633,8 +643,9 @@ impl GpuRenderer {
                 self.read_tile(tile_width, tile_height, |row, colors, ids| {
                     let offset = ((tile_y + row) * width + tile_x) as usize;
                     let n = tile_width as usize;
-                    for (dst, src) in rgb[offset..offset + n].iter_mut().zip(colors.chunks(4)) {
-                        *dst = [src[0], src[1], src[2]];
+                    for (i, src) in colors.chunks(4).enumerate() {
+                        rgb[offset + i] = [src[0], src[1], src[2]];
+                        variance[offset + i] = src[3];
                     }
                     prims[offset..offset + n].copy_from_slice(ids);
                 })?;
@@ -646,6 +657,7 @@ impl GpuRenderer {
             Rendered {
                 image: Image { width, height, rgb },
                 prims,
+                variance,
             },
             timings,
         ))
@@ -806,16 +818,48 @@ impl GpuRenderer {
 
     /// Traces `rays` against the resident scene: closest hits, or with
     /// `any_hit` the first hit each ray finds. Misses come back as t = +inf,
-    /// prim = NO_HIT. Rays go up in batches so that no dispatch runs long.
+    /// prim = NO_HIT.
     pub fn trace_rays(&mut self, rays: &[Ray], any_hit: bool) -> Result<Vec<Hit>> {
-        const BATCH: usize = 1 << 20;
-        const RAY_WORKGROUP: usize = 64;
-        let pipeline_index = any_hit as usize;
         self.prepare_trace(any_hit)?;
+        let pipeline = self.trace_pipelines[any_hit as usize]
+            .as_ref()
+            .expect("prepared");
+        let hits: Vec<Hit> = self.run_list(pipeline, &self.rays_layout, 2, rays)?;
+        Ok(hits
+            .into_iter()
+            .map(|h| if h.prim == NO_HIT { Hit::MISS } else { h })
+            .collect())
+    }
+
+    /// Renders the listed pixels with the current sampling (adaptive
+    /// sampling's later passes): mean colour and variance of the mean.
+    pub fn render_pixel_list(&mut self, pixels: &[[u32; 2]]) -> Result<Vec<[f32; 4]>> {
+        if self.pixel_list_pipeline.is_none() {
+            let pipeline =
+                self.build_pipeline("render_pixel_list", &self.pixels_layout, &self.constants)?;
+            self.pixel_list_pipeline = Some(pipeline);
+        }
+        self.gpu
+            .queue
+            .write_buffer(&self.params_buffer, 0, bytemuck::bytes_of(&self.params));
+        let pipeline = self.pixel_list_pipeline.as_ref().expect("built");
+        self.run_list(pipeline, &self.pixels_layout, 4, pixels)
+    }
+
+    /// Runs a one-invocation-per-item entry point over `inputs` (bound at
+    /// `binding`, outputs at `binding + 1`), in batches so that no dispatch
+    /// runs long.
+    fn run_list<I: bytemuck::Pod, O: bytemuck::Pod>(
+        &self,
+        pipeline: &wgpu::ComputePipeline,
+        layout: &wgpu::BindGroupLayout,
+        binding: u32,
+        inputs: &[I],
+    ) -> Result<Vec<O>> {
+        const BATCH: usize = 1 << 20;
+        const LIST_WORKGROUP: usize = 64;
         let gpu = &self.gpu;
-        let batch = BATCH.min(rays.len()).max(1);
-        let ray_bytes = (batch * size_of::<Ray>()) as u64;
-        let hit_bytes = (batch * size_of::<Hit>()) as u64;
+        let batch = BATCH.min(inputs.len()).max(1);
         let buffer = |label, size, usage| {
             gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -825,50 +869,54 @@ impl GpuRenderer {
             })
         };
         use wgpu::BufferUsages as U;
-        let ray_buffer = buffer("rays", ray_bytes, U::STORAGE | U::COPY_DST);
-        let hit_buffer = buffer("hits", hit_bytes, U::STORAGE | U::COPY_SRC);
-        let staging = buffer("hits readback", hit_bytes, U::COPY_DST | U::MAP_READ);
-        let mut hits = Vec::with_capacity(rays.len());
-        for chunk in rays.chunks(batch) {
-            let ray_len = (chunk.len() * size_of::<Ray>()) as u64;
-            let hit_len = (chunk.len() * size_of::<Hit>()) as u64;
+        let in_buffer = buffer(
+            "list input",
+            (batch * size_of::<I>()) as u64,
+            U::STORAGE | U::COPY_DST,
+        );
+        let out_bytes = (batch * size_of::<O>()) as u64;
+        let out_buffer = buffer("list output", out_bytes, U::STORAGE | U::COPY_SRC);
+        let staging = buffer("list readback", out_bytes, U::COPY_DST | U::MAP_READ);
+        let mut outputs = Vec::with_capacity(inputs.len());
+        for chunk in inputs.chunks(batch) {
+            let in_len = (chunk.len() * size_of::<I>()) as u64;
+            let out_len = (chunk.len() * size_of::<O>()) as u64;
             gpu.queue
-                .write_buffer(&ray_buffer, 0, bytemuck::cast_slice(chunk));
+                .write_buffer(&in_buffer, 0, bytemuck::cast_slice(chunk));
             // Bound to the batch's length: the shader stops at arrayLength.
+            let range = |buffer, size| {
+                wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer,
+                    offset: 0,
+                    size: wgpu::BufferSize::new(size),
+                })
+            };
             let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("rays"),
-                layout: &self.rays_layout,
+                label: Some("list"),
+                layout,
                 entries: &[
                     wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                            buffer: &ray_buffer,
-                            offset: 0,
-                            size: wgpu::BufferSize::new(ray_len),
-                        }),
+                        binding,
+                        resource: range(&in_buffer, in_len),
                     },
                     wgpu::BindGroupEntry {
-                        binding: 3,
-                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                            buffer: &hit_buffer,
-                            offset: 0,
-                            size: wgpu::BufferSize::new(hit_len),
-                        }),
+                        binding: binding + 1,
+                        resource: range(&out_buffer, out_len),
                     },
                 ],
             });
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
             {
                 let mut pass = encoder.begin_compute_pass(&Default::default());
-                pass.set_pipeline(self.trace_pipelines[pipeline_index].as_ref().unwrap());
+                pass.set_pipeline(pipeline);
                 pass.set_bind_group(0, &self.scene_group, &[]);
                 pass.set_bind_group(1, &group, &[]);
-                pass.dispatch_workgroups(chunk.len().div_ceil(RAY_WORKGROUP) as u32, 1, 1);
+                pass.dispatch_workgroups(chunk.len().div_ceil(LIST_WORKGROUP) as u32, 1, 1);
             }
-            encoder.copy_buffer_to_buffer(&hit_buffer, 0, &staging, 0, hit_len);
+            encoder.copy_buffer_to_buffer(&out_buffer, 0, &staging, 0, out_len);
             gpu.queue.submit([encoder.finish()]);
             let (sender, receiver) = mpsc::channel();
-            staging.map_async(wgpu::MapMode::Read, ..hit_len, move |r| {
+            staging.map_async(wgpu::MapMode::Read, ..out_len, move |r| {
                 let _ = sender.send(r);
             });
             gpu.wait()?;
@@ -878,17 +926,13 @@ impl GpuRenderer {
                 .map_err(|e| Error::Gpu(format!("readback: {e}")))?;
             {
                 let mapped = staging
-                    .get_mapped_range(..hit_len)
+                    .get_mapped_range(..out_len)
                     .map_err(|e| Error::Gpu(format!("readback: {e}")))?;
-                hits.extend(
-                    bytemuck::cast_slice::<u8, Hit>(&mapped)
-                        .iter()
-                        .map(|h| if h.prim == NO_HIT { Hit::MISS } else { *h }),
-                );
+                outputs.extend_from_slice(bytemuck::cast_slice::<u8, O>(&mapped));
             }
             staging.unmap();
         }
-        Ok(hits)
+        Ok(outputs)
     }
 }
 

@@ -6,6 +6,7 @@
 //! `shade`), `gpu` (wgpu host code), `scene` and `loading` (input),
 //! `output` (images), `diff` (comparisons), `rays` (ray queries), `cli` (the `lambert` binary).
 
+pub mod adaptive;
 pub mod bench;
 pub mod bvh;
 pub mod cli;

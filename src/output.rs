@@ -22,6 +22,9 @@ pub struct Image {
 pub struct Rendered {
     pub image: Image,
     pub prims: Vec<u32>,
+    /// Per pixel, the variance of the mean luminance of its samples (the
+    /// squared standard error; 0 at 1 sample per pixel).
+    pub variance: Vec<f32>,
 }
 
 impl Image {

@@ -102,7 +102,9 @@ pub fn time_vs_error(points: &[Point], stem: &Path) -> Result<()> {
                     let colour = series_colour(path, intersect);
                     let series: Vec<(f64, f64)> = points
                         .iter()
-                        .filter(|p| p.path == path && p.intersect == intersect)
+                        .filter(|p| {
+                            p.path == path && p.intersect == intersect && p.sampling == "uniform"
+                        })
                         .map(|p| (p.seconds.max(1e-6), p.rmse.max(floor)))
                         .collect();
                     if series.is_empty() {
@@ -118,6 +120,26 @@ pub fn time_vs_error(points: &[Point], stem: &Path) -> Result<()> {
                         .label(format!("{path:?} {}", intersect.name()))
                         .legend(move |(x, y)| Circle::new((x, y), 4, colour.filled()));
                 }
+            }
+            for path in [Path32::GpuF32, Path32::CpuF32] {
+                let colour = series_colour(path, Intersect::Watertight);
+                let series: Vec<(f64, f64)> = points
+                    .iter()
+                    .filter(|p| p.path == path && p.sampling == "adaptive")
+                    .map(|p| (p.seconds.max(1e-6), p.rmse.max(floor)))
+                    .collect();
+                if series.is_empty() {
+                    continue;
+                }
+                chart
+                    .draw_series(
+                        series
+                            .iter()
+                            .map(|&(x, y)| TriangleMarker::new((x, y), 7, colour.filled())),
+                    )
+                    .map_err(plot_error)?
+                    .label(format!("{path:?} adaptive"))
+                    .legend(move |(x, y)| TriangleMarker::new((x, y), 7, colour.filled()));
             }
             chart
                 .draw_series(LineSeries::new(

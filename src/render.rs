@@ -114,6 +114,22 @@ impl Engine {
         }
     }
 
+    /// Renders the listed pixels with `scene`'s spp and seed: mean colour
+    /// and variance of the mean (adaptive sampling's later passes).
+    pub fn render_pixel_list(
+        &mut self,
+        scene: &Scene,
+        pixels: &[[u32; 2]],
+    ) -> Result<Vec<[f32; 4]>> {
+        match self {
+            Engine::Gpu(renderer) => {
+                renderer.set_camera(scene, &scene.camera);
+                renderer.render_pixel_list(pixels)
+            }
+            Engine::Cpu => Ok(cpu::render_pixel_list(scene, pixels)),
+        }
+    }
+
     /// Readies the device for `trace` (builds its pipeline).
     pub fn prepare_trace(&mut self, any_hit: bool) -> Result<()> {
         match self {

@@ -597,8 +597,9 @@ fn bench_time_vs_error_runs_end_to_end() {
         );
     }
     // Three paths (GPU on lavapipe, CPU f32, CPU f64) × three tests × three spp,
-    // plus brute force on each path and the full shader on the GPU.
-    assert_eq!(points.len(), 3 * 3 * 3 + 3 + 1);
+    // plus brute force on each path, the full shader on the GPU, and four
+    // adaptive targets on each f32 path.
+    assert_eq!(points.len(), 3 * 3 * 3 + 3 + 1 + 2 * 4);
     assert!(points.iter().any(|p| p["on_pareto_front"] == true));
     // Error falls with spp for every path and test.
     for path in ["gpu-f32", "cpu-f32", "cpu-f64"] {
@@ -610,6 +611,7 @@ fn bench_time_vs_error_runs_end_to_end() {
                         && p["intersect"] == test
                         && p["accel"] == "bvh"
                         && p["shader"] != "full"
+                        && p["sampling"] == "uniform"
                 })
                 .map(|p| p["rmse"].as_f64().unwrap())
                 .collect();

@@ -118,3 +118,49 @@ fn specialised_and_full_shaders_render_the_same_image() {
         assert_eq!(stats.prim_mismatches, 0);
     }
 }
+
+#[test]
+fn adaptive_sampling_beats_uniform_at_the_same_sample_count() {
+    use lambert::adaptive::{AdaptiveSettings, render_adaptive};
+    use lambert::render::Engine;
+    for name in ["edge_cases", "spheres"] {
+        let scene = load(name);
+        let mut reference = at_spp(&scene, 256);
+        reference.seed = 777;
+        let reference = cpu::render(&reference, Precision::F64, &Progress::hidden());
+        let settings = AdaptiveSettings {
+            target_error: 0.01,
+            base_spp: 4,
+            max_spp: 64,
+        };
+        let (cpu_image, report) = render_adaptive(&mut Engine::Cpu, &scene, settings).unwrap();
+        let mut gpu = Engine::Gpu(Box::new(
+            lambert::gpu::GpuRenderer::new(open_gpu(), &scene).unwrap(),
+        ));
+        let (gpu_image, gpu_report) = render_adaptive(&mut gpu, &scene, settings).unwrap();
+        // Same samples on both paths: the same pixels refined, the same image.
+        assert_eq!(
+            report.refined_per_pass, gpu_report.refined_per_pass,
+            "{name}"
+        );
+        let stats = compare(&gpu_image, &cpu_image, &Tolerance::default()).unwrap();
+        assert!(stats.passed, "{name}: adaptive GPU vs CPU\n{stats}");
+        // Uniform sampling with at least as many samples in all.
+        let uniform_spp = report.mean_spp.ceil() as u32;
+        let uniform = render_cpu(&at_spp(&scene, uniform_spp));
+        let adaptive_rmse = compare(&cpu_image, &reference, &Tolerance::default())
+            .unwrap()
+            .rmse;
+        let uniform_rmse = compare(&uniform, &reference, &Tolerance::default())
+            .unwrap()
+            .rmse;
+        println!(
+            "{name}: adaptive {:.2} spp on average: RMSE {adaptive_rmse:.3e} (expected {:.3e}); uniform {uniform_spp} spp: RMSE {uniform_rmse:.3e}",
+            report.mean_spp, report.expected_rmse
+        );
+        assert!(
+            adaptive_rmse < uniform_rmse,
+            "{name}: adaptive sampling is no better than uniform"
+        );
+    }
+}

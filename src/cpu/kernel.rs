@@ -373,21 +373,35 @@ impl<'a> Kernel<'a> {
         )
     }
 
-    /// One pixel: the box-filtered mean of its samples, and the primitive
-    /// its first sample hit.
-    pub fn render_pixel(&self, x: u32, y: u32) -> (Vec3, u32) {
+    /// One pixel: the box-filtered mean of its samples, the primitive its
+    /// first sample hit, and the variance of its mean luminance.
+    pub fn render_pixel(&self, x: u32, y: u32) -> (Vec3, u32, Real) {
+        let luminance = Vec3::new(0.2126, 0.7152, 0.0722);
         let mut sum = Vec3::ZERO;
+        let mut sum_squares: Real = 0.0;
         let mut first_prim = NO_HIT;
-        for sample in 0..self.scene.spp {
+        let spp = self.scene.spp;
+        for sample in 0..spp {
             let (px, py) = self.sample_position(x, y, sample);
             let ray = self.camera_ray(px, py);
             let hit = self.trace_closest(ray);
             if sample == 0 {
                 first_prim = hit.prim;
             }
-            sum += self.shade(&ray, &hit);
+            let color = self.shade(&ray, &hit);
+            sum += color;
+            let l = color.dot(luminance);
+            sum_squares += l * l;
         }
-        (sum / self.scene.spp as Real, first_prim)
+        let n = spp as Real;
+        let mean = sum / n;
+        let l = mean.dot(luminance);
+        let variance = if spp > 1 {
+            (sum_squares - n * l * l).max(0.0) / ((n - 1.0) * n)
+        } else {
+            0.0
+        };
+        (mean, first_prim, variance)
     }
 }
 

@@ -34,30 +34,45 @@ pub enum Precision {
     F64,
 }
 
-/// Renders every pixel at its centre; rows run in parallel.
+/// One pixel in the chosen precision: colour, first primitive, variance of
+/// the mean luminance.
+fn pixel(
+    kernel32: &f32::Kernel,
+    kernel64: &f64::Kernel,
+    precision: Precision,
+    x: u32,
+    y: u32,
+) -> ([::core::primitive::f32; 3], u32, ::core::primitive::f32) {
+    match precision {
+        Precision::F32 => {
+            let (c, p, v) = kernel32.render_pixel(x, y);
+            (c.to_array(), p, v)
+        }
+        Precision::F64 => {
+            let (c, p, v) = kernel64.render_pixel(x, y);
+            (c.as_vec3().to_array(), p, v as ::core::primitive::f32)
+        }
+    }
+}
+
+/// Renders every pixel with the scene's samples; rows run in parallel.
 pub fn render(scene: &Scene, precision: Precision, progress: &Progress) -> Rendered {
     let (width, height) = (scene.camera.width as usize, scene.camera.height as usize);
-    let mut rgb = vec![[0.0f32; 3]; width * height];
+    let mut rgb = vec![[0.0; 3]; width * height];
     let mut prims = vec![0u32; width * height];
+    let mut variance = vec![0.0; width * height];
     let kernel32 = f32::Kernel::new(scene);
     let kernel64 = f64::Kernel::new(scene);
     rgb.par_chunks_mut(width)
         .zip(prims.par_chunks_mut(width))
+        .zip(variance.par_chunks_mut(width))
         .enumerate()
-        .for_each(|(y, (rgb_row, prim_row))| {
+        .for_each(|(y, ((rgb_row, prim_row), variance_row))| {
             for x in 0..width {
-                let (color, prim) = match precision {
-                    Precision::F32 => {
-                        let (c, p) = kernel32.render_pixel(x as u32, y as u32);
-                        (c.to_array(), p)
-                    }
-                    Precision::F64 => {
-                        let (c, p) = kernel64.render_pixel(x as u32, y as u32);
-                        (c.as_vec3().to_array(), p)
-                    }
-                };
-                rgb_row[x] = color;
-                prim_row[x] = prim;
+                let (c, p, v) = pixel(&kernel32, &kernel64, precision, x as u32, y as u32);
+                rgb_row[x] = c;
+                prim_row[x] = p;
+                variance_row[x] = v;
             }
             progress.inc(1);
         });
@@ -68,7 +83,22 @@ pub fn render(scene: &Scene, precision: Precision, progress: &Progress) -> Rende
             rgb,
         },
         prims,
+        variance,
     }
+}
+
+/// Renders the listed pixels only (adaptive sampling's later passes):
+/// mean colour and variance of the mean, as `render_pixel_list` on the GPU.
+pub fn render_pixel_list(scene: &Scene, pixels: &[[u32; 2]]) -> Vec<[::core::primitive::f32; 4]> {
+    let kernel32 = f32::Kernel::new(scene);
+    let kernel64 = f64::Kernel::new(scene);
+    pixels
+        .par_iter()
+        .map(|&[x, y]| {
+            let (c, _, v) = pixel(&kernel32, &kernel64, Precision::F32, x, y);
+            [c[0], c[1], c[2], v]
+        })
+        .collect()
 }
 
 /// Traces a ray query on the CPU in single precision, as the GPU does:
