@@ -247,6 +247,9 @@ pub struct Point {
     pub mean_spp: f64,
     /// Median wall time of a render, seconds (GPU: dispatch and readback).
     pub seconds: f64,
+    /// GPU time of the dispatches from timestamp queries (GPU path, where
+    /// the adapter supports them; not for adaptive sampling's passes).
+    pub gpu_seconds: Option<f64>,
     pub rmse: f64,
     pub psnr_db: Option<f64>,
     pub max_error: f32,
@@ -336,7 +339,7 @@ pub fn time_vs_error(
                 }
                 for (accel, shader) in variants {
                     s.accel = accel;
-                    let (seconds, image) =
+                    let (seconds, device, image) =
                         time_render(&s, path, shader == "full", knobs.runs, request)?;
                     let stats = diff::compare(&image, &reference, &tolerance)?;
                     let point = Point {
@@ -350,6 +353,7 @@ pub fn time_vs_error(
                         target_error: None,
                         mean_spp: spp as f64,
                         seconds: seconds.as_secs_f64(),
+                        gpu_seconds: device.map(|d| d.as_secs_f64()),
                         rmse: stats.rmse,
                         psnr_db: stats.psnr_db,
                         max_error: stats.max_abs,
@@ -408,6 +412,7 @@ pub fn time_vs_error(
                 target_error: Some(target),
                 mean_spp: report.mean_spp,
                 seconds: seconds.as_secs_f64(),
+                gpu_seconds: None,
                 rmse: stats.rmse,
                 psnr_db: stats.psnr_db,
                 max_error: stats.max_abs,
@@ -426,13 +431,21 @@ pub fn time_vs_error(
     Ok(points)
 }
 
+/// Median wall time of a render, the device time of the last run (GPU with
+/// timestamp queries only), and its image.
 fn time_render(
     scene: &Scene,
     path: Path32,
     full_shader: bool,
     runs: usize,
     request: &AdapterRequest,
-) -> Result<(Duration, Rendered)> {
+) -> Result<(Duration, Option<Duration>, Rendered)> {
+    let cpu = |precision| {
+        let (t, image) = median_time(runs, || {
+            Ok(cpu::render(scene, precision, &Progress::hidden()))
+        })?;
+        Ok((t, None, image))
+    };
     match path {
         Path32::GpuF32 => {
             let gpu = Gpu::open(request, false)?;
@@ -442,14 +455,11 @@ fn time_render(
                 GpuRenderer::new(gpu, scene)?
             };
             r.prepare_render()?;
-            median_time(runs, || Ok(r.render(&Progress::hidden())?.0))
+            let (t, (image, timings)) = median_time(runs, || r.render(&Progress::hidden()))?;
+            Ok((t, timings.device, image))
         }
-        Path32::CpuF32 => median_time(runs, || {
-            Ok(cpu::render(scene, Precision::F32, &Progress::hidden()))
-        }),
-        Path32::CpuF64 => median_time(runs, || {
-            Ok(cpu::render(scene, Precision::F64, &Progress::hidden()))
-        }),
+        Path32::CpuF32 => cpu(Precision::F32),
+        Path32::CpuF64 => cpu(Precision::F64),
     }
 }
 

@@ -370,6 +370,7 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
             let timings = crate::render::RenderTimings {
                 render: start.elapsed(),
                 readback: Duration::ZERO,
+                device: None,
             };
             (rendered, timings)
         }
@@ -408,6 +409,13 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
             "{:.2} Mrays/s (primary rays, render stage)",
             rays / timings.render.as_secs_f64() / 1e6
         );
+        if let Some(device) = timings.device {
+            eprintln!(
+                "GPU time (timestamp queries): {}, {:.2} Mrays/s",
+                seconds(device),
+                rays / device.as_secs_f64() / 1e6
+            );
+        }
     }
     Ok(ExitCode::SUCCESS)
 }

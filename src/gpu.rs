@@ -154,7 +154,8 @@ impl Gpu {
         let limits = adapter.limits();
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("lambert"),
-            required_features: wgpu::Features::empty(),
+            // GPU time of each dispatch, where the adapter can measure it.
+            required_features: adapter.features() & wgpu::Features::TIMESTAMP_QUERY,
             required_limits: limits.clone(),
             ..Default::default()
         }))
@@ -276,8 +277,93 @@ impl SplitBuffer {
 /// Where the time of one GPU render went.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct GpuTimings {
+    /// Wall time of the dispatches (submit to completion).
     pub render: Duration,
     pub readback: Duration,
+    /// Device time of the dispatches, from timestamp queries, where the
+    /// adapter supports them.
+    pub device: Option<Duration>,
+}
+
+/// Timestamp queries around each dispatch.
+struct Timer {
+    queries: wgpu::QuerySet,
+    resolve: wgpu::Buffer,
+    staging: wgpu::Buffer,
+    /// Nanoseconds per timestamp tick.
+    period: f64,
+}
+
+impl Timer {
+    fn new(gpu: &Gpu) -> Option<Timer> {
+        if !gpu
+            .device
+            .features()
+            .contains(wgpu::Features::TIMESTAMP_QUERY)
+        {
+            return None;
+        }
+        let buffer = |label, usage| {
+            gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: 16,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        Some(Timer {
+            queries: gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("dispatch time"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2,
+            }),
+            resolve: buffer(
+                "timestamps",
+                wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+            ),
+            staging: buffer(
+                "timestamps readback",
+                wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            ),
+            period: gpu.queue.get_timestamp_period() as f64,
+        })
+    }
+
+    fn writes(&self) -> wgpu::ComputePassTimestampWrites<'_> {
+        wgpu::ComputePassTimestampWrites {
+            query_set: &self.queries,
+            beginning_of_pass_write_index: Some(0),
+            end_of_pass_write_index: Some(1),
+        }
+    }
+
+    fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
+        encoder.resolve_query_set(&self.queries, 0..2, &self.resolve, 0);
+        encoder.copy_buffer_to_buffer(&self.resolve, 0, &self.staging, 0, 16);
+    }
+
+    /// The pass's device time, once its submission has completed.
+    fn read(&self, gpu: &Gpu) -> Result<Duration> {
+        let (sender, receiver) = mpsc::channel();
+        self.staging.map_async(wgpu::MapMode::Read, .., move |r| {
+            let _ = sender.send(r);
+        });
+        gpu.wait()?;
+        receiver
+            .recv()
+            .map_err(|e| Error::Gpu(format!("timestamps: {e}")))?
+            .map_err(|e| Error::Gpu(format!("timestamps: {e}")))?;
+        let ticks = {
+            let mapped = self
+                .staging
+                .get_mapped_range(..)
+                .map_err(|e| Error::Gpu(format!("timestamps: {e}")))?;
+            let t: &[u64] = bytemuck::cast_slice(&mapped);
+            t[1].saturating_sub(t[0])
+        };
+        self.staging.unmap();
+        Ok(Duration::from_nanos((ticks as f64 * self.period) as u64))
+    }
 }
 
 /// A scene resident on the device: buffers and pipeline are built once;
@@ -308,6 +394,7 @@ pub struct GpuRenderer {
     pub device_bytes: u64,
     /// Whether an array was split over two bindings.
     pub split_bindings: bool,
+    timer: Option<Timer>,
     pub upload_time: Duration,
 }
 
@@ -588,6 +675,7 @@ impl GpuRenderer {
             return Err(Error::Gpu(format!("uploading the scene: {e}")));
         }
         gpu.wait()?;
+        let timer = Timer::new(&gpu);
         Ok(GpuRenderer {
             gpu,
             module,
@@ -609,6 +697,7 @@ impl GpuRenderer {
             prim_staging,
             device_bytes,
             split_bindings,
+            timer,
             upload_time: start.elapsed(),
         })
     }
@@ -636,8 +725,11 @@ impl GpuRenderer {
                 let tile_width = side.min(width - tile_x);
                 let tile_height = side.min(height - tile_y);
                 let start = Instant::now();
-                self.dispatch_tile(tile_x, tile_y, tile_width, tile_height)?;
+                let device_time = self.dispatch_tile(tile_x, tile_y, tile_width, tile_height)?;
                 timings.render += start.elapsed();
+                if let Some(t) = device_time {
+                    *timings.device.get_or_insert(Duration::ZERO) += t;
+                }
 
                 let start = Instant::now();
                 self.read_tile(tile_width, tile_height, |row, colors, ids| {
@@ -677,21 +769,35 @@ impl GpuRenderer {
         self.params.width.div_ceil(side) as u64 * self.params.height.div_ceil(side) as u64
     }
 
-    fn dispatch_tile(&mut self, x: u32, y: u32, width: u32, height: u32) -> Result<()> {
+    /// Renders one tile; returns its device time where timestamps work.
+    fn dispatch_tile(
+        &mut self,
+        x: u32,
+        y: u32,
+        width: u32,
+        height: u32,
+    ) -> Result<Option<Duration>> {
         self.params.tile_origin = [x, y];
         let gpu = &self.gpu;
         gpu.queue
             .write_buffer(&self.params_buffer, 0, bytemuck::bytes_of(&self.params));
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         {
-            let mut pass = encoder.begin_compute_pass(&Default::default());
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("render tile"),
+                timestamp_writes: self.timer.as_ref().map(Timer::writes),
+            });
             pass.set_pipeline(self.render_pipeline.as_ref().expect("prepared"));
             pass.set_bind_group(0, &self.scene_group, &[]);
             pass.set_bind_group(1, &self.image_group, &[]);
             pass.dispatch_workgroups(width.div_ceil(WORKGROUP), height.div_ceil(WORKGROUP), 1);
         }
+        if let Some(timer) = &self.timer {
+            timer.resolve(&mut encoder);
+        }
         gpu.queue.submit([encoder.finish()]);
-        gpu.wait()
+        gpu.wait()?;
+        self.timer.as_ref().map(|t| t.read(gpu)).transpose()
     }
 
     /// Copies the tile's textures to the staging buffers (rows padded as

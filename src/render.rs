@@ -34,6 +34,8 @@ pub enum Engine {
 pub struct RenderTimings {
     pub render: Duration,
     pub readback: Duration,
+    /// GPU time from timestamp queries, where the adapter supports them.
+    pub device: Option<Duration>,
 }
 
 impl Engine {
@@ -91,6 +93,7 @@ impl Engine {
                     RenderTimings {
                         render: t.render,
                         readback: t.readback,
+                        device: t.device,
                     },
                 ))
             }
@@ -108,6 +111,7 @@ impl Engine {
                     RenderTimings {
                         render: start.elapsed(),
                         readback: Duration::ZERO,
+                        device: None,
                     },
                 ))
             }
