@@ -494,9 +494,10 @@ pub fn intersect_triangle_watertight(
     c: Vec3,
 ) -> (Real, Real, Real) {
     let [kx, ky, kz] = shear.axes;
-    let oa = a - ray.origin;
-    let ob = b - ray.origin;
-    let oc = c - ray.origin;
+    // Arrays, not glam's Index (a match per access): this is the hot loop.
+    let oa = (a - ray.origin).to_array();
+    let ob = (b - ray.origin).to_array();
+    let oc = (c - ray.origin).to_array();
     let ax = oa[kx] - shear.s.x * oa[kz];
     let ay = oa[ky] - shear.s.y * oa[kz];
     let bx = ob[kx] - shear.s.x * ob[kz];
