@@ -7,7 +7,7 @@ use serde::Serialize;
 
 use crate::error::Result;
 use crate::output::Rendered;
-use crate::render::Engine;
+use crate::render::Renderer;
 use crate::scene::{MAX_SPP, Scene};
 
 const LUMINANCE: [f32; 3] = [0.2126, 0.7152, 0.0722];
@@ -61,9 +61,9 @@ fn luminance(c: [f32; 3]) -> f64 {
     (0..3).map(|i| (c[i] * LUMINANCE[i]) as f64).sum()
 }
 
-/// Renders `scene` adaptively on `engine` (opened for `scene`).
+/// Renders `scene` adaptively on `renderer` (opened for `scene`).
 pub fn render_adaptive(
-    engine: &mut Engine,
+    renderer: &mut Renderer,
     scene: &Scene,
     settings: AdaptiveSettings,
 ) -> Result<(Rendered, AdaptiveReport)> {
@@ -72,7 +72,7 @@ pub fn render_adaptive(
     let target_variance = settings.target_error * settings.target_error;
     let mut pass_scene = scene.clone();
     pass_scene.spp = base;
-    let (mut rendered, _) = engine.render(&pass_scene, false)?;
+    let (mut rendered, _) = renderer.render(&pass_scene, false)?;
     let pixels = rendered.prims.len();
     // Per pixel: samples so far, and the sum of squared deviations of
     // luminance about the mean (Chan et al.'s M2), to merge passes exactly.
@@ -97,7 +97,7 @@ pub fn render_adaptive(
         // Another seed per pass: its samples are independent of the others.
         pass_scene.seed = scene.seed.wrapping_add(pass.wrapping_mul(0x9e37_79b9));
         let coords: Vec<[u32; 2]> = list.iter().map(|&i| [i % width, i / width]).collect();
-        let results = engine.render_pixel_list(&pass_scene, &coords)?;
+        let results = renderer.render_pixel_list(&pass_scene, &coords)?;
         for (&i, r) in list.iter().zip(&results) {
             let i = i as usize;
             let (na, nb) = (samples[i] as f64, extra as f64);

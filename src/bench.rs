@@ -17,7 +17,7 @@ use crate::layout::{LIGHT_DIRECTIONAL, Light, NO_HIT, Ray};
 use crate::output::Rendered;
 use crate::probe;
 use crate::progress::Progress;
-use crate::render::Engine;
+use crate::render::Renderer;
 use crate::scene::{Accel, Camera, Intersect, Scene};
 
 /// Median of `runs` timed calls after one untimed warm-up.
@@ -92,7 +92,7 @@ pub fn default_ladder(models: &Path) -> Vec<PathBuf> {
     .collect()
 }
 
-/// Which engines a benchmark runs on.
+/// Which renderers a benchmark runs on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum BenchDevices {
     /// The GPU adapter (any, lavapipe included) and the CPU path.
@@ -102,22 +102,22 @@ pub enum BenchDevices {
 }
 
 impl BenchDevices {
-    fn engines(self, scene: &Scene, request: &AdapterRequest) -> Result<Vec<Engine>> {
-        let mut engines = Vec::new();
+    fn renderers(self, scene: &Scene, request: &AdapterRequest) -> Result<Vec<Renderer>> {
+        let mut renderers = Vec::new();
         if self != BenchDevices::Cpu {
-            engines.push(Engine::Gpu(Box::new(GpuRenderer::new(
+            renderers.push(Renderer::Gpu(Box::new(GpuRenderer::new(
                 Gpu::open(request, false)?,
                 scene,
             )?)));
         }
         if self != BenchDevices::Gpu {
-            engines.push(Engine::Cpu);
+            renderers.push(Renderer::Cpu);
         }
-        Ok(engines)
+        Ok(renderers)
     }
 }
 
-/// One model on one engine.
+/// One model on one renderer.
 #[derive(Clone, Debug, Serialize)]
 pub struct LadderRow {
     pub model: String,
@@ -177,7 +177,7 @@ pub fn shadow_rays(scene: &Scene, primary: &[Ray], hits: &[crate::layout::Hit]) 
         .collect()
 }
 
-/// Primary and shadow ray throughput of `scene` on each engine.
+/// Primary and shadow ray throughput of `scene` on each renderer.
 pub fn ladder_rows(
     name: &str,
     scene: &Scene,
@@ -192,15 +192,15 @@ pub fn ladder_rows(
         + std::mem::size_of_val(scene.normals.as_slice())
         + scene.bvh.device_bytes();
     let mut rows = Vec::new();
-    for mut engine in devices.engines(scene, request)? {
-        engine.prepare_trace(false)?;
-        engine.prepare_trace(true)?;
-        let (t_primary, _) = median_time(runs, || engine.trace(scene, &primary, false))?;
-        let (t_shadow, _) = median_time(runs, || engine.trace(scene, &shadow, true))?;
+    for mut renderer in devices.renderers(scene, request)? {
+        renderer.prepare_trace(false)?;
+        renderer.prepare_trace(true)?;
+        let (t_primary, _) = median_time(runs, || renderer.trace(scene, &primary, false))?;
+        let (t_shadow, _) = median_time(runs, || renderer.trace(scene, &shadow, true))?;
         rows.push(LadderRow {
             model: name.to_string(),
             triangles: scene.triangles.len(),
-            device: engine.describe(),
+            device: renderer.describe(),
             primary_rays: primary.len(),
             primary_mrays_per_s: primary.len() as f64 / t_primary.as_secs_f64() / 1e6,
             shadow_rays: shadow.len(),
@@ -387,15 +387,16 @@ pub fn time_vs_error(
                 base_spp: base,
                 max_spp,
             };
-            let mut engine = match path {
-                Path32::GpuF32 => Engine::Gpu(Box::new(GpuRenderer::new(
+            let mut renderer = match path {
+                Path32::GpuF32 => Renderer::Gpu(Box::new(GpuRenderer::new(
                     Gpu::open(request, false)?,
                     scene,
                 )?)),
-                _ => Engine::Cpu,
+                _ => Renderer::Cpu,
             };
-            let (seconds, (image, report)) =
-                median_time(knobs.runs, || render_adaptive(&mut engine, scene, settings))?;
+            let (seconds, (image, report)) = median_time(knobs.runs, || {
+                render_adaptive(&mut renderer, scene, settings)
+            })?;
             let stats = diff::compare(&image, &reference, &tolerance)?;
             let point = Point {
                 scene: name.to_string(),

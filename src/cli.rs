@@ -16,7 +16,7 @@ use crate::layout::NO_HIT;
 use crate::output::Rendered;
 use crate::progress::Progress;
 use crate::rays;
-use crate::render::{DeviceChoice, Engine};
+use crate::render::{DeviceChoice, Renderer};
 use crate::scene::{Accel, Camera, Intersect, Scene, validate_spp};
 
 #[derive(Parser)]
@@ -329,16 +329,16 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
     let load = start.elapsed();
 
     let start = Instant::now();
-    let (mut engine, note) = Engine::open(&scene, args.device, &args.adapter.request())?;
+    let (mut renderer, note) = Renderer::open(&scene, args.device, &args.adapter.request())?;
     let upload = start.elapsed();
     if let Some(note) = note {
         eprintln!("{note}");
     }
     if !args.quiet {
-        eprintln!("rendering on {}", engine.describe());
+        eprintln!("rendering on {}", renderer.describe());
     }
     let (rendered, timings) = match args.target_error {
-        None => engine.render(&scene, !args.quiet)?,
+        None => renderer.render(&scene, !args.quiet)?,
         Some(target) => {
             if !(target.is_finite() && target > 0.0) {
                 return Err(Error::Usage(format!(
@@ -355,7 +355,7 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
                 max_spp: args.max_spp,
             };
             let start = Instant::now();
-            let (rendered, report) = render_adaptive(&mut engine, &scene, settings)?;
+            let (rendered, report) = render_adaptive(&mut renderer, &scene, settings)?;
             if !args.quiet {
                 eprintln!(
                     "adaptive: {:.1} samples per pixel on average ({} samples); pixels refined per pass {:?}; {} pixels still above {target} at {} spp; expected RMSE from sampling noise {:.3e}",
@@ -426,19 +426,19 @@ fn turntable(args: &RenderArgs, frames: u32) -> Result<ExitCode> {
     }
     check_output_path(&frame_path(&args.output, 0)?)?;
     let mut scene = args.options.load(&args.scene)?;
-    let (mut engine, note) = Engine::open(&scene, args.device, &args.adapter.request())?;
+    let (mut renderer, note) = Renderer::open(&scene, args.device, &args.adapter.request())?;
     if let Some(note) = note {
         eprintln!("{note}");
     }
     if !args.quiet {
-        eprintln!("rendering {frames} frames on {}", engine.describe());
+        eprintln!("rendering {frames} frames on {}", renderer.describe());
     }
     let start_camera = scene.camera.clone();
     let mut total = Duration::ZERO;
     for frame in 0..frames {
         scene.camera = orbit(&start_camera, frame, frames);
         let start = Instant::now();
-        let (rendered, _) = engine.render(&scene, false)?;
+        let (rendered, _) = renderer.render(&scene, false)?;
         let elapsed = start.elapsed();
         total += elapsed;
         let path = frame_path(&args.output, frame)?;
@@ -534,13 +534,13 @@ fn trace(args: &TraceArgs) -> Result<ExitCode> {
         None => Scene::from_objs(&args.obj)?,
     };
     args.options.apply(&mut scene)?;
-    let (mut engine, note) = Engine::open(&scene, args.device, &args.adapter.request())?;
+    let (mut renderer, note) = Renderer::open(&scene, args.device, &args.adapter.request())?;
     if let Some(note) = note {
         eprintln!("{note}");
     }
-    engine.prepare_trace(args.any_hit)?;
+    renderer.prepare_trace(args.any_hit)?;
     let start = Instant::now();
-    let hits = engine.trace(&scene, &rays, args.any_hit)?;
+    let hits = renderer.trace(&scene, &rays, args.any_hit)?;
     let elapsed = start.elapsed();
     rays::write_hits(&args.output, &hits)?;
     let oracle = args.oracle.then(|| {
@@ -548,7 +548,7 @@ fn trace(args: &TraceArgs) -> Result<ExitCode> {
         rays::Agreement::measure(&hits, &truth)
     });
     let report = TraceReport {
-        device: engine.describe(),
+        device: renderer.describe(),
         intersect: scene.intersect.name(),
         any_hit: args.any_hit,
         rays: rays.len(),

@@ -23,8 +23,10 @@ pub enum DeviceChoice {
     Cpu,
 }
 
-/// A scene ready to render, resident on its device.
-pub enum Engine {
+/// A scene resident on its device (GPU buffers and pipelines, or the CPU
+/// path): render it again from another camera, or trace ray queries
+/// against it, and nothing but the camera or the rays is uploaded.
+pub enum Renderer {
     Gpu(Box<GpuRenderer>),
     Cpu,
 }
@@ -38,16 +40,16 @@ pub struct RenderTimings {
     pub device: Option<Duration>,
 }
 
-impl Engine {
+impl Renderer {
     /// Opens the device `choice` asks for and uploads `scene`. The string
     /// returned, if any, explains a fallback to the CPU path.
     pub fn open(
         scene: &Scene,
         choice: DeviceChoice,
         request: &AdapterRequest,
-    ) -> Result<(Engine, Option<String>)> {
+    ) -> Result<(Renderer, Option<String>)> {
         let gpu = match choice {
-            DeviceChoice::Cpu => return Ok((Engine::Cpu, None)),
+            DeviceChoice::Cpu => return Ok((Renderer::Cpu, None)),
             DeviceChoice::Gpu => Gpu::open(request, false)?,
             DeviceChoice::Auto => match Gpu::open(request, !request.names_adapter()) {
                 Ok(gpu) => gpu,
@@ -55,17 +57,17 @@ impl Engine {
                     let note = format!(
                         "{e}\nnote: rendering on the CPU path instead (--device gpu uses a software adapter such as lavapipe)"
                     );
-                    return Ok((Engine::Cpu, Some(note)));
+                    return Ok((Renderer::Cpu, Some(note)));
                 }
             },
         };
-        Ok((Engine::Gpu(Box::new(GpuRenderer::new(gpu, scene)?)), None))
+        Ok((Renderer::Gpu(Box::new(GpuRenderer::new(gpu, scene)?)), None))
     }
 
     pub fn describe(&self) -> String {
         match self {
-            Engine::Gpu(r) => format!("GPU: {}", r.gpu().describe()),
-            Engine::Cpu => format!(
+            Renderer::Gpu(r) => format!("GPU: {}", r.gpu().describe()),
+            Renderer::Cpu => format!(
                 "CPU reference path ({} threads)",
                 rayon::current_num_threads()
             ),
@@ -79,7 +81,7 @@ impl Engine {
         show_progress: bool,
     ) -> Result<(Rendered, RenderTimings)> {
         match self {
-            Engine::Gpu(renderer) => {
+            Renderer::Gpu(renderer) => {
                 renderer.set_camera(scene, &scene.camera);
                 let progress = if show_progress {
                     Progress::new(renderer.tile_count(), "tiles")
@@ -97,7 +99,7 @@ impl Engine {
                     },
                 ))
             }
-            Engine::Cpu => {
+            Renderer::Cpu => {
                 let progress = if show_progress {
                     Progress::new(scene.camera.height as u64, "rows")
                 } else {
@@ -126,19 +128,19 @@ impl Engine {
         pixels: &[[u32; 2]],
     ) -> Result<Vec<[f32; 4]>> {
         match self {
-            Engine::Gpu(renderer) => {
+            Renderer::Gpu(renderer) => {
                 renderer.set_camera(scene, &scene.camera);
                 renderer.render_pixel_list(pixels)
             }
-            Engine::Cpu => Ok(cpu::render_pixel_list(scene, pixels)),
+            Renderer::Cpu => Ok(cpu::render_pixel_list(scene, pixels)),
         }
     }
 
     /// Readies the device for `trace` (builds its pipeline).
     pub fn prepare_trace(&mut self, any_hit: bool) -> Result<()> {
         match self {
-            Engine::Gpu(renderer) => renderer.prepare_trace(any_hit),
-            Engine::Cpu => Ok(()),
+            Renderer::Gpu(renderer) => renderer.prepare_trace(any_hit),
+            Renderer::Cpu => Ok(()),
         }
     }
 
@@ -146,8 +148,8 @@ impl Engine {
     /// engine was opened with).
     pub fn trace(&mut self, scene: &Scene, rays: &[Ray], any_hit: bool) -> Result<Vec<Hit>> {
         match self {
-            Engine::Gpu(renderer) => renderer.trace_rays(rays, any_hit),
-            Engine::Cpu => Ok(cpu::trace_rays(scene, rays, any_hit)),
+            Renderer::Gpu(renderer) => renderer.trace_rays(rays, any_hit),
+            Renderer::Cpu => Ok(cpu::trace_rays(scene, rays, any_hit)),
         }
     }
 }

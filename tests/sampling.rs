@@ -122,7 +122,7 @@ fn specialised_and_full_shaders_render_the_same_image() {
 #[test]
 fn adaptive_sampling_beats_uniform_at_the_same_sample_count() {
     use lambert::adaptive::{AdaptiveSettings, render_adaptive};
-    use lambert::render::Engine;
+    use lambert::render::Renderer;
     for name in ["edge_cases", "spheres"] {
         let scene = load(name);
         let mut reference = at_spp(&scene, 256);
@@ -133,8 +133,8 @@ fn adaptive_sampling_beats_uniform_at_the_same_sample_count() {
             base_spp: 4,
             max_spp: 64,
         };
-        let (cpu_image, report) = render_adaptive(&mut Engine::Cpu, &scene, settings).unwrap();
-        let mut gpu = Engine::Gpu(Box::new(
+        let (cpu_image, report) = render_adaptive(&mut Renderer::Cpu, &scene, settings).unwrap();
+        let mut gpu = Renderer::Gpu(Box::new(
             lambert::gpu::GpuRenderer::new(open_gpu(), &scene).unwrap(),
         ));
         let (gpu_image, gpu_report) = render_adaptive(&mut gpu, &scene, settings).unwrap();
