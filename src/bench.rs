@@ -148,14 +148,8 @@ pub fn shadow_rays(scene: &Scene, primary: &[Ray], hits: &[crate::layout::Hit]) 
         .zip(hits)
         .filter(|(_, h)| h.prim != NO_HIT)
         .filter_map(|(r, h)| {
-            let ray = cpu::f32::Ray::from_query(r);
-            let hit = cpu::f32::Hit {
-                t: h.t,
-                prim: h.prim,
-                u: h.u,
-                v: h.v,
-            };
-            let surface = kernel.surface_at(&ray, &hit);
+            let surface =
+                kernel.surface_at(&cpu::f32::Ray::from_query(r), &cpu::f32::Hit::from_query(h));
             let origin = cpu::f32::offset_ray_origin(
                 surface.position,
                 surface.error,

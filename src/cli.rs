@@ -624,10 +624,7 @@ fn bench(args: &BenchArgs) -> Result<ExitCode> {
     );
     for input in &inputs {
         let scene = bench::load_input(input, args.size)?;
-        let name = input
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default();
+        let name = input_name(input);
         for row in bench::ladder_rows(&name, &scene, args.device, &request, args.runs)? {
             println!(
                 "{:<18} {:>9} {:>11.2} {:>11.2} {:>8.3} {:>7.1} {:>6} {:>9.1} {:>8.1}  {}",
@@ -653,6 +650,13 @@ fn bench(args: &BenchArgs) -> Result<ExitCode> {
         crate::plot::ladder(&rows, &dir.join("time_per_ray"))?;
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// A bench input's name in tables and plots: its file name without extension.
+fn input_name(path: &Path) -> String {
+    path.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default()
 }
 
 fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<()> {
@@ -695,10 +699,7 @@ fn bench_time_vs_error(args: &BenchArgs) -> Result<ExitCode> {
     let mut all = Vec::new();
     for input in &inputs {
         let scene = bench::load_input(input, args.size)?;
-        let name = input
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default();
+        let name = input_name(input);
         let points = bench::time_vs_error(&name, &scene, &knobs, &request, &mut |line| {
             eprintln!("{line}")
         })?;

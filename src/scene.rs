@@ -259,16 +259,10 @@ impl Scene {
             background,
             ambient,
             shadows: file.render.shadows,
-            triangles: Vec::new(),
-            normals: Vec::new(),
-            spheres: Vec::new(),
-            materials: Vec::new(),
-            lights: Vec::new(),
-            bvh: Bvh::default(),
-            accel: Accel::default(),
             intersect: file.render.intersect,
             spp: file.render.spp,
             seed: file.render.seed,
+            ..Scene::bare()
         };
 
         for (i, entry) in file.mesh.iter().enumerate() {

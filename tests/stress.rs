@@ -174,14 +174,8 @@ fn rays_spawned_from_hits_never_hit_their_own_triangle() {
             if h.prim == NO_HIT {
                 continue;
             }
-            let kr = cpu::f32::Ray::from_query(r);
-            let kh = cpu::f32::Hit {
-                t: h.t,
-                prim: h.prim,
-                u: h.u,
-                v: h.v,
-            };
-            let surface = kernel.surface_at(&kr, &kh);
+            let surface =
+                kernel.surface_at(&cpu::f32::Ray::from_query(r), &cpu::f32::Hit::from_query(h));
             let n = surface.geometric_normal;
             let origin = cpu::f32::offset_ray_origin(surface.position, surface.error, n);
             for _ in 0..4 {

@@ -45,6 +45,18 @@ pub struct Hit {
     pub v: Real,
 }
 
+impl Hit {
+    /// A ray query's answer, in this precision.
+    pub fn from_query(hit: &crate::layout::Hit) -> Hit {
+        Hit {
+            t: hit.t as Real,
+            prim: hit.prim,
+            u: hit.u as Real,
+            v: hit.v as Real,
+        }
+    }
+}
+
 /// Precomputed per ray for the watertight test: axes permuted so that the
 /// direction's largest component is z, and the shear onto +z.
 #[derive(Clone, Copy, Debug)]
