@@ -10,7 +10,7 @@ use glam::{DVec3, Vec3};
 use lambert::Scene;
 use lambert::cpu;
 use lambert::layout::{Hit, NO_HIT, Ray, Triangle};
-use lambert::probe::edge_aimed_rays;
+use lambert::probe::{Rng, edge_aimed_rays, icosphere};
 use lambert::rays::{Agreement, ulp_distance};
 use lambert::scene::Intersect;
 use proptest::prelude::{ProptestConfig, prop, prop_assert, prop_assert_eq, prop_assume, proptest};
