@@ -930,7 +930,7 @@ impl GpuRenderer {
         let pipeline = self.trace_pipelines[any_hit as usize]
             .as_ref()
             .expect("prepared");
-        let hits: Vec<Hit> = self.run_list(pipeline, &self.rays_layout, 2, rays)?;
+        let hits: Vec<Hit> = self.run_list(pipeline, &self.rays_layout, 2, rays, 1 << 20)?;
         Ok(hits
             .into_iter()
             .map(|h| if h.prim == NO_HIT { Hit::MISS } else { h })
@@ -949,23 +949,25 @@ impl GpuRenderer {
             .queue
             .write_buffer(&self.params_buffer, 0, bytemuck::bytes_of(&self.params));
         let pipeline = self.pixel_list_pipeline.as_ref().expect("built");
-        self.run_list(pipeline, &self.pixels_layout, 4, pixels)
+        // As many samples per dispatch as a full tile at 1 spp.
+        let batch = ((TILE * TILE) / self.params.spp).max(WORKGROUP * WORKGROUP) as usize;
+        self.run_list(pipeline, &self.pixels_layout, 4, pixels, batch)
     }
 
     /// Runs a one-invocation-per-item entry point over `inputs` (bound at
-    /// `binding`, outputs at `binding + 1`), in batches so that no dispatch
-    /// runs long.
+    /// `binding`, outputs at `binding + 1`), `batch` items per dispatch so
+    /// that no dispatch runs long.
     fn run_list<I: bytemuck::Pod, O: bytemuck::Pod>(
         &self,
         pipeline: &wgpu::ComputePipeline,
         layout: &wgpu::BindGroupLayout,
         binding: u32,
         inputs: &[I],
+        batch: usize,
     ) -> Result<Vec<O>> {
-        const BATCH: usize = 1 << 20;
         const LIST_WORKGROUP: usize = 64;
         let gpu = &self.gpu;
-        let batch = BATCH.min(inputs.len()).max(1);
+        let batch = batch.min(inputs.len()).max(1);
         let buffer = |label, size, usage| {
             gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),

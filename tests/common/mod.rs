@@ -78,7 +78,6 @@ pub fn trace_cpu(
     cpu::trace_rays(scene, rays, any_hit)
 }
 
-
 /// A scene of the given primitives, camera and lights irrelevant.
 pub fn scene_of(triangles: Vec<Triangle>, spheres: Vec<Sphere>) -> Scene {
     let mut s = scene(
