@@ -987,7 +987,7 @@ impl GpuRenderer {
         let staging = buffer("list readback", out_bytes, U::COPY_DST | U::MAP_READ);
         let mut outputs = Vec::with_capacity(inputs.len());
         for chunk in inputs.chunks(batch) {
-            let in_len = (chunk.len() * size_of::<I>()) as u64;
+            let in_len = std::mem::size_of_val(chunk) as u64;
             let out_len = (chunk.len() * size_of::<O>()) as u64;
             gpu.queue
                 .write_buffer(&in_buffer, 0, bytemuck::cast_slice(chunk));

@@ -27,7 +27,7 @@ pub fn read_rays(path: &Path) -> Result<Vec<Ray>> {
 /// Decodes a ray file's bytes; `path` names it in errors.
 pub fn parse_rays(bytes: &[u8], path: &Path) -> Result<Vec<Ray>> {
     let fail = |message: String| Error::Usage(format!("{}: {message}", path.display()));
-    if bytes.len() % RAY_BYTES != 0 {
+    if !bytes.len().is_multiple_of(RAY_BYTES) {
         return Err(fail(format!(
             "{} bytes is not a whole number of rays ({RAY_BYTES} bytes each: 8 little-endian f32 \
              ox oy oz tmin dx dy dz tmax); {} bytes left over",

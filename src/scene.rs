@@ -546,7 +546,7 @@ fn validate_camera(camera: &Camera) -> Result<(), String> {
 pub fn strata_columns(spp: u32) -> u32 {
     (1..=spp.isqrt().max(1))
         .rev()
-        .find(|d| spp % d == 0)
+        .find(|d| spp.is_multiple_of(*d))
         .unwrap_or(1)
 }
 

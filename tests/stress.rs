@@ -47,7 +47,10 @@ fn misses(hits: &[Hit]) -> usize {
 
 /// The closed meshes of the leak test, as f64 vertices and faces, about 20
 /// units across.
-fn closed_meshes() -> Vec<(&'static str, Vec<DVec3>, Vec<[u32; 3]>)> {
+/// A named mesh: vertices and triangles as vertex indices.
+type NamedMesh = (&'static str, Vec<DVec3>, Vec<[u32; 3]>);
+
+fn closed_meshes() -> Vec<NamedMesh> {
     let (ico_v, ico_f) = icosphere(10.0, 3);
     let cube = lambert::loading::load_obj(
         &asset("scenes/meshes/cube.obj"),

@@ -461,7 +461,7 @@ pub fn intersect_triangle_moller_trumbore(
     let inv_det = 1.0 / det;
     let s = ray.origin - a;
     let u = s.dot(p) * inv_det;
-    if !(u >= 0.0 && u <= 1.0) {
+    if !(0.0..=1.0).contains(&u) {
         return NO_TRIANGLE_HIT;
     }
     let q = s.cross(e1);
