@@ -184,8 +184,12 @@ pub fn ladder(rows: &[LadderRow], stem: &Path) -> Result<()> {
     if rows.is_empty() {
         return Ok(());
     }
-    let mut devices: Vec<String> = rows.iter().map(|r| r.device.clone()).collect();
-    devices.dedup();
+    let mut devices: Vec<String> = Vec::new();
+    for row in rows {
+        if !devices.contains(&row.device) {
+            devices.push(row.device.clone());
+        }
+    }
     let ns = |mrays: f64| 1e3 / mrays.max(1e-9);
     let x_lo = rows.iter().map(|r| r.triangles).min().unwrap() as f64 / 1.5;
     let x_hi = rows.iter().map(|r| r.triangles).max().unwrap() as f64 * 1.5;
