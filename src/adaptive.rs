@@ -28,6 +28,8 @@ pub struct AdaptiveReport {
     /// Pixels given more samples, per pass after the first.
     pub refined_per_pass: Vec<usize>,
     pub total_samples: u64,
+    /// The sample cap used (the requested one, clamped to [base, MAX_SPP]).
+    pub max_spp: u32,
     pub mean_spp: f64,
     /// √(mean over pixels of the variance of each pixel's mean): the RMSE
     /// the sampling noise alone is expected to leave.
@@ -88,6 +90,11 @@ pub fn render_adaptive(
     let mut pass = 1u32;
     while spp < max_spp {
         let extra = spp.min(max_spp - spp);
+        // A pass of one sample would take the pixel centre, not a random
+        // point: stop short of the cap rather than bias the mean.
+        if extra < 2 {
+            break;
+        }
         let list = refine_list(&rendered.variance, width, target_variance);
         if list.is_empty() {
             break;
@@ -116,6 +123,7 @@ pub fn render_adaptive(
         spp += extra;
         pass += 1;
     }
+    report.max_spp = max_spp;
     report.total_samples = samples.iter().map(|&n| n as u64).sum();
     report.mean_spp = report.total_samples as f64 / pixels as f64;
     report.expected_rmse =

@@ -17,7 +17,7 @@ use crate::output::Rendered;
 use crate::progress::Progress;
 use crate::rays;
 use crate::render::{DeviceChoice, Renderer};
-use crate::scene::{Accel, Camera, Intersect, Scene, validate_spp};
+use crate::scene::{Accel, Camera, Intersect, MAX_SPP, Scene, validate_spp};
 
 #[derive(Parser)]
 #[command(
@@ -131,8 +131,9 @@ struct RenderArgs {
     #[arg(long, value_name = "N")]
     turntable: Option<u32>,
     /// Adaptive sampling: add samples only to pixels whose standard error
-    /// (of mean luminance) is above E, starting from --spp (at least 2,
-    /// default 4), doubling up to --max-spp. Reports the error it expects.
+    /// (of mean luminance) is above E, or whose neighbour's is, starting from
+    /// the scene's spp (or --spp) when above 1, else 4, doubling up to
+    /// --max-spp. Reports the error it expects.
     #[arg(long, value_name = "E")]
     target_error: Option<f64>,
     /// Cap on samples per pixel for --target-error.
@@ -146,7 +147,9 @@ struct RenderArgs {
 /// `frames/frame_{:04}.png` with frame 7 → `frames/frame_0007.png`.
 pub fn frame_path(pattern: &Path, frame: u32) -> Result<PathBuf> {
     let text = pattern.to_string_lossy();
-    let (Some(open), Some(close)) = (text.find('{'), text.find('}')) else {
+    let open = text.find('{');
+    let close = open.and_then(|o| text[o..].find('}').map(|c| o + c));
+    let (Some(open), Some(close)) = (open, close) else {
         return Err(Error::Usage(format!(
             "{}: --turntable needs a frame number in the output name, as {{}} or {{:04}}",
             pattern.display()
@@ -155,9 +158,9 @@ pub fn frame_path(pattern: &Path, frame: u32) -> Result<PathBuf> {
     let spec = &text[open + 1..close];
     let width = match spec.strip_prefix(":0").or_else(|| spec.strip_prefix(':')) {
         None if spec.is_empty() => 0,
-        Some(w) => w.parse::<usize>().map_err(|_| {
+        Some(w) => w.parse::<usize>().ok().filter(|&w| w <= 16).ok_or_else(|| {
             Error::Usage(format!(
-                "{}: cannot read the frame number format {{{spec}}}",
+                "{}: cannot read the frame number format {{{spec}}}; use {{}} or {{:0N}} with N at most 16",
                 pattern.display()
             ))
         })?,
@@ -319,6 +322,24 @@ fn seconds(d: Duration) -> String {
 }
 
 fn render(args: &RenderArgs) -> Result<ExitCode> {
+    if let Some(target) = args.target_error {
+        if !(target.is_finite() && target > 0.0) {
+            return Err(Error::Usage(format!(
+                "--target-error {target} must be a positive number"
+            )));
+        }
+        if args.turntable.is_some() {
+            return Err(Error::Usage(
+                "--target-error and --turntable cannot be combined".into(),
+            ));
+        }
+        if !(2..=MAX_SPP).contains(&args.max_spp) {
+            return Err(Error::Usage(format!(
+                "--max-spp {} must be between 2 and {MAX_SPP}",
+                args.max_spp
+            )));
+        }
+    }
     if let Some(frames) = args.turntable {
         return turntable(args, frames);
     }
@@ -337,21 +358,14 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
     if !args.quiet {
         eprintln!("rendering on {}", renderer.describe());
     }
+    let mut samples = scene.camera.width as f64 * scene.camera.height as f64 * scene.spp as f64;
     let (rendered, timings) = match args.target_error {
         None => renderer.render(&scene, !args.quiet)?,
         Some(target) => {
-            if !(target.is_finite() && target > 0.0) {
-                return Err(Error::Usage(format!(
-                    "--target-error {target} must be positive"
-                )));
-            }
             let settings = AdaptiveSettings {
                 target_error: target,
-                base_spp: if args.options.spp.is_some() {
-                    scene.spp
-                } else {
-                    4
-                },
+                // The scene's (or --spp's) samples, when it asks for more than one.
+                base_spp: if scene.spp > 1 { scene.spp } else { 4 },
                 max_spp: args.max_spp,
             };
             let start = Instant::now();
@@ -363,10 +377,11 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
                     report.total_samples,
                     report.refined_per_pass,
                     report.above_target,
-                    args.max_spp,
+                    report.max_spp,
                     report.expected_rmse
                 );
             }
+            samples = report.total_samples as f64;
             let timings = crate::render::RenderTimings {
                 render: start.elapsed(),
                 readback: Duration::ZERO,
@@ -380,7 +395,7 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
     rendered.image.save(&args.output)?;
     let write = start.elapsed();
     if !args.quiet {
-        let rays = scene.camera.width as f64 * scene.camera.height as f64 * scene.spp as f64;
+        let rays = samples;
         eprintln!(
             "wrote {} ({}×{}, {} primitives)",
             args.output.display(),
@@ -668,7 +683,7 @@ fn bench_time_vs_error(args: &BenchArgs) -> Result<ExitCode> {
     bench::check_spp_list(&args.spp_list)?;
     let reference_spp = args
         .reference_spp
-        .unwrap_or(4 * args.spp_list.iter().max().copied().unwrap_or(1));
+        .unwrap_or((4 * args.spp_list.iter().max().copied().unwrap_or(1)).min(MAX_SPP));
     validate_spp(reference_spp).map_err(|e| Error::Usage(format!("--reference-{e}")))?;
     let inputs = if args.inputs.is_empty() {
         ["edge_cases", "spheres", "triangle_oblique"]
@@ -690,8 +705,11 @@ fn bench_time_vs_error(args: &BenchArgs) -> Result<ExitCode> {
             Err(e) => return Err(e),
         },
     };
+    let mut spp = args.spp_list.clone();
+    spp.sort_unstable();
+    spp.dedup();
     let knobs = bench::Knobs {
-        spp: args.spp_list.clone(),
+        spp,
         reference_spp,
         runs: args.runs,
         gpu,

@@ -223,7 +223,11 @@ impl Gpu {
     fn split_buffer(&self, label: &str, bytes: &[u8], stride: u64) -> Result<SplitBuffer> {
         let limit = self.binding_limit();
         let len = bytes.len() as u64;
-        let max_bytes = (2 * limit).min(self.limits.max_buffer_size);
+        // Whole elements in the low range, and an offset every device
+        // accepts (a multiple of 256 elements is a multiple of 256 bytes);
+        // the high range holds the rest, up to one binding more.
+        let per_binding = (limit / stride) / 256 * 256;
+        let max_bytes = (per_binding * stride + limit).min(self.limits.max_buffer_size);
         let buffer = self.storage_buffer(label, bytes, max_bytes)?;
         if len <= limit {
             return Ok(SplitBuffer {
@@ -232,9 +236,6 @@ impl Gpu {
                 low: len,
             });
         }
-        // Whole elements, and an offset every device accepts (a multiple of
-        // 256 elements is a multiple of 256 bytes).
-        let per_binding = (limit / stride) / 256 * 256;
         Ok(SplitBuffer {
             buffer,
             per_binding: per_binding as u32,

@@ -17,6 +17,10 @@ use crate::scene::Scene;
 
 const RAY_BYTES: usize = 32;
 const FIELDS: [&str; 8] = ["ox", "oy", "oz", "tmin", "dx", "dy", "dz", "tmax"];
+/// Range of direction lengths the f32 tests handle: |d|² and 1/d stay finite
+/// and normal in f32.
+pub const MIN_DIRECTION: f64 = 1e-18;
+pub const MAX_DIRECTION: f64 = 1e18;
 
 /// Reads and validates a ray file.
 pub fn read_rays(path: &Path) -> Result<Vec<Ray>> {
@@ -53,8 +57,8 @@ pub fn parse_rays(bytes: &[u8], path: &Path) -> Result<Vec<Ray>> {
     Ok(rays)
 }
 
-/// Every value finite except tmax, which may be +inf; a non-zero direction;
-/// tmin ≤ tmax. The message names the first bad ray, its byte offset and
+/// Every value finite except tmax, which may be +inf; a direction of length
+/// within [MIN_DIRECTION, MAX_DIRECTION]; tmin ≤ tmax. The message names the first bad ray, its byte offset and
 /// the field.
 pub fn validate_rays(rays: &[Ray]) -> Result<(), String> {
     for (i, ray) in rays.iter().enumerate() {
@@ -77,8 +81,12 @@ pub fn validate_rays(rays: &[Ray]) -> Result<(), String> {
                 ));
             }
         }
-        if ray.dir == [0.0; 3] {
-            return Err(format!("{at}: the direction (dx, dy, dz) is zero"));
+        let length = glam::Vec3::from(ray.dir).as_dvec3().length();
+        if !(MIN_DIRECTION..=MAX_DIRECTION).contains(&length) {
+            return Err(format!(
+                "{at}: the direction (dx, dy, dz) has length {length:e}; it must be between \
+                 {MIN_DIRECTION:e} and {MAX_DIRECTION:e} (f32 squares of it must not under- or overflow)"
+            ));
         }
         if ray.tmin > ray.tmax {
             return Err(format!(

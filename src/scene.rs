@@ -507,7 +507,7 @@ fn mesh_transform(field: &str, entry: &MeshEntry) -> Result<Transform, String> {
     })
 }
 
-fn validate_camera(camera: &Camera) -> Result<(), String> {
+pub fn validate_camera(camera: &Camera) -> Result<(), String> {
     for (name, v) in [
         ("eye", camera.eye),
         ("look_at", camera.look_at),

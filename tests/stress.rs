@@ -431,7 +431,22 @@ fn invalid_rays_are_rejected_with_the_ray_and_field_named() {
                 dir: [0.0; 3],
                 ..good
             },
-            "direction (dx, dy, dz) is zero",
+            "direction (dx, dy, dz) has length 0e0",
+        ),
+        // |d|² would underflow or overflow in f32: rejected, not missed.
+        (
+            Ray {
+                dir: [1e-25, 0.0, 0.0],
+                ..good
+            },
+            "direction (dx, dy, dz) has length 1",
+        ),
+        (
+            Ray {
+                dir: [0.0, 0.0, 1e20],
+                ..good
+            },
+            "direction (dx, dy, dz) has length 1",
         ),
         (
             Ray {
