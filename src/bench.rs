@@ -20,12 +20,22 @@ use crate::progress::Progress;
 use crate::render::Renderer;
 use crate::scene::{Accel, Camera, Intersect, Scene};
 
-/// Median of `runs` timed calls after one untimed warm-up.
+/// Time a measurement may take beyond its warm-up: slow points get fewer
+/// timed runs (at least one), so that a large scene's sweep stays within
+/// minutes.
+const POINT_BUDGET: Duration = Duration::from_secs(4);
+
+/// Median of up to `runs` timed calls after one timed warm-up (fewer when
+/// they would exceed POINT_BUDGET).
 pub fn median_time<T>(runs: usize, mut f: impl FnMut() -> Result<T>) -> Result<(Duration, T)> {
+    let start = Instant::now();
     f()?;
+    let warm_up = start.elapsed();
+    let affordable = (POINT_BUDGET.as_secs_f64() / warm_up.as_secs_f64().max(1e-9)) as usize;
+    let runs = runs.min(affordable).max(1);
     let mut times = Vec::with_capacity(runs);
     let mut last = None;
-    for _ in 0..runs.max(1) {
+    for _ in 0..runs {
         let start = Instant::now();
         last = Some(f()?);
         times.push(start.elapsed());

@@ -283,7 +283,8 @@ struct BenchArgs {
     /// Image side for OBJ models (pixels).
     #[arg(long, default_value_t = 1024)]
     size: u32,
-    /// Timed runs per measurement (median), after one warm-up.
+    /// Timed runs per measurement (median), after one warm-up; fewer (at
+    /// least one) where they would take more than 4 s.
     #[arg(long, default_value_t = 3)]
     runs: usize,
     /// Samples per pixel to measure (--time-vs-error).
