@@ -46,6 +46,22 @@ fn png_and_svg(
     write_atomically(&stem.with_extension("png"), &image)
 }
 
+/// The legend, then the picture handed to its backend.
+fn finish<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    area: &DrawingArea<DB, Shift>,
+    position: SeriesLabelPosition,
+) -> Result<()> {
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .position(position)
+        .draw()
+        .map_err(plot_error)?;
+    area.present().map_err(plot_error)
+}
+
 fn series_colour(path: Path32, intersect: Intersect) -> RGBColor {
     let base = match path {
         Path32::GpuF32 => (31, 119, 180),
@@ -160,15 +176,7 @@ pub fn time_vs_error(points: &[Point], stem: &Path) -> Result<()> {
                     )
                 }))
                 .map_err(plot_error)?;
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .position(SeriesLabelPosition::UpperRight)
-                .draw()
-                .map_err(plot_error)?;
-            area.present().map_err(plot_error)?;
-            Ok(())
+            finish(&mut chart, &area, SeriesLabelPosition::UpperRight)
         }};
     }
     png_and_svg(
@@ -255,15 +263,7 @@ pub fn ladder(rows: &[LadderRow], stem: &Path) -> Result<()> {
                         .map_err(plot_error)?;
                 }
             }
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .position(SeriesLabelPosition::UpperLeft)
-                .draw()
-                .map_err(plot_error)?;
-            area.present().map_err(plot_error)?;
-            Ok(())
+            finish(&mut chart, &area, SeriesLabelPosition::UpperLeft)
         }};
     }
     png_and_svg(
