@@ -139,6 +139,11 @@ struct RenderArgs {
     /// Cap on samples per pixel for --target-error.
     #[arg(long, default_value_t = 256)]
     max_spp: u32,
+    /// Spend about this many seconds: a 1-spp pilot render times a sample,
+    /// then the image is rendered with as many samples per pixel as the
+    /// rest of the budget allows. Reports the error it expects.
+    #[arg(long, value_name = "SECONDS", conflicts_with = "target_error")]
+    time_budget: Option<f64>,
     /// Print nothing but errors.
     #[arg(short, long)]
     quiet: bool,
@@ -341,6 +346,18 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
             )));
         }
     }
+    if let Some(budget) = args.time_budget {
+        if !(budget.is_finite() && budget > 0.0) {
+            return Err(Error::Usage(format!(
+                "--time-budget {budget} must be a positive number of seconds"
+            )));
+        }
+        if args.turntable.is_some() {
+            return Err(Error::Usage(
+                "--time-budget and --turntable cannot be combined".into(),
+            ));
+        }
+    }
     if let Some(frames) = args.turntable {
         return turntable(args, frames);
     }
@@ -359,9 +376,30 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
     if !args.quiet {
         eprintln!("rendering on {}", renderer.describe());
     }
+    let mut scene = scene;
+    if let Some(budget) = args.time_budget {
+        scene.spp = spp_for_budget(&mut renderer, &scene, budget, args.quiet)?;
+    }
     let mut samples = scene.camera.width as f64 * scene.camera.height as f64 * scene.spp as f64;
     let (rendered, timings) = match args.target_error {
-        None => renderer.render(&scene, !args.quiet)?,
+        None => {
+            let (rendered, timings) = renderer.render(&scene, !args.quiet)?;
+            if args.time_budget.is_some() && !args.quiet {
+                let noise = (rendered.variance.iter().map(|&v| v as f64).sum::<f64>()
+                    / rendered.variance.len() as f64)
+                    .sqrt();
+                eprintln!(
+                    "time budget: {} spp; expected RMSE from sampling noise {}",
+                    scene.spp,
+                    if scene.spp > 1 {
+                        format!("{noise:.3e}")
+                    } else {
+                        "unknown at 1 spp".to_string()
+                    }
+                );
+            }
+            (rendered, timings)
+        }
         Some(target) => {
             let settings = AdaptiveSettings {
                 target_error: target,
@@ -434,6 +472,22 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
         }
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Samples per pixel that fit in `budget` seconds, from a timed 1-spp pilot
+/// render (whose time counts against the budget).
+fn spp_for_budget(renderer: &mut Renderer, scene: &Scene, budget: f64, quiet: bool) -> Result<u32> {
+    let mut pilot = scene.clone();
+    pilot.spp = 1;
+    let (_, t) = renderer.render(&pilot, false)?;
+    let per_sample = (t.render + t.readback).as_secs_f64().max(1e-6);
+    let spp = ((budget - per_sample) / per_sample)
+        .floor()
+        .clamp(1.0, MAX_SPP as f64) as u32;
+    if !quiet {
+        eprintln!("time budget {budget} s: a 1-spp pass takes {per_sample:.3} s, so {spp} spp");
+    }
+    Ok(spp)
 }
 
 fn turntable(args: &RenderArgs, frames: u32) -> Result<ExitCode> {

@@ -630,3 +630,69 @@ fn bench_time_vs_error_runs_end_to_end() {
         );
     }
 }
+
+#[test]
+fn time_budget_and_target_error_render_and_report() {
+    let case = Case::new();
+    let scene = case.file("scene.toml", &format!("{CAMERA}{SPHERE}{LIGHT}"));
+    let out_png = case.path("out.png");
+    let out = lambert(&[
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        out_png.to_str().unwrap(),
+        "--device",
+        "cpu",
+        "--time-budget",
+        "0.5",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(out_png.exists());
+    // A 16×12 image renders in far less than 0.5 s: many samples fit.
+    let spp: u32 = stderr
+        .lines()
+        .find_map(|l| {
+            l.strip_prefix("time budget: ")?
+                .split(' ')
+                .next()?
+                .parse()
+                .ok()
+        })
+        .unwrap_or_else(|| panic!("no spp reported:\n{stderr}"));
+    assert!(spp > 1, "{stderr}");
+    let out = lambert(&[
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        out_png.to_str().unwrap(),
+        "--device",
+        "cpu",
+        "--target-error",
+        "0.01",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        out.status.success() && stderr.contains("expected RMSE"),
+        "{stderr}"
+    );
+    for bad in [
+        ["--time-budget", "-1"],
+        ["--time-budget", "nan"],
+        ["--target-error", "0"],
+    ] {
+        let out = lambert(&[
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            out_png.to_str().unwrap(),
+            bad[0],
+            bad[1],
+        ]);
+        assert_eq!(
+            out.status.code(),
+            Some(if bad[1] == "-1" { 2 } else { 1 }),
+            "{bad:?}"
+        );
+    }
+}
