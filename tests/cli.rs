@@ -636,18 +636,22 @@ fn time_budget_and_target_error_render_and_report() {
     let case = Case::new();
     let scene = case.file("scene.toml", &format!("{CAMERA}{SPHERE}{LIGHT}"));
     let out_png = case.path("out.png");
-    let out = lambert(&[
-        "render",
-        scene.to_str().unwrap(),
-        "-o",
-        out_png.to_str().unwrap(),
-        "--device",
-        "cpu",
-        "--time-budget",
-        "0.5",
-    ]);
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{stderr}");
+    let render = |option: &str, value: &str| {
+        let out = lambert(&[
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            out_png.to_str().unwrap(),
+            "--device",
+            "cpu",
+            option,
+            value,
+        ]);
+        let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+        (out.status.code(), stderr)
+    };
+    let (code, stderr) = render("--time-budget", "0.5");
+    assert_eq!(code, Some(0), "{stderr}");
     assert!(out_png.exists());
     // A 16×12 image renders in far less than 0.5 s: many samples fit.
     let spp: u32 = stderr
@@ -661,38 +665,17 @@ fn time_budget_and_target_error_render_and_report() {
         })
         .unwrap_or_else(|| panic!("no spp reported:\n{stderr}"));
     assert!(spp > 1, "{stderr}");
-    let out = lambert(&[
-        "render",
-        scene.to_str().unwrap(),
-        "-o",
-        out_png.to_str().unwrap(),
-        "--device",
-        "cpu",
-        "--target-error",
-        "0.01",
-    ]);
-    let stderr = String::from_utf8_lossy(&out.stderr);
+    let (code, stderr) = render("--target-error", "0.01");
     assert!(
-        out.status.success() && stderr.contains("expected RMSE"),
+        code == Some(0) && stderr.contains("expected RMSE"),
         "{stderr}"
     );
-    for bad in [
-        ["--time-budget", "-1"],
-        ["--time-budget", "nan"],
-        ["--target-error", "0"],
+    // A negative number is no value to clap (exit 2); the rest are ours (exit 1).
+    for (option, value, expected) in [
+        ("--time-budget", "-1", 2),
+        ("--time-budget", "nan", 1),
+        ("--target-error", "0", 1),
     ] {
-        let out = lambert(&[
-            "render",
-            scene.to_str().unwrap(),
-            "-o",
-            out_png.to_str().unwrap(),
-            bad[0],
-            bad[1],
-        ]);
-        assert_eq!(
-            out.status.code(),
-            Some(if bad[1] == "-1" { 2 } else { 1 }),
-            "{bad:?}"
-        );
+        assert_eq!(render(option, value).0, Some(expected), "{option} {value}");
     }
 }
