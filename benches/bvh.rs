@@ -107,7 +107,7 @@ fn builders(c: &mut Criterion) {
         group.measurement_time(Duration::from_secs(if big { 5 } else { 2 }));
         group.throughput(Throughput::Elements(camera_rays.len() as u64));
         for (label, bvh) in trees {
-            if bvh.depth() >= MAX_DEPTH {
+            if bvh.depth() > MAX_DEPTH {
                 eprintln!(
                     "{name} {label}: depth {} exceeds the traversal stack, skipped",
                     bvh.depth()

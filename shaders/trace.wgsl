@@ -36,8 +36,15 @@ const INTERSECT_MOLLER_TRUMBORE: u32 = 1u;
 const INTERSECT_WATERTIGHT: u32 = 2u;
 // Unit roundoff of f32 (pbrt's MachineEpsilon), for error bounds.
 const MACHINE_EPSILON: f32 = 5.96046448e-8;
-// Traversal stack entries: bvh::MAX_DEPTH, which bounds the tree's depth.
-const STACK_SIZE: u32 = 64u;
+// Traversal stack entries: bvh::STACK_SIZE (three per level of the tree's
+// bounded depth, plus four).
+const STACK_SIZE: u32 = 97u;
+// Child references of a BVH node (src/layout.rs): a leaf has LEAF_BIT set,
+// its primitive count − 1 from bit LEAF_COUNT_SHIFT up and its first
+// primitive in the bits below.
+const LEAF_BIT: u32 = 0x80000000u;
+const LEAF_COUNT_SHIFT: u32 = 28u;
+const LEAF_FIRST_MASK: u32 = 0x0fffffffu;
 // Widens a box's exit distance so that rounding in the slab test cannot cull
 // a box the ray grazes: pbrt-v4's 1 + 2·gamma(3), with room for a GPU's
 // reciprocal being up to a few ULPs off (WGSL allows 2.5). The watertight
@@ -125,13 +132,13 @@ struct Hit {
     v: f32,
 }
 
-// Leaf: count > 0, primitives bvh_prims[first .. first + count].
-// Interior: count = 0, children are nodes first and first + 1.
+// Up to four children. Their boxes one lane per child: bounds[2a] the
+// minima along axis a, bounds[2a + 1] the maxima; an empty slot's box is
+// inverted. children: a node index, or a leaf reference (LEAF_BIT).
 struct BvhNode {
-    min: vec3<f32>,
-    first: u32,
-    max: vec3<f32>,
-    count: u32,
+    bounds: array<vec4<f32>, 6>,
+    children: vec4<u32>,
+    _pad: vec4<u32>,
 }
 
 // Precomputed per ray for the watertight test: the axes permuted so that
@@ -386,74 +393,102 @@ fn record_hit(ray: ptr<function, Ray>, shear: Shear, hit: ptr<function, Hit>, pr
     return false;
 }
 
-// Distance at which the ray enters the box within (tmin, tmax), or FAR.
-// Written with comparisons rather than min/max: a slab whose plane holds the
-// origin of a ray parallel to it gives 0·∞ = NaN, and a NaN comparison is
-// false on every device, so such a slab is ignored the same way everywhere.
-fn intersect_box(ray: Ray, inv_dir: vec3<f32>, lo: vec3<f32>, hi: vec3<f32>) -> f32 {
-    let t0 = (lo - ray.origin) * inv_dir;
-    let t1 = (hi - ray.origin) * inv_dir;
-    let swap = t0 > t1;
-    let near = select(t0, t1, swap);
-    let far = select(t1, t0, swap) * BOX_SLACK;
-    var t_near = ray.tmin;
-    var t_far = ray.tmax;
-    for (var axis = 0; axis < 3; axis++) {
-        t_near = select(t_near, near[axis], near[axis] > t_near);
-        t_far = select(t_far, far[axis], far[axis] < t_far);
+// Distances at which the ray enters the node's four child boxes within
+// (tmin, tmax), FAR where it misses one (an empty slot's inverted box is
+// always missed). Written with comparisons rather than min/max: a slab whose
+// plane holds the origin of a ray parallel to it gives 0·∞ = NaN, and a NaN
+// comparison is false on every device, so such a slab is ignored the same
+// way everywhere.
+fn intersect_boxes(ray: Ray, inv_dir: vec3<f32>, node: BvhNode) -> vec4<f32> {
+    var t_near = vec4<f32>(ray.tmin);
+    var t_far = vec4<f32>(ray.tmax);
+    for (var axis = 0u; axis < 3u; axis++) {
+        // The slab's near plane is its minimum unless the ray runs toward −axis.
+        let flip = inv_dir[axis] < 0.0;
+        let near_plane = select(node.bounds[2u * axis], node.bounds[2u * axis + 1u], flip);
+        let far_plane = select(node.bounds[2u * axis + 1u], node.bounds[2u * axis], flip);
+        let near = (near_plane - ray.origin[axis]) * inv_dir[axis];
+        let far = (far_plane - ray.origin[axis]) * inv_dir[axis] * BOX_SLACK;
+        t_near = select(t_near, near, near > t_near);
+        t_far = select(t_far, far, far < t_far);
     }
-    return select(FAR, t_near, t_near <= t_far);
+    return select(vec4<f32>(FAR), t_near, t_near <= t_far);
 }
 
-// Closest hit through the BVH, nearer child first; with `any_hit`, the first
-// hit found. A ray that misses the root box does no further work.
+// Closest hit through the BVH, nearest child first; with `any_hit`, the
+// first hit found. A ray that misses every box of the root stops there.
 fn trace_bvh(ray_in: Ray, shear: Shear, any_hit: bool) -> Hit {
     var ray = ray_in;
     var hit = miss();
     let inv_dir = 1.0 / ray.dir;
-    var stack_node: array<u32, STACK_SIZE>;
+    // Entries: a node index or leaf reference, and the distance at which the
+    // ray enters its box.
+    var stack_child: array<u32, STACK_SIZE>;
     var stack_t: array<f32, STACK_SIZE>;
     var sp = 0u;
-    let root = bvh_node_at(0u);
-    let t_root = intersect_box(ray, inv_dir, root.min, root.max);
-    if t_root < ray.tmax {
-        stack_node[0] = 0u;
-        stack_t[0] = t_root;
-        sp = 1u;
-    }
-    while sp > 0u {
-        sp -= 1u;
-        // A hit found since this node was pushed may already be nearer.
-        if stack_t[sp] >= ray.tmax {
-            continue;
-        }
-        let node = bvh_node_at(stack_node[sp]);
-        if node.count > 0u {
-            for (var i = node.first; i < node.first + node.count; i++) {
+    // What is visited now: the root first.
+    var child = 0u;
+    loop {
+        if (child & LEAF_BIT) != 0u {
+            let first = child & LEAF_FIRST_MASK;
+            let count = ((child & ~LEAF_BIT) >> LEAF_COUNT_SHIFT) + 1u;
+            for (var i = first; i < first + count; i++) {
                 if record_hit(&ray, shear, &hit, bvh_prims[i]) && any_hit {
                     return hit;
                 }
             }
-            continue;
+        } else {
+            let node = bvh_node_at(child);
+            let t = intersect_boxes(ray, inv_dir, node);
+            var entered = 0u;
+            for (var slot = 0u; slot < 4u; slot++) {
+                entered |= select(0u, 1u << slot, t[slot] < ray.tmax);
+            }
+            if entered != 0u {
+                let nearest = firstTrailingBit(entered);
+                entered &= entered - 1u;
+                if entered == 0u {
+                    // One child entered: visit it, nothing to push.
+                    child = node.children[nearest];
+                    continue;
+                }
+                // Several: push them sorted, farthest deepest, then visit the
+                // nearest at once.
+                let base = sp;
+                stack_child[sp] = node.children[nearest];
+                stack_t[sp] = t[nearest];
+                sp += 1u;
+                while entered != 0u {
+                    let slot = firstTrailingBit(entered);
+                    entered &= entered - 1u;
+                    var j = sp;
+                    while j > base && stack_t[j - 1u] < t[slot] {
+                        stack_child[j] = stack_child[j - 1u];
+                        stack_t[j] = stack_t[j - 1u];
+                        j -= 1u;
+                    }
+                    stack_child[j] = node.children[slot];
+                    stack_t[j] = t[slot];
+                    sp += 1u;
+                }
+                sp -= 1u;
+                child = stack_child[sp];
+                continue;
+            }
         }
-        let left = node.first;
-        let left_node = bvh_node_at(left);
-        let right_node = bvh_node_at(left + 1u);
-        let t_left = intersect_box(ray, inv_dir, left_node.min, left_node.max);
-        let t_right = intersect_box(ray, inv_dir, right_node.min, right_node.max);
-        // Push the farther child first so that the nearer is visited next.
-        let left_first = t_left <= t_right;
-        let t_near = min(t_left, t_right);
-        let t_far = max(t_left, t_right);
-        if t_far < ray.tmax {
-            stack_node[sp] = select(left, left + 1u, left_first);
-            stack_t[sp] = t_far;
-            sp += 1u;
+        // Then the nearest pushed entry that a hit found since has not put
+        // out of reach.
+        var found = false;
+        while sp > 0u {
+            sp -= 1u;
+            if stack_t[sp] < ray.tmax {
+                child = stack_child[sp];
+                found = true;
+                break;
+            }
         }
-        if t_near < ray.tmax {
-            stack_node[sp] = select(left + 1u, left, left_first);
-            stack_t[sp] = t_near;
-            sp += 1u;
+        if !found {
+            break;
         }
     }
     return hit;

@@ -48,8 +48,11 @@ pub fn median_time<T>(runs: usize, mut f: impl FnMut() -> Result<T>) -> Result<(
 /// front (+z) and slightly above, lit by one directional light, shadows on.
 pub fn scene_for_obj(path: &Path, size: u32) -> Result<Scene> {
     let mut scene = Scene::from_objs(&[path.to_path_buf()])?;
-    let root = scene.bvh.nodes[0];
-    let (lo, hi) = (Vec3::from(root.min), Vec3::from(root.max));
+    let root = scene
+        .bvh
+        .bounds()
+        .ok_or_else(|| Error::Usage(format!("{}: the model has no triangles", path.display())))?;
+    let (lo, hi) = (root.min, root.max);
     let centre = (lo + hi) * 0.5;
     let radius = (hi - lo).length() * 0.5;
     let vfov: f32 = 30.0;

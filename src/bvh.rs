@@ -1,32 +1,46 @@
-//! Bounding volume hierarchy over all primitives (triangles and spheres),
-//! built with a binned surface-area heuristic and flattened into the node
-//! layout the shader traverses.
+//! Bounding volume hierarchy over all primitives (triangles and spheres):
+//! built as a binary tree with a binned surface-area heuristic, then
+//! collapsed into the 4-wide nodes that the shader and the CPU kernel
+//! traverse (one 4-lane slab test per node; docs/bvh.md has the figures).
 //!
-//! Node layout (`layout::BvhNode`, 32 bytes): `min`, `first`, `max`, `count`.
-//! A leaf has `count > 0` and owns `prims[first .. first + count]` (primitive
-//! ids). An interior node has `count == 0`; its children are the adjacent
-//! nodes `first` and `first + 1`. Node 0 is the root. The tree is at most
-//! `MAX_DEPTH` deep, so traversal fits the shader's fixed stack.
+//! Node layout (`layout::BvhNode`, 128 bytes): the boxes of up to four
+//! children, one lane per child (`bounds[2a]` the minima along axis a,
+//! `bounds[2a + 1]` the maxima), and one reference per child in `children`:
+//! - an interior child: its node index (bit 31 clear);
+//! - a leaf: `LEAF_BIT | (count − 1) << 28 | first`, the primitives
+//!   `prims[first .. first + count]`, 1 ≤ count ≤ `MAX_LEAF`;
+//! - no child: `EMPTY_SLOT`, with an inverted box that no ray enters.
+//!
+//! Node 0 is the root. A wide node holds its binary node's children, or
+//! their children where they are interior: two binary levels per wide level,
+//! so the wide tree is at most `MAX_DEPTH` levels deep and traversal fits
+//! the shader's fixed stack of `STACK_SIZE` entries.
 
 use glam::Vec3;
 use rayon::prelude::*;
 
-use crate::layout::{BvhNode, Sphere, Triangle};
+use crate::layout::{BvhNode, LEAF_BIT, LEAF_FIRST_MASK, Sphere, Triangle, leaf_range, leaf_ref};
 
-/// Deepest level the builder creates; the shader's stack holds this many
-/// entries (`STACK_SIZE` in trace.wgsl).
-pub const MAX_DEPTH: usize = 64;
+/// Wide levels at most (root = 1).
+pub const MAX_DEPTH: usize = 32;
+/// Binary levels at most: each wide level takes two.
+const MAX_BINARY_DEPTH: usize = 2 * MAX_DEPTH;
+/// Traversal stack entries (`STACK_SIZE` in trace.wgsl): a node visit pops
+/// one entry and pushes at most four, so the stack holds at most three per
+/// level above plus the four of the deepest.
+pub const STACK_SIZE: usize = 3 * MAX_DEPTH + 1;
+/// Most primitives a scene may hold: a leaf reference has 28 bits for them.
+pub const MAX_PRIMITIVES: usize = LEAF_FIRST_MASK as usize + 1;
 const BINS: usize = 16;
-/// Primitives per leaf above which a leaf is never made (unless the
-/// primitives cannot be told apart by position).
-const MAX_LEAF: usize = 8;
+/// Primitives per leaf at most (a leaf reference has 3 bits for the count).
+pub const MAX_LEAF: usize = 8;
 /// SAH costs of a node visit and of a primitive test.
 const COST_TRAVERSAL: f32 = 1.0;
 const COST_INTERSECT: f32 = 1.0;
 /// Subtrees above this size are built in parallel.
 const PARALLEL_THRESHOLD: usize = 4096;
 
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct Bvh {
     pub nodes: Vec<BvhNode>,
     /// Primitive ids in leaf order.
@@ -34,14 +48,15 @@ pub struct Bvh {
     pub build_time: std::time::Duration,
 }
 
-#[derive(Clone, Copy, Debug)]
-struct Aabb {
-    min: Vec3,
-    max: Vec3,
+/// An axis-aligned box.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    pub min: Vec3,
+    pub max: Vec3,
 }
 
 impl Aabb {
-    const EMPTY: Aabb = Aabb {
+    pub const EMPTY: Aabb = Aabb {
         min: Vec3::INFINITY,
         max: Vec3::NEG_INFINITY,
     };
@@ -56,32 +71,31 @@ impl Aabb {
         self.max = self.max.max(p);
     }
 
-    fn half_area(&self) -> f32 {
+    pub fn half_area(&self) -> f32 {
         let d = (self.max - self.min).max(Vec3::ZERO);
         d.x * d.y + d.y * d.z + d.z * d.x
     }
 
-    fn centre(&self) -> Vec3 {
+    pub fn centre(&self) -> Vec3 {
         0.5 * (self.min + self.max)
     }
 }
 
-/// The tree before flattening.
-enum BuildNode {
-    Leaf {
-        bounds: Aabb,
-        prims: Vec<u32>,
-    },
+/// A binary BVH before it is collapsed into wide nodes: what a builder
+/// makes (ours, or obvhs's in the benches).
+pub enum BinaryNode {
+    /// At most `MAX_LEAF` primitives.
+    Leaf { bounds: Aabb, prims: Vec<u32> },
     Interior {
         bounds: Aabb,
-        children: Box<[BuildNode; 2]>,
+        children: Box<[BinaryNode; 2]>,
     },
 }
 
-impl BuildNode {
-    fn bounds(&self) -> Aabb {
+impl BinaryNode {
+    pub fn bounds(&self) -> Aabb {
         match self {
-            BuildNode::Leaf { bounds, .. } | BuildNode::Interior { bounds, .. } => *bounds,
+            BinaryNode::Leaf { bounds, .. } | BinaryNode::Interior { bounds, .. } => *bounds,
         }
     }
 }
@@ -91,6 +105,17 @@ struct Item {
     prim: u32,
     bounds: Aabb,
     centre: Vec3,
+}
+
+impl Default for Bvh {
+    /// The BVH of an empty scene: a root with no children.
+    fn default() -> Bvh {
+        Bvh {
+            nodes: vec![BvhNode::EMPTY],
+            prims: Vec::new(),
+            build_time: std::time::Duration::ZERO,
+        }
+    }
 }
 
 impl Bvh {
@@ -123,90 +148,161 @@ impl Bvh {
                 centre: bounds.centre(),
             })
             .collect();
-        if items.is_empty() {
-            return Bvh::default();
-        }
-        let root = build_node(items, 0);
-        let mut bvh = Bvh::default();
-        bvh.nodes.push(BvhNode::default());
-        bvh.flatten(root, 0);
+        let mut bvh = if items.is_empty() {
+            Bvh::default()
+        } else {
+            Bvh::from_binary(build_node(items, 0))
+        };
         bvh.build_time = start.elapsed();
         bvh
     }
 
-    fn flatten(&mut self, node: BuildNode, index: usize) {
-        let bounds = node.bounds();
-        let (first, count) = match node {
-            BuildNode::Leaf { prims, .. } => {
-                let first = self.prims.len() as u32;
-                self.prims.extend_from_slice(&prims);
-                (first, prims.len() as u32)
-            }
-            BuildNode::Interior { children, .. } => {
-                let first = self.nodes.len();
-                self.nodes.push(BvhNode::default());
-                self.nodes.push(BvhNode::default());
-                let [left, right] = *children;
-                self.flatten(left, first);
-                self.flatten(right, first + 1);
-                (first as u32, 0)
-            }
-        };
-        self.nodes[index] = BvhNode {
-            min: bounds.min.to_array(),
-            first,
-            max: bounds.max.to_array(),
-            count,
-        };
+    /// The wide tree of a binary one. Its leaves must hold at most
+    /// `MAX_LEAF` primitives, and fewer than `MAX_PRIMITIVES` in all.
+    pub fn from_binary(root: BinaryNode) -> Bvh {
+        let mut bvh = Bvh::default();
+        bvh.flatten(root, 0);
+        bvh
     }
 
-    /// Expected cost of a random ray by the SAH (traversal and intersection
-    /// costs of 1), relative to the root's area: lower is better.
+    /// Fills node `index` from `node`'s children (or their children), then
+    /// the subtrees of its interior children, depth first.
+    fn flatten(&mut self, node: BinaryNode, index: usize) {
+        let slots = wide_slots(node);
+        let mut wide = BvhNode::EMPTY;
+        let mut interior = Vec::new();
+        for (slot, child) in slots.into_iter().enumerate() {
+            let b = child.bounds();
+            wide.set_child_bounds(slot, b.min.to_array(), b.max.to_array());
+            wide.children[slot] = match child {
+                BinaryNode::Leaf { prims, .. } => {
+                    assert!(
+                        (1..=MAX_LEAF).contains(&prims.len()),
+                        "a leaf of {} primitives",
+                        prims.len()
+                    );
+                    let first = self.prims.len() as u32;
+                    self.prims.extend_from_slice(&prims);
+                    leaf_ref(first, prims.len() as u32)
+                }
+                child => {
+                    interior.push((child, self.nodes.len()));
+                    self.nodes.push(BvhNode::EMPTY);
+                    (self.nodes.len() - 1) as u32
+                }
+            };
+        }
+        self.nodes[index] = wide;
+        for (child, i) in interior {
+            self.flatten(child, i);
+        }
+    }
+
+    /// The box around every primitive; None for an empty scene.
+    pub fn bounds(&self) -> Option<Aabb> {
+        let mut b = Aabb::EMPTY;
+        for slot in occupied_slots(&self.nodes[0]) {
+            b.grow(&child_aabb(&self.nodes[0], slot));
+        }
+        (b.min.x <= b.max.x).then_some(b)
+    }
+
+    /// Expected cost of a random ray by the SAH (a wide node visit and a
+    /// primitive test both cost 1), relative to the root's area: lower is
+    /// better.
     pub fn sah_cost(&self) -> f64 {
-        let Some(root) = self.nodes.first() else {
+        let Some(root) = self.bounds() else {
             return 0.0;
         };
-        let area = |n: &BvhNode| {
-            Aabb {
-                min: Vec3::from(n.min),
-                max: Vec3::from(n.max),
+        let root_area = (root.half_area() as f64).max(f64::MIN_POSITIVE);
+        let mut cost = 0.0;
+        for node in &self.nodes {
+            let mut node_box = Aabb::EMPTY;
+            for slot in occupied_slots(node) {
+                let b = child_aabb(node, slot);
+                node_box.grow(&b);
+                if node.children[slot] & LEAF_BIT != 0 {
+                    let (_, count) = leaf_range(node.children[slot]);
+                    cost += (COST_INTERSECT * count as f32 * b.half_area()) as f64;
+                }
             }
-            .half_area() as f64
-        };
-        let root_area = area(root).max(f64::MIN_POSITIVE);
-        self.nodes
-            .iter()
-            .map(|n| {
-                let cost = if n.count > 0 {
-                    COST_INTERSECT as f64 * n.count as f64
-                } else {
-                    COST_TRAVERSAL as f64
-                };
-                cost * area(n) / root_area
-            })
-            .sum()
+            cost += (COST_TRAVERSAL * node_box.half_area()) as f64;
+        }
+        cost / root_area
     }
 
-    /// Levels below the root of the deepest leaf.
+    /// Wide levels from the root to the deepest leaf (1: the root's children
+    /// are all leaves).
     pub fn depth(&self) -> usize {
         fn depth_of(bvh: &Bvh, index: usize) -> usize {
-            let n = &bvh.nodes[index];
-            if n.count > 0 {
-                0
-            } else {
-                1 + depth_of(bvh, n.first as usize).max(depth_of(bvh, n.first as usize + 1))
-            }
+            let node = &bvh.nodes[index];
+            1 + occupied_slots(node)
+                .filter(|&slot| node.children[slot] & LEAF_BIT == 0)
+                .map(|slot| depth_of(bvh, node.children[slot] as usize))
+                .max()
+                .unwrap_or(0)
         }
-        if self.nodes.is_empty() {
-            0
-        } else {
-            depth_of(self, 0)
-        }
+        depth_of(self, 0)
+    }
+
+    /// Leaves (child references with `LEAF_BIT`).
+    pub fn leaf_count(&self) -> usize {
+        self.nodes
+            .iter()
+            .flat_map(|n| occupied_slots(n).map(move |s| n.children[s]))
+            .filter(|c| c & LEAF_BIT != 0)
+            .count()
     }
 
     /// Bytes on the device: nodes plus the primitive index list.
     pub fn device_bytes(&self) -> usize {
         std::mem::size_of_val(self.nodes.as_slice()) + std::mem::size_of_val(self.prims.as_slice())
+    }
+}
+
+/// The children of the wide node made from `node`: its children, each
+/// interior one replaced by its own two (so that every path descends two
+/// binary levels per wide level, which bounds the depth); then, while there
+/// are fewer than four, the interior one of largest area replaced by its
+/// two. Fuller nodes mean fewer visits per ray.
+fn wide_slots(node: BinaryNode) -> Vec<BinaryNode> {
+    let mut slots = Vec::with_capacity(4);
+    let expand = |node: BinaryNode, slots: &mut Vec<BinaryNode>| match node {
+        BinaryNode::Interior { children, .. } => slots.extend(*children),
+        leaf => slots.push(leaf),
+    };
+    match node {
+        BinaryNode::Interior { children, .. } => {
+            for child in *children {
+                expand(child, &mut slots);
+            }
+        }
+        leaf => return vec![leaf],
+    }
+    while slots.len() < 4 {
+        let largest = slots
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| matches!(s, BinaryNode::Interior { .. }))
+            .max_by(|(_, a), (_, b)| a.bounds().half_area().total_cmp(&b.bounds().half_area()));
+        let Some((i, _)) = largest else { break };
+        let node = slots.swap_remove(i);
+        expand(node, &mut slots);
+    }
+    slots
+}
+
+/// The slots of `node` that hold a child.
+pub fn occupied_slots(node: &BvhNode) -> impl Iterator<Item = usize> + '_ {
+    (0..4).filter(|&s| node.children[s] != crate::layout::EMPTY_SLOT)
+}
+
+/// Child `slot`'s box.
+pub fn child_aabb(node: &BvhNode, slot: usize) -> Aabb {
+    let (min, max) = node.child_bounds(slot);
+    Aabb {
+        min: Vec3::from(min),
+        max: Vec3::from(max),
     }
 }
 
@@ -220,21 +316,32 @@ fn bounds_of(items: &[Item]) -> (Aabb, Aabb) {
     (bounds, centres)
 }
 
-fn leaf(bounds: Aabb, items: &[Item]) -> BuildNode {
-    BuildNode::Leaf {
+fn leaf(bounds: Aabb, items: &[Item]) -> BinaryNode {
+    BinaryNode::Leaf {
         bounds,
         prims: items.iter().map(|i| i.prim).collect(),
     }
 }
 
-fn build_node(mut items: Vec<Item>, depth: usize) -> BuildNode {
+/// Binary levels that halving `n` primitives takes to reach leaves of
+/// `MAX_LEAF`.
+fn median_levels(n: usize) -> usize {
+    n.div_ceil(MAX_LEAF).next_power_of_two().trailing_zeros() as usize
+}
+
+/// Builds the subtree of `items` at binary depth `depth`. Invariant:
+/// depth + median_levels(n) < MAX_BINARY_DEPTH, so that median splits can
+/// always finish within the depth limit; an SAH split is taken only while
+/// it keeps the invariant for both children.
+fn build_node(mut items: Vec<Item>, depth: usize) -> BinaryNode {
     let (bounds, centres) = bounds_of(&items);
     let n = items.len();
-    if n == 1 || depth + 1 >= MAX_DEPTH {
+    if n == 1 {
         return leaf(bounds, &items);
     }
     let extent = centres.max - centres.min;
-    let split = if extent.max_element() > 0.0 {
+    let sah_allowed = depth + 1 + median_levels(n - 1) < MAX_BINARY_DEPTH;
+    let split = if sah_allowed && extent.max_element() > 0.0 {
         best_binned_split(&items, &centres, bounds.half_area())
     } else {
         None
@@ -252,12 +359,15 @@ fn build_node(mut items: Vec<Item>, depth: usize) -> BuildNode {
             items = left;
             right
         }
-        // Centres coincide (or no split separates them): halve by order, so
-        // even identical primitives give a balanced tree.
+        // Centres coincide, no split separates them, or the tree is near
+        // its depth limit: halve at the median centre along the longest
+        // axis, so that even identical primitives give a balanced tree.
         None => {
             if n <= MAX_LEAF {
                 return leaf(bounds, &items);
             }
+            let axis = extent.max_position();
+            items.select_nth_unstable_by(n / 2, |a, b| a.centre[axis].total_cmp(&b.centre[axis]));
             items.split_off(n / 2)
         }
     };
@@ -269,7 +379,7 @@ fn build_node(mut items: Vec<Item>, depth: usize) -> BuildNode {
     } else {
         (build_node(items, depth + 1), build_node(right, depth + 1))
     };
-    BuildNode::Interior {
+    BinaryNode::Interior {
         bounds,
         children: Box::new([left, right]),
     }

@@ -10,7 +10,8 @@ use wgpu::util::DeviceExt;
 use crate::cpu::f32::CameraBasis;
 use crate::error::{Error, Result};
 use crate::layout::{
-    Hit, LIGHT_DIRECTIONAL, LIGHT_POINT, NO_HIT, Params, Ray, Sphere, Triangle, TriangleNormals,
+    BvhNode, Hit, LIGHT_DIRECTIONAL, LIGHT_POINT, NO_HIT, Params, Ray, Sphere, Triangle,
+    TriangleNormals,
 };
 use crate::output::{Image, Rendered};
 use crate::progress::Progress;
@@ -544,7 +545,11 @@ impl GpuRenderer {
             gpu.split_buffer("triangles", &non_empty::<Triangle>(&scene.triangles), 48)?;
         let normals =
             gpu.split_buffer("normals", &non_empty::<TriangleNormals>(&scene.normals), 48)?;
-        let nodes = gpu.split_buffer("BVH nodes", &non_empty(&scene.bvh.nodes), 32)?;
+        let nodes = gpu.split_buffer(
+            "BVH nodes",
+            bytemuck::cast_slice(&scene.bvh.nodes),
+            std::mem::size_of::<BvhNode>() as u64,
+        )?;
         let spheres = gpu.storage_buffer("spheres", &non_empty::<Sphere>(&scene.spheres), limit)?;
         let materials = gpu.storage_buffer("materials", &non_empty(&scene.materials), limit)?;
         let lights = gpu.storage_buffer("lights", &non_empty(&scene.lights), limit)?;

@@ -126,14 +126,65 @@ impl Hit {
     };
 }
 
-/// One BVH node; see `bvh` for how the shader decodes it.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+/// One 4-wide BVH node (128 bytes); docs/bvh.md and `bvh` tell how the
+/// shader decodes it. The four children's boxes are stored one lane per
+/// child: `bounds[2a]` holds their minima along axis a, `bounds[2a + 1]` their
+/// maxima. `children[i]` is child i's reference: a node index, a leaf
+/// (`LEAF_BIT` set, see `leaf_ref`) or `EMPTY_SLOT`.
+#[repr(C, align(64))]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct BvhNode {
-    pub min: [f32; 3],
-    /// Leaf: first index into the primitive list. Interior: left child.
-    pub first: u32,
-    pub max: [f32; 3],
-    /// Leaf: number of primitives (> 0). Interior: 0.
-    pub count: u32,
+    pub bounds: [[f32; 4]; 6],
+    pub children: [u32; 4],
+    pub _pad: [u32; 4],
+}
+
+/// Marks a child reference as a leaf.
+pub const LEAF_BIT: u32 = 0x8000_0000;
+/// A leaf reference holds its primitive count − 1 from this bit up (3 bits)...
+pub const LEAF_COUNT_SHIFT: u32 = 28;
+/// ...and the index of its first primitive in the bits below.
+pub const LEAF_FIRST_MASK: u32 = (1 << LEAF_COUNT_SHIFT) - 1;
+/// A child slot with no child; its box is inverted, so no ray enters it.
+pub const EMPTY_SLOT: u32 = u32::MAX;
+
+/// The reference to a leaf of `count` (1 to 8) primitives from `first`.
+pub fn leaf_ref(first: u32, count: u32) -> u32 {
+    debug_assert!((1..=8).contains(&count) && first <= LEAF_FIRST_MASK);
+    LEAF_BIT | (count - 1) << LEAF_COUNT_SHIFT | first
+}
+
+/// (first, count) of a leaf reference.
+pub fn leaf_range(child: u32) -> (u32, u32) {
+    (
+        child & LEAF_FIRST_MASK,
+        ((child & !LEAF_BIT) >> LEAF_COUNT_SHIFT) + 1,
+    )
+}
+
+impl BvhNode {
+    /// No children: every slot empty, every box inverted.
+    pub const EMPTY: BvhNode = BvhNode {
+        bounds: [
+            [FAR; 4], [-FAR; 4], [FAR; 4], [-FAR; 4], [FAR; 4], [-FAR; 4],
+        ],
+        children: [EMPTY_SLOT; 4],
+        _pad: [0; 4],
+    };
+
+    /// Child `slot`'s box as (min, max).
+    pub fn child_bounds(&self, slot: usize) -> ([f32; 3], [f32; 3]) {
+        let b = &self.bounds;
+        (
+            [b[0][slot], b[2][slot], b[4][slot]],
+            [b[1][slot], b[3][slot], b[5][slot]],
+        )
+    }
+
+    pub fn set_child_bounds(&mut self, slot: usize, min: [f32; 3], max: [f32; 3]) {
+        for axis in 0..3 {
+            self.bounds[2 * axis][slot] = min[axis];
+            self.bounds[2 * axis + 1][slot] = max[axis];
+        }
+    }
 }

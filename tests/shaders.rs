@@ -131,6 +131,14 @@ fn host_structs_match_wgsl_layout() {
         }
     );
     check_layout!(m, Hit { t, prim, u, v });
+    check_layout!(
+        m,
+        BvhNode {
+            bounds,
+            children,
+            _pad
+        }
+    );
 }
 
 #[test]
@@ -158,6 +166,19 @@ fn shader_constants_match_host() {
         format!("Literal(U32({FLAG_SMOOTH}))")
     );
     assert_eq!(constant("FAR"), format!("Literal(F32({FAR:?}))"));
+    assert_eq!(
+        constant("STACK_SIZE"),
+        format!("Literal(U32({}))", lambert::bvh::STACK_SIZE)
+    );
+    assert_eq!(constant("LEAF_BIT"), format!("Literal(U32({LEAF_BIT}))"));
+    assert_eq!(
+        constant("LEAF_COUNT_SHIFT"),
+        format!("Literal(U32({LEAF_COUNT_SHIFT}))")
+    );
+    assert_eq!(
+        constant("LEAF_FIRST_MASK"),
+        format!("Literal(U32({LEAF_FIRST_MASK}))")
+    );
 }
 
 #[test]

@@ -639,9 +639,8 @@ fn gpu_and_cpu_agree_on_ray_sets_for_the_default_variant() {
     let mut ulps = Vec::new();
     for name in ["bunny", "dragon", "cornell", "spheres"] {
         let scene = load(name);
-        let root = scene.bvh.nodes[0];
-        let lo = Vec3::from(root.min).as_dvec3();
-        let hi = Vec3::from(root.max).as_dvec3();
+        let root = scene.bvh.bounds().expect("a non-empty scene");
+        let (lo, hi) = (root.min.as_dvec3(), root.max.as_dvec3());
         let size = (hi - lo).max_element();
         let rays: Vec<Ray> = (0..20_000)
             .map(|_| {
@@ -697,11 +696,9 @@ fn gpu_bvh_traces_rays_like_gpu_brute_force() {
         let scene = load(name);
         let mut brute = scene.clone();
         brute.accel = lambert::scene::Accel::BruteForce;
-        let root = scene.bvh.nodes[0];
-        let centre = Vec3::from(root.min)
-            .lerp(Vec3::from(root.max), 0.5)
-            .as_dvec3();
-        let size = (Vec3::from(root.max) - Vec3::from(root.min)).max_element() as f64;
+        let root = scene.bvh.bounds().expect("a non-empty scene");
+        let centre = root.centre().as_dvec3();
+        let size = (root.max - root.min).max_element() as f64;
         let rays: Vec<Ray> = (0..5000)
             .map(|_| {
                 let origin = centre + rng.direction() * size;

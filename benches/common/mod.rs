@@ -8,9 +8,9 @@
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use glam::Vec3A;
-use lambert::bvh::Bvh;
-use lambert::layout::{BvhNode, Hit, NO_HIT, Triangle};
+use glam::{Vec3, Vec3A};
+use lambert::bvh::{Aabb, BinaryNode, Bvh};
+use lambert::layout::{Hit, NO_HIT, Triangle};
 use obvhs::BvhBuildParams;
 use obvhs::bvh2::Bvh2;
 
@@ -136,45 +136,36 @@ pub fn build_obvhs(triangles: &[Triangle], params: BvhBuildParams) -> (Bvh, Obvh
     (bvh, times)
 }
 
-/// Our layout from an obvhs `Bvh2`, in the order `Bvh::build` flattens (root
-/// at 0; an interior node's children allocated side by side, then the left
-/// subtree depth-first, then the right), with each leaf's primitives copied
-/// to a contiguous range of `prims` in leaf order. Only nodes reachable from
-/// the root are kept.
+/// Our wide layout from an obvhs `Bvh2`: its binary tree (nodes reachable
+/// from the root) collapsed by `Bvh::from_binary`, exactly as our own
+/// builder's tree is.
 pub fn flatten(bvh2: &Bvh2) -> Bvh {
-    let mut bvh = Bvh::default();
     if bvh2.nodes.is_empty() {
-        return bvh;
+        return Bvh::default();
     }
-    bvh.nodes.reserve(bvh2.nodes.len());
-    bvh.prims.reserve(bvh2.primitive_indices.len());
-    bvh.nodes.push(BvhNode::default());
-    flatten_node(bvh2, &mut bvh, 0, 0);
-    bvh
+    Bvh::from_binary(binary_node(bvh2, 0))
 }
 
-fn flatten_node(bvh2: &Bvh2, bvh: &mut Bvh, src: usize, dst: usize) {
-    let node = &bvh2.nodes[src];
+fn binary_node(bvh2: &Bvh2, index: usize) -> BinaryNode {
+    let node = &bvh2.nodes[index];
     let aabb = node.aabb();
-    let (first, count) = if node.is_leaf() {
-        let first = bvh.prims.len() as u32;
+    let bounds = Aabb {
+        min: Vec3::from(aabb.min),
+        max: Vec3::from(aabb.max),
+    };
+    if node.is_leaf() {
         let range = node.first_index as usize..(node.first_index + node.prim_count) as usize;
-        bvh.prims.extend_from_slice(&bvh2.primitive_indices[range]);
-        (first, node.prim_count)
+        BinaryNode::Leaf {
+            bounds,
+            prims: bvh2.primitive_indices[range].to_vec(),
+        }
     } else {
-        let first = bvh.nodes.len();
-        bvh.nodes.push(BvhNode::default());
-        bvh.nodes.push(BvhNode::default());
-        flatten_node(bvh2, bvh, node.first_index as usize, first);
-        flatten_node(bvh2, bvh, node.first_index as usize + 1, first + 1);
-        (first as u32, 0)
-    };
-    bvh.nodes[dst] = BvhNode {
-        min: aabb.min.to_array(),
-        first,
-        max: aabb.max.to_array(),
-        count,
-    };
+        let first = node.first_index as usize;
+        BinaryNode::Interior {
+            bounds,
+            children: Box::new([binary_node(bvh2, first), binary_node(bvh2, first + 1)]),
+        }
+    }
 }
 
 /// How `hits` agree with `reference`, ray by ray.
@@ -213,6 +204,5 @@ pub fn agreement(reference: &[Hit], hits: &[Hit]) -> HitAgreement {
 
 /// Leaves, and primitive references in leaves (> triangles with pre-splits).
 pub fn leaf_stats(bvh: &Bvh) -> (usize, usize) {
-    let leaves = bvh.nodes.iter().filter(|n| n.count > 0).count();
-    (leaves, bvh.prims.len())
+    (bvh.leaf_count(), bvh.prims.len())
 }

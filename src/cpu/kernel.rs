@@ -1,10 +1,10 @@
 // The CPU twin of shaders/trace.wgsl, function by function with the same
 // names. Included twice by src/cpu/mod.rs: once with `Real = f32` (the
 // reference the GPU is diffed against) and once with `Real = f64` (the
-// oracle). The including module defines `Real` and `Vec3`.
+// oracle). The including module defines `Real`, `Vec3` and `Vec4`.
 
-use crate::bvh::MAX_DEPTH;
-use crate::layout::{FLAG_SMOOTH, LIGHT_POINT, NO_HIT};
+use crate::bvh::STACK_SIZE;
+use crate::layout::{BvhNode, FLAG_SMOOTH, LEAF_BIT, LIGHT_POINT, NO_HIT, leaf_range};
 use crate::scene::{Accel, Camera, Intersect, Scene};
 
 /// Widens a box's exit distance so that rounding cannot cull a box the ray
@@ -87,6 +87,10 @@ fn vec3(v: [f32; 3]) -> Vec3 {
     Vec3::new(v[0] as Real, v[1] as Real, v[2] as Real)
 }
 
+fn vec4(v: [f32; 4]) -> Vec4 {
+    Vec4::new(v[0] as Real, v[1] as Real, v[2] as Real, v[3] as Real)
+}
+
 fn vec3_f64(v: [f64; 3]) -> Vec3 {
     Vec3::new(v[0] as Real, v[1] as Real, v[2] as Real)
 }
@@ -161,6 +165,7 @@ impl<'a> Kernel<'a> {
     }
 
     /// The scene's ray/triangle test.
+    #[inline(always)]
     pub fn intersect_triangle(
         &self,
         ray: &Ray,
@@ -177,6 +182,7 @@ impl<'a> Kernel<'a> {
     }
 
     /// (t, u, v) of primitive `prim` (triangles first, then spheres).
+    #[inline(always)]
     pub fn intersect_primitive(&self, ray: &Ray, shear: &Shear, prim: u32) -> (Real, Real, Real) {
         let triangles = &self.scene.triangles;
         if (prim as usize) < triangles.len() {
@@ -189,6 +195,7 @@ impl<'a> Kernel<'a> {
 
     /// Tests `prim`; if it is hit nearer than ray.tmax, makes it the hit and
     /// shortens the ray. Returns whether it did.
+    #[inline(always)]
     pub fn record_hit(&self, ray: &mut Ray, shear: &Shear, hit: &mut Hit, prim: u32) -> bool {
         let (t, u, v) = self.intersect_primitive(ray, shear, prim);
         if t < ray.tmax {
@@ -199,50 +206,78 @@ impl<'a> Kernel<'a> {
         false
     }
 
-    /// Closest hit through the BVH, nearer child first; with `any_hit`, the
-    /// first hit found.
+    /// Closest hit through the BVH, nearest child first; with `any_hit`, the
+    /// first hit found. A ray that misses every box of the root stops there.
+    #[inline(always)]
     pub fn trace_bvh(&self, ray_in: Ray, shear: &Shear, any_hit: bool) -> Hit {
-        let nodes = &self.scene.bvh.nodes;
+        let bvh = &self.scene.bvh;
         let mut ray = ray_in;
         let mut hit = miss();
         let inv_dir = ray.dir.recip();
-        let mut stack = [(0u32, 0.0 as Real); MAX_DEPTH];
+        // Entries: a node index or leaf reference, and the distance at which
+        // the ray enters its box. Uninitialised: zeroing it would cost as
+        // much as a node visit, and only entries below `sp` are ever read.
+        let mut stack = [std::mem::MaybeUninit::<(u32, Real)>::uninit(); STACK_SIZE];
         let mut sp = 0;
-        let t_root = intersect_box(&ray, inv_dir, &nodes[0]);
-        if t_root < ray.tmax {
-            stack[0] = (0, t_root);
-            sp = 1;
-        }
-        while sp > 0 {
-            sp -= 1;
-            let (index, t_entry) = stack[sp];
-            if t_entry >= ray.tmax {
-                continue;
-            }
-            let node = &nodes[index as usize];
-            if node.count > 0 {
-                for &prim in &self.scene.bvh.prims[node.first as usize..(node.first + node.count) as usize] {
+        // What is visited now: the root first.
+        let mut child = 0u32;
+        loop {
+            if child & LEAF_BIT != 0 {
+                let (first, count) = leaf_range(child);
+                for &prim in &bvh.prims[first as usize..(first + count) as usize] {
                     if self.record_hit(&mut ray, shear, &mut hit, prim) && any_hit {
                         return hit;
                     }
                 }
-                continue;
+            } else {
+                let node = &bvh.nodes[child as usize];
+                let t_boxes = intersect_boxes(&ray, inv_dir, node);
+                let mut entered = t_boxes.cmplt(Vec4::splat(ray.tmax)).bitmask();
+                if entered != 0 {
+                    let nearest = entered.trailing_zeros() as usize;
+                    entered &= entered - 1;
+                    if entered == 0 {
+                        // One child entered: visit it, nothing to push.
+                        child = node.children[nearest];
+                        continue;
+                    }
+                    // Several: push them sorted, farthest deepest, then visit
+                    // the nearest at once.
+                    let t = t_boxes.to_array();
+                    let base = sp;
+                    stack[sp].write((node.children[nearest], t[nearest]));
+                    sp += 1;
+                    while entered != 0 {
+                        let slot = entered.trailing_zeros() as usize;
+                        entered &= entered - 1;
+                        let mut j = sp;
+                        // SAFETY (here and below): entries below `sp` are written.
+                        while j > base && unsafe { stack[j - 1].assume_init().1 } < t[slot] {
+                            stack[j] = stack[j - 1];
+                            j -= 1;
+                        }
+                        stack[j].write((node.children[slot], t[slot]));
+                        sp += 1;
+                    }
+                    sp -= 1;
+                    child = unsafe { stack[sp].assume_init().0 };
+                    continue;
+                }
             }
-            let left = node.first;
-            let t_left = intersect_box(&ray, inv_dir, &nodes[left as usize]);
-            let t_right = intersect_box(&ray, inv_dir, &nodes[left as usize + 1]);
-            let left_first = t_left <= t_right;
-            let (t_near, t_far) = (t_left.min(t_right), t_left.max(t_right));
-            if t_far < ray.tmax {
-                stack[sp] = (if left_first { left + 1 } else { left }, t_far);
-                sp += 1;
-            }
-            if t_near < ray.tmax {
-                stack[sp] = (if left_first { left } else { left + 1 }, t_near);
-                sp += 1;
+            // Then the nearest pushed entry that a hit found since has not
+            // put out of reach.
+            loop {
+                if sp == 0 {
+                    return hit;
+                }
+                sp -= 1;
+                let (next, t_next) = unsafe { stack[sp].assume_init() };
+                if t_next < ray.tmax {
+                    child = next;
+                    break;
+                }
             }
         }
-        hit
     }
 
     /// Every primitive in turn: the reference the BVH is tested against.
@@ -257,6 +292,7 @@ impl<'a> Kernel<'a> {
         hit
     }
 
+    #[inline(always)]
     pub fn trace(&self, ray_in: Ray, any_hit: bool) -> Hit {
         let mut ray = ray_in;
         ray.tmax = ray.tmax.min(FAR);
@@ -476,6 +512,7 @@ pub fn intersect_triangle_moller_trumbore(
     (t, u, v)
 }
 
+#[inline(always)]
 pub fn ray_shear(dir: Vec3) -> Shear {
     let m = dir.abs();
     let kz = if m.x >= m.y && m.x >= m.z {
@@ -498,6 +535,7 @@ pub fn ray_shear(dir: Vec3) -> Shear {
 
 /// Woop, Benthin and Wald (JCGT 2013), as in the shader: edge values of
 /// exactly 0 count as inside.
+#[inline(always)]
 pub fn intersect_triangle_watertight(
     ray: &Ray,
     shear: &Shear,
@@ -559,25 +597,27 @@ pub fn intersect_sphere(ray: &Ray, center: Vec3, radius: Real) -> Real {
     FAR
 }
 
-/// Distance at which the ray enters the node's box within (tmin, tmax), or
-/// FAR. Comparisons, not min/max, so that a NaN slab is ignored as on the GPU.
-pub fn intersect_box(ray: &Ray, inv_dir: Vec3, node: &crate::layout::BvhNode) -> Real {
-    let t0 = (vec3(node.min) - ray.origin) * inv_dir;
-    let t1 = (vec3(node.max) - ray.origin) * inv_dir;
-    let mut t_near = ray.tmin;
-    let mut t_far = ray.tmax;
+/// Distances at which the ray enters the node's four child boxes within
+/// (tmin, tmax), FAR where it misses one (or the slot is empty: its box is
+/// inverted). Comparisons, not min/max, so that a NaN slab is ignored as on
+/// the GPU.
+#[inline(always)]
+pub fn intersect_boxes(ray: &Ray, inv_dir: Vec3, node: &BvhNode) -> Vec4 {
+    let origin = ray.origin.to_array();
+    let inv_dir = inv_dir.to_array();
+    let mut t_near = Vec4::splat(ray.tmin);
+    let mut t_far = Vec4::splat(ray.tmax);
     for axis in 0..3 {
-        let swap = t0[axis] > t1[axis];
-        let near = if swap { t1[axis] } else { t0[axis] };
-        let far = if swap { t0[axis] } else { t1[axis] } * BOX_SLACK;
-        if near > t_near {
-            t_near = near;
-        }
-        if far < t_far {
-            t_far = far;
-        }
+        // The slab's near plane is its minimum unless the ray runs toward −axis.
+        let flip = (inv_dir[axis] < 0.0) as usize;
+        let near_plane = vec4(node.bounds[2 * axis + flip]);
+        let far_plane = vec4(node.bounds[2 * axis + 1 - flip]);
+        let near = (near_plane - Vec4::splat(origin[axis])) * Vec4::splat(inv_dir[axis]);
+        let far = (far_plane - Vec4::splat(origin[axis])) * Vec4::splat(inv_dir[axis]) * BOX_SLACK;
+        t_near = Vec4::select(near.cmpgt(t_near), near, t_near);
+        t_far = Vec4::select(far.cmplt(t_far), far, t_far);
     }
-    if t_near <= t_far { t_near } else { FAR }
+    Vec4::select(t_near.cmple(t_far), t_near, Vec4::splat(FAR))
 }
 
 fn sign_nonzero(x: Real) -> Real {
