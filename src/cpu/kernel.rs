@@ -356,6 +356,7 @@ impl<'a> Kernel<'a> {
     }
 
     /// Lambert: ambient·k + Σ k·E·max(0, n·l)·visible, linear RGB.
+    #[inline(always)]
     pub fn shade(&self, ray: &Ray, hit: &Hit) -> Vec3 {
         if hit.prim == NO_HIT {
             return self.background;
@@ -423,6 +424,7 @@ impl<'a> Kernel<'a> {
 
     /// One pixel: the box-filtered mean of its samples, the primitive its
     /// first sample hit, and the variance of its mean luminance.
+    #[inline(always)]
     pub fn render_pixel(&self, x: u32, y: u32) -> (Vec3, u32, Real) {
         let luminance = Vec3::new(0.2126, 0.7152, 0.0722);
         let mut sum = Vec3::ZERO;

@@ -38,6 +38,7 @@ pub enum Precision {
 
 /// One pixel in the chosen precision: colour, first primitive, variance of
 /// the mean luminance.
+#[inline(always)]
 fn pixel(
     kernel32: &f32::Kernel,
     kernel64: &f64::Kernel,
@@ -70,12 +71,14 @@ pub fn render(scene: &Scene, precision: Precision, progress: &Progress) -> Rende
         .zip(variance.par_chunks_mut(width))
         .enumerate()
         .for_each(|(y, ((rgb_row, prim_row), variance_row))| {
-            for x in 0..width {
-                let (c, p, v) = pixel(&kernel32, &kernel64, precision, x as u32, y as u32);
-                rgb_row[x] = c;
-                prim_row[x] = p;
-                variance_row[x] = v;
-            }
+            with_avx2(#[inline(always)] || {
+                for x in 0..width {
+                    let (c, p, v) = pixel(&kernel32, &kernel64, precision, x as u32, y as u32);
+                    rgb_row[x] = c;
+                    prim_row[x] = p;
+                    variance_row[x] = v;
+                }
+            });
             progress.inc(1);
         });
     Rendered {
@@ -112,39 +115,29 @@ pub fn trace_rays(scene: &Scene, rays: &[layout::Ray], any_hit: bool) -> Vec<lay
     let mut hits = vec![layout::Hit::MISS; rays.len()];
     hits.par_chunks_mut(CHUNK)
         .zip(rays.par_chunks(CHUNK))
-        .for_each(|(hits, rays)| trace_chunk(&kernel, rays, hits, any_hit));
+        .for_each(|(hits, rays)| with_avx2(#[inline(always)] || trace_chunk(&kernel, rays, hits, any_hit)));
     hits
 }
 
-/// Uses AVX2 where the CPU has it: the same IEEE operations, so the same
-/// hits, in fewer instructions.
-fn trace_chunk(
-    kernel: &f32::Kernel,
-    rays: &[layout::Ray],
-    hits: &mut [layout::Hit],
-    any_hit: bool,
-) {
+/// Runs `f` (an `#[inline(always)]` closure) compiled for AVX2 where the CPU
+/// has it: the kernel's functions are inlined into it, so they run with the same IEEE operations (the same
+/// results) in fewer instructions.
+#[inline(always)]
+fn with_avx2<R>(f: impl FnOnce() -> R) -> R {
     #[cfg(target_arch = "x86_64")]
     if std::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU has the features the function is compiled for.
-        return unsafe { trace_chunk_avx2(kernel, rays, hits, any_hit) };
+        #[target_feature(enable = "avx2")]
+        fn avx2<R>(f: impl FnOnce() -> R) -> R {
+            f()
+        }
+        // SAFETY: the CPU has the features `avx2` is compiled for.
+        return unsafe { avx2(f) };
     }
-    trace_chunk_portable(kernel, rays, hits, any_hit)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn trace_chunk_avx2(
-    kernel: &f32::Kernel,
-    rays: &[layout::Ray],
-    hits: &mut [layout::Hit],
-    any_hit: bool,
-) {
-    trace_chunk_portable(kernel, rays, hits, any_hit)
+    f()
 }
 
 #[inline(always)]
-fn trace_chunk_portable(
+fn trace_chunk(
     kernel: &f32::Kernel,
     rays: &[layout::Ray],
     hits: &mut [layout::Hit],
