@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use glam::{DMat3, DVec3};
 use serde::Deserialize;
 
-use crate::bvh::Bvh;
+use crate::bvh::{Bvh, MAX_PRIMITIVES};
 use crate::error::{Error, Result};
 use crate::layout::{
     FLAG_SMOOTH, LIGHT_DIRECTIONAL, LIGHT_POINT, Light, Material, Sphere, Triangle, TriangleNormals,
@@ -323,6 +323,7 @@ impl Scene {
                 "the scene is empty: it needs a [[mesh]] with faces or a [[sphere]]".into(),
             ));
         }
+        scene.check_primitive_count(path)?;
         scene.rebuild_bvh();
         Ok(scene)
     }
@@ -447,6 +448,20 @@ impl Scene {
             } else if !self.normals.is_empty() {
                 self.normals.push(TriangleNormals::default());
             }
+        }
+        self.check_primitive_count(obj_path)
+    }
+
+    /// The BVH addresses at most `MAX_PRIMITIVES` primitives.
+    fn check_primitive_count(&self, path: &Path) -> Result<()> {
+        if self.primitive_count() > MAX_PRIMITIVES {
+            return Err(Error::scene(
+                path,
+                format!(
+                    "the scene has {} primitives; lambert supports at most {MAX_PRIMITIVES}",
+                    self.primitive_count()
+                ),
+            ));
         }
         Ok(())
     }

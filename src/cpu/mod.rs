@@ -71,14 +71,17 @@ pub fn render(scene: &Scene, precision: Precision, progress: &Progress) -> Rende
         .zip(variance.par_chunks_mut(width))
         .enumerate()
         .for_each(|(y, ((rgb_row, prim_row), variance_row))| {
-            with_avx2(#[inline(always)] || {
-                for x in 0..width {
-                    let (c, p, v) = pixel(&kernel32, &kernel64, precision, x as u32, y as u32);
-                    rgb_row[x] = c;
-                    prim_row[x] = p;
-                    variance_row[x] = v;
-                }
-            });
+            with_avx2(
+                #[inline(always)]
+                || {
+                    for x in 0..width {
+                        let (c, p, v) = pixel(&kernel32, &kernel64, precision, x as u32, y as u32);
+                        rgb_row[x] = c;
+                        prim_row[x] = p;
+                        variance_row[x] = v;
+                    }
+                },
+            );
             progress.inc(1);
         });
     Rendered {
@@ -115,7 +118,12 @@ pub fn trace_rays(scene: &Scene, rays: &[layout::Ray], any_hit: bool) -> Vec<lay
     let mut hits = vec![layout::Hit::MISS; rays.len()];
     hits.par_chunks_mut(CHUNK)
         .zip(rays.par_chunks(CHUNK))
-        .for_each(|(hits, rays)| with_avx2(#[inline(always)] || trace_chunk(&kernel, rays, hits, any_hit)));
+        .for_each(|(hits, rays)| {
+            with_avx2(
+                #[inline(always)]
+                || trace_chunk(&kernel, rays, hits, any_hit),
+            )
+        });
     hits
 }
 
