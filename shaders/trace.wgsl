@@ -408,7 +408,8 @@ fn intersect_boxes(ray: Ray, inv_dir: vec3<f32>, node: BvhNode) -> vec4<f32> {
         let near_plane = select(node.bounds[2u * axis], node.bounds[2u * axis + 1u], flip);
         let far_plane = select(node.bounds[2u * axis + 1u], node.bounds[2u * axis], flip);
         let near = (near_plane - ray.origin[axis]) * inv_dir[axis];
-        let far = (far_plane - ray.origin[axis]) * inv_dir[axis] * BOX_SLACK;
+        // The slack scales the reciprocal, which a ray's loop computes once.
+        let far = (far_plane - ray.origin[axis]) * (inv_dir[axis] * BOX_SLACK);
         t_near = select(t_near, near, near > t_near);
         t_far = select(t_far, far, far < t_far);
     }

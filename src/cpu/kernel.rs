@@ -1,7 +1,8 @@
 // The CPU twin of shaders/trace.wgsl, function by function with the same
 // names. Included twice by src/cpu/mod.rs: once with `Real = f32` (the
 // reference the GPU is diffed against) and once with `Real = f64` (the
-// oracle). The including module defines `Real`, `Vec3` and `Vec4`.
+// oracle). The including module defines `Real`, `Vec3`, `Vec4`, and
+// `greater_of` and `lesser_of` (the shader's NaN-ignoring selects).
 
 use crate::bvh::STACK_SIZE;
 use crate::layout::{BvhNode, FLAG_SMOOTH, LEAF_BIT, LIGHT_POINT, NO_HIT, leaf_range};
@@ -615,9 +616,10 @@ pub fn intersect_boxes(ray: &Ray, inv_dir: Vec3, node: &BvhNode) -> Vec4 {
         let near_plane = vec4(node.bounds[2 * axis + flip]);
         let far_plane = vec4(node.bounds[2 * axis + 1 - flip]);
         let near = (near_plane - Vec4::splat(origin[axis])) * Vec4::splat(inv_dir[axis]);
-        let far = (far_plane - Vec4::splat(origin[axis])) * Vec4::splat(inv_dir[axis]) * BOX_SLACK;
-        t_near = Vec4::select(near.cmpgt(t_near), near, t_near);
-        t_far = Vec4::select(far.cmplt(t_far), far, t_far);
+        // The slack scales the reciprocal, which a ray's loop computes once.
+        let far = (far_plane - Vec4::splat(origin[axis])) * Vec4::splat(inv_dir[axis] * BOX_SLACK);
+        t_near = greater_of(near, t_near);
+        t_far = lesser_of(far, t_far);
     }
     Vec4::select(t_near.cmple(t_far), t_near, Vec4::splat(FAR))
 }

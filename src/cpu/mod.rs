@@ -16,6 +16,29 @@ pub mod f32 {
     pub type Vec3 = glam::Vec3;
     pub type Vec4 = glam::Vec4;
 
+    /// `a` where a > b, else `b` (a NaN in `a` yields `b`): the shader's
+    /// `select(b, a, a > b)`, in one instruction where SSE's maxps and
+    /// minps give exactly that (their second operand unless the comparison
+    /// holds).
+    #[inline(always)]
+    fn greater_of(a: Vec4, b: Vec4) -> Vec4 {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: SSE is part of x86_64.
+        return Vec4::from(unsafe { std::arch::x86_64::_mm_max_ps(a.into(), b.into()) });
+        #[cfg(not(target_arch = "x86_64"))]
+        return Vec4::select(a.cmpgt(b), a, b);
+    }
+
+    /// `a` where a < b, else `b` (a NaN in `a` yields `b`).
+    #[inline(always)]
+    fn lesser_of(a: Vec4, b: Vec4) -> Vec4 {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: SSE is part of x86_64.
+        return Vec4::from(unsafe { std::arch::x86_64::_mm_min_ps(a.into(), b.into()) });
+        #[cfg(not(target_arch = "x86_64"))]
+        return Vec4::select(a.cmplt(b), a, b);
+    }
+
     include!("kernel.rs");
 }
 
@@ -25,6 +48,18 @@ pub mod f64 {
     pub type Real = f64;
     pub type Vec3 = glam::DVec3;
     pub type Vec4 = glam::DVec4;
+
+    /// `a` where a > b, else `b` (a NaN in `a` yields `b`).
+    #[inline(always)]
+    fn greater_of(a: Vec4, b: Vec4) -> Vec4 {
+        Vec4::select(a.cmpgt(b), a, b)
+    }
+
+    /// `a` where a < b, else `b` (a NaN in `a` yields `b`).
+    #[inline(always)]
+    fn lesser_of(a: Vec4, b: Vec4) -> Vec4 {
+        Vec4::select(a.cmplt(b), a, b)
+    }
 
     include!("kernel.rs");
 }
