@@ -282,6 +282,7 @@ impl<'a> Kernel<'a> {
     }
 
     /// Every primitive in turn: the reference the BVH is tested against.
+    #[inline(always)]
     pub fn trace_brute_force(&self, ray_in: Ray, shear: &Shear, any_hit: bool) -> Hit {
         let mut ray = ray_in;
         let mut hit = miss();
