@@ -265,3 +265,63 @@ fn gpu_bvh_and_brute_force_render_the_same_image() {
         assert!(stats.passed, "{name} GPU vs CPU through the BVH:\n{stats}");
     }
 }
+
+/// The 4-lane slab test against a plain f64 one, box by box: entry distance
+/// within rounding where both see a hit, and never a miss where the exact
+/// test sees the ray pass through the box's interior; empty slots are always
+/// missed; a ray lying in a face's plane, parallel to it, still enters.
+#[test]
+fn slab_test_of_four_boxes_matches_a_plain_one() {
+    use lambert::cpu::f32::intersect_boxes;
+    use lambert::layout::{BvhNode, FAR, leaf_ref};
+    let rays = random_rays(11, 4000, [0.0; 3], 4.0);
+    let boxes = random_rays(12, 4000, [0.0; 3], 2.0);
+    let mut entered = 0;
+    for (i, ray) in rays.iter().enumerate() {
+        let mut node = BvhNode::EMPTY;
+        // Three boxes from random points; slot 3 stays empty.
+        for slot in 0..3 {
+            let b = &boxes[(i * 3 + slot) % boxes.len()];
+            let (p, q) = (b.origin, b.origin + b.dir * 0.3);
+            node.set_child_bounds(slot, p.min(q).to_array(), p.max(q).to_array());
+            node.children[slot] = leaf_ref(slot as u32, 1);
+        }
+        let t = intersect_boxes(ray, ray.dir.recip(), &node).to_array();
+        assert_eq!(t[3], FAR, "an empty slot was entered by {ray:?}");
+        for slot in 0..3 {
+            let (lo, hi) = node.child_bounds(slot);
+            let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
+            let (mut near, mut far) = (ray.tmin as f64, ray.tmax as f64);
+            for a in 0..3 {
+                let (t0, t1) = ((lo[a] as f64 - o[a]) / d[a], (hi[a] as f64 - o[a]) / d[a]);
+                near = near.max(t0.min(t1));
+                far = far.min(t0.max(t1));
+            }
+            if near < far * (1.0 - 1e-5) {
+                entered += 1;
+                assert!(
+                    (t[slot] as f64 - near).abs() <= 1e-5 * near.abs().max(1e-3),
+                    "slot {slot}: {} vs exact {near} for {ray:?}",
+                    t[slot]
+                );
+            } else if near > far * (1.0 + 1e-5) {
+                assert_eq!(t[slot], FAR, "slot {slot} entered, exact: miss, {ray:?}");
+            }
+        }
+    }
+    assert!(entered > 100, "too few rays entered a box: {entered}");
+    // Along the face z = 1 of a unit box, parallel to it: 0·∞ = NaN in that
+    // slab, which the test ignores, so the ray enters at x = 0.
+    let mut node = BvhNode::EMPTY;
+    node.set_child_bounds(0, [0.0; 3], [1.0; 3]);
+    for dir in [Vec3::new(1.0, 0.0, 0.0), Vec3::new(1.0, 0.0, -0.0)] {
+        let ray = Ray {
+            origin: Vec3::new(-1.0, 0.5, 1.0),
+            tmin: 0.0,
+            dir,
+            tmax: FAR,
+        };
+        let t = intersect_boxes(&ray, ray.dir.recip(), &node).to_array();
+        assert_eq!(t[0], 1.0, "grazing ray with direction {dir:?}");
+    }
+}
