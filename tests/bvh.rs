@@ -325,3 +325,38 @@ fn slab_test_of_four_boxes_matches_a_plain_one() {
         assert_eq!(t[0], 1.0, "grazing ray with direction {dir:?}");
     }
 }
+
+/// `cpu::trace_rays` traces two rays at a time per thread, a node visit
+/// each in turn; every ray must get exactly the hit it gets alone.
+#[test]
+fn interleaved_ray_queries_equal_single_ray_traces() {
+    for name in ["bunny", "spheres"] {
+        let scene = load(name);
+        let kernel = Kernel::new(&scene);
+        let root = scene.bvh.bounds().expect("a non-empty scene");
+        let spread = (root.max - root.min).max_element();
+        // An odd count over several chunks, so that lanes run dry unevenly.
+        let rays: Vec<lambert::layout::Ray> = random_rays(5, 5001, root.centre().to_array(), spread)
+            .iter()
+            .map(|r| lambert::layout::Ray {
+                origin: r.origin.to_array(),
+                tmin: r.tmin,
+                dir: r.dir.to_array(),
+                tmax: r.tmax,
+            })
+            .collect();
+        for any_hit in [false, true] {
+            let hits = lambert::cpu::trace_rays(&scene, &rays, any_hit);
+            let mut hit_count = 0;
+            for (ray, hit) in rays.iter().zip(&hits) {
+                let alone = kernel.trace(Ray::from_query(ray), any_hit);
+                assert_eq!(hit.prim, alone.prim, "{name}: {ray:?}");
+                if alone.prim != NO_HIT {
+                    assert_eq!((hit.t, hit.u, hit.v), (alone.t, alone.u, alone.v));
+                    hit_count += 1;
+                }
+            }
+            assert!(hit_count > 100, "{name}: only {hit_count} rays hit");
+        }
+    }
+}

@@ -75,6 +75,59 @@ pub struct Surface {
     pub albedo: Vec3,
 }
 
+/// A traversal's stack: node indices or leaf references, and the distances at
+/// which the ray enters their boxes. Uninitialised: zeroing it would cost as
+/// much as a node visit, and only entries below the traversal's `sp` are
+/// ever read.
+pub type TraversalStack = [std::mem::MaybeUninit<(u32, Real)>; STACK_SIZE];
+
+#[inline(always)]
+pub fn new_stack() -> TraversalStack {
+    [std::mem::MaybeUninit::uninit(); STACK_SIZE]
+}
+
+/// One ray's traversal of the BVH in progress: the shader's `trace_bvh`
+/// locals (but the stack), kept between `Kernel::visit` passes so that a
+/// thread can advance several rays in turn (their memory loads then
+/// overlap).
+#[derive(Clone, Copy)]
+pub struct Traversal {
+    /// tmax shrinks to the closest hit so far.
+    pub ray: Ray,
+    pub hit: Hit,
+    inv_dir: Vec3,
+    shear: Shear,
+    any_hit: bool,
+    /// Entries on the stack.
+    sp: usize,
+    /// What the next pass visits: the root first.
+    child: u32,
+}
+
+impl Traversal {
+    #[inline(always)]
+    pub fn new(ray: Ray, shear: Shear, any_hit: bool) -> Traversal {
+        Traversal {
+            ray,
+            hit: miss(),
+            inv_dir: ray.dir.recip(),
+            shear,
+            any_hit,
+            sp: 0,
+            child: 0,
+        }
+    }
+}
+
+/// The ray as `trace` traces it (misses report FAR, so an infinite tmax must
+/// not let them through), and its shear.
+#[inline(always)]
+pub fn prepare_ray(ray_in: Ray) -> (Ray, Shear) {
+    let mut ray = ray_in;
+    ray.tmax = ray.tmax.min(FAR);
+    (ray, ray_shear(ray.dir))
+}
+
 pub fn miss() -> Hit {
     Hit {
         t: FAR,
@@ -209,76 +262,83 @@ impl<'a> Kernel<'a> {
 
     /// Closest hit through the BVH, nearest child first; with `any_hit`, the
     /// first hit found. A ray that misses every box of the root stops there.
+    /// The shader's loop, one `visit` per pass.
     #[inline(always)]
-    pub fn trace_bvh(&self, ray_in: Ray, shear: &Shear, any_hit: bool) -> Hit {
+    pub fn trace_bvh(&self, ray: Ray, shear: &Shear, any_hit: bool) -> Hit {
+        let mut traversal = Traversal::new(ray, *shear, any_hit);
+        let mut stack = new_stack();
+        while self.visit(&mut traversal, &mut stack) {}
+        traversal.hit
+    }
+
+    /// One pass of `trace_bvh`'s loop: visits the traversal's current node or
+    /// leaf and picks the next. Returns false when the traversal is done (its
+    /// `hit` is then the answer).
+    #[inline(always)]
+    pub fn visit(&self, traversal: &mut Traversal, stack: &mut TraversalStack) -> bool {
         let bvh = &self.scene.bvh;
-        let mut ray = ray_in;
-        let mut hit = miss();
-        let inv_dir = ray.dir.recip();
-        // Entries: a node index or leaf reference, and the distance at which
-        // the ray enters its box. Uninitialised: zeroing it would cost as
-        // much as a node visit, and only entries below `sp` are ever read.
-        let mut stack = [std::mem::MaybeUninit::<(u32, Real)>::uninit(); STACK_SIZE];
-        let mut sp = 0;
-        // What is visited now: the root first.
-        let mut child = 0u32;
-        loop {
-            if child & LEAF_BIT != 0 {
-                let (first, count) = leaf_range(child);
-                for &prim in &bvh.prims[first as usize..(first + count) as usize] {
-                    if self.record_hit(&mut ray, shear, &mut hit, prim) && any_hit {
-                        return hit;
-                    }
-                }
-            } else {
-                let node = &bvh.nodes[child as usize];
-                let t_boxes = intersect_boxes(&ray, inv_dir, node);
-                let mut entered = t_boxes.cmplt(Vec4::splat(ray.tmax)).bitmask();
-                if entered != 0 {
-                    let nearest = entered.trailing_zeros() as usize;
-                    entered &= entered - 1;
-                    if entered == 0 {
-                        // One child entered: visit it, nothing to push.
-                        child = node.children[nearest];
-                        continue;
-                    }
-                    // Several: push them sorted, farthest deepest, then visit
-                    // the nearest at once.
-                    let t = t_boxes.to_array();
-                    let base = sp;
-                    stack[sp].write((node.children[nearest], t[nearest]));
-                    sp += 1;
-                    while entered != 0 {
-                        let slot = entered.trailing_zeros() as usize;
-                        entered &= entered - 1;
-                        let mut j = sp;
-                        // SAFETY (here and below): entries below `sp` are written.
-                        while j > base && unsafe { stack[j - 1].assume_init().1 } < t[slot] {
-                            stack[j] = stack[j - 1];
-                            j -= 1;
-                        }
-                        stack[j].write((node.children[slot], t[slot]));
-                        sp += 1;
-                    }
-                    sp -= 1;
-                    child = unsafe { stack[sp].assume_init().0 };
-                    continue;
+        let Traversal {
+            ray,
+            hit,
+            inv_dir,
+            shear,
+            any_hit,
+            sp,
+            child,
+        } = traversal;
+        if *child & LEAF_BIT != 0 {
+            let (first, count) = leaf_range(*child);
+            for &prim in &bvh.prims[first as usize..(first + count) as usize] {
+                if self.record_hit(ray, shear, hit, prim) && *any_hit {
+                    return false;
                 }
             }
-            // Then the nearest pushed entry that a hit found since has not
-            // put out of reach.
-            loop {
-                if sp == 0 {
-                    return hit;
+        } else {
+            let node = &bvh.nodes[*child as usize];
+            let t_boxes = intersect_boxes(ray, *inv_dir, node);
+            let mut entered = t_boxes.cmplt(Vec4::splat(ray.tmax)).bitmask();
+            if entered != 0 {
+                let nearest = entered.trailing_zeros() as usize;
+                entered &= entered - 1;
+                if entered == 0 {
+                    // One child entered: visit it, nothing to push.
+                    *child = node.children[nearest];
+                    return true;
                 }
-                sp -= 1;
-                let (next, t_next) = unsafe { stack[sp].assume_init() };
-                if t_next < ray.tmax {
-                    child = next;
-                    break;
+                // Several: push them sorted, farthest deepest, then visit the
+                // nearest at once.
+                let t = t_boxes.to_array();
+                let base = *sp;
+                stack[*sp].write((node.children[nearest], t[nearest]));
+                *sp += 1;
+                while entered != 0 {
+                    let slot = entered.trailing_zeros() as usize;
+                    entered &= entered - 1;
+                    let mut j = *sp;
+                    // SAFETY (here and below): entries below `sp` are written.
+                    while j > base && unsafe { stack[j - 1].assume_init().1 } < t[slot] {
+                        stack[j] = stack[j - 1];
+                        j -= 1;
+                    }
+                    stack[j].write((node.children[slot], t[slot]));
+                    *sp += 1;
                 }
+                *sp -= 1;
+                *child = unsafe { stack[*sp].assume_init().0 };
+                return true;
             }
         }
+        // Then the nearest pushed entry that a hit found since has not put
+        // out of reach.
+        while *sp > 0 {
+            *sp -= 1;
+            let (next, t_next) = unsafe { stack[*sp].assume_init() };
+            if t_next < ray.tmax {
+                *child = next;
+                return true;
+            }
+        }
+        false
     }
 
     /// Every primitive in turn: the reference the BVH is tested against.
@@ -296,9 +356,7 @@ impl<'a> Kernel<'a> {
 
     #[inline(always)]
     pub fn trace(&self, ray_in: Ray, any_hit: bool) -> Hit {
-        let mut ray = ray_in;
-        ray.tmax = ray.tmax.min(FAR);
-        let shear = ray_shear(ray.dir);
+        let (ray, shear) = prepare_ray(ray_in);
         match self.scene.accel {
             Accel::Bvh => self.trace_bvh(ray, &shear, any_hit),
             Accel::BruteForce => self.trace_brute_force(ray, &shear, any_hit),

@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use crate::layout::{self, NO_HIT};
 use crate::output::{Image, Rendered};
 use crate::progress::Progress;
-use crate::scene::Scene;
+use crate::scene::{Accel, Scene};
 
 /// Single precision, as on the GPU.
 #[allow(clippy::unnecessary_cast)]
@@ -184,6 +184,13 @@ fn with_avx2<R>(f: impl FnOnce() -> R) -> R {
     f()
 }
 
+/// Rays one thread traces together through the BVH, a node visit each in
+/// turn, so that one ray's cache misses overlap the other's work. Each ray
+/// takes exactly the path it takes alone. Two: on the dragon, incoherent
+/// rays gain 60% and camera rays 1–2% over one; three or more cost camera
+/// rays more in book-keeping than they save.
+const INTERLEAVED_RAYS: usize = 2;
+
 #[inline(always)]
 fn trace_chunk(
     kernel: &f32::Kernel,
@@ -191,9 +198,8 @@ fn trace_chunk(
     hits: &mut [std::mem::MaybeUninit<layout::Hit>],
     any_hit: bool,
 ) {
-    for (ray, out) in rays.iter().zip(hits) {
-        let hit = kernel.trace(f32::Ray::from_query(ray), any_hit);
-        out.write(if hit.prim == NO_HIT {
+    let answer = |hit: f32::Hit| {
+        if hit.prim == NO_HIT {
             layout::Hit::MISS
         } else {
             layout::Hit {
@@ -202,7 +208,46 @@ fn trace_chunk(
                 u: hit.u,
                 v: hit.v,
             }
-        });
+        }
+    };
+    if rays.is_empty() {
+        return;
+    }
+    if kernel.scene.accel != Accel::Bvh {
+        for (ray, out) in rays.iter().zip(hits) {
+            out.write(answer(kernel.trace(f32::Ray::from_query(ray), any_hit)));
+        }
+        return;
+    }
+    let start = |i: usize| {
+        let (ray, shear) = f32::prepare_ray(f32::Ray::from_query(&rays[i]));
+        f32::Traversal::new(ray, shear, any_hit)
+    };
+    // Lane k traces ray index[k] with traversals[k] and stacks[k]; a lane
+    // whose ray is done takes the next one.
+    let lanes = INTERLEAVED_RAYS.min(rays.len());
+    let mut stacks: [f32::TraversalStack; INTERLEAVED_RAYS] =
+        std::array::from_fn(|_| f32::new_stack());
+    let mut index: [usize; INTERLEAVED_RAYS] = std::array::from_fn(|k| k);
+    let mut traversals: [f32::Traversal; INTERLEAVED_RAYS] =
+        std::array::from_fn(|k| start(k.min(rays.len() - 1)));
+    let mut next = lanes;
+    let mut active = lanes;
+    while active > 0 {
+        for k in 0..lanes {
+            if index[k] == usize::MAX || kernel.visit(&mut traversals[k], &mut stacks[k]) {
+                continue;
+            }
+            hits[index[k]].write(answer(traversals[k].hit));
+            if next < rays.len() {
+                index[k] = next;
+                traversals[k] = start(next);
+                next += 1;
+            } else {
+                index[k] = usize::MAX;
+                active -= 1;
+            }
+        }
     }
 }
 
