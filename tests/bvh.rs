@@ -336,15 +336,16 @@ fn interleaved_ray_queries_equal_single_ray_traces() {
         let root = scene.bvh.bounds().expect("a non-empty scene");
         let spread = (root.max - root.min).max_element();
         // An odd count over several chunks, so that lanes run dry unevenly.
-        let rays: Vec<lambert::layout::Ray> = random_rays(5, 5001, root.centre().to_array(), spread)
-            .iter()
-            .map(|r| lambert::layout::Ray {
-                origin: r.origin.to_array(),
-                tmin: r.tmin,
-                dir: r.dir.to_array(),
-                tmax: r.tmax,
-            })
-            .collect();
+        let rays: Vec<lambert::layout::Ray> =
+            random_rays(5, 5001, root.centre().to_array(), spread)
+                .iter()
+                .map(|r| lambert::layout::Ray {
+                    origin: r.origin.to_array(),
+                    tmin: r.tmin,
+                    dir: r.dir.to_array(),
+                    tmax: r.tmax,
+                })
+                .collect();
         for any_hit in [false, true] {
             let hits = lambert::cpu::trace_rays(&scene, &rays, any_hit);
             let mut hit_count = 0;

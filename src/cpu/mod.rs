@@ -186,9 +186,10 @@ fn with_avx2<R>(f: impl FnOnce() -> R) -> R {
 
 /// Rays one thread traces together through the BVH, a node visit each in
 /// turn, so that one ray's cache misses overlap the other's work. Each ray
-/// takes exactly the path it takes alone. Two: on the dragon, incoherent
-/// rays gain 60% and camera rays 1–2% over one; three or more cost camera
-/// rays more in book-keeping than they save.
+/// takes exactly the path it takes alone. Two (docs/benchmarks.md): through
+/// the dragon, incoherent rays gain 60% and camera rays 1–2% over one;
+/// camera rays through a model that stays in cache lose 17%; three or more
+/// cost more in book-keeping than they save.
 const INTERLEAVED_RAYS: usize = 2;
 
 #[inline(always)]
