@@ -36,8 +36,9 @@ const INTERSECT_MOLLER_TRUMBORE: u32 = 1u;
 const INTERSECT_WATERTIGHT: u32 = 2u;
 // Unit roundoff of f32 (pbrt's MachineEpsilon), for error bounds.
 const MACHINE_EPSILON: f32 = 5.96046448e-8;
-// Traversal stack entries: bvh::STACK_SIZE (three per level of the tree's
-// bounded depth, plus four).
+// Traversal stack entries: bvh::STACK_SIZE. A node visit pops one entry and
+// pushes at most four, so the stack holds at most three per level above the
+// deepest plus that level's four: 3·(MAX_DEPTH − 1) + 4 with MAX_DEPTH = 32.
 const STACK_SIZE: u32 = 97u;
 // Child references of a BVH node (src/layout.rs): a leaf has LEAF_BIT set,
 // its primitive count − 1 from bit LEAF_COUNT_SHIFT up and its first
@@ -138,7 +139,8 @@ struct Hit {
 struct BvhNode {
     bounds: array<vec4<f32>, 6>,
     children: vec4<u32>,
-    _pad: vec4<u32>,
+    occupied: u32,
+    _pad: array<u32, 3>,
 }
 
 // Precomputed per ray for the watertight test: the axes permuted so that
@@ -394,11 +396,12 @@ fn record_hit(ray: ptr<function, Ray>, shear: Shear, hit: ptr<function, Hit>, pr
 }
 
 // Distances at which the ray enters the node's four child boxes within
-// (tmin, tmax), FAR where it misses one (an empty slot's inverted box is
-// always missed). Written with comparisons rather than min/max: a slab whose
-// plane holds the origin of a ray parallel to it gives 0·∞ = NaN, and a NaN
-// comparison is false on every device, so such a slab is ignored the same
-// way everywhere.
+// (tmin, tmax), FAR where it misses one (and for an empty slot's inverted
+// box, unless the ray holds a NaN: traversal masks empty slots). Written
+// with select on a comparison rather than WGSL's min/max, whose result for
+// a NaN operand is unspecified: a slab whose plane holds the origin of a ray
+// parallel to it gives 0·∞ = NaN, and a NaN comparison is false on every
+// device, so such a slab is ignored the same way everywhere.
 fn intersect_boxes(ray: Ray, inv_dir: vec3<f32>, node: BvhNode) -> vec4<f32> {
     var t_near = vec4<f32>(ray.tmin);
     var t_far = vec4<f32>(ray.tmax);
@@ -445,19 +448,21 @@ fn trace_bvh(ray_in: Ray, shear: Shear, any_hit: bool) -> Hit {
             for (var slot = 0u; slot < 4u; slot++) {
                 entered |= select(0u, 1u << slot, t[slot] < ray.tmax);
             }
+            entered &= node.occupied;
             if entered != 0u {
-                let nearest = firstTrailingBit(entered);
+                // The lowest entered slot.
+                let first = firstTrailingBit(entered);
                 entered &= entered - 1u;
                 if entered == 0u {
                     // One child entered: visit it, nothing to push.
-                    child = node.children[nearest];
+                    child = node.children[first];
                     continue;
                 }
                 // Several: push them sorted, farthest deepest, then visit the
                 // nearest at once.
                 let base = sp;
-                stack_child[sp] = node.children[nearest];
-                stack_t[sp] = t[nearest];
+                stack_child[sp] = node.children[first];
+                stack_t[sp] = t[first];
                 sp += 1u;
                 while entered != 0u {
                     let slot = firstTrailingBit(entered);

@@ -158,10 +158,22 @@ impl Bvh {
     }
 
     /// The wide tree of a binary one. Its leaves must hold at most
-    /// `MAX_LEAF` primitives, and fewer than `MAX_PRIMITIVES` in all.
+    /// `MAX_LEAF` primitives, at most `MAX_PRIMITIVES` in all, and it must be
+    /// at most `2 * MAX_DEPTH` binary levels deep (as `build`'s trees are), so
+    /// that the wide tree fits the traversal stack; panics otherwise.
     pub fn from_binary(root: BinaryNode) -> Bvh {
         let mut bvh = Bvh::default();
         bvh.flatten(root, 0);
+        assert!(
+            bvh.prims.len() <= MAX_PRIMITIVES,
+            "{} primitives in a BVH",
+            bvh.prims.len()
+        );
+        assert!(
+            bvh.depth() <= MAX_DEPTH,
+            "a BVH {} levels deep",
+            bvh.depth()
+        );
         bvh
     }
 
@@ -173,8 +185,7 @@ impl Bvh {
         let mut interior = Vec::new();
         for (slot, child) in slots.into_iter().enumerate() {
             let b = child.bounds();
-            wide.set_child_bounds(slot, b.min.to_array(), b.max.to_array());
-            wide.children[slot] = match child {
+            let reference = match child {
                 BinaryNode::Leaf { prims, .. } => {
                     assert!(
                         (1..=MAX_LEAF).contains(&prims.len()),
@@ -191,6 +202,7 @@ impl Bvh {
                     (self.nodes.len() - 1) as u32
                 }
             };
+            wide.set_child(slot, reference, b.min.to_array(), b.max.to_array());
         }
         self.nodes[index] = wide;
         for (child, i) in interior {
@@ -294,7 +306,7 @@ fn wide_slots(node: BinaryNode) -> Vec<BinaryNode> {
 
 /// The slots of `node` that hold a child.
 pub fn occupied_slots(node: &BvhNode) -> impl Iterator<Item = usize> + '_ {
-    (0..4).filter(|&s| node.children[s] != crate::layout::EMPTY_SLOT)
+    (0..4).filter(|&s| node.occupied & 1 << s != 0)
 }
 
 /// Child `slot`'s box.

@@ -130,13 +130,17 @@ impl Hit {
 /// shader decodes it. The four children's boxes are stored one lane per
 /// child: `bounds[2a]` holds their minima along axis a, `bounds[2a + 1]` their
 /// maxima. `children[i]` is child i's reference: a node index, a leaf
-/// (`LEAF_BIT` set, see `leaf_ref`) or `EMPTY_SLOT`.
+/// (`LEAF_BIT` set, see `leaf_ref`) or `EMPTY_SLOT`. Bit i of `occupied` is
+/// set when slot i holds a child: traversal enters only those, because a ray
+/// with a NaN or infinite component can pass the slab test of an empty
+/// slot's inverted box.
 #[repr(C, align(64))]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct BvhNode {
     pub bounds: [[f32; 4]; 6],
     pub children: [u32; 4],
-    pub _pad: [u32; 4],
+    pub occupied: u32,
+    pub _pad: [u32; 3],
 }
 
 /// Marks a child reference as a leaf.
@@ -150,7 +154,10 @@ pub const EMPTY_SLOT: u32 = u32::MAX;
 
 /// The reference to a leaf of `count` (1 to 8) primitives from `first`.
 pub fn leaf_ref(first: u32, count: u32) -> u32 {
-    debug_assert!((1..=8).contains(&count) && first <= LEAF_FIRST_MASK);
+    assert!(
+        (1..=8).contains(&count) && first <= LEAF_FIRST_MASK,
+        "no leaf reference holds {count} primitives from {first}"
+    );
     LEAF_BIT | (count - 1) << LEAF_COUNT_SHIFT | first
 }
 
@@ -169,7 +176,8 @@ impl BvhNode {
             [FAR; 4], [-FAR; 4], [FAR; 4], [-FAR; 4], [FAR; 4], [-FAR; 4],
         ],
         children: [EMPTY_SLOT; 4],
-        _pad: [0; 4],
+        occupied: 0,
+        _pad: [0; 3],
     };
 
     /// Child `slot`'s box as (min, max).
@@ -181,10 +189,13 @@ impl BvhNode {
         )
     }
 
-    pub fn set_child_bounds(&mut self, slot: usize, min: [f32; 3], max: [f32; 3]) {
+    /// Puts child `reference` with box (min, max) in `slot`.
+    pub fn set_child(&mut self, slot: usize, reference: u32, min: [f32; 3], max: [f32; 3]) {
         for axis in 0..3 {
             self.bounds[2 * axis][slot] = min[axis];
             self.bounds[2 * axis + 1][slot] = max[axis];
         }
+        self.children[slot] = reference;
+        self.occupied |= 1 << slot;
     }
 }

@@ -39,8 +39,16 @@ fn check_structure(scene: &Scene) {
     let mut seen = vec![0u32; scene.primitive_count()];
     let mut leaves = 0;
     for (i, node) in bvh.nodes.iter().enumerate() {
-        for slot in 0..4 {
-            let child = node.children[slot];
+        let holds_child = node.children.map(|c| c != EMPTY_SLOT);
+        assert_eq!(
+            node.occupied,
+            (0..4)
+                .filter(|&s| holds_child[s])
+                .map(|s| 1 << s)
+                .sum::<u32>(),
+            "occupancy of node {i}"
+        );
+        for (slot, &child) in node.children.iter().enumerate() {
             let b = child_aabb(node, slot);
             if child == EMPTY_SLOT {
                 assert!(
@@ -268,8 +276,8 @@ fn gpu_bvh_and_brute_force_render_the_same_image() {
 
 /// The 4-lane slab test against a plain f64 one, box by box: entry distance
 /// within rounding where both see a hit, and never a miss where the exact
-/// test sees the ray pass through the box's interior; empty slots are always
-/// missed; a ray lying in a face's plane, parallel to it, still enters.
+/// test sees the ray pass through the box's interior; finite rays miss empty
+/// slots; a ray lying in a face's plane, parallel to it, still enters.
 #[test]
 fn slab_test_of_four_boxes_matches_a_plain_one() {
     use lambert::cpu::f32::intersect_boxes;
@@ -283,12 +291,12 @@ fn slab_test_of_four_boxes_matches_a_plain_one() {
         for slot in 0..3 {
             let b = &boxes[(i * 3 + slot) % boxes.len()];
             let (p, q) = (b.origin, b.origin + b.dir * 0.3);
-            node.set_child_bounds(slot, p.min(q).to_array(), p.max(q).to_array());
-            node.children[slot] = leaf_ref(slot as u32, 1);
+            let leaf = leaf_ref(slot as u32, 1);
+            node.set_child(slot, leaf, p.min(q).to_array(), p.max(q).to_array());
         }
         let t = intersect_boxes(ray, ray.dir.recip(), &node).to_array();
         assert_eq!(t[3], FAR, "an empty slot was entered by {ray:?}");
-        for slot in 0..3 {
+        for (slot, &t_slot) in t.iter().enumerate().take(3) {
             let (lo, hi) = node.child_bounds(slot);
             let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
             let (mut near, mut far) = (ray.tmin as f64, ray.tmax as f64);
@@ -300,12 +308,11 @@ fn slab_test_of_four_boxes_matches_a_plain_one() {
             if near < far * (1.0 - 1e-5) {
                 entered += 1;
                 assert!(
-                    (t[slot] as f64 - near).abs() <= 1e-5 * near.abs().max(1e-3),
-                    "slot {slot}: {} vs exact {near} for {ray:?}",
-                    t[slot]
+                    (t_slot as f64 - near).abs() <= 1e-5 * near.abs().max(1e-3),
+                    "slot {slot}: {t_slot} vs exact {near} for {ray:?}"
                 );
             } else if near > far * (1.0 + 1e-5) {
-                assert_eq!(t[slot], FAR, "slot {slot} entered, exact: miss, {ray:?}");
+                assert_eq!(t_slot, FAR, "slot {slot} entered, exact: miss, {ray:?}");
             }
         }
     }
@@ -313,7 +320,7 @@ fn slab_test_of_four_boxes_matches_a_plain_one() {
     // Along the face z = 1 of a unit box, parallel to it: 0·∞ = NaN in that
     // slab, which the test ignores, so the ray enters at x = 0.
     let mut node = BvhNode::EMPTY;
-    node.set_child_bounds(0, [0.0; 3], [1.0; 3]);
+    node.set_child(0, leaf_ref(0, 1), [0.0; 3], [1.0; 3]);
     for dir in [Vec3::new(1.0, 0.0, 0.0), Vec3::new(1.0, 0.0, -0.0)] {
         let ray = Ray {
             origin: Vec3::new(-1.0, 0.5, 1.0),
@@ -359,5 +366,66 @@ fn interleaved_ray_queries_equal_single_ray_traces() {
             }
             assert!(hit_count > 100, "{name}: only {hit_count} rays hit");
         }
+    }
+}
+
+/// A ray with a NaN or infinite component (a degenerate triangle's NaN
+/// normal makes one) can pass the slab test of an empty slot's inverted
+/// box; traversal must still never enter an empty slot, and answer as brute
+/// force does, on both paths.
+#[test]
+fn rays_with_nan_or_infinite_components_trace_like_brute_force() {
+    let t = triangle([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
+    let far_t = triangle([5.0, 0.0, 0.0], [6.0, 0.0, 0.0], [5.0, 1.0, 0.0]);
+    let sphere = Sphere {
+        center: [0.0, 3.0, 0.0],
+        radius: 0.5,
+        ..Default::default()
+    };
+    let scene = scene_of(vec![t, far_t], vec![sphere]);
+    assert_ne!(
+        scene.bvh.nodes[0].occupied, 0b1111,
+        "the root has no empty slot"
+    );
+    let (nan, inf) = (f32::NAN, f32::INFINITY);
+    let query = |origin: [f32; 3], dir: [f32; 3], tmin: f32, tmax: f32| lambert::layout::Ray {
+        origin,
+        tmin,
+        dir,
+        tmax,
+    };
+    let down = [0.0, 0.0, -1.0];
+    let rays = vec![
+        query([0.2, 0.2, 1.0], [nan; 3], 0.0, inf),
+        query([0.2, 0.2, 1.0], [nan, 0.0, -1.0], 0.0, inf),
+        query([nan; 3], down, 0.0, inf),
+        query([0.2, 0.2, nan], down, 0.0, inf),
+        query([inf, 0.2, 1.0], down, 0.0, inf),
+        query([0.2, 0.2, inf], down, 0.0, inf),
+        query([0.2, 0.2, 1.0], [0.0, 0.0, -inf], 0.0, inf),
+        query([0.2, 0.2, 1.0], [0.0; 3], 0.0, inf),
+        query([0.2, 0.2, 1.0], down, nan, inf),
+        query([0.2, 0.2, 1.0], down, 0.0, nan),
+        // A finite ray that hits, so that the comparison is not all misses.
+        query([0.2, 0.2, 1.0], down, 0.0, inf),
+    ];
+    let mut brute = scene.clone();
+    brute.accel = Accel::BruteForce;
+    for any_hit in [false, true] {
+        let expected: Vec<u32> = trace_cpu(&brute, &rays, any_hit)
+            .iter()
+            .map(|h| h.prim)
+            .collect();
+        assert_eq!(expected.last(), Some(&0), "the finite ray hits triangle 0");
+        let cpu: Vec<u32> = trace_cpu(&scene, &rays, any_hit)
+            .iter()
+            .map(|h| h.prim)
+            .collect();
+        assert_eq!(cpu, expected, "CPU BVH vs brute force, any_hit {any_hit}");
+        let gpu: Vec<u32> = trace_gpu(&scene, &rays, any_hit)
+            .iter()
+            .map(|h| h.prim)
+            .collect();
+        assert_eq!(gpu, expected, "GPU BVH vs brute force, any_hit {any_hit}");
     }
 }

@@ -136,6 +136,7 @@ fn host_structs_match_wgsl_layout() {
         BvhNode {
             bounds,
             children,
+            occupied,
             _pad
         }
     );

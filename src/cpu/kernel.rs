@@ -79,10 +79,10 @@ pub struct Surface {
 /// which the ray enters their boxes. Uninitialised: zeroing it would cost as
 /// much as a node visit, and only entries below the traversal's `sp` are
 /// ever read.
-pub type TraversalStack = [std::mem::MaybeUninit<(u32, Real)>; STACK_SIZE];
+pub(crate) type TraversalStack = [std::mem::MaybeUninit<(u32, Real)>; STACK_SIZE];
 
 #[inline(always)]
-pub fn new_stack() -> TraversalStack {
+pub(crate) fn new_stack() -> TraversalStack {
     [std::mem::MaybeUninit::uninit(); STACK_SIZE]
 }
 
@@ -91,7 +91,7 @@ pub fn new_stack() -> TraversalStack {
 /// thread can advance several rays in turn (their memory loads then
 /// overlap).
 #[derive(Clone, Copy)]
-pub struct Traversal {
+pub(crate) struct Traversal {
     /// tmax shrinks to the closest hit so far.
     pub ray: Ray,
     pub hit: Hit,
@@ -106,7 +106,7 @@ pub struct Traversal {
 
 impl Traversal {
     #[inline(always)]
-    pub fn new(ray: Ray, shear: Shear, any_hit: bool) -> Traversal {
+    pub(crate) fn new(ray: Ray, shear: Shear, any_hit: bool) -> Traversal {
         Traversal {
             ray,
             hit: miss(),
@@ -267,15 +267,20 @@ impl<'a> Kernel<'a> {
     pub fn trace_bvh(&self, ray: Ray, shear: &Shear, any_hit: bool) -> Hit {
         let mut traversal = Traversal::new(ray, *shear, any_hit);
         let mut stack = new_stack();
-        while self.visit(&mut traversal, &mut stack) {}
+        // SAFETY: every pass gets this traversal's own stack.
+        while unsafe { self.visit(&mut traversal, &mut stack) } {}
         traversal.hit
     }
 
     /// One pass of `trace_bvh`'s loop: visits the traversal's current node or
     /// leaf and picks the next. Returns false when the traversal is done (its
     /// `hit` is then the answer).
+    ///
+    /// # Safety
+    /// `stack` must be the one that every earlier pass of this traversal
+    /// used: it reads the entries they pushed.
     #[inline(always)]
-    pub fn visit(&self, traversal: &mut Traversal, stack: &mut TraversalStack) -> bool {
+    pub(crate) unsafe fn visit(&self, traversal: &mut Traversal, stack: &mut TraversalStack) -> bool {
         let bvh = &self.scene.bvh;
         let Traversal {
             ray,
@@ -296,20 +301,21 @@ impl<'a> Kernel<'a> {
         } else {
             let node = &bvh.nodes[*child as usize];
             let t_boxes = intersect_boxes(ray, *inv_dir, node);
-            let mut entered = t_boxes.cmplt(Vec4::splat(ray.tmax)).bitmask();
+            let mut entered = t_boxes.cmplt(Vec4::splat(ray.tmax)).bitmask() & node.occupied;
             if entered != 0 {
-                let nearest = entered.trailing_zeros() as usize;
+                // The lowest entered slot.
+                let first = entered.trailing_zeros() as usize;
                 entered &= entered - 1;
                 if entered == 0 {
                     // One child entered: visit it, nothing to push.
-                    *child = node.children[nearest];
+                    *child = node.children[first];
                     return true;
                 }
                 // Several: push them sorted, farthest deepest, then visit the
                 // nearest at once.
                 let t = t_boxes.to_array();
                 let base = *sp;
-                stack[*sp].write((node.children[nearest], t[nearest]));
+                stack[*sp].write((node.children[first], t[first]));
                 *sp += 1;
                 while entered != 0 {
                     let slot = entered.trailing_zeros() as usize;
@@ -660,9 +666,10 @@ pub fn intersect_sphere(ray: &Ray, center: Vec3, radius: Real) -> Real {
 }
 
 /// Distances at which the ray enters the node's four child boxes within
-/// (tmin, tmax), FAR where it misses one (or the slot is empty: its box is
-/// inverted). Comparisons, not min/max, so that a NaN slab is ignored as on
-/// the GPU.
+/// (tmin, tmax), FAR where it misses one (and for an empty slot's inverted
+/// box, unless the ray holds a NaN: traversal masks empty slots). A NaN slab
+/// is ignored as in the shader: `greater_of`/`lesser_of` keep the running
+/// bound when the comparison fails.
 #[inline(always)]
 pub fn intersect_boxes(ray: &Ray, inv_dir: Vec3, node: &BvhNode) -> Vec4 {
     let origin = ray.origin.to_array();

@@ -16,7 +16,7 @@ pub mod f32 {
     pub type Vec3 = glam::Vec3;
     pub type Vec4 = glam::Vec4;
 
-    /// `a` where a > b, else `b` (a NaN in `a` yields `b`): the shader's
+    /// `a` where a > b, else `b` (a NaN in either yields `b`): the shader's
     /// `select(b, a, a > b)`, in one instruction where SSE's maxps and
     /// minps give exactly that (their second operand unless the comparison
     /// holds).
@@ -29,7 +29,7 @@ pub mod f32 {
         return Vec4::select(a.cmpgt(b), a, b);
     }
 
-    /// `a` where a < b, else `b` (a NaN in `a` yields `b`).
+    /// `a` where a < b, else `b` (a NaN in either yields `b`).
     #[inline(always)]
     fn lesser_of(a: Vec4, b: Vec4) -> Vec4 {
         #[cfg(target_arch = "x86_64")]
@@ -49,13 +49,13 @@ pub mod f64 {
     pub type Vec3 = glam::DVec3;
     pub type Vec4 = glam::DVec4;
 
-    /// `a` where a > b, else `b` (a NaN in `a` yields `b`).
+    /// `a` where a > b, else `b` (a NaN in either yields `b`).
     #[inline(always)]
     fn greater_of(a: Vec4, b: Vec4) -> Vec4 {
         Vec4::select(a.cmpgt(b), a, b)
     }
 
-    /// `a` where a < b, else `b` (a NaN in `a` yields `b`).
+    /// `a` where a < b, else `b` (a NaN in either yields `b`).
     #[inline(always)]
     fn lesser_of(a: Vec4, b: Vec4) -> Vec4 {
         Vec4::select(a.cmplt(b), a, b)
@@ -236,7 +236,10 @@ fn trace_chunk(
     let mut active = lanes;
     while active > 0 {
         for k in 0..lanes {
-            if index[k] == usize::MAX || kernel.visit(&mut traversals[k], &mut stacks[k]) {
+            // SAFETY: lane k's traversal is always visited with stacks[k];
+            // a new traversal starts with nothing pushed.
+            if index[k] == usize::MAX || unsafe { kernel.visit(&mut traversals[k], &mut stacks[k]) }
+            {
                 continue;
             }
             hits[index[k]].write(answer(traversals[k].hit));
