@@ -22,7 +22,7 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use lambert::bvh::{Bvh, MAX_DEPTH};
+use lambert::bvh::Bvh;
 use lambert::{bench, cpu, rays};
 
 const TRACE_SIZE: u32 = 512;
@@ -107,13 +107,6 @@ fn builders(c: &mut Criterion) {
         group.measurement_time(Duration::from_secs(if big { 5 } else { 2 }));
         group.throughput(Throughput::Elements(camera_rays.len() as u64));
         for (label, bvh) in trees {
-            if bvh.depth() > MAX_DEPTH {
-                eprintln!(
-                    "{name} {label}: depth {} exceeds the traversal stack, skipped",
-                    bvh.depth()
-                );
-                continue;
-            }
             scene.bvh = bvh;
             // Quick check: the converted tree finds the same hits.
             let a = common::agreement(&reference, &cpu::trace_rays(&scene, &camera_rays, false));

@@ -15,7 +15,7 @@ mod common;
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
-use lambert::bvh::{Bvh, MAX_DEPTH};
+use lambert::bvh::Bvh;
 use lambert::{bench, cpu, rays};
 
 fn median(mut v: Vec<Duration>) -> Duration {
@@ -99,27 +99,23 @@ fn main() {
         scene.bvh = trees[0].clone();
         let reference = cpu::trace_rays(&scene, &camera_rays, false);
         // Agreement per tree (deterministic), then timed rounds.
+        // (Every tree fits the traversal stack: `Bvh::from_binary` checks.)
         let mut facts = Vec::new();
         for bvh in &trees {
             scene.bvh = bvh.clone();
-            if bvh.depth() <= MAX_DEPTH {
-                let agree =
-                    common::agreement(&reference, &cpu::trace_rays(&scene, &camera_rays, false));
-                facts.push(Some(agree));
-            } else {
-                // Our traversal's stack fits trees of MAX_DEPTH wide levels.
-                facts.push(None);
-            }
+            facts.push(common::agreement(
+                &reference,
+                &cpu::trace_rays(&scene, &camera_rays, false),
+            ));
         }
-        let traceable: Vec<usize> = (0..trees.len()).filter(|&i| facts[i].is_some()).collect();
-        let mut trace_best = vec![None; trees.len()];
+        let mut trace_best = Vec::new();
         {
             // Round-robin over the trees after a warm-up round, as for builds
             // (the tree is moved into the scene, not copied, between runs).
             let mut per = vec![Vec::new(); trees.len()];
             let rounds = if big { 4 } else { 7 };
             for round in 0..=rounds {
-                for &i in &traceable {
+                for i in 0..trees.len() {
                     scene.bvh = std::mem::take(&mut trees[i]);
                     let start = Instant::now();
                     black_box(cpu::trace_rays(&scene, &camera_rays, false));
@@ -130,9 +126,9 @@ fn main() {
                     }
                 }
             }
-            for &i in &traceable {
-                let min = *per[i].iter().min().unwrap();
-                trace_best[i] = Some((min, median(per[i].clone())));
+            for times in per {
+                let min = *times.iter().min().unwrap();
+                trace_best.push((min, median(times)));
             }
         }
 
@@ -143,13 +139,10 @@ fn main() {
             let nodes = bvh.nodes.len();
             let bt = &build_times[i];
             let mrays = |t: Duration| camera_rays.len() as f64 / t.as_secs_f64() / 1e6;
-            let (speed, agree) = match (&facts[i], trace_best[i]) {
-                (Some(agree), Some((best, med))) => (
-                    format!("{:.2} | {:.2}", mrays(best), mrays(med)),
-                    format!("{} / {} / {}", agree.same_prim, agree.tie, agree.differ),
-                ),
-                _ => ("too deep | -".into(), "-".into()),
-            };
+            let (best, med) = trace_best[i];
+            let agree = &facts[i];
+            let speed = format!("{:.2} | {:.2}", mrays(best), mrays(med));
+            let agree = format!("{} / {} / {}", agree.same_prim, agree.tie, agree.differ);
             println!(
                 "| {name} | {tris} | {label} | {:.1} | {:.1} | {sah:.2} | {depth} | {nodes} | {leaves} | {refs} | {speed} | {agree} |",
                 ms(*bt.iter().min().unwrap()),

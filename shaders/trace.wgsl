@@ -135,7 +135,8 @@ struct Hit {
 
 // Up to four children. Their boxes one lane per child: bounds[2a] the
 // minima along axis a, bounds[2a + 1] the maxima; an empty slot's box is
-// inverted. children: a node index, or a leaf reference (LEAF_BIT).
+// inverted. children: a node index, a leaf reference (LEAF_BIT) or
+// EMPTY_SLOT; bit i of occupied is set when slot i holds a child.
 struct BvhNode {
     bounds: array<vec4<f32>, 6>,
     children: vec4<u32>,
@@ -514,8 +515,10 @@ fn trace_brute_force(ray_in: Ray, shear: Shear, any_hit: bool) -> Hit {
 
 fn trace(ray_in: Ray, any_hit: bool) -> Hit {
     var ray = ray_in;
-    // Misses report FAR, so an infinite tmax must not let them through.
-    ray.tmax = min(ray.tmax, FAR);
+    // Misses report FAR, so an infinite tmax must not let them through. A
+    // comparison, not min (unspecified for NaN): a NaN tmax becomes FAR, as
+    // on the CPU.
+    ray.tmax = select(FAR, ray.tmax, ray.tmax < FAR);
     let shear = ray_shear(ray.dir);
     if USE_BVH {
         return trace_bvh(ray, shear, any_hit);

@@ -9,7 +9,8 @@
 //! - an interior child: its node index (bit 31 clear);
 //! - a leaf: `LEAF_BIT | (count − 1) << 28 | first`, the primitives
 //!   `prims[first .. first + count]`, 1 ≤ count ≤ `MAX_LEAF`;
-//! - no child: `EMPTY_SLOT`, with an inverted box that no ray enters.
+//! - no child: `EMPTY_SLOT`, with an inverted box; bit i of `occupied` is
+//!   set for the slots that hold a child, and traversal enters no other.
 //!
 //! Node 0 is the root. A wide node holds its binary node's children, or
 //! their children where they are interior: two binary levels per wide level,
@@ -158,9 +159,10 @@ impl Bvh {
     }
 
     /// The wide tree of a binary one. Its leaves must hold at most
-    /// `MAX_LEAF` primitives, at most `MAX_PRIMITIVES` in all, and it must be
-    /// at most `2 * MAX_DEPTH` binary levels deep (as `build`'s trees are), so
-    /// that the wide tree fits the traversal stack; panics otherwise.
+    /// `MAX_LEAF` primitives, at most `MAX_PRIMITIVES` in all, and the wide
+    /// tree must be at most `MAX_DEPTH` levels deep, so that it fits the
+    /// traversal stack (a binary tree of at most `2 * MAX_DEPTH` levels, as
+    /// `build` makes, always does); panics otherwise.
     pub fn from_binary(root: BinaryNode) -> Bvh {
         let mut bvh = Bvh::default();
         bvh.flatten(root, 0);

@@ -133,7 +133,8 @@ impl Hit {
 /// (`LEAF_BIT` set, see `leaf_ref`) or `EMPTY_SLOT`. Bit i of `occupied` is
 /// set when slot i holds a child: traversal enters only those, because a ray
 /// with a NaN or infinite component can pass the slab test of an empty
-/// slot's inverted box.
+/// slot's inverted box. `set_child` is how a child is added: it keeps
+/// `occupied` in step with `children`.
 #[repr(C, align(64))]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct BvhNode {
@@ -149,7 +150,8 @@ pub const LEAF_BIT: u32 = 0x8000_0000;
 pub const LEAF_COUNT_SHIFT: u32 = 28;
 /// ...and the index of its first primitive in the bits below.
 pub const LEAF_FIRST_MASK: u32 = (1 << LEAF_COUNT_SHIFT) - 1;
-/// A child slot with no child; its box is inverted, so no ray enters it.
+/// A child slot with no child; its box is inverted, so that no finite ray
+/// enters it, and its `occupied` bit clear, so that traversal never does.
 pub const EMPTY_SLOT: u32 = u32::MAX;
 
 /// The reference to a leaf of `count` (1 to 8) primitives from `first`.
@@ -195,6 +197,10 @@ impl BvhNode {
             self.bounds[2 * axis][slot] = min[axis];
             self.bounds[2 * axis + 1][slot] = max[axis];
         }
+        assert_ne!(
+            reference, EMPTY_SLOT,
+            "slot {slot}: EMPTY_SLOT is not a child"
+        );
         self.children[slot] = reference;
         self.occupied |= 1 << slot;
     }

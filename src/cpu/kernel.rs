@@ -124,7 +124,8 @@ impl Traversal {
 #[inline(always)]
 pub fn prepare_ray(ray_in: Ray) -> (Ray, Shear) {
     let mut ray = ray_in;
-    ray.tmax = ray.tmax.min(FAR);
+    // As the shader's select: a NaN tmax becomes FAR.
+    ray.tmax = if ray.tmax < FAR { ray.tmax } else { FAR };
     (ray, ray_shear(ray.dir))
 }
 
@@ -301,7 +302,8 @@ impl<'a> Kernel<'a> {
         } else {
             let node = &bvh.nodes[*child as usize];
             let t_boxes = intersect_boxes(ray, *inv_dir, node);
-            let mut entered = t_boxes.cmplt(Vec4::splat(ray.tmax)).bitmask() & node.occupied;
+            let mut entered = t_boxes.cmplt(Vec4::splat(ray.tmax)).bitmask();
+            entered &= node.occupied;
             if entered != 0 {
                 // The lowest entered slot.
                 let first = entered.trailing_zeros() as usize;
