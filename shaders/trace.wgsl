@@ -20,10 +20,11 @@ override INTERSECT: u32 = 2u;
 // closest.
 override ANY_HIT: bool = false;
 // Arrays too large for one storage binding are split over two: the first
-// this many elements in `triangles` (and `triangle_normals`) or `bvh_nodes`,
-// the rest in the `_hi` binding. Unsplit: all.
+// this many elements in `triangles` (and `triangle_normals`), `bvh_nodes`
+// or `bvh_blocks`, the rest in the `_hi` binding. Unsplit: all.
 override TRIANGLES_PER_BINDING: u32 = 0xffffffffu;
 override NODES_PER_BINDING: u32 = 0xffffffffu;
+override BLOCKS_PER_BINDING: u32 = 0xffffffffu;
 
 const NO_HIT: u32 = 0xffffffffu;
 // WGSL has no infinity literal; the largest finite f32 serves as "no hit yet".
@@ -144,6 +145,15 @@ struct BvhNode {
     _pad: array<u32, 3>,
 }
 
+// Up to four primitives of a BVH leaf (src/layout.rs PrimBlock): lane i is
+// primitive prims[i] (NO_HIT: empty), and for a triangle v[k][a][i] is
+// coordinate a of its vertex k; other lanes have zero vertices, which the
+// watertight test never hits.
+struct PrimBlock {
+    v: array<array<vec4<f32>, 3>, 3>,
+    prims: vec4<u32>,
+}
+
 // Precomputed per ray for the watertight test: the axes permuted so that
 // the direction's largest component is z (kx, ky, kz), and the shear that
 // maps the direction onto +z.
@@ -168,10 +178,11 @@ struct Surface {
 @group(0) @binding(4) var<storage, read> materials: array<Material>;
 @group(0) @binding(5) var<storage, read> lights: array<Light>;
 @group(0) @binding(6) var<storage, read> bvh_nodes: array<BvhNode>;
-@group(0) @binding(7) var<storage, read> bvh_prims: array<u32>;
+@group(0) @binding(7) var<storage, read> bvh_blocks: array<PrimBlock>;
 @group(0) @binding(8) var<storage, read> triangles_hi: array<Triangle>;
 @group(0) @binding(9) var<storage, read> triangle_normals_hi: array<TriangleNormals>;
 @group(0) @binding(10) var<storage, read> bvh_nodes_hi: array<BvhNode>;
+@group(0) @binding(11) var<storage, read> bvh_blocks_hi: array<PrimBlock>;
 // Group 1 holds what one entry point reads and writes: an image tile for
 // `render`, a batch of rays for `trace_rays`.
 @group(1) @binding(0) var out_color: texture_storage_2d<rgba32float, write>;
@@ -203,6 +214,13 @@ fn bvh_node_at(i: u32) -> BvhNode {
         return bvh_nodes[i];
     }
     return bvh_nodes_hi[i - NODES_PER_BINDING];
+}
+
+fn bvh_block_at(i: u32) -> PrimBlock {
+    if i < BLOCKS_PER_BINDING {
+        return bvh_blocks[i];
+    }
+    return bvh_blocks_hi[i - BLOCKS_PER_BINDING];
 }
 
 fn miss() -> Hit {
@@ -341,6 +359,39 @@ fn intersect_triangle_watertight(ray: Ray, shear: Shear, a: vec3<f32>, b: vec3<f
     return vec3<f32>(t, v / det, w / det);
 }
 
+// (t, u, v) per lane of a leaf block's four triangles, as in the columns.
+struct BlockHits {
+    t: vec4<f32>,
+    u: vec4<f32>,
+    v: vec4<f32>,
+}
+
+// intersect_triangle_watertight on a block's four lanes at once, the same
+// operations in the same order in each; t = FAR where a lane misses (a lane
+// of no area always does).
+fn intersect_triangle_block(ray: Ray, shear: Shear, block: PrimBlock) -> BlockHits {
+    let k = shear.axes;
+    // Coordinate k.x, k.y or k.z of each vertex relative to the origin.
+    let az = block.v[0][k.z] - vec4<f32>(ray.origin[k.z]);
+    let bz = block.v[1][k.z] - vec4<f32>(ray.origin[k.z]);
+    let cz = block.v[2][k.z] - vec4<f32>(ray.origin[k.z]);
+    let ax = (block.v[0][k.x] - vec4<f32>(ray.origin[k.x])) - shear.s.x * az;
+    let ay = (block.v[0][k.y] - vec4<f32>(ray.origin[k.y])) - shear.s.y * az;
+    let bx = (block.v[1][k.x] - vec4<f32>(ray.origin[k.x])) - shear.s.x * bz;
+    let by = (block.v[1][k.y] - vec4<f32>(ray.origin[k.y])) - shear.s.y * bz;
+    let cx = (block.v[2][k.x] - vec4<f32>(ray.origin[k.x])) - shear.s.x * cz;
+    let cy = (block.v[2][k.y] - vec4<f32>(ray.origin[k.y])) - shear.s.y * cz;
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    let zero = vec4<f32>(0.0);
+    let outside = ((u < zero) | (v < zero) | (w < zero)) & ((u > zero) | (v > zero) | (w > zero));
+    let det = u + v + w;
+    let t = (u * shear.s.z * az + v * shear.s.z * bz + w * shear.s.z * cz) / det;
+    let hit = !outside & (det != zero) & (t > vec4<f32>(ray.tmin)) & (t < vec4<f32>(ray.tmax));
+    return BlockHits(select(vec4<f32>(FAR), t, hit), v / det, w / det);
+}
+
 // Nearest root of |o + t·d − c|² = r² inside (tmin, tmax); FAR on a miss.
 // Uses the cancellation-free form of Ray Tracing Gems ch. 7.
 fn intersect_sphere(ray: Ray, center: vec3<f32>, radius: f32) -> f32 {
@@ -396,6 +447,34 @@ fn record_hit(ray: ptr<function, Ray>, shear: Shear, hit: ptr<function, Hit>, pr
     return false;
 }
 
+// Tests a leaf block's primitives: its triangles in one 4-lane watertight
+// test, then (in lane order) its spheres, and its triangles too under
+// another triangle test. Each hit nearer than ray.tmax becomes the hit and
+// shortens the ray; returns whether there was one.
+fn record_block_hits(ray: ptr<function, Ray>, shear: Shear, hit: ptr<function, Hit>, block: PrimBlock) -> bool {
+    let watertight = INTERSECT == INTERSECT_WATERTIGHT;
+    var recorded = false;
+    if watertight && HAS_TRIANGLES {
+        let lanes = intersect_triangle_block(*ray, shear, block);
+        for (var lane = 0u; lane < 4u; lane++) {
+            if lanes.t[lane] < (*ray).tmax {
+                (*ray).tmax = lanes.t[lane];
+                *hit = Hit(lanes.t[lane], block.prims[lane], lanes.u[lane], lanes.v[lane]);
+                recorded = true;
+            }
+        }
+    }
+    if !watertight || HAS_SPHERES {
+        for (var lane = 0u; lane < 4u; lane++) {
+            let prim = block.prims[lane];
+            if prim != NO_HIT && !(watertight && prim < params.num_triangles) {
+                recorded = record_hit(ray, shear, hit, prim) || recorded;
+            }
+        }
+    }
+    return recorded;
+}
+
 // Distances at which the ray enters the node's four child boxes within
 // (tmin, tmax), FAR where it misses one (and for an empty slot's inverted
 // box, unless the ray holds a NaN: traversal masks empty slots). Written
@@ -438,7 +517,7 @@ fn trace_bvh(ray_in: Ray, shear: Shear, any_hit: bool) -> Hit {
             let first = child & LEAF_FIRST_MASK;
             let count = ((child & ~LEAF_BIT) >> LEAF_COUNT_SHIFT) + 1u;
             for (var i = first; i < first + count; i++) {
-                if record_hit(&ray, shear, &hit, bvh_prims[i]) && any_hit {
+                if record_block_hits(&ray, shear, &hit, bvh_block_at(i)) && any_hit {
                     return hit;
                 }
             }

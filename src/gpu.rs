@@ -10,7 +10,7 @@ use wgpu::util::DeviceExt;
 use crate::cpu::f32::CameraBasis;
 use crate::error::{Error, Result};
 use crate::layout::{
-    BvhNode, Hit, LIGHT_DIRECTIONAL, LIGHT_POINT, NO_HIT, Params, Ray, Sphere, Triangle,
+    BvhNode, Hit, LIGHT_DIRECTIONAL, LIGHT_POINT, NO_HIT, Params, PrimBlock, Ray, Sphere, Triangle,
     TriangleNormals,
 };
 use crate::output::{Image, Rendered};
@@ -553,8 +553,11 @@ impl GpuRenderer {
         let spheres = gpu.storage_buffer("spheres", &non_empty::<Sphere>(&scene.spheres), limit)?;
         let materials = gpu.storage_buffer("materials", &non_empty(&scene.materials), limit)?;
         let lights = gpu.storage_buffer("lights", &non_empty(&scene.lights), limit)?;
-        let prims =
-            gpu.storage_buffer("BVH primitive list", &non_empty(&scene.bvh.prims), limit)?;
+        let blocks = gpu.split_buffer(
+            "BVH leaf blocks",
+            &non_empty::<PrimBlock>(&scene.bvh.blocks),
+            std::mem::size_of::<PrimBlock>() as u64,
+        )?;
         let device_bytes = [
             &triangles.buffer,
             &normals.buffer,
@@ -562,15 +565,18 @@ impl GpuRenderer {
             &spheres,
             &materials,
             &lights,
-            &prims,
+            &blocks.buffer,
         ]
         .iter()
         .map(|b| b.size())
         .sum();
-        let split_bindings = triangles.per_binding != u32::MAX || nodes.per_binding != u32::MAX;
+        let split_bindings = [&triangles, &nodes, &blocks]
+            .iter()
+            .any(|b| b.per_binding != u32::MAX);
         let mut constants = constants;
         constants.push(("TRIANGLES_PER_BINDING", triangles.per_binding as f64));
         constants.push(("NODES_PER_BINDING", nodes.per_binding as f64));
+        constants.push(("BLOCKS_PER_BINDING", blocks.per_binding as f64));
 
         let texture = |label, format| {
             device.create_texture(&wgpu::TextureDescriptor {
@@ -616,6 +622,7 @@ impl GpuRenderer {
                 (8, BindingKind::Storage),
                 (9, BindingKind::Storage),
                 (10, BindingKind::Storage),
+                (11, BindingKind::Storage),
             ],
         );
         let image_layout = bind_group_layout(
@@ -645,10 +652,11 @@ impl GpuRenderer {
             entry(4, materials.as_entire_binding()),
             entry(5, lights.as_entire_binding()),
             entry(6, nodes.low_binding()),
-            entry(7, prims.as_entire_binding()),
+            entry(7, blocks.low_binding()),
             entry(8, triangles.high_binding()),
             entry(9, normals.high_binding()),
             entry(10, nodes.high_binding()),
+            entry(11, blocks.high_binding()),
         ];
         let color_view = color_texture.create_view(&Default::default());
         let prim_view = prim_texture.create_view(&Default::default());

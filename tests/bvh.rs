@@ -11,8 +11,9 @@ use lambert::layout::{EMPTY_SLOT, LEAF_BIT, NO_HIT, Sphere, Triangle, leaf_range
 use lambert::scene::Accel;
 use proptest::prelude::*;
 
-/// Every primitive referenced exactly once, each leaf's box around its
-/// primitives, children inside their parents' slots, empty slots with
+/// Every primitive referenced exactly once, each leaf's blocks full but for
+/// the last, their lanes holding their triangles' vertices, each leaf's box
+/// around its primitives, children inside their parents' slots, empty slots with
 /// inverted boxes, depth within the shader's stack.
 fn check_structure(scene: &Scene) {
     let bvh = &scene.bvh;
@@ -57,10 +58,24 @@ fn check_structure(scene: &Scene) {
                 );
             } else if child & LEAF_BIT != 0 {
                 let (first, count) = leaf_range(child);
-                assert!((1..=MAX_LEAF as u32).contains(&count));
-                for &p in &bvh.prims[first as usize..(first + count) as usize] {
-                    seen[p as usize] += 1;
-                    assert!(inside(&prim_bounds(p), &b), "prim {p} outside its leaf");
+                let blocks = &bvh.blocks[first as usize..(first + count) as usize];
+                let prims: Vec<u32> = blocks.iter().flat_map(|b| b.prims).collect();
+                let used = prims.iter().filter(|&&p| p != NO_HIT).count();
+                assert!(
+                    (1..=MAX_LEAF).contains(&used) && used > prims.len() - 4,
+                    "a leaf of {used} primitives in {count} blocks"
+                );
+                for (lane, block) in blocks.iter().flat_map(|b| (0..4).map(move |l| (l, b))) {
+                    let p = block.prims[lane];
+                    let vertices = [0, 1, 2].map(|k| [0, 1, 2].map(|a| block.v[k][a][lane]));
+                    match scene.triangles.get(p as usize) {
+                        Some(t) => assert_eq!(vertices, [t.v0, t.v1, t.v2], "triangle {p}'s lane"),
+                        None => assert_eq!(vertices, [[0.0; 3]; 3], "lane of {p} has vertices"),
+                    }
+                    if p != NO_HIT {
+                        seen[p as usize] += 1;
+                        assert!(inside(&prim_bounds(p), &b), "prim {p} outside its leaf");
+                    }
                 }
                 leaves += 1;
             } else {

@@ -131,6 +131,7 @@ fn host_structs_match_wgsl_layout() {
         }
     );
     check_layout!(m, Hit { t, prim, u, v });
+    check_layout!(m, PrimBlock { v, prims });
     check_layout!(
         m,
         BvhNode {

@@ -125,7 +125,7 @@ pub fn build_obvhs(triangles: &[Triangle], params: BvhBuildParams) -> (Bvh, Obvh
     let t1 = Instant::now();
     let bvh2 = obvhs::bvh2::builder::build_bvh2_from_tris(&tris, params, &mut Duration::default());
     let t2 = Instant::now();
-    let mut bvh = flatten(&bvh2);
+    let mut bvh = flatten(&bvh2, triangles);
     let t3 = Instant::now();
     let times = ObvhsTimes {
         convert: t1 - t0,
@@ -139,11 +139,11 @@ pub fn build_obvhs(triangles: &[Triangle], params: BvhBuildParams) -> (Bvh, Obvh
 /// Our wide layout from an obvhs `Bvh2`: its binary tree (nodes reachable
 /// from the root) collapsed by `Bvh::from_binary`, exactly as our own
 /// builder's tree is.
-pub fn flatten(bvh2: &Bvh2) -> Bvh {
+pub fn flatten(bvh2: &Bvh2, triangles: &[Triangle]) -> Bvh {
     if bvh2.nodes.is_empty() {
         return Bvh::default();
     }
-    Bvh::from_binary(binary_node(bvh2, 0))
+    Bvh::from_binary(binary_node(bvh2, 0), triangles)
 }
 
 fn binary_node(bvh2: &Bvh2, index: usize) -> BinaryNode {
@@ -204,5 +204,10 @@ pub fn agreement(reference: &[Hit], hits: &[Hit]) -> HitAgreement {
 
 /// Leaves, and primitive references in leaves (> triangles with pre-splits).
 pub fn leaf_stats(bvh: &Bvh) -> (usize, usize) {
-    (bvh.leaf_count(), bvh.prims.len())
+    let refs = bvh
+        .blocks
+        .iter()
+        .flat_map(|b| b.prims)
+        .filter(|&p| p != NO_HIT);
+    (bvh.leaf_count(), refs.count())
 }

@@ -5,7 +5,7 @@
 // `greater_of` and `lesser_of` (the shader's NaN-ignoring selects).
 
 use crate::bvh::STACK_SIZE;
-use crate::layout::{BvhNode, FLAG_SMOOTH, LEAF_BIT, LIGHT_POINT, NO_HIT, leaf_range};
+use crate::layout::{BvhNode, FLAG_SMOOTH, LEAF_BIT, LIGHT_POINT, NO_HIT, PrimBlock, leaf_range};
 use crate::scene::{Accel, Camera, Intersect, Scene};
 
 /// Widens a box's exit distance so that rounding cannot cull a box the ray
@@ -261,6 +261,48 @@ impl<'a> Kernel<'a> {
         false
     }
 
+    /// Tests a leaf block's primitives: its triangles in one 4-lane
+    /// watertight test, then (in lane order) its spheres, and its triangles
+    /// too under another triangle test. Each hit nearer than ray.tmax
+    /// becomes the hit and shortens the ray; returns whether there was one.
+    #[inline(always)]
+    pub fn record_block_hits(
+        &self,
+        ray: &mut Ray,
+        shear: &Shear,
+        hit: &mut Hit,
+        block: &PrimBlock,
+    ) -> bool {
+        let scene = self.scene;
+        let watertight = scene.intersect == Intersect::Watertight;
+        let mut recorded = false;
+        if watertight && !scene.triangles.is_empty() {
+            let (t, u, v) = intersect_triangle_block(ray, shear, block);
+            let (t, u, v) = (t.to_array(), u.to_array(), v.to_array());
+            for lane in 0..4 {
+                if t[lane] < ray.tmax {
+                    ray.tmax = t[lane];
+                    *hit = Hit {
+                        t: t[lane],
+                        prim: block.prims[lane],
+                        u: u[lane],
+                        v: v[lane],
+                    };
+                    recorded = true;
+                }
+            }
+        }
+        if !watertight || !scene.spheres.is_empty() {
+            let num_triangles = scene.triangles.len() as u32;
+            for &prim in &block.prims {
+                if prim != NO_HIT && !(watertight && prim < num_triangles) {
+                    recorded |= self.record_hit(ray, shear, hit, prim);
+                }
+            }
+        }
+        recorded
+    }
+
     /// Closest hit through the BVH, nearest child first; with `any_hit`, the
     /// first hit found. A ray that misses every box of the root stops there.
     /// The shader's loop, one `visit` per pass.
@@ -294,8 +336,8 @@ impl<'a> Kernel<'a> {
         } = traversal;
         if *child & LEAF_BIT != 0 {
             let (first, count) = leaf_range(*child);
-            for &prim in &bvh.prims[first as usize..(first + count) as usize] {
-                if self.record_hit(ray, shear, hit, prim) && *any_hit {
+            for block in &bvh.blocks[first as usize..(first + count) as usize] {
+                if self.record_block_hits(ray, shear, hit, block) && *any_hit {
                     return false;
                 }
             }
@@ -640,6 +682,48 @@ pub fn intersect_triangle_watertight(
         return NO_TRIANGLE_HIT;
     }
     (t, v / det, w / det)
+}
+
+/// A block's lanes as a vector.
+#[inline(always)]
+fn lanes(a: [f32; 4]) -> Vec4 {
+    Vec4::new(a[0] as Real, a[1] as Real, a[2] as Real, a[3] as Real)
+}
+
+/// `intersect_triangle_watertight` on a block's four lanes at once, the
+/// same operations in the same order in each: (t, u, v) per lane, t = FAR
+/// where a lane misses (a lane of no area always does).
+#[inline(always)]
+pub fn intersect_triangle_block(ray: &Ray, shear: &Shear, block: &PrimBlock) -> (Vec4, Vec4, Vec4) {
+    let [kx, ky, kz] = shear.axes;
+    let origin = ray.origin.to_array();
+    // Coordinate a of vertex k relative to the origin.
+    let rel = |k: usize, a: usize| lanes(block.v[k][a]) - Vec4::splat(origin[a]);
+    let (sx, sy, sz) = (
+        Vec4::splat(shear.s.x),
+        Vec4::splat(shear.s.y),
+        Vec4::splat(shear.s.z),
+    );
+    let (az, bz, cz) = (rel(0, kz), rel(1, kz), rel(2, kz));
+    let ax = rel(0, kx) - sx * az;
+    let ay = rel(0, ky) - sy * az;
+    let bx = rel(1, kx) - sx * bz;
+    let by = rel(1, ky) - sy * bz;
+    let cx = rel(2, kx) - sx * cz;
+    let cy = rel(2, ky) - sy * cz;
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    let zero = Vec4::ZERO;
+    let outside = (u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero))
+        & (u.cmpgt(zero) | v.cmpgt(zero) | w.cmpgt(zero));
+    let det = u + v + w;
+    let t = (u * sz * az + v * sz * bz + w * sz * cz) / det;
+    let hit = !outside
+        & det.cmpne(zero)
+        & t.cmpgt(Vec4::splat(ray.tmin))
+        & t.cmplt(Vec4::splat(ray.tmax));
+    (Vec4::select(hit, t, Vec4::splat(FAR)), v / det, w / det)
 }
 
 /// Nearest root of |o + t·d − c|² = r² inside (tmin, tmax); FAR on a miss.
