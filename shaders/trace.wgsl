@@ -216,11 +216,21 @@ fn bvh_node_at(i: u32) -> BvhNode {
     return bvh_nodes_hi[i - NODES_PER_BINDING];
 }
 
-fn bvh_block_at(i: u32) -> PrimBlock {
+// Block i's lanes of coordinate a of vertex k, and its primitives: read
+// where they lie, not as a copy of the block, which dynamic indexing by
+// the ray's axes would put in slow local memory.
+fn block_lanes(i: u32, k: u32, a: u32) -> vec4<f32> {
     if i < BLOCKS_PER_BINDING {
-        return bvh_blocks[i];
+        return bvh_blocks[i].v[k][a];
     }
-    return bvh_blocks_hi[i - BLOCKS_PER_BINDING];
+    return bvh_blocks_hi[i - BLOCKS_PER_BINDING].v[k][a];
+}
+
+fn block_prims(i: u32) -> vec4<u32> {
+    if i < BLOCKS_PER_BINDING {
+        return bvh_blocks[i].prims;
+    }
+    return bvh_blocks_hi[i - BLOCKS_PER_BINDING].prims;
 }
 
 fn miss() -> Hit {
@@ -369,18 +379,18 @@ struct BlockHits {
 // intersect_triangle_watertight on a block's four lanes at once, the same
 // operations in the same order in each; t = FAR where a lane misses (a lane
 // of no area always does).
-fn intersect_triangle_block(ray: Ray, shear: Shear, block: PrimBlock) -> BlockHits {
+fn intersect_triangle_block(ray: Ray, shear: Shear, block: u32) -> BlockHits {
     let k = shear.axes;
     // Coordinate k.x, k.y or k.z of each vertex relative to the origin.
-    let az = block.v[0][k.z] - vec4<f32>(ray.origin[k.z]);
-    let bz = block.v[1][k.z] - vec4<f32>(ray.origin[k.z]);
-    let cz = block.v[2][k.z] - vec4<f32>(ray.origin[k.z]);
-    let ax = (block.v[0][k.x] - vec4<f32>(ray.origin[k.x])) - shear.s.x * az;
-    let ay = (block.v[0][k.y] - vec4<f32>(ray.origin[k.y])) - shear.s.y * az;
-    let bx = (block.v[1][k.x] - vec4<f32>(ray.origin[k.x])) - shear.s.x * bz;
-    let by = (block.v[1][k.y] - vec4<f32>(ray.origin[k.y])) - shear.s.y * bz;
-    let cx = (block.v[2][k.x] - vec4<f32>(ray.origin[k.x])) - shear.s.x * cz;
-    let cy = (block.v[2][k.y] - vec4<f32>(ray.origin[k.y])) - shear.s.y * cz;
+    let az = block_lanes(block, 0u, k.z) - vec4<f32>(ray.origin[k.z]);
+    let bz = block_lanes(block, 1u, k.z) - vec4<f32>(ray.origin[k.z]);
+    let cz = block_lanes(block, 2u, k.z) - vec4<f32>(ray.origin[k.z]);
+    let ax = (block_lanes(block, 0u, k.x) - vec4<f32>(ray.origin[k.x])) - shear.s.x * az;
+    let ay = (block_lanes(block, 0u, k.y) - vec4<f32>(ray.origin[k.y])) - shear.s.y * az;
+    let bx = (block_lanes(block, 1u, k.x) - vec4<f32>(ray.origin[k.x])) - shear.s.x * bz;
+    let by = (block_lanes(block, 1u, k.y) - vec4<f32>(ray.origin[k.y])) - shear.s.y * bz;
+    let cx = (block_lanes(block, 2u, k.x) - vec4<f32>(ray.origin[k.x])) - shear.s.x * cz;
+    let cy = (block_lanes(block, 2u, k.y) - vec4<f32>(ray.origin[k.y])) - shear.s.y * cz;
     let u = cx * by - cy * bx;
     let v = ax * cy - ay * cx;
     let w = bx * ay - by * ax;
@@ -451,22 +461,23 @@ fn record_hit(ray: ptr<function, Ray>, shear: Shear, hit: ptr<function, Hit>, pr
 // test, then (in lane order) its spheres, and its triangles too under
 // another triangle test. Each hit nearer than ray.tmax becomes the hit and
 // shortens the ray; returns whether there was one.
-fn record_block_hits(ray: ptr<function, Ray>, shear: Shear, hit: ptr<function, Hit>, block: PrimBlock) -> bool {
+fn record_block_hits(ray: ptr<function, Ray>, shear: Shear, hit: ptr<function, Hit>, block: u32) -> bool {
     let watertight = INTERSECT == INTERSECT_WATERTIGHT;
+    let prims = block_prims(block);
     var recorded = false;
     if watertight && HAS_TRIANGLES {
         let lanes = intersect_triangle_block(*ray, shear, block);
         for (var lane = 0u; lane < 4u; lane++) {
             if lanes.t[lane] < (*ray).tmax {
                 (*ray).tmax = lanes.t[lane];
-                *hit = Hit(lanes.t[lane], block.prims[lane], lanes.u[lane], lanes.v[lane]);
+                *hit = Hit(lanes.t[lane], prims[lane], lanes.u[lane], lanes.v[lane]);
                 recorded = true;
             }
         }
     }
     if !watertight || HAS_SPHERES {
         for (var lane = 0u; lane < 4u; lane++) {
-            let prim = block.prims[lane];
+            let prim = prims[lane];
             if prim != NO_HIT && !(watertight && prim < params.num_triangles) {
                 recorded = record_hit(ray, shear, hit, prim) || recorded;
             }
@@ -517,7 +528,7 @@ fn trace_bvh(ray_in: Ray, shear: Shear, any_hit: bool) -> Hit {
             let first = child & LEAF_FIRST_MASK;
             let count = ((child & ~LEAF_BIT) >> LEAF_COUNT_SHIFT) + 1u;
             for (var i = first; i < first + count; i++) {
-                if record_block_hits(&ray, shear, &hit, bvh_block_at(i)) && any_hit {
+                if record_block_hits(&ray, shear, &hit, i) && any_hit {
                     return hit;
                 }
             }

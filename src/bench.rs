@@ -146,7 +146,7 @@ pub struct LadderRow {
     pub bvh_nodes: usize,
     pub bvh_depth: usize,
     pub sah_cost: f64,
-    /// Bytes of triangles, normals, BVH nodes and primitive list on the device.
+    /// Bytes of triangles, normals, BVH nodes and leaf blocks on the device.
     pub device_bytes: usize,
     pub device_bytes_per_triangle: f64,
 }
