@@ -451,3 +451,53 @@ fn rays_with_nan_or_infinite_components_trace_like_brute_force() {
         assert_eq!(gpu, expected, "GPU BVH vs brute force, any_hit {any_hit}");
     }
 }
+
+/// The 4-lane watertight test of a leaf block gives each lane exactly what
+/// the one-triangle test gives (t, u and v bit for bit), as the shader's
+/// and the CPU's blocks rely on; lanes that hold no triangle never hit.
+#[test]
+fn block_test_matches_the_one_triangle_test_bit_for_bit() {
+    use lambert::cpu::f32::{intersect_triangle_block, intersect_triangle_watertight};
+    use lambert::layout::{FAR, PrimBlock};
+    let rays = random_rays(21, 3000, [0.0; 3], 3.0);
+    // Random points near the centre, as vertices.
+    let points: Vec<Vec3> = random_rays(22, 3000 * 12, [0.0; 3], 1.5)
+        .iter()
+        .map(|r| r.origin)
+        .collect();
+    let mut hits = 0;
+    for (i, ray) in rays.iter().enumerate() {
+        let p = |l: usize, k: usize| points[i * 12 + l * 3 + k];
+        let triangles: Vec<Triangle> = (0..4)
+            .map(|l| triangle(p(l, 0).into(), p(l, 1).into(), p(l, 2).into()))
+            .collect();
+        // On odd rays lane 3 is primitive 3 beyond the triangles (a sphere).
+        let n = if i % 2 == 0 { 4 } else { 3 };
+        let block = PrimBlock::new(&[0, 1, 2, 3], &triangles[..n]);
+        let shear = ray_shear(ray.dir);
+        let (t, u, v) = intersect_triangle_block(ray, &shear, &block);
+        let (t, u, v) = (t.to_array(), u.to_array(), v.to_array());
+        for lane in 0..4 {
+            let expected = if lane < n {
+                let [a, b, c] = [0, 1, 2].map(|k| p(lane, k));
+                intersect_triangle_watertight(ray, &shear, a, b, c)
+            } else {
+                (FAR, 0.0, 0.0)
+            };
+            assert_eq!(
+                t[lane].to_bits(),
+                expected.0.to_bits(),
+                "lane {lane} t, {ray:?}"
+            );
+            if expected.0 != FAR {
+                assert_eq!(
+                    (u[lane].to_bits(), v[lane].to_bits()),
+                    (expected.1.to_bits(), expected.2.to_bits()),
+                    "lane {lane} u, v, {ray:?}"
+                );
+                hits += 1;
+            }
+        }
+    }
+    assert!(hits > 200, "only {hits} lanes hit: the test checks little");
+}
