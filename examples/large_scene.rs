@@ -66,13 +66,13 @@ fn main() -> lambert::Result<()> {
     let start = Instant::now();
     let mut renderer = GpuRenderer::new(gpu, &scene)?;
     println!(
-        "GPU {}: uploaded {:.1} MiB ({:.1} bytes per triangle) in {:.2} s; one binding holds {} MiB, arrays split over two: {}",
+        "GPU {}: uploaded {:.1} MiB ({:.1} bytes per triangle) in {:.2} s; one binding holds {} MiB, arrays split over two: {:?}",
         renderer.gpu().describe(),
         renderer.device_bytes as f64 / (1 << 20) as f64,
         renderer.device_bytes as f64 / scene.triangles.len() as f64,
         start.elapsed().as_secs_f64(),
         limit >> 20,
-        renderer.split_bindings
+        renderer.split_arrays
     );
     renderer.prepare_render()?;
     let start = Instant::now();

@@ -54,7 +54,7 @@ const LEAF_FIRST_MASK: u32 = 0x0fffffffu;
 const BOX_SLACK: f32 = 1.000001;
 
 // Layouts: each struct here has a #[repr(C)] twin in src/layout.rs, checked
-// against naga's reflection of this file by tests/layout.rs.
+// against naga's reflection of this file by tests/shaders.rs.
 struct Params {
     eye: vec3<f32>,
     width: u32,
@@ -147,8 +147,8 @@ struct BvhNode {
 
 // Up to four primitives of a BVH leaf (src/layout.rs PrimBlock): lane i is
 // primitive prims[i] (NO_HIT: empty), and for a triangle v[k][a][i] is
-// coordinate a of its vertex k; other lanes have zero vertices, which the
-// watertight test never hits.
+// coordinate a of its vertex k; other lanes have zero vertices, and
+// record_block_hits ignores what the 4-lane test says of them.
 struct PrimBlock {
     v: array<array<vec4<f32>, 3>, 3>,
     prims: vec4<u32>,
@@ -378,7 +378,8 @@ struct BlockHits {
 
 // intersect_triangle_watertight on a block's four lanes at once, the same
 // operations in the same order in each; t = FAR where a lane misses (a lane
-// of no area always does).
+// of zero vertices too, unless the device fuses multiply-adds:
+// record_block_hits looks only at triangle lanes).
 fn intersect_triangle_block(ray: Ray, shear: Shear, block: u32) -> BlockHits {
     let k = shear.axes;
     // Coordinate k.x, k.y or k.z of each vertex relative to the origin.
@@ -468,7 +469,10 @@ fn record_block_hits(ray: ptr<function, Ray>, shear: Shear, hit: ptr<function, H
     if watertight && HAS_TRIANGLES {
         let lanes = intersect_triangle_block(*ray, shear, block);
         for (var lane = 0u; lane < 4u; lane++) {
-            if lanes.t[lane] < (*ray).tmax {
+            // Only triangle lanes (the id test also drops empty ones): a
+            // GPU that fuses multiply-adds can see a hit in a lane of zero
+            // vertices.
+            if lanes.t[lane] < (*ray).tmax && prims[lane] < params.num_triangles {
                 (*ray).tmax = lanes.t[lane];
                 *hit = Hit(lanes.t[lane], prims[lane], lanes.u[lane], lanes.v[lane]);
                 recorded = true;

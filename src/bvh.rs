@@ -34,7 +34,8 @@ const MAX_BINARY_DEPTH: usize = 2 * MAX_DEPTH;
 /// level above plus the four of the deepest.
 pub const STACK_SIZE: usize = 3 * MAX_DEPTH + 1;
 /// Most primitives a scene may hold: a leaf reference has 28 bits for its
-/// first block, and there are never more blocks than primitives.
+/// first block, and `build` never makes more blocks than primitives
+/// (`from_binary` checks the blocks of other trees).
 pub const MAX_PRIMITIVES: usize = LEAF_FIRST_MASK as usize + 1;
 const BINS: usize = 16;
 /// Primitives per leaf at most (two blocks).

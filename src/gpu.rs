@@ -394,8 +394,9 @@ pub struct GpuRenderer {
     prim_staging: wgpu::Buffer,
     /// Bytes of the scene's buffers on the device.
     pub device_bytes: u64,
-    /// Whether an array was split over two bindings.
-    pub split_bindings: bool,
+    /// The arrays split over two bindings ("triangles" also stands for
+    /// their normals).
+    pub split_arrays: Vec<&'static str>,
     timer: Option<Timer>,
     pub upload_time: Duration,
 }
@@ -570,9 +571,15 @@ impl GpuRenderer {
         .iter()
         .map(|b| b.size())
         .sum();
-        let split_bindings = [&triangles, &nodes, &blocks]
-            .iter()
-            .any(|b| b.per_binding != u32::MAX);
+        let split_arrays = [
+            ("triangles", &triangles),
+            ("BVH nodes", &nodes),
+            ("BVH leaf blocks", &blocks),
+        ]
+        .iter()
+        .filter(|(_, b)| b.per_binding != u32::MAX)
+        .map(|(name, _)| *name)
+        .collect();
         let mut constants = constants;
         constants.push(("TRIANGLES_PER_BINDING", triangles.per_binding as f64));
         constants.push(("NODES_PER_BINDING", nodes.per_binding as f64));
@@ -710,7 +717,7 @@ impl GpuRenderer {
             color_staging,
             prim_staging,
             device_bytes,
-            split_bindings,
+            split_arrays,
             timer,
             upload_time: start.elapsed(),
         })

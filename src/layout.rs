@@ -1,7 +1,7 @@
 //! Structs shared by the host, the GPU shader (`shaders/trace.wgsl`) and the
 //! CPU reference. Each mirrors the WGSL struct of the same name byte for byte
 //! (vec3 fields take 16 bytes with the following scalar in their padding);
-//! `tests/layout.rs` checks sizes and offsets against naga's reflection.
+//! `tests/shaders.rs` checks sizes and offsets against naga's reflection.
 
 use bytemuck::{Pod, Zeroable};
 
@@ -147,11 +147,14 @@ pub struct BvhNode {
 /// Up to four primitives of one BVH leaf (160 bytes), the four lanes of
 /// one watertight triangle test: lane i is primitive `prims[i]` (`NO_HIT`
 /// for an empty lane), and for a triangle, `v[k][a][i]` is coordinate a of
-/// its vertex k. Sphere and empty lanes have zero vertices, a triangle of
-/// no area that the test never hits. Holding the vertices here, in leaf
+/// its vertex k. Sphere and empty lanes have zero vertices, and traversal
+/// takes hits only from lanes whose id is a triangle's (with fused
+/// multiply-adds a GPU can find a hit in a triangle of zero vertices).
+/// Aligned to 32 bytes, so a block spans whole cache-line halves. Holding
+/// the vertices here, in leaf
 /// order, spares a leaf the id → triangle load, and one 4-lane test costs
 /// little more than one triangle.
-#[repr(C)]
+#[repr(C, align(32))]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct PrimBlock {
     pub v: [[[f32; 4]; 3]; 3],

@@ -501,3 +501,57 @@ fn block_test_matches_the_one_triangle_test_bit_for_bit() {
     }
     assert!(hits > 200, "only {hits} lanes hit: the test checks little");
 }
+
+/// Traversal takes hits only from a block's triangle lanes: vertices in an
+/// empty or a sphere lane (zero in a real block; a GPU that fuses
+/// multiply-adds can find a hit in those) must not count, on either path.
+/// Here they are made a large triangle in front of everything.
+#[test]
+fn block_lanes_that_hold_no_triangle_never_hit() {
+    let t = triangle([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
+    let u = triangle([0.0, 1.0, 0.0], [1.0, 1.0, 0.0], [0.0, 2.0, 0.0]);
+    let sphere = Sphere {
+        center: [3.0, 0.5, 0.0],
+        radius: 0.5,
+        ..Default::default()
+    };
+    for (what, spheres) in [("empty lane", vec![]), ("sphere lane", vec![sphere])] {
+        let scene = scene_of(vec![t, u], spheres);
+        assert_eq!(scene.bvh.blocks.len(), 1, "{what}: one block");
+        let rays: Vec<lambert::layout::Ray> = random_rays(31, 400, [0.5, 0.5, 3.0], 2.0)
+            .iter()
+            .map(|r| lambert::layout::Ray {
+                origin: r.origin.to_array(),
+                tmin: 0.0,
+                dir: [r.dir.x, r.dir.y, -r.dir.z.abs() - 0.5],
+                tmax: f32::INFINITY,
+            })
+            .collect();
+        let mut doctored = scene.clone();
+        let block = &mut doctored.bvh.blocks[0];
+        let cover = [[-50.0, -50.0, 1.0], [50.0, -50.0, 1.0], [0.0, 50.0, 1.0]];
+        for (k, vertex) in cover.iter().enumerate() {
+            for (a, &x) in vertex.iter().enumerate() {
+                block.v[k][a][2] = x;
+                block.v[k][a][3] = x;
+            }
+        }
+        for any_hit in [false, true] {
+            let expected: Vec<u32> = trace_cpu(&scene, &rays, any_hit)
+                .iter()
+                .map(|h| h.prim)
+                .collect();
+            assert!(expected.iter().any(|&p| p != NO_HIT), "{what}: nothing hit");
+            let cpu: Vec<u32> = trace_cpu(&doctored, &rays, any_hit)
+                .iter()
+                .map(|h| h.prim)
+                .collect();
+            assert_eq!(cpu, expected, "{what}: CPU, any_hit {any_hit}");
+            let gpu: Vec<u32> = trace_gpu(&doctored, &rays, any_hit)
+                .iter()
+                .map(|h| h.prim)
+                .collect();
+            assert_eq!(gpu, expected, "{what}: GPU, any_hit {any_hit}");
+        }
+    }
+}

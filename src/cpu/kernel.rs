@@ -142,6 +142,7 @@ fn vec3(v: [f32; 3]) -> Vec3 {
     Vec3::new(v[0] as Real, v[1] as Real, v[2] as Real)
 }
 
+#[inline(always)]
 fn vec4(v: [f32; 4]) -> Vec4 {
     Vec4::new(v[0] as Real, v[1] as Real, v[2] as Real, v[3] as Real)
 }
@@ -276,11 +277,15 @@ impl<'a> Kernel<'a> {
         let scene = self.scene;
         let watertight = scene.intersect == Intersect::Watertight;
         let mut recorded = false;
-        if watertight && !scene.triangles.is_empty() {
+        let num_triangles = scene.triangles.len() as u32;
+        if watertight && num_triangles > 0 {
             let (t, u, v) = intersect_triangle_block(ray, shear, block);
             let (t, u, v) = (t.to_array(), u.to_array(), v.to_array());
             for lane in 0..4 {
-                if t[lane] < ray.tmax {
+                // Only triangle lanes (the id test also drops empty ones): a
+                // GPU that fuses multiply-adds can see a hit in a lane of
+                // zero vertices.
+                if t[lane] < ray.tmax && block.prims[lane] < num_triangles {
                     ray.tmax = t[lane];
                     *hit = Hit {
                         t: t[lane],
@@ -293,7 +298,6 @@ impl<'a> Kernel<'a> {
             }
         }
         if !watertight || !scene.spheres.is_empty() {
-            let num_triangles = scene.triangles.len() as u32;
             for &prim in &block.prims {
                 if prim != NO_HIT && !(watertight && prim < num_triangles) {
                     recorded |= self.record_hit(ray, shear, hit, prim);
@@ -684,21 +688,16 @@ pub fn intersect_triangle_watertight(
     (t, v / det, w / det)
 }
 
-/// A block's lanes as a vector.
-#[inline(always)]
-fn lanes(a: [f32; 4]) -> Vec4 {
-    Vec4::new(a[0] as Real, a[1] as Real, a[2] as Real, a[3] as Real)
-}
-
 /// `intersect_triangle_watertight` on a block's four lanes at once, the
 /// same operations in the same order in each: (t, u, v) per lane, t = FAR
-/// where a lane misses (a lane of no area always does).
+/// where a lane misses (unfused arithmetic, as here, always misses a lane
+/// of zero vertices; `record_block_hits` looks only at triangle lanes).
 #[inline(always)]
 pub fn intersect_triangle_block(ray: &Ray, shear: &Shear, block: &PrimBlock) -> (Vec4, Vec4, Vec4) {
     let [kx, ky, kz] = shear.axes;
     let origin = ray.origin.to_array();
     // Coordinate a of vertex k relative to the origin.
-    let rel = |k: usize, a: usize| lanes(block.v[k][a]) - Vec4::splat(origin[a]);
+    let rel = |k: usize, a: usize| vec4(block.v[k][a]) - Vec4::splat(origin[a]);
     let (sx, sy, sz) = (
         Vec4::splat(shear.s.x),
         Vec4::splat(shear.s.y),
