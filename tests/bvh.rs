@@ -433,22 +433,32 @@ fn rays_with_nan_or_infinite_components_trace_like_brute_force() {
     ];
     let mut brute = scene.clone();
     brute.accel = Accel::BruteForce;
+    let expected = |any_hit| {
+        let prims = hit_prims(&trace_cpu(&brute, &rays, any_hit));
+        assert_eq!(prims.last(), Some(&0), "the finite ray hits triangle 0");
+        prims
+    };
+    assert_both_paths_give(&scene, &rays, expected, "BVH vs brute force");
+}
+
+fn hit_prims(hits: &[lambert::layout::Hit]) -> Vec<u32> {
+    hits.iter().map(|h| h.prim).collect()
+}
+
+/// `scene` gives `rays` the primitives `expected(any_hit)` on the CPU and
+/// the GPU path, for closest and for any hits.
+fn assert_both_paths_give(
+    scene: &Scene,
+    rays: &[lambert::layout::Ray],
+    expected: impl Fn(bool) -> Vec<u32>,
+    what: &str,
+) {
     for any_hit in [false, true] {
-        let expected: Vec<u32> = trace_cpu(&brute, &rays, any_hit)
-            .iter()
-            .map(|h| h.prim)
-            .collect();
-        assert_eq!(expected.last(), Some(&0), "the finite ray hits triangle 0");
-        let cpu: Vec<u32> = trace_cpu(&scene, &rays, any_hit)
-            .iter()
-            .map(|h| h.prim)
-            .collect();
-        assert_eq!(cpu, expected, "CPU BVH vs brute force, any_hit {any_hit}");
-        let gpu: Vec<u32> = trace_gpu(&scene, &rays, any_hit)
-            .iter()
-            .map(|h| h.prim)
-            .collect();
-        assert_eq!(gpu, expected, "GPU BVH vs brute force, any_hit {any_hit}");
+        let expected = expected(any_hit);
+        let cpu = hit_prims(&trace_cpu(scene, rays, any_hit));
+        assert_eq!(cpu, expected, "{what}: CPU, any_hit {any_hit}");
+        let gpu = hit_prims(&trace_gpu(scene, rays, any_hit));
+        assert_eq!(gpu, expected, "{what}: GPU, any_hit {any_hit}");
     }
 }
 
@@ -536,22 +546,11 @@ fn block_lanes_that_hold_no_triangle_never_hit() {
                 block.v[k][a][3] = x;
             }
         }
-        for any_hit in [false, true] {
-            let expected: Vec<u32> = trace_cpu(&scene, &rays, any_hit)
-                .iter()
-                .map(|h| h.prim)
-                .collect();
-            assert!(expected.iter().any(|&p| p != NO_HIT), "{what}: nothing hit");
-            let cpu: Vec<u32> = trace_cpu(&doctored, &rays, any_hit)
-                .iter()
-                .map(|h| h.prim)
-                .collect();
-            assert_eq!(cpu, expected, "{what}: CPU, any_hit {any_hit}");
-            let gpu: Vec<u32> = trace_gpu(&doctored, &rays, any_hit)
-                .iter()
-                .map(|h| h.prim)
-                .collect();
-            assert_eq!(gpu, expected, "{what}: GPU, any_hit {any_hit}");
-        }
+        let expected = |any_hit| {
+            let prims = hit_prims(&trace_cpu(&scene, &rays, any_hit));
+            assert!(prims.iter().any(|&p| p != NO_HIT), "{what}: nothing hit");
+            prims
+        };
+        assert_both_paths_give(&doctored, &rays, expected, what);
     }
 }
