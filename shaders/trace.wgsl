@@ -42,8 +42,8 @@ const MACHINE_EPSILON: f32 = 5.96046448e-8;
 // deepest plus that level's four: 3·(MAX_DEPTH − 1) + 4 with MAX_DEPTH = 32.
 const STACK_SIZE: u32 = 97u;
 // Child references of a BVH node (src/layout.rs): a leaf has LEAF_BIT set,
-// its primitive count − 1 from bit LEAF_COUNT_SHIFT up and its first
-// primitive in the bits below.
+// its block count − 1 from bit LEAF_COUNT_SHIFT up and its first block in
+// the bits below.
 const LEAF_BIT: u32 = 0x80000000u;
 const LEAF_COUNT_SHIFT: u32 = 28u;
 const LEAF_FIRST_MASK: u32 = 0x0fffffffu;
@@ -462,7 +462,12 @@ fn record_hit(ray: ptr<function, Ray>, shear: Shear, hit: ptr<function, Hit>, pr
 // test, then (in lane order) its spheres, and its triangles too under
 // another triangle test. Each hit nearer than ray.tmax becomes the hit and
 // shortens the ray; returns whether there was one.
-fn record_block_hits(ray: ptr<function, Ray>, shear: Shear, hit: ptr<function, Hit>, block: u32) -> bool {
+fn record_block_hits(
+    ray: ptr<function, Ray>,
+    shear: Shear,
+    hit: ptr<function, Hit>,
+    block: u32,
+) -> bool {
     let watertight = INTERSECT == INTERSECT_WATERTIGHT;
     let prims = block_prims(block);
     var recorded = false;
@@ -492,7 +497,8 @@ fn record_block_hits(ray: ptr<function, Ray>, shear: Shear, hit: ptr<function, H
 
 // Distances at which the ray enters the node's four child boxes within
 // (tmin, tmax), FAR where it misses one (and for an empty slot's inverted
-// box, unless the ray holds a NaN: traversal masks empty slots). Written
+// box, unless the ray has a NaN or infinite component: traversal masks
+// empty slots). Written
 // with select on a comparison rather than WGSL's min/max, whose result for
 // a NaN operand is unspecified: a slab whose plane holds the origin of a ray
 // parallel to it gives 0·∞ = NaN, and a NaN comparison is false on every

@@ -150,10 +150,9 @@ pub struct BvhNode {
 /// its vertex k. Sphere and empty lanes have zero vertices, and traversal
 /// takes hits only from lanes whose id is a triangle's (with fused
 /// multiply-adds a GPU can find a hit in a triangle of zero vertices).
-/// Aligned to 32 bytes, so a block spans whole cache-line halves. Holding
-/// the vertices here, in leaf
-/// order, spares a leaf the id → triangle load, and one 4-lane test costs
-/// little more than one triangle.
+/// Holding the vertices here, in leaf order, spares a leaf the
+/// id → triangle load, and one 4-lane test costs little more than one
+/// triangle. Aligned to 32 bytes, so a block spans whole cache-line halves.
 #[repr(C, align(32))]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct PrimBlock {

@@ -327,7 +327,11 @@ impl<'a> Kernel<'a> {
     /// `stack` must be the one that every earlier pass of this traversal
     /// used: it reads the entries they pushed.
     #[inline(always)]
-    pub(crate) unsafe fn visit(&self, traversal: &mut Traversal, stack: &mut TraversalStack) -> bool {
+    pub(crate) unsafe fn visit(
+        &self,
+        traversal: &mut Traversal,
+        stack: &mut TraversalStack,
+    ) -> bool {
         let bvh = &self.scene.bvh;
         let Traversal {
             ray,
@@ -752,7 +756,8 @@ pub fn intersect_sphere(ray: &Ray, center: Vec3, radius: Real) -> Real {
 
 /// Distances at which the ray enters the node's four child boxes within
 /// (tmin, tmax), FAR where it misses one (and for an empty slot's inverted
-/// box, unless the ray holds a NaN: traversal masks empty slots). A NaN slab
+/// box, unless the ray has a NaN or infinite component: traversal masks
+/// empty slots). A NaN slab
 /// is ignored as in the shader: `greater_of`/`lesser_of` keep the running
 /// bound when the comparison fails.
 #[inline(always)]
