@@ -259,6 +259,11 @@ struct TraceArgs {
     /// Also trace in f64 (watertight) and report agreement and t error.
     #[arg(long)]
     oracle: bool,
+    /// Trace the rays once, untimed, before the timed trace, so that the
+    /// figure is that of a warm query (caches, memory pages, allocator and
+    /// driver state already set up), as in benchmarks that warm up first.
+    #[arg(long)]
+    warmup: bool,
     /// Print the report as JSON on stdout.
     #[arg(long)]
     json: bool,
@@ -592,6 +597,8 @@ struct TraceReport {
     any_hit: bool,
     rays: usize,
     hits: usize,
+    /// The untimed warm-up trace's time, with --warmup.
+    warmup_seconds: Option<f64>,
     trace_seconds: f64,
     mrays_per_second: f64,
     oracle: Option<rays::Agreement>,
@@ -609,6 +616,13 @@ fn trace(args: &TraceArgs) -> Result<ExitCode> {
         eprintln!("{note}");
     }
     renderer.prepare_trace(args.any_hit)?;
+    let warmup_seconds = if args.warmup {
+        let start = Instant::now();
+        renderer.trace(&scene, &rays, args.any_hit)?;
+        Some(start.elapsed().as_secs_f64())
+    } else {
+        None
+    };
     let start = Instant::now();
     let hits = renderer.trace(&scene, &rays, args.any_hit)?;
     let elapsed = start.elapsed();
@@ -623,6 +637,7 @@ fn trace(args: &TraceArgs) -> Result<ExitCode> {
         any_hit: args.any_hit,
         rays: rays.len(),
         hits: hits.iter().filter(|h| h.prim != NO_HIT).count(),
+        warmup_seconds,
         trace_seconds: elapsed.as_secs_f64(),
         mrays_per_second: rays.len() as f64 / elapsed.as_secs_f64() / 1e6,
         oracle,

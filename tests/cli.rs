@@ -471,12 +471,20 @@ fn trace_writes_hits_in_the_documented_format() {
             "--device",
             device,
             "--oracle",
+            "--warmup",
+            "--json",
         ]);
         assert!(
             out.status.success(),
             "{}",
             String::from_utf8_lossy(&out.stderr)
         );
+        // The warm-up trace is reported apart; the hits below are the timed
+        // trace's.
+        let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        for key in ["warmup_seconds", "trace_seconds"] {
+            assert!(report[key].as_f64().unwrap() > 0.0, "{key} in {report}");
+        }
         let bytes = std::fs::read(&hits_path).unwrap();
         assert_eq!(bytes.len(), 32);
         let f = |i: usize| f32::from_le_bytes(bytes[i..i + 4].try_into().unwrap());
