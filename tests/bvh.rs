@@ -114,6 +114,14 @@ fn triangle(a: [f32; 3], b: [f32; 3], c: [f32; 3]) -> Triangle {
     }
 }
 
+fn sphere(center: [f32; 3], radius: f32) -> Sphere {
+    Sphere {
+        center,
+        radius,
+        ..Default::default()
+    }
+}
+
 /// Closest hits through the BVH and by brute force agree (prim and t) for
 /// each ray; any-hit agrees on occlusion.
 fn check_rays(scene: &Scene, rays: &[Ray]) {
@@ -249,7 +257,7 @@ proptest! {
         seed in 0u64..1000,
     ) {
         let triangles = tris.iter().map(|v| triangle([v[0], v[1], v[2]], [v[3], v[4], v[5]], [v[6], v[7], v[8]])).collect();
-        let spheres = spheres.iter().map(|(c, r)| Sphere { center: *c, radius: *r, ..Default::default() }).collect();
+        let spheres = spheres.iter().map(|&(c, r)| sphere(c, r)).collect();
         let s = scene_of(triangles, spheres);
         check_structure(&s);
         check_rays(&s, &random_rays(seed, 200, [0.0; 3], 8.0));
@@ -397,11 +405,7 @@ fn interleaved_ray_queries_equal_single_ray_traces() {
 fn rays_with_nan_or_infinite_components_trace_like_brute_force() {
     let t = triangle([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
     let far_t = triangle([5.0, 0.0, 0.0], [6.0, 0.0, 0.0], [5.0, 1.0, 0.0]);
-    let sphere = Sphere {
-        center: [0.0, 3.0, 0.0],
-        radius: 0.5,
-        ..Default::default()
-    };
+    let sphere = sphere([0.0, 3.0, 0.0], 0.5);
     let scene = scene_of(vec![t, far_t], vec![sphere]);
     assert_ne!(
         scene.bvh.nodes[0].occupied, 0b1111,
@@ -520,11 +524,7 @@ fn block_test_matches_the_one_triangle_test_bit_for_bit() {
 fn block_lanes_that_hold_no_triangle_never_hit() {
     let t = triangle([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
     let u = triangle([0.0, 1.0, 0.0], [1.0, 1.0, 0.0], [0.0, 2.0, 0.0]);
-    let sphere = Sphere {
-        center: [3.0, 0.5, 0.0],
-        radius: 0.5,
-        ..Default::default()
-    };
+    let sphere = sphere([3.0, 0.5, 0.0], 0.5);
     for (what, spheres) in [("empty lane", vec![]), ("sphere lane", vec![sphere])] {
         let scene = scene_of(vec![t, u], spheres);
         assert_eq!(scene.bvh.blocks.len(), 1, "{what}: one block");
