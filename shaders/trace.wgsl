@@ -369,11 +369,19 @@ fn intersect_triangle_watertight(ray: Ray, shear: Shear, a: vec3<f32>, b: vec3<f
     return vec3<f32>(t, v / det, w / det);
 }
 
-// (t, u, v) per lane of a leaf block's four triangles, as in the columns.
+// A leaf block's four lanes after intersect_triangle_block: t per lane (FAR
+// where it misses), and what u and v are divided from, since only a
+// recorded hit needs them.
 struct BlockHits {
     t: vec4<f32>,
-    u: vec4<f32>,
     v: vec4<f32>,
+    w: vec4<f32>,
+    det: vec4<f32>,
+}
+
+// (u, v) of lane `lane`, as intersect_triangle_watertight gives them.
+fn block_uv(lanes: BlockHits, lane: u32) -> vec2<f32> {
+    return vec2<f32>(lanes.v[lane] / lanes.det[lane], lanes.w[lane] / lanes.det[lane]);
 }
 
 // intersect_triangle_watertight on a block's four lanes at once, the same
@@ -400,7 +408,7 @@ fn intersect_triangle_block(ray: Ray, shear: Shear, block: u32) -> BlockHits {
     let det = u + v + w;
     let t = (u * shear.s.z * az + v * shear.s.z * bz + w * shear.s.z * cz) / det;
     let hit = !outside & (det != zero) & (t > vec4<f32>(ray.tmin)) & (t < vec4<f32>(ray.tmax));
-    return BlockHits(select(vec4<f32>(FAR), t, hit), v / det, w / det);
+    return BlockHits(select(vec4<f32>(FAR), t, hit), v, w, det);
 }
 
 // Nearest root of |o + t·d − c|² = r² inside (tmin, tmax); FAR on a miss.
@@ -479,7 +487,8 @@ fn record_block_hits(
             // vertices.
             if lanes.t[lane] < (*ray).tmax && prims[lane] < params.num_triangles {
                 (*ray).tmax = lanes.t[lane];
-                *hit = Hit(lanes.t[lane], prims[lane], lanes.u[lane], lanes.v[lane]);
+                let uv = block_uv(lanes, lane);
+                *hit = Hit(lanes.t[lane], prims[lane], uv.x, uv.y);
                 recorded = true;
             }
         }
@@ -495,15 +504,22 @@ fn record_block_hits(
     return recorded;
 }
 
-// Distances at which the ray enters the node's four child boxes within
-// (tmin, tmax), FAR where it misses one (and for an empty slot's inverted
-// box, unless the ray has a NaN or infinite component: traversal masks
-// empty slots). Written
+// A node's four child boxes after intersect_boxes: where the ray enters each
+// (meaningful for entered ones only), and bit i set where it enters box i
+// within (tmin, tmax).
+struct BoxHits {
+    t: vec4<f32>,
+    entered: u32,
+}
+
+// Which of the node's four child boxes the ray enters within (tmin, tmax),
+// and where (an empty slot's inverted box is never entered unless the ray
+// has a NaN or infinite component: traversal masks empty slots). Written
 // with select on a comparison rather than WGSL's min/max, whose result for
 // a NaN operand is unspecified: a slab whose plane holds the origin of a ray
 // parallel to it gives 0·∞ = NaN, and a NaN comparison is false on every
 // device, so such a slab is ignored the same way everywhere.
-fn intersect_boxes(ray: Ray, inv_dir: vec3<f32>, node: BvhNode) -> vec4<f32> {
+fn intersect_boxes(ray: Ray, inv_dir: vec3<f32>, node: BvhNode) -> BoxHits {
     var t_near = vec4<f32>(ray.tmin);
     var t_far = vec4<f32>(ray.tmax);
     for (var axis = 0u; axis < 3u; axis++) {
@@ -517,7 +533,11 @@ fn intersect_boxes(ray: Ray, inv_dir: vec3<f32>, node: BvhNode) -> vec4<f32> {
         t_near = select(t_near, near, near > t_near);
         t_far = select(t_far, far, far < t_far);
     }
-    return select(vec4<f32>(FAR), t_near, t_near <= t_far);
+    // Two comparisons side by side rather than one on a select of t_near,
+    // as on the CPU, whose critical path this is.
+    let inside = (t_near <= t_far) & (t_near < vec4<f32>(ray.tmax));
+    let bits = select(vec4<u32>(0u), vec4<u32>(1u, 2u, 4u, 8u), inside);
+    return BoxHits(t_near, bits.x | bits.y | bits.z | bits.w);
 }
 
 // Closest hit through the BVH, nearest child first; with `any_hit`, the
@@ -544,12 +564,9 @@ fn trace_bvh(ray_in: Ray, shear: Shear, any_hit: bool) -> Hit {
             }
         } else {
             let node = bvh_node_at(child);
-            let t = intersect_boxes(ray, inv_dir, node);
-            var entered = 0u;
-            for (var slot = 0u; slot < 4u; slot++) {
-                entered |= select(0u, 1u << slot, t[slot] < ray.tmax);
-            }
-            entered &= node.occupied;
+            let boxes = intersect_boxes(ray, inv_dir, node);
+            let t = boxes.t;
+            var entered = boxes.entered & node.occupied;
             if entered != 0u {
                 // The lowest entered slot.
                 let first = firstTrailingBit(entered);

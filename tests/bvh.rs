@@ -317,9 +317,11 @@ fn slab_test_of_four_boxes_matches_a_plain_one() {
             let leaf = leaf_ref(slot as u32, 1);
             node.set_child(slot, leaf, p.min(q).to_array(), p.max(q).to_array());
         }
-        let t = intersect_boxes(ray, ray.dir.recip(), &node).to_array();
-        assert_eq!(t[3], FAR, "an empty slot was entered by {ray:?}");
-        for (slot, &t_slot) in t.iter().enumerate().take(3) {
+        let boxes = intersect_boxes(ray, ray.dir.recip(), &node);
+        assert_eq!(boxes.entered & 8, 0, "an empty slot was entered by {ray:?}");
+        for slot in 0..3 {
+            let t_slot = boxes.t[slot];
+            let hit = boxes.entered & (1 << slot) != 0;
             let (lo, hi) = node.child_bounds(slot);
             let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
             let (mut near, mut far) = (ray.tmin as f64, ray.tmax as f64);
@@ -330,12 +332,13 @@ fn slab_test_of_four_boxes_matches_a_plain_one() {
             }
             if near < far * (1.0 - 1e-5) {
                 entered += 1;
+                assert!(hit, "slot {slot} missed, exact: hit, {ray:?}");
                 assert!(
                     (t_slot as f64 - near).abs() <= 1e-5 * near.abs().max(1e-3),
                     "slot {slot}: {t_slot} vs exact {near} for {ray:?}"
                 );
             } else if near > far * (1.0 + 1e-5) {
-                assert_eq!(t_slot, FAR, "slot {slot} entered, exact: miss, {ray:?}");
+                assert!(!hit, "slot {slot} entered, exact: miss, {ray:?}");
             }
         }
     }
@@ -351,8 +354,12 @@ fn slab_test_of_four_boxes_matches_a_plain_one() {
             dir,
             tmax: FAR,
         };
-        let t = intersect_boxes(&ray, ray.dir.recip(), &node).to_array();
-        assert_eq!(t[0], 1.0, "grazing ray with direction {dir:?}");
+        let boxes = intersect_boxes(&ray, ray.dir.recip(), &node);
+        assert_eq!(
+            (boxes.entered & 1, boxes.t[0]),
+            (1, 1.0),
+            "grazing ray with direction {dir:?}"
+        );
     }
 }
 
@@ -489,8 +496,8 @@ fn block_test_matches_the_one_triangle_test_bit_for_bit() {
         let n = if i % 2 == 0 { 4 } else { 3 };
         let block = PrimBlock::new(&[0, 1, 2, 3], &triangles[..n]);
         let shear = ray_shear(ray.dir);
-        let (t, u, v) = intersect_triangle_block(ray, &shear, &block);
-        let (t, u, v) = (t.to_array(), u.to_array(), v.to_array());
+        let lanes = intersect_triangle_block(ray, &shear, &block);
+        let t = lanes.t.to_array();
         for lane in 0..4 {
             let expected = if lane < n {
                 let [a, b, c] = [0, 1, 2].map(|k| p(lane, k));
@@ -504,8 +511,9 @@ fn block_test_matches_the_one_triangle_test_bit_for_bit() {
                 "lane {lane} t, {ray:?}"
             );
             if expected.0 != FAR {
+                let (u, v) = lanes.uv(lane);
                 assert_eq!(
-                    (u[lane].to_bits(), v[lane].to_bits()),
+                    (u.to_bits(), v.to_bits()),
                     (expected.1.to_bits(), expected.2.to_bits()),
                     "lane {lane} u, v, {ray:?}"
                 );

@@ -279,19 +279,20 @@ impl<'a> Kernel<'a> {
         let mut recorded = false;
         let num_triangles = scene.triangles.len() as u32;
         if watertight && num_triangles > 0 {
-            let (t, u, v) = intersect_triangle_block(ray, shear, block);
-            let (t, u, v) = (t.to_array(), u.to_array(), v.to_array());
+            let lanes = intersect_triangle_block(ray, shear, block);
+            let t = lanes.t.to_array();
             for lane in 0..4 {
                 // Only triangle lanes (the id test also drops empty ones): a
                 // GPU that fuses multiply-adds can see a hit in a lane of
                 // zero vertices.
                 if t[lane] < ray.tmax && block.prims[lane] < num_triangles {
                     ray.tmax = t[lane];
+                    let (u, v) = lanes.uv(lane);
                     *hit = Hit {
                         t: t[lane],
                         prim: block.prims[lane],
-                        u: u[lane],
-                        v: v[lane],
+                        u,
+                        v,
                     };
                     recorded = true;
                 }
@@ -351,9 +352,8 @@ impl<'a> Kernel<'a> {
             }
         } else {
             let node = &bvh.nodes[*child as usize];
-            let t_boxes = intersect_boxes(ray, *inv_dir, node);
-            let mut entered = t_boxes.cmplt(Vec4::splat(ray.tmax)).bitmask();
-            entered &= node.occupied;
+            let boxes = intersect_boxes(ray, *inv_dir, node);
+            let mut entered = boxes.entered & node.occupied;
             if entered != 0 {
                 // The lowest entered slot.
                 let first = entered.trailing_zeros() as usize;
@@ -365,7 +365,7 @@ impl<'a> Kernel<'a> {
                 }
                 // Several: push them sorted, farthest deepest, then visit the
                 // nearest at once.
-                let t = t_boxes.to_array();
+                let t = boxes.t.to_array();
                 let base = *sp;
                 stack[*sp].write((node.children[first], t[first]));
                 *sp += 1;
@@ -692,12 +692,32 @@ pub fn intersect_triangle_watertight(
     (t, v / det, w / det)
 }
 
+/// A leaf block's four lanes after `intersect_triangle_block`: t per lane
+/// (FAR where it misses), and what u and v are divided from, since only a
+/// recorded hit needs them.
+#[derive(Clone, Copy, Debug)]
+pub struct BlockHits {
+    pub t: Vec4,
+    v: Vec4,
+    w: Vec4,
+    det: Vec4,
+}
+
+impl BlockHits {
+    /// (u, v) of lane `lane`, as `intersect_triangle_watertight` gives them.
+    #[inline(always)]
+    pub fn uv(&self, lane: usize) -> (Real, Real) {
+        let det = self.det.to_array()[lane];
+        (self.v.to_array()[lane] / det, self.w.to_array()[lane] / det)
+    }
+}
+
 /// `intersect_triangle_watertight` on a block's four lanes at once, the
-/// same operations in the same order in each: (t, u, v) per lane, t = FAR
-/// where a lane misses (unfused arithmetic, as here, always misses a lane
-/// of zero vertices; `record_block_hits` looks only at triangle lanes).
+/// same operations in the same order in each: t per lane, FAR where a lane
+/// misses (unfused arithmetic, as here, always misses a lane of zero
+/// vertices; `record_block_hits` looks only at triangle lanes).
 #[inline(always)]
-pub fn intersect_triangle_block(ray: &Ray, shear: &Shear, block: &PrimBlock) -> (Vec4, Vec4, Vec4) {
+pub fn intersect_triangle_block(ray: &Ray, shear: &Shear, block: &PrimBlock) -> BlockHits {
     let [kx, ky, kz] = shear.axes;
     let origin = ray.origin.to_array();
     // Coordinate a of vertex k relative to the origin.
@@ -726,7 +746,12 @@ pub fn intersect_triangle_block(ray: &Ray, shear: &Shear, block: &PrimBlock) -> 
         & det.cmpne(zero)
         & t.cmpgt(Vec4::splat(ray.tmin))
         & t.cmplt(Vec4::splat(ray.tmax));
-    (Vec4::select(hit, t, Vec4::splat(FAR)), v / det, w / det)
+    BlockHits {
+        t: Vec4::select(hit, t, Vec4::splat(FAR)),
+        v,
+        w,
+        det,
+    }
 }
 
 /// Nearest root of |o + t·d − c|² = r² inside (tmin, tmax); FAR on a miss.
@@ -754,14 +779,22 @@ pub fn intersect_sphere(ray: &Ray, center: Vec3, radius: Real) -> Real {
     FAR
 }
 
-/// Distances at which the ray enters the node's four child boxes within
-/// (tmin, tmax), FAR where it misses one (and for an empty slot's inverted
-/// box, unless the ray has a NaN or infinite component: traversal masks
-/// empty slots). A NaN slab
-/// is ignored as in the shader: `greater_of`/`lesser_of` keep the running
-/// bound when the comparison fails.
+/// A node's four child boxes after `intersect_boxes`.
+#[derive(Clone, Copy, Debug)]
+pub struct BoxHits {
+    /// Where the ray enters each box (meaningful for entered ones only).
+    pub t: Vec4,
+    /// Bit i set: the ray enters box i within (tmin, tmax).
+    pub entered: u32,
+}
+
+/// Which of the node's four child boxes the ray enters within (tmin, tmax),
+/// and where (an empty slot's inverted box is never entered unless the ray
+/// has a NaN or infinite component: traversal masks empty slots). A NaN
+/// slab is ignored as in the shader: `greater_of`/`lesser_of` keep the
+/// running bound when the comparison fails.
 #[inline(always)]
-pub fn intersect_boxes(ray: &Ray, inv_dir: Vec3, node: &BvhNode) -> Vec4 {
+pub fn intersect_boxes(ray: &Ray, inv_dir: Vec3, node: &BvhNode) -> BoxHits {
     let origin = ray.origin.to_array();
     let inv_dir = inv_dir.to_array();
     let mut t_near = Vec4::splat(ray.tmin);
@@ -777,7 +810,13 @@ pub fn intersect_boxes(ray: &Ray, inv_dir: Vec3, node: &BvhNode) -> Vec4 {
         t_near = greater_of(near, t_near);
         t_far = lesser_of(far, t_far);
     }
-    Vec4::select(t_near.cmple(t_far), t_near, Vec4::splat(FAR))
+    // Two comparisons side by side rather than one on a select of t_near:
+    // this is the critical path of a node visit.
+    let entered = t_near.cmple(t_far) & t_near.cmplt(Vec4::splat(ray.tmax));
+    BoxHits {
+        t: t_near,
+        entered: entered.bitmask(),
+    }
 }
 
 fn sign_nonzero(x: Real) -> Real {

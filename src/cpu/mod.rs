@@ -106,7 +106,7 @@ pub fn render(scene: &Scene, precision: Precision, progress: &Progress) -> Rende
         .zip(variance.par_chunks_mut(width))
         .enumerate()
         .for_each(|(y, ((rgb_row, prim_row), variance_row))| {
-            with_avx2(
+            with_simd(
                 #[inline(always)]
                 || {
                     for x in 0..width {
@@ -157,7 +157,7 @@ pub fn trace_rays(scene: &Scene, rays: &[layout::Ray], any_hit: bool) -> Vec<lay
         .par_chunks_mut(CHUNK)
         .zip(rays.par_chunks(CHUNK))
         .for_each(|(hits, rays)| {
-            with_avx2(
+            with_simd(
                 #[inline(always)]
                 || trace_chunk(&kernel, rays, hits, any_hit),
             )
@@ -167,19 +167,33 @@ pub fn trace_rays(scene: &Scene, rays: &[layout::Ray], any_hit: bool) -> Vec<lay
     hits
 }
 
-/// Runs `f` (an `#[inline(always)]` closure) compiled for AVX2 where the CPU
-/// has it: the kernel's functions are inlined into it, so they run the same
-/// IEEE operations (the same results) in fewer instructions.
+/// Runs `f` (an `#[inline(always)]` closure) compiled for the widest vector
+/// instructions the CPU has, AVX-512 (with VL, so 128-bit operations get
+/// its embedded broadcasts and mask registers; and BMI) or AVX2: the kernel's
+/// functions are inlined into it, so they run the same IEEE operations (the
+/// same results) in fewer instructions.
 #[inline(always)]
-fn with_avx2<R>(f: impl FnOnce() -> R) -> R {
+fn with_simd<R>(f: impl FnOnce() -> R) -> R {
     #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("avx2") {
-        #[target_feature(enable = "avx2")]
-        fn avx2<R>(f: impl FnOnce() -> R) -> R {
-            f()
+    {
+        use std::is_x86_feature_detected as has;
+        let avx512 = has!("avx512f") && has!("avx512vl") && has!("avx512dq") && has!("avx512bw");
+        if avx512 && has!("bmi1") && has!("bmi2") && has!("lzcnt") {
+            #[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,bmi1,bmi2,lzcnt")]
+            fn avx512<R>(f: impl FnOnce() -> R) -> R {
+                f()
+            }
+            // SAFETY: the CPU has the features `avx512` is compiled for.
+            return unsafe { avx512(f) };
         }
-        // SAFETY: the CPU has the features `avx2` is compiled for.
-        return unsafe { avx2(f) };
+        if has!("avx2") {
+            #[target_feature(enable = "avx2")]
+            fn avx2<R>(f: impl FnOnce() -> R) -> R {
+                f()
+            }
+            // SAFETY: the CPU has the features `avx2` is compiled for.
+            return unsafe { avx2(f) };
+        }
     }
     f()
 }
