@@ -504,6 +504,49 @@ fn record_block_hits(
     return recorded;
 }
 
+// What the slab test needs of a ray, computed once per ray (ray_slabs): per
+// axis, the reciprocal direction (widened by the slack for exit distances),
+// the offsets that make a plane's distance one multiply-add, and which of the
+// two planes the ray meets first.
+struct Slabs {
+    inv_dir: vec3<f32>,
+    inv_dir_far: vec3<f32>,
+    // −origin·inv_dir (or ·inv_dir_far), moved down (near) or up (far) by
+    // more than the rounding of that product, of this sum and of an unfused
+    // multiply-add (WGSL's fma may be either): a plane's distance
+    // fma(plane, inv_dir, offset) then errs only by rounding relative to
+    // itself, which the slack covers for exit distances.
+    near_offset: vec3<f32>,
+    far_offset: vec3<f32>,
+    // Whether the ray runs toward −axis: its near plane is the maximum.
+    flip: vec3<bool>,
+}
+
+// Direction components smaller than this count as this, with their sign, in
+// the slab test (as in Embree): their reciprocals stay finite, so the offsets
+// do (no ∞ − ∞), and a ray parallel to an axis has huge slab distances of the
+// right signs, or one near 0 for a plane that holds its origin.
+const MIN_SLAB_DIR: f32 = 1e-18;
+
+fn ray_slabs(ray: Ray) -> Slabs {
+    // The sign bit, not a comparison, so that −0 counts as negative.
+    let sign_bits = bitcast<vec3<u32>>(ray.dir) & vec3<u32>(0x80000000u);
+    let tiny = bitcast<vec3<f32>>(vec3<u32>(bitcast<u32>(MIN_SLAB_DIR)) | sign_bits);
+    let dir = select(ray.dir, tiny, abs(ray.dir) < vec3<f32>(MIN_SLAB_DIR));
+    let inv_dir = 1.0 / dir;
+    let inv_dir_far = inv_dir * BOX_SLACK;
+    let near = -ray.origin * inv_dir;
+    let far = -ray.origin * inv_dir_far;
+    let margin = 8.0 * MACHINE_EPSILON;
+    return Slabs(
+        inv_dir,
+        inv_dir_far,
+        near - abs(near) * margin,
+        far + abs(far) * margin,
+        dir < vec3<f32>(0.0),
+    );
+}
+
 // A node's four child boxes after intersect_boxes: where the ray enters each
 // (meaningful for entered ones only), and bit i set where it enters box i
 // within (tmin, tmax).
@@ -514,22 +557,20 @@ struct BoxHits {
 
 // Which of the node's four child boxes the ray enters within (tmin, tmax),
 // and where (an empty slot's inverted box is never entered unless the ray
-// has a NaN or infinite component: traversal masks empty slots). Written
-// with select on a comparison rather than WGSL's min/max, whose result for
-// a NaN operand is unspecified: a slab whose plane holds the origin of a ray
-// parallel to it gives 0·∞ = NaN, and a NaN comparison is false on every
-// device, so such a slab is ignored the same way everywhere.
-fn intersect_boxes(ray: Ray, inv_dir: vec3<f32>, node: BvhNode) -> BoxHits {
+// has a NaN or infinite component: traversal masks empty slots). Each
+// plane's distance is one multiply-add. Written with select on a comparison
+// rather than WGSL's min/max, whose result for a NaN operand is unspecified:
+// a NaN comparison is false on every device, so a NaN slab (from a NaN ray)
+// is ignored the same way everywhere.
+fn intersect_boxes(ray: Ray, slabs: Slabs, node: BvhNode) -> BoxHits {
     var t_near = vec4<f32>(ray.tmin);
     var t_far = vec4<f32>(ray.tmax);
     for (var axis = 0u; axis < 3u; axis++) {
-        // The slab's near plane is its minimum unless the ray runs toward −axis.
-        let flip = inv_dir[axis] < 0.0;
+        let flip = slabs.flip[axis];
         let near_plane = select(node.bounds[2u * axis], node.bounds[2u * axis + 1u], flip);
         let far_plane = select(node.bounds[2u * axis + 1u], node.bounds[2u * axis], flip);
-        let near = (near_plane - ray.origin[axis]) * inv_dir[axis];
-        // The slack scales the reciprocal, which a ray's loop computes once.
-        let far = (far_plane - ray.origin[axis]) * (inv_dir[axis] * BOX_SLACK);
+        let near = fma(near_plane, vec4<f32>(slabs.inv_dir[axis]), vec4<f32>(slabs.near_offset[axis]));
+        let far = fma(far_plane, vec4<f32>(slabs.inv_dir_far[axis]), vec4<f32>(slabs.far_offset[axis]));
         t_near = select(t_near, near, near > t_near);
         t_far = select(t_far, far, far < t_far);
     }
@@ -545,7 +586,7 @@ fn intersect_boxes(ray: Ray, inv_dir: vec3<f32>, node: BvhNode) -> BoxHits {
 fn trace_bvh(ray_in: Ray, shear: Shear, any_hit: bool) -> Hit {
     var ray = ray_in;
     var hit = miss();
-    let inv_dir = 1.0 / ray.dir;
+    let slabs = ray_slabs(ray);
     // Entries: a node index or leaf reference, and the distance at which the
     // ray enters its box.
     var stack_child: array<u32, STACK_SIZE>;
@@ -564,7 +605,7 @@ fn trace_bvh(ray_in: Ray, shear: Shear, any_hit: bool) -> Hit {
             }
         } else {
             let node = bvh_node_at(child);
-            let boxes = intersect_boxes(ray, inv_dir, node);
+            let boxes = intersect_boxes(ray, slabs, node);
             let t = boxes.t;
             var entered = boxes.entered & node.occupied;
             if entered != 0u {

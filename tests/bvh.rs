@@ -303,7 +303,7 @@ fn gpu_bvh_and_brute_force_render_the_same_image() {
 /// slots; a ray lying in a face's plane, parallel to it, still enters.
 #[test]
 fn slab_test_of_four_boxes_matches_a_plain_one() {
-    use lambert::cpu::f32::intersect_boxes;
+    use lambert::cpu::f32::{intersect_boxes, ray_slabs};
     use lambert::layout::{BvhNode, FAR, leaf_ref};
     let rays = random_rays(11, 4000, [0.0; 3], 4.0);
     let boxes = random_rays(12, 4000, [0.0; 3], 2.0);
@@ -317,7 +317,7 @@ fn slab_test_of_four_boxes_matches_a_plain_one() {
             let leaf = leaf_ref(slot as u32, 1);
             node.set_child(slot, leaf, p.min(q).to_array(), p.max(q).to_array());
         }
-        let boxes = intersect_boxes(ray, ray.dir.recip(), &node);
+        let boxes = intersect_boxes(ray, &ray_slabs(ray), &node);
         assert_eq!(boxes.entered & 8, 0, "an empty slot was entered by {ray:?}");
         for slot in 0..3 {
             let t_slot = boxes.t[slot];
@@ -343,10 +343,25 @@ fn slab_test_of_four_boxes_matches_a_plain_one() {
         }
     }
     assert!(entered > 100, "too few rays entered a box: {entered}");
-    // Along the face z = 1 of a unit box, parallel to it: 0·∞ = NaN in that
-    // slab, which the test ignores, so the ray enters at x = 0.
+    // Parallel to the z slab of a unit box: outside it, the ray misses;
+    // along its face z = 1 (the plane's distance near 0, the other's huge),
+    // it enters at x = 0.
     let mut node = BvhNode::EMPTY;
     node.set_child(0, leaf_ref(0, 1), [0.0; 3], [1.0; 3]);
+    for (z, dir) in [(1.5, 0.0), (-0.5, 0.0), (1.5, -0.0), (-1e-3, -0.0)] {
+        let ray = Ray {
+            origin: Vec3::new(-1.0, 0.5, z),
+            tmin: 0.0,
+            dir: Vec3::new(1.0, 0.0, dir),
+            tmax: FAR,
+        };
+        let boxes = intersect_boxes(&ray, &ray_slabs(&ray), &node);
+        assert_eq!(
+            boxes.entered & 1,
+            0,
+            "parallel ray outside the box: {ray:?}"
+        );
+    }
     for dir in [Vec3::new(1.0, 0.0, 0.0), Vec3::new(1.0, 0.0, -0.0)] {
         let ray = Ray {
             origin: Vec3::new(-1.0, 0.5, 1.0),
@@ -354,11 +369,12 @@ fn slab_test_of_four_boxes_matches_a_plain_one() {
             dir,
             tmax: FAR,
         };
-        let boxes = intersect_boxes(&ray, ray.dir.recip(), &node);
-        assert_eq!(
-            (boxes.entered & 1, boxes.t[0]),
-            (1, 1.0),
-            "grazing ray with direction {dir:?}"
+        let boxes = intersect_boxes(&ray, &ray_slabs(&ray), &node);
+        assert_eq!(boxes.entered & 1, 1, "grazing ray with direction {dir:?}");
+        assert!(
+            (boxes.t[0] - 1.0).abs() < 1e-6,
+            "grazing ray with direction {dir:?} enters at {}",
+            boxes.t[0]
         );
     }
 }

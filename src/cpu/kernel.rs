@@ -95,7 +95,7 @@ pub(crate) struct Traversal {
     /// tmax shrinks to the closest hit so far.
     pub ray: Ray,
     pub hit: Hit,
-    inv_dir: Vec3,
+    slabs: Slabs,
     shear: Shear,
     any_hit: bool,
     /// Entries on the stack.
@@ -110,7 +110,7 @@ impl Traversal {
         Traversal {
             ray,
             hit: miss(),
-            inv_dir: ray.dir.recip(),
+            slabs: ray_slabs(&ray),
             shear,
             any_hit,
             sp: 0,
@@ -337,7 +337,7 @@ impl<'a> Kernel<'a> {
         let Traversal {
             ray,
             hit,
-            inv_dir,
+            slabs,
             shear,
             any_hit,
             sp,
@@ -352,7 +352,7 @@ impl<'a> Kernel<'a> {
             }
         } else {
             let node = &bvh.nodes[*child as usize];
-            let boxes = intersect_boxes(ray, *inv_dir, node);
+            let boxes = intersect_boxes(ray, slabs, node);
             let mut entered = boxes.entered & node.occupied;
             if entered != 0 {
                 // The lowest entered slot.
@@ -779,6 +779,56 @@ pub fn intersect_sphere(ray: &Ray, center: Vec3, radius: Real) -> Real {
     FAR
 }
 
+/// What the slab test needs of a ray, computed once per ray (`ray_slabs`):
+/// per axis, the reciprocal direction (widened by the slack for exit
+/// distances), the offsets that make a plane's distance one multiply-add,
+/// and which of the two planes the ray meets first.
+#[derive(Clone, Copy, Debug)]
+pub struct Slabs {
+    inv_dir: [Real; 3],
+    inv_dir_far: [Real; 3],
+    /// −origin·inv_dir (or ·inv_dir_far), moved down (near) or up (far) by
+    /// more than the rounding of that product, of this sum and of an
+    /// unfused multiply-add (WGSL's fma may be either): a plane's distance
+    /// `plane·inv_dir + offset` then errs only by rounding relative to
+    /// itself, which the slack covers for exit distances.
+    near_offset: [Real; 3],
+    far_offset: [Real; 3],
+    /// Whether the ray runs toward −axis: its near plane is the maximum.
+    flip: [bool; 3],
+}
+
+/// Direction components smaller than this count as this, with their sign,
+/// in the slab test (as in Embree): their reciprocals stay finite, so the
+/// offsets do (no ∞ − ∞), and a ray parallel to an axis has huge slab
+/// distances of the right signs, or one near 0 for a plane that holds its
+/// origin.
+const MIN_SLAB_DIR: Real = 1e-18;
+
+/// The ray's `Slabs`, as in the shader.
+#[inline(always)]
+pub fn ray_slabs(ray: &Ray) -> Slabs {
+    let dir = ray.dir.to_array().map(|d| {
+        if d.abs() < MIN_SLAB_DIR {
+            MIN_SLAB_DIR.copysign(d)
+        } else {
+            d
+        }
+    });
+    let inv_dir = Vec3::from_array(dir).recip();
+    let inv_dir_far = inv_dir * BOX_SLACK;
+    let near = -ray.origin * inv_dir;
+    let far = -ray.origin * inv_dir_far;
+    let margin = 8.0 * MACHINE_EPSILON;
+    Slabs {
+        inv_dir: inv_dir.to_array(),
+        inv_dir_far: inv_dir_far.to_array(),
+        near_offset: (near - near.abs() * margin).to_array(),
+        far_offset: (far + far.abs() * margin).to_array(),
+        flip: dir.map(|d| d < 0.0),
+    }
+}
+
 /// A node's four child boxes after `intersect_boxes`.
 #[derive(Clone, Copy, Debug)]
 pub struct BoxHits {
@@ -790,23 +840,26 @@ pub struct BoxHits {
 
 /// Which of the node's four child boxes the ray enters within (tmin, tmax),
 /// and where (an empty slot's inverted box is never entered unless the ray
-/// has a NaN or infinite component: traversal masks empty slots). A NaN
-/// slab is ignored as in the shader: `greater_of`/`lesser_of` keep the
-/// running bound when the comparison fails.
+/// has a NaN or infinite component: traversal masks empty slots). Each
+/// plane's distance is one fused multiply-add. A NaN slab (from a NaN ray)
+/// is ignored as in the shader: `greater_of`/`lesser_of` keep the running
+/// bound when the comparison fails.
 #[inline(always)]
-pub fn intersect_boxes(ray: &Ray, inv_dir: Vec3, node: &BvhNode) -> BoxHits {
-    let origin = ray.origin.to_array();
-    let inv_dir = inv_dir.to_array();
+pub fn intersect_boxes(ray: &Ray, slabs: &Slabs, node: &BvhNode) -> BoxHits {
     let mut t_near = Vec4::splat(ray.tmin);
     let mut t_far = Vec4::splat(ray.tmax);
     for axis in 0..3 {
-        // The slab's near plane is its minimum unless the ray runs toward −axis.
-        let flip = (inv_dir[axis] < 0.0) as usize;
+        let flip = slabs.flip[axis] as usize;
         let near_plane = vec4(node.bounds[2 * axis + flip]);
         let far_plane = vec4(node.bounds[2 * axis + 1 - flip]);
-        let near = (near_plane - Vec4::splat(origin[axis])) * Vec4::splat(inv_dir[axis]);
-        // The slack scales the reciprocal, which a ray's loop computes once.
-        let far = (far_plane - Vec4::splat(origin[axis])) * Vec4::splat(inv_dir[axis] * BOX_SLACK);
+        let near = near_plane.mul_add(
+            Vec4::splat(slabs.inv_dir[axis]),
+            Vec4::splat(slabs.near_offset[axis]),
+        );
+        let far = far_plane.mul_add(
+            Vec4::splat(slabs.inv_dir_far[axis]),
+            Vec4::splat(slabs.far_offset[axis]),
+        );
         t_near = greater_of(near, t_near);
         t_far = lesser_of(far, t_far);
     }

@@ -138,7 +138,10 @@ pub fn render_pixel_list(scene: &Scene, pixels: &[[u32; 2]]) -> Vec<[::core::pri
     pixels
         .par_iter()
         .map(|&[x, y]| {
-            let (c, _, v) = pixel(&kernel32, &kernel64, Precision::F32, x, y);
+            let (c, _, v) = with_simd(
+                #[inline(always)]
+                || pixel(&kernel32, &kernel64, Precision::F32, x, y),
+            );
             [c[0], c[1], c[2], v]
         })
         .collect()
@@ -234,10 +237,14 @@ fn trace_chunk(
         }
         return;
     }
-    let start = |i: usize| {
-        let (ray, shear) = f32::prepare_ray(f32::Ray::from_query(&rays[i]));
+    // A function, not a closure, so that it can be inlined: it then runs
+    // with the kernel's vector instructions, and builds the traversal in
+    // place rather than returning it through memory.
+    #[inline(always)]
+    fn start(ray: &layout::Ray, any_hit: bool) -> f32::Traversal {
+        let (ray, shear) = f32::prepare_ray(f32::Ray::from_query(ray));
         f32::Traversal::new(ray, shear, any_hit)
-    };
+    }
     // Lane k traces ray index[k] with traversals[k] and stacks[k]; a lane
     // whose ray is done takes the next one.
     let lanes = INTERLEAVED_RAYS.min(rays.len());
@@ -245,7 +252,7 @@ fn trace_chunk(
         std::array::from_fn(|_| f32::new_stack());
     let mut index: [usize; INTERLEAVED_RAYS] = std::array::from_fn(|k| k);
     let mut traversals: [f32::Traversal; INTERLEAVED_RAYS] =
-        std::array::from_fn(|k| start(k.min(rays.len() - 1)));
+        std::array::from_fn(|k| start(&rays[k.min(rays.len() - 1)], any_hit));
     let mut next = lanes;
     let mut active = lanes;
     while active > 0 {
@@ -259,7 +266,7 @@ fn trace_chunk(
             hits[index[k]].write(answer(traversals[k].hit));
             if next < rays.len() {
                 index[k] = next;
-                traversals[k] = start(next);
+                traversals[k] = start(&rays[next], any_hit);
                 next += 1;
             } else {
                 index[k] = usize::MAX;
@@ -275,7 +282,10 @@ pub fn trace_rays_f64(scene: &Scene, rays: &[layout::Ray], any_hit: bool) -> Vec
     rays.par_iter()
         .with_min_len(1024)
         .map(|ray| {
-            let hit = kernel.trace(f64::Ray::from_query(ray), any_hit);
+            let hit = with_simd(
+                #[inline(always)]
+                || kernel.trace(f64::Ray::from_query(ray), any_hit),
+            );
             if hit.prim == NO_HIT {
                 f64::Hit {
                     t: ::core::primitive::f64::INFINITY,
