@@ -379,12 +379,37 @@ fn slab_test_of_four_boxes_matches_a_plain_one() {
     }
 }
 
-/// `cpu::trace_rays` traces two rays at a time per thread, a node visit
-/// each in turn; every ray must get exactly the hit it gets alone.
+/// `cpu::trace_rays` traces two or four rays at a time per thread, a node
+/// visit each in turn; every ray must get exactly the hit it gets alone.
 #[test]
 fn interleaved_ray_queries_equal_single_ray_traces() {
-    for name in ["bunny", "spheres"] {
-        let scene = load(name);
+    // Random small triangles, enough that incoherent rays through their BVH
+    // are traced four at a time rather than two.
+    let soup = scene_of(
+        random_rays(9, 400_000, [0.0; 3], 1.0)
+            .iter()
+            .map(|r| {
+                let (p, d) = (r.origin, 0.01 * r.dir);
+                triangle(
+                    p.into(),
+                    (p + d).into(),
+                    (p + Vec3::new(d.y, d.z, d.x)).into(),
+                )
+            })
+            .collect(),
+        Vec::new(),
+    );
+    let bvh_bytes =
+        std::mem::size_of_val(&soup.bvh.nodes[..]) + std::mem::size_of_val(&soup.bvh.blocks[..]);
+    assert!(
+        bvh_bytes > lambert::cpu::LARGE_BVH_BYTES,
+        "{bvh_bytes} bytes"
+    );
+    for (name, scene) in [
+        ("bunny", load("bunny")),
+        ("spheres", load("spheres")),
+        ("soup", soup),
+    ] {
         let kernel = Kernel::new(&scene);
         let root = scene.bvh.bounds().expect("a non-empty scene");
         let spread = (root.max - root.min).max_element();

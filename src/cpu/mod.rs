@@ -153,6 +153,12 @@ pub fn render_pixel_list(scene: &Scene, pixels: &[[u32; 2]]) -> Vec<[::core::pri
 pub fn trace_rays(scene: &Scene, rays: &[layout::Ray], any_hit: bool) -> Vec<layout::Hit> {
     const CHUNK: usize = 1024;
     let kernel = f32::Kernel::new(scene);
+    let bvh = &scene.bvh;
+    let bvh_bytes = std::mem::size_of_val(&bvh.nodes[..]) + std::mem::size_of_val(&bvh.blocks[..]);
+    // Rays closer than this count as leaving from nearby points.
+    let nearby = bvh
+        .bounds()
+        .map_or(0.0, |b| 0.01 * (b.max - b.min).length());
     // Written by the threads themselves: filling it first on one thread
     // would cost a twentieth of the trace.
     let mut hits = Vec::with_capacity(rays.len());
@@ -160,10 +166,17 @@ pub fn trace_rays(scene: &Scene, rays: &[layout::Ray], any_hit: bool) -> Vec<lay
         .par_chunks_mut(CHUNK)
         .zip(rays.par_chunks(CHUNK))
         .for_each(|(hits, rays)| {
-            with_simd(
-                #[inline(always)]
-                || trace_chunk(&kernel, rays, hits, any_hit),
-            )
+            if bvh_bytes > LARGE_BVH_BYTES && !coherent(rays, nearby) {
+                with_simd(
+                    #[inline(always)]
+                    || trace_chunk::<INTERLEAVED_INCOHERENT_RAYS>(&kernel, rays, hits, any_hit),
+                )
+            } else {
+                with_simd(
+                    #[inline(always)]
+                    || trace_chunk::<INTERLEAVED_RAYS>(&kernel, rays, hits, any_hit),
+                )
+            }
         });
     // SAFETY: trace_chunk wrote every element.
     unsafe { hits.set_len(rays.len()) };
@@ -202,15 +215,47 @@ fn with_simd<R>(f: impl FnOnce() -> R) -> R {
 }
 
 /// Rays one thread traces together through the BVH, a node visit each in
-/// turn, so that one ray's cache misses overlap the other's work. Each ray
+/// turn, so that one ray's cache misses overlap the others' work. Each ray
 /// takes exactly the path it takes alone. Two (docs/benchmarks.md): through
 /// the dragon, incoherent rays gain 60% and camera rays 1–2% over one;
-/// camera rays through a model that stays in cache lose 17%; three or more
-/// cost more in book-keeping than they save.
+/// camera rays through a model that stays in cache lose 17%.
 const INTERLEAVED_RAYS: usize = 2;
 
+/// Incoherent rays through a BVH larger than a core's cache wait on memory
+/// at nearly every node: four in turn hide more of it (the dragon's 1M
+/// random rays: +9–10% over two), while coherent rays, or a BVH that stays
+/// in cache, lose 2–9% to the book-keeping (docs/benchmarks.md).
+const INTERLEAVED_INCOHERENT_RAYS: usize = 4;
+
+/// BVH nodes and blocks above this size count as larger than a core's cache
+/// (L2 is 1–2 MiB a core on current x86 servers; dragon_res4's 1.1 MiB BVH
+/// loses with four rays in turn, dragon_res2's 20 MiB breaks even, the
+/// dragon's 86 MiB gains).
+pub const LARGE_BVH_BYTES: usize = 16 << 20;
+
+/// Whether most neighbouring rays of a chunk leave from nearby points (closer
+/// than `nearby`) in nearly the same direction (within about 8°), as camera
+/// rays and the shadow rays of their hits do: their traversals then share
+/// the nodes they load. Looks at 32 pairs spread over the chunk.
+fn coherent(rays: &[layout::Ray], nearby: f32) -> bool {
+    const PAIRS: usize = 32;
+    let step = (rays.len() / PAIRS).max(1);
+    let (mut pairs, mut similar) = (0, 0);
+    for i in (0..rays.len().saturating_sub(1)).step_by(step) {
+        let (a, b) = (&rays[i], &rays[i + 1]);
+        let (da, db) = (glam::Vec3::from(a.dir), glam::Vec3::from(b.dir));
+        let gap = glam::Vec3::from(a.origin) - glam::Vec3::from(b.origin);
+        let cos = da.dot(db);
+        // cos > 0.99·|da||db|, without the square roots.
+        let aligned = cos > 0.0 && cos * cos > 0.9801 * da.length_squared() * db.length_squared();
+        pairs += 1;
+        similar += (aligned && gap.length_squared() <= nearby * nearby) as usize;
+    }
+    2 * similar >= pairs
+}
+
 #[inline(always)]
-fn trace_chunk(
+fn trace_chunk<const LANES: usize>(
     kernel: &f32::Kernel,
     rays: &[layout::Ray],
     hits: &mut [std::mem::MaybeUninit<layout::Hit>],
@@ -247,11 +292,10 @@ fn trace_chunk(
     }
     // Lane k traces ray index[k] with traversals[k] and stacks[k]; a lane
     // whose ray is done takes the next one.
-    let lanes = INTERLEAVED_RAYS.min(rays.len());
-    let mut stacks: [f32::TraversalStack; INTERLEAVED_RAYS] =
-        std::array::from_fn(|_| f32::new_stack());
-    let mut index: [usize; INTERLEAVED_RAYS] = std::array::from_fn(|k| k);
-    let mut traversals: [f32::Traversal; INTERLEAVED_RAYS] =
+    let lanes = LANES.min(rays.len());
+    let mut stacks: [f32::TraversalStack; LANES] = std::array::from_fn(|_| f32::new_stack());
+    let mut index: [usize; LANES] = std::array::from_fn(|k| k);
+    let mut traversals: [f32::Traversal; LANES] =
         std::array::from_fn(|k| start(&rays[k.min(rays.len() - 1)], any_hit));
     let mut next = lanes;
     let mut active = lanes;
