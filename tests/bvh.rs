@@ -538,8 +538,7 @@ fn block_test_matches_the_one_triangle_test_bit_for_bit() {
         let block = PrimBlock::new(&[0, 1, 2, 3], &triangles[..n]);
         let shear = ray_shear(ray.dir);
         let lanes = intersect_triangle_block(ray, &shear, &block);
-        let t = lanes.t.to_array();
-        for lane in 0..4 {
+        for (lane, t) in lanes.t.to_array().into_iter().enumerate() {
             let expected = if lane < n {
                 let [a, b, c] = [0, 1, 2].map(|k| p(lane, k));
                 intersect_triangle_watertight(ray, &shear, a, b, c)
@@ -547,7 +546,7 @@ fn block_test_matches_the_one_triangle_test_bit_for_bit() {
                 (FAR, 0.0, 0.0)
             };
             assert_eq!(
-                t[lane].to_bits(),
+                t.to_bits(),
                 expected.0.to_bits(),
                 "lane {lane} t, {ray:?}"
             );

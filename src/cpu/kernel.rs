@@ -280,16 +280,15 @@ impl<'a> Kernel<'a> {
         let num_triangles = scene.triangles.len() as u32;
         if watertight && num_triangles > 0 {
             let lanes = intersect_triangle_block(ray, shear, block);
-            let t = lanes.t.to_array();
-            for lane in 0..4 {
+            for (lane, &t) in lanes.t.to_array().iter().enumerate() {
                 // Only triangle lanes (the id test also drops empty ones): a
                 // GPU that fuses multiply-adds can see a hit in a lane of
                 // zero vertices.
-                if t[lane] < ray.tmax && block.prims[lane] < num_triangles {
-                    ray.tmax = t[lane];
+                if t < ray.tmax && block.prims[lane] < num_triangles {
+                    ray.tmax = t;
                     let (u, v) = lanes.uv(lane);
                     *hit = Hit {
-                        t: t[lane],
+                        t,
                         prim: block.prims[lane],
                         u,
                         v,
