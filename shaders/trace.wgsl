@@ -617,8 +617,22 @@ fn trace_bvh(ray_in: Ray, shear: Shear, any_hit: bool) -> Hit {
                     child = node.children[first];
                     continue;
                 }
-                // Several: push them sorted, farthest deepest, then visit the
+                let second = firstTrailingBit(entered);
+                entered &= entered - 1u;
+                if entered == 0u {
+                    // Two: push the farther, visit the nearer (the second on
+                    // a tie, as the sort below orders them).
+                    let near = select(second, first, t[first] < t[second]);
+                    let far = select(first, second, t[first] < t[second]);
+                    stack_child[sp] = node.children[far];
+                    stack_t[sp] = t[far];
+                    sp += 1u;
+                    child = node.children[near];
+                    continue;
+                }
+                // More: push them sorted, farthest deepest, then visit the
                 // nearest at once.
+                entered |= 1u << second;
                 let base = sp;
                 stack_child[sp] = node.children[first];
                 stack_t[sp] = t[first];

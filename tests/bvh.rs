@@ -545,11 +545,7 @@ fn block_test_matches_the_one_triangle_test_bit_for_bit() {
             } else {
                 (FAR, 0.0, 0.0)
             };
-            assert_eq!(
-                t.to_bits(),
-                expected.0.to_bits(),
-                "lane {lane} t, {ray:?}"
-            );
+            assert_eq!(t.to_bits(), expected.0.to_bits(), "lane {lane} t, {ray:?}");
             if expected.0 != FAR {
                 let (u, v) = lanes.uv(lane);
                 assert_eq!(

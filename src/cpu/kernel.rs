@@ -362,9 +362,26 @@ impl<'a> Kernel<'a> {
                     *child = node.children[first];
                     return true;
                 }
-                // Several: push them sorted, farthest deepest, then visit the
-                // nearest at once.
                 let t = boxes.t.to_array();
+                let second = entered.trailing_zeros() as usize;
+                entered &= entered - 1;
+                if entered == 0 {
+                    // Two: push the farther, visit the nearer (the second on
+                    // a tie, as the sort below orders them), with no round
+                    // trip through the stack.
+                    let (near, far) = if t[first] < t[second] {
+                        (first, second)
+                    } else {
+                        (second, first)
+                    };
+                    stack[*sp].write((node.children[far], t[far]));
+                    *sp += 1;
+                    *child = node.children[near];
+                    return true;
+                }
+                // More: push them sorted, farthest deepest, then visit the
+                // nearest at once.
+                entered |= 1 << second;
                 let base = *sp;
                 stack[*sp].write((node.children[first], t[first]));
                 *sp += 1;
