@@ -205,8 +205,16 @@ pub fn ladder(rows: &[LadderRow], stem: &Path) -> Result<()> {
         .iter()
         .flat_map(|r| [ns(r.primary_mrays_per_s), ns(r.shadow_mrays_per_s)])
         .collect();
-    let y_lo = all_ns.iter().cloned().fold(f64::INFINITY, f64::min) / 1.5;
-    let y_hi = all_ns.iter().cloned().fold(0.0, f64::max) * 1.5;
+    // Whole decades: the log axis labels only those it spans in full.
+    let y_lo = 10f64.powf(
+        all_ns
+            .iter()
+            .cloned()
+            .fold(f64::INFINITY, f64::min)
+            .log10()
+            .floor(),
+    );
+    let y_hi = 10f64.powf(all_ns.iter().cloned().fold(0.0, f64::max).log10().ceil());
     let palette = [
         RGBColor(31, 119, 180),
         RGBColor(44, 160, 44),

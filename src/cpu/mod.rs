@@ -228,9 +228,9 @@ const INTERLEAVED_RAYS: usize = 2;
 const INTERLEAVED_INCOHERENT_RAYS: usize = 4;
 
 /// BVH nodes and blocks above this size count as larger than a core's cache
-/// (L2 is 1–2 MiB a core on current x86 servers; dragon_res4's 1.1 MiB BVH
-/// loses with four rays in turn, dragon_res2's 20 MiB breaks even, the
-/// dragon's 86 MiB gains).
+/// (L2 is 1–2 MiB a core on current x86 servers; dragon_res4's 0.6 MiB BVH
+/// loses with four rays in turn, dragon_res2's 10.5 MiB breaks even, the
+/// dragon's 46 MiB gains).
 pub const LARGE_BVH_BYTES: usize = 16 << 20;
 
 /// Whether most neighbouring rays of a chunk leave from nearby points (closer
