@@ -185,7 +185,9 @@ pub fn trace_rays(scene: &Scene, rays: &[layout::Ray], any_hit: bool) -> Vec<lay
 
 /// Runs `f` (an `#[inline(always)]` closure) compiled for the widest vector
 /// instructions the CPU has, AVX-512 (with VL, so 128-bit operations get
-/// its embedded broadcasts and mask registers; and BMI) or AVX2: the kernel's
+/// its embedded broadcasts and mask registers; and BMI) or AVX2 with FMA
+/// (x86 CPUs since 2013; without them each fused multiply-add of the slab
+/// test is a library call, correct but about 4× slower): the kernel's
 /// functions are inlined into it, so they run the same IEEE operations (the
 /// same results) in fewer instructions.
 #[inline(always)]
@@ -202,8 +204,10 @@ fn with_simd<R>(f: impl FnOnce() -> R) -> R {
             // SAFETY: the CPU has the features `avx512` is compiled for.
             return unsafe { avx512(f) };
         }
-        if has!("avx2") {
-            #[target_feature(enable = "avx2")]
+        // FMA too: the slab test's multiply-adds are fused, which without it
+        // is a library call per lane (4× slower traversal).
+        if has!("avx2") && has!("fma") {
+            #[target_feature(enable = "avx2,fma")]
             fn avx2<R>(f: impl FnOnce() -> R) -> R {
                 f()
             }
