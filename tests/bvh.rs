@@ -399,8 +399,7 @@ fn interleaved_ray_queries_equal_single_ray_traces() {
             .collect(),
         Vec::new(),
     );
-    let bvh_bytes =
-        std::mem::size_of_val(&soup.bvh.nodes[..]) + std::mem::size_of_val(&soup.bvh.blocks[..]);
+    let bvh_bytes = soup.bvh.device_bytes();
     assert!(
         bvh_bytes > lambert::cpu::LARGE_BVH_BYTES,
         "{bvh_bytes} bytes"

@@ -153,10 +153,10 @@ pub fn render_pixel_list(scene: &Scene, pixels: &[[u32; 2]]) -> Vec<[::core::pri
 pub fn trace_rays(scene: &Scene, rays: &[layout::Ray], any_hit: bool) -> Vec<layout::Hit> {
     const CHUNK: usize = 1024;
     let kernel = f32::Kernel::new(scene);
-    let bvh = &scene.bvh;
-    let bvh_bytes = std::mem::size_of_val(&bvh.nodes[..]) + std::mem::size_of_val(&bvh.blocks[..]);
+    let large = scene.bvh.device_bytes() > LARGE_BVH_BYTES;
     // Rays closer than this count as leaving from nearby points.
-    let nearby = bvh
+    let nearby = scene
+        .bvh
         .bounds()
         .map_or(0.0, |b| 0.01 * (b.max - b.min).length());
     // Written by the threads themselves: filling it first on one thread
@@ -166,17 +166,17 @@ pub fn trace_rays(scene: &Scene, rays: &[layout::Ray], any_hit: bool) -> Vec<lay
         .par_chunks_mut(CHUNK)
         .zip(rays.par_chunks(CHUNK))
         .for_each(|(hits, rays)| {
-            if bvh_bytes > LARGE_BVH_BYTES && !coherent(rays, nearby) {
-                with_simd(
-                    #[inline(always)]
-                    || trace_chunk::<INTERLEAVED_INCOHERENT_RAYS>(&kernel, rays, hits, any_hit),
-                )
-            } else {
-                with_simd(
-                    #[inline(always)]
-                    || trace_chunk::<INTERLEAVED_RAYS>(&kernel, rays, hits, any_hit),
-                )
-            }
+            let incoherent = large && !coherent(rays, nearby);
+            with_simd(
+                #[inline(always)]
+                || {
+                    if incoherent {
+                        trace_chunk::<INTERLEAVED_INCOHERENT_RAYS>(&kernel, rays, hits, any_hit)
+                    } else {
+                        trace_chunk::<INTERLEAVED_RAYS>(&kernel, rays, hits, any_hit)
+                    }
+                },
+            )
         });
     // SAFETY: trace_chunk wrote every element.
     unsafe { hits.set_len(rays.len()) };
