@@ -38,9 +38,9 @@ const INTERSECT_WATERTIGHT: u32 = 2u;
 // Unit roundoff of f32 (pbrt's MachineEpsilon), for error bounds.
 const MACHINE_EPSILON: f32 = 5.96046448e-8;
 // Traversal stack entries: bvh::STACK_SIZE. A node visit pops one entry and
-// pushes at most four, so the stack holds at most three per level above the
-// deepest plus that level's four: 3·(MAX_DEPTH − 1) + 4 with MAX_DEPTH = 32.
-const STACK_SIZE: u32 = 97u;
+// pushes at most eight, so the stack holds at most seven per level above the
+// deepest plus that level's eight: 7·(MAX_DEPTH − 1) + 8 with MAX_DEPTH = 24.
+const STACK_SIZE: u32 = 169u;
 // Child references of a BVH node (src/layout.rs): a leaf has LEAF_BIT set,
 // its block count − 1 from bit LEAF_COUNT_SHIFT up and its first block in
 // the bits below.
@@ -134,15 +134,22 @@ struct Hit {
     v: f32,
 }
 
-// Up to four children. Their boxes one lane per child: bounds[2a] the
-// minima along axis a, bounds[2a + 1] the maxima; an empty slot's box is
-// inverted. children: a node index, a leaf reference (LEAF_BIT) or
-// EMPTY_SLOT; bit i of occupied is set when slot i holds a child.
+// Up to eight children (256 bytes, src/layout.rs). Their boxes one lane per
+// child, each row of eight lanes in two vec4 halves: bounds[2r + h] is half
+// h (slots 4h to 4h + 3) of row r, and row 2a holds the minima along axis a,
+// row 2a + 1 the maxima; an empty slot's box is inverted. children[h][i]:
+// slot 4h + i's node index, leaf reference (LEAF_BIT) or EMPTY_SLOT; bit s
+// of occupied is set when slot s holds a child.
 struct BvhNode {
-    bounds: array<vec4<f32>, 6>,
-    children: vec4<u32>,
+    bounds: array<vec4<f32>, 12>,
+    children: array<vec4<u32>, 2>,
     occupied: u32,
-    _pad: array<u32, 3>,
+    _pad: array<u32, 7>,
+}
+
+// Child `slot`'s reference.
+fn node_child(node: BvhNode, slot: u32) -> u32 {
+    return select(node.children[1][slot & 3u], node.children[0][slot & 3u], slot < 4u);
 }
 
 // Up to four primitives of a BVH leaf (src/layout.rs PrimBlock): lane i is
@@ -547,38 +554,50 @@ fn ray_slabs(ray: Ray) -> Slabs {
     );
 }
 
-// A node's four child boxes after intersect_boxes: where the ray enters each
-// (meaningful for entered ones only), and bit i set where it enters box i
-// within (tmin, tmax).
+// A node's eight child boxes after intersect_boxes: where the ray enters
+// each (meaningful for entered ones only; slots 4h to 4h + 3 in t[h]), and
+// bit s set where it enters box s within (tmin, tmax).
 struct BoxHits {
-    t: vec4<f32>,
+    t: array<vec4<f32>, 2>,
     entered: u32,
 }
 
-// Which of the node's four child boxes the ray enters within (tmin, tmax),
+// Where the ray enters child `slot`'s box.
+fn box_t(boxes: BoxHits, slot: u32) -> f32 {
+    return select(boxes.t[1][slot & 3u], boxes.t[0][slot & 3u], slot < 4u);
+}
+
+// Which of the node's eight child boxes the ray enters within (tmin, tmax),
 // and where (an empty slot's inverted box is never entered unless the ray
-// has a NaN or infinite component: traversal masks empty slots). Each
-// plane's distance is one multiply-add. Written with select on a comparison
-// rather than WGSL's min/max, whose result for a NaN operand is unspecified:
-// a NaN comparison is false on every device, so a NaN slab (from a NaN ray)
-// is ignored the same way everywhere.
+// has a NaN or infinite component: traversal masks empty slots), in two
+// 4-lane halves. Each plane's distance is one multiply-add. Written with
+// select on a comparison rather than WGSL's min/max, whose result for a NaN
+// operand is unspecified: a NaN comparison is false on every device, so a
+// NaN slab (from a NaN ray) is ignored the same way everywhere.
 fn intersect_boxes(ray: Ray, slabs: Slabs, node: BvhNode) -> BoxHits {
-    var t_near = vec4<f32>(ray.tmin);
-    var t_far = vec4<f32>(ray.tmax);
-    for (var axis = 0u; axis < 3u; axis++) {
-        let flip = slabs.flip[axis];
-        let near_plane = select(node.bounds[2u * axis], node.bounds[2u * axis + 1u], flip);
-        let far_plane = select(node.bounds[2u * axis + 1u], node.bounds[2u * axis], flip);
-        let near = fma(near_plane, vec4<f32>(slabs.inv_dir[axis]), vec4<f32>(slabs.near_offset[axis]));
-        let far = fma(far_plane, vec4<f32>(slabs.inv_dir_far[axis]), vec4<f32>(slabs.far_offset[axis]));
-        t_near = select(t_near, near, near > t_near);
-        t_far = select(t_far, far, far < t_far);
+    var boxes = BoxHits(array<vec4<f32>, 2>(), 0u);
+    for (var half = 0u; half < 2u; half++) {
+        var t_near = vec4<f32>(ray.tmin);
+        var t_far = vec4<f32>(ray.tmax);
+        for (var axis = 0u; axis < 3u; axis++) {
+            let flip = slabs.flip[axis];
+            let minima = node.bounds[4u * axis + half];
+            let maxima = node.bounds[4u * axis + 2u + half];
+            let near_plane = select(minima, maxima, flip);
+            let far_plane = select(maxima, minima, flip);
+            let near = fma(near_plane, vec4<f32>(slabs.inv_dir[axis]), vec4<f32>(slabs.near_offset[axis]));
+            let far = fma(far_plane, vec4<f32>(slabs.inv_dir_far[axis]), vec4<f32>(slabs.far_offset[axis]));
+            t_near = select(t_near, near, near > t_near);
+            t_far = select(t_far, far, far < t_far);
+        }
+        // Two comparisons side by side rather than one on a select of
+        // t_near, as on the CPU, whose critical path this is.
+        let inside = (t_near <= t_far) & (t_near < vec4<f32>(ray.tmax));
+        let bits = select(vec4<u32>(0u), vec4<u32>(1u, 2u, 4u, 8u) << vec4<u32>(4u * half), inside);
+        boxes.t[half] = t_near;
+        boxes.entered |= bits.x | bits.y | bits.z | bits.w;
     }
-    // Two comparisons side by side rather than one on a select of t_near,
-    // as on the CPU, whose critical path this is.
-    let inside = (t_near <= t_far) & (t_near < vec4<f32>(ray.tmax));
-    let bits = select(vec4<u32>(0u), vec4<u32>(1u, 2u, 4u, 8u), inside);
-    return BoxHits(t_near, bits.x | bits.y | bits.z | bits.w);
+    return boxes;
 }
 
 // Closest hit through the BVH, nearest child first; with `any_hit`, the
@@ -606,7 +625,6 @@ fn trace_bvh(ray_in: Ray, shear: Shear, any_hit: bool) -> Hit {
         } else {
             let node = bvh_node_at(child);
             let boxes = intersect_boxes(ray, slabs, node);
-            let t = boxes.t;
             var entered = boxes.entered & node.occupied;
             if entered != 0u {
                 // The lowest entered slot.
@@ -614,7 +632,7 @@ fn trace_bvh(ray_in: Ray, shear: Shear, any_hit: bool) -> Hit {
                 entered &= entered - 1u;
                 if entered == 0u {
                     // One child entered: visit it, nothing to push.
-                    child = node.children[first];
+                    child = node_child(node, first);
                     continue;
                 }
                 let second = firstTrailingBit(entered);
@@ -622,32 +640,34 @@ fn trace_bvh(ray_in: Ray, shear: Shear, any_hit: bool) -> Hit {
                 if entered == 0u {
                     // Two: push the farther, visit the nearer (the second on
                     // a tie, as the sort below orders them).
-                    let near = select(second, first, t[first] < t[second]);
-                    let far = select(first, second, t[first] < t[second]);
-                    stack_child[sp] = node.children[far];
-                    stack_t[sp] = t[far];
+                    let first_nearer = box_t(boxes, first) < box_t(boxes, second);
+                    let near = select(second, first, first_nearer);
+                    let far = select(first, second, first_nearer);
+                    stack_child[sp] = node_child(node, far);
+                    stack_t[sp] = box_t(boxes, far);
                     sp += 1u;
-                    child = node.children[near];
+                    child = node_child(node, near);
                     continue;
                 }
                 // More: push them sorted, farthest deepest, then visit the
                 // nearest at once.
                 entered |= 1u << second;
                 let base = sp;
-                stack_child[sp] = node.children[first];
-                stack_t[sp] = t[first];
+                stack_child[sp] = node_child(node, first);
+                stack_t[sp] = box_t(boxes, first);
                 sp += 1u;
                 while entered != 0u {
                     let slot = firstTrailingBit(entered);
                     entered &= entered - 1u;
+                    let t_slot = box_t(boxes, slot);
                     var j = sp;
-                    while j > base && stack_t[j - 1u] < t[slot] {
+                    while j > base && stack_t[j - 1u] < t_slot {
                         stack_child[j] = stack_child[j - 1u];
                         stack_t[j] = stack_t[j - 1u];
                         j -= 1u;
                     }
-                    stack_child[j] = node.children[slot];
-                    stack_t[j] = t[slot];
+                    stack_child[j] = node_child(node, slot);
+                    stack_t[j] = t_slot;
                     sp += 1u;
                 }
                 sp -= 1u;

@@ -1,9 +1,9 @@
 //! Bounding volume hierarchy over all primitives (triangles and spheres):
 //! built as a binary tree with a binned surface-area heuristic, then
-//! collapsed into the 4-wide nodes that the shader and the CPU kernel
-//! traverse (one 4-lane slab test per node; docs/bvh.md has the figures).
+//! collapsed into the 8-wide nodes that the shader and the CPU kernel
+//! traverse (one 8-lane slab test per node; docs/bvh.md has the figures).
 //!
-//! Node layout (`layout::BvhNode`, 128 bytes): the boxes of up to four
+//! Node layout (`layout::BvhNode`, 256 bytes): the boxes of up to eight
 //! children, one lane per child (`bounds[2a]` the minima along axis a,
 //! `bounds[2a + 1]` the maxima), and one reference per child in `children`:
 //! - an interior child: its node index (bit 31 clear);
@@ -22,17 +22,19 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::layout::{
-    BvhNode, LEAF_BIT, LEAF_FIRST_MASK, PrimBlock, Sphere, Triangle, leaf_range, leaf_ref,
+    BVH_WIDTH, BvhNode, LEAF_BIT, LEAF_FIRST_MASK, PrimBlock, Sphere, Triangle, leaf_range,
+    leaf_ref,
 };
 
-/// Wide levels at most (root = 1).
-pub const MAX_DEPTH: usize = 32;
+/// Wide levels at most (root = 1): their 48 binary levels leave the SAH
+/// 28 levels of slack over the median splits of 5 million primitives (20).
+pub const MAX_DEPTH: usize = 24;
 /// Binary levels at most: each wide level takes two.
 const MAX_BINARY_DEPTH: usize = 2 * MAX_DEPTH;
 /// Traversal stack entries (`STACK_SIZE` in trace.wgsl): a node visit pops
-/// one entry and pushes at most four, so the stack holds at most three per
-/// level above plus the four of the deepest.
-pub const STACK_SIZE: usize = 3 * MAX_DEPTH + 1;
+/// one entry and pushes at most `BVH_WIDTH`, so the stack holds at most
+/// `BVH_WIDTH − 1` per level above plus the `BVH_WIDTH` of the deepest.
+pub const STACK_SIZE: usize = (BVH_WIDTH - 1) * MAX_DEPTH + 1;
 /// Most primitives a scene may hold: a leaf reference has 28 bits for its
 /// first block, and `build` never makes more blocks than primitives
 /// (`from_binary` checks the blocks of other trees).
@@ -286,10 +288,10 @@ impl Bvh {
 /// The children of the wide node made from `node`: its children, each
 /// interior one replaced by its own two (so that every path descends two
 /// binary levels per wide level, which bounds the depth); then, while there
-/// are fewer than four, the interior one of largest area replaced by its
-/// two. Fuller nodes mean fewer visits per ray.
+/// are fewer than `BVH_WIDTH`, the interior one of largest area replaced by
+/// its two. Fuller nodes mean fewer visits per ray.
 fn wide_slots(node: BinaryNode) -> Vec<BinaryNode> {
-    let mut slots = Vec::with_capacity(4);
+    let mut slots = Vec::with_capacity(BVH_WIDTH);
     let expand = |node: BinaryNode, slots: &mut Vec<BinaryNode>| match node {
         BinaryNode::Interior { children, .. } => slots.extend(*children),
         leaf => slots.push(leaf),
@@ -302,7 +304,7 @@ fn wide_slots(node: BinaryNode) -> Vec<BinaryNode> {
         }
         leaf => return vec![leaf],
     }
-    while slots.len() < 4 {
+    while slots.len() < BVH_WIDTH {
         let largest = slots
             .iter()
             .enumerate()
@@ -317,7 +319,7 @@ fn wide_slots(node: BinaryNode) -> Vec<BinaryNode> {
 
 /// The slots of `node` that hold a child.
 pub fn occupied_slots(node: &BvhNode) -> impl Iterator<Item = usize> + '_ {
-    (0..4).filter(|&s| node.occupied & 1 << s != 0)
+    (0..BVH_WIDTH).filter(|&s| node.occupied & 1 << s != 0)
 }
 
 /// Child `slot`'s box.

@@ -126,8 +126,11 @@ impl Hit {
     };
 }
 
-/// One 4-wide BVH node (128 bytes); docs/bvh.md and `bvh` tell how the
-/// shader decodes it. The four children's boxes are stored one lane per
+/// Children of a BVH node at most.
+pub const BVH_WIDTH: usize = 8;
+
+/// One 8-wide BVH node (256 bytes: four cache lines); docs/bvh.md and `bvh`
+/// tell how the shader decodes it. The eight children's boxes are stored one lane per
 /// child: `bounds[2a]` holds their minima along axis a, `bounds[2a + 1]` their
 /// maxima. `children[i]` is child i's reference: a node index, a leaf
 /// (`LEAF_BIT` set, see `leaf_ref`) or `EMPTY_SLOT`. Bit i of `occupied` is
@@ -138,10 +141,10 @@ impl Hit {
 #[repr(C, align(64))]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct BvhNode {
-    pub bounds: [[f32; 4]; 6],
-    pub children: [u32; 4],
+    pub bounds: [[f32; BVH_WIDTH]; 6],
+    pub children: [u32; BVH_WIDTH],
     pub occupied: u32,
-    pub _pad: [u32; 3],
+    pub _pad: [u32; BVH_WIDTH - 1],
 }
 
 /// Up to four primitives of one BVH leaf (160 bytes), the four lanes of
@@ -218,11 +221,16 @@ impl BvhNode {
     /// No children: every slot empty, every box inverted.
     pub const EMPTY: BvhNode = BvhNode {
         bounds: [
-            [FAR; 4], [-FAR; 4], [FAR; 4], [-FAR; 4], [FAR; 4], [-FAR; 4],
+            [FAR; BVH_WIDTH],
+            [-FAR; BVH_WIDTH],
+            [FAR; BVH_WIDTH],
+            [-FAR; BVH_WIDTH],
+            [FAR; BVH_WIDTH],
+            [-FAR; BVH_WIDTH],
         ],
-        children: [EMPTY_SLOT; 4],
+        children: [EMPTY_SLOT; BVH_WIDTH],
         occupied: 0,
-        _pad: [0; 3],
+        _pad: [0; BVH_WIDTH - 1],
     };
 
     /// Child `slot`'s box as (min, max).

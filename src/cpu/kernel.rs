@@ -1,11 +1,13 @@
 // The CPU twin of shaders/trace.wgsl, function by function with the same
 // names. Included twice by src/cpu/mod.rs: once with `Real = f32` (the
 // reference the GPU is diffed against) and once with `Real = f64` (the
-// oracle). The including module defines `Real`, `Vec3`, `Vec4`, and
-// `greater_of` and `lesser_of` (the shader's NaN-ignoring selects).
+// oracle). The including module defines `Real`, `Vec3`, `Vec4`,
+// `greater_of` and `lesser_of` (the shader's NaN-ignoring selects), and
+// `intersect_boxes_ymm` with `has_ymm_boxes` (`intersect_boxes` in one
+// 8-lane register, and whether the CPU can run it).
 
 use crate::bvh::STACK_SIZE;
-use crate::layout::{BvhNode, FLAG_SMOOTH, LEAF_BIT, LIGHT_POINT, NO_HIT, PrimBlock, leaf_range};
+use crate::layout::{BVH_WIDTH, BvhNode, FLAG_SMOOTH, LEAF_BIT, LIGHT_POINT, NO_HIT, PrimBlock, leaf_range};
 use crate::scene::{Accel, Camera, Intersect, Scene};
 
 /// Widens a box's exit distance so that rounding cannot cull a box the ray
@@ -193,6 +195,9 @@ pub struct Kernel<'a> {
     background: Vec3,
     ambient: Vec3,
     strata_x: u32,
+    /// Whether node visits take `intersect_boxes_ymm` (the CPU has 8-lane
+    /// vector registers and fused multiply-adds).
+    ymm_boxes: bool,
 }
 
 impl<'a> Kernel<'a> {
@@ -203,6 +208,7 @@ impl<'a> Kernel<'a> {
             background: vec3(scene.background),
             ambient: vec3(scene.ambient),
             strata_x: crate::scene::strata_columns(scene.spp),
+            ymm_boxes: has_ymm_boxes(),
         }
     }
 
@@ -351,7 +357,12 @@ impl<'a> Kernel<'a> {
             }
         } else {
             let node = &bvh.nodes[*child as usize];
-            let boxes = intersect_boxes(ray, slabs, node);
+            let boxes = if self.ymm_boxes {
+                // SAFETY: `ymm_boxes` says the CPU has what it needs.
+                unsafe { intersect_boxes_ymm(ray, slabs, node) }
+            } else {
+                intersect_boxes(ray, slabs, node)
+            };
             let mut entered = boxes.entered & node.occupied;
             if entered != 0 {
                 // The lowest entered slot.
@@ -362,7 +373,7 @@ impl<'a> Kernel<'a> {
                     *child = node.children[first];
                     return true;
                 }
-                let t = boxes.t.to_array();
+                let t = boxes.t;
                 let second = entered.trailing_zeros() as usize;
                 entered &= entered - 1;
                 if entered == 0 {
@@ -845,47 +856,50 @@ pub fn ray_slabs(ray: &Ray) -> Slabs {
     }
 }
 
-/// A node's four child boxes after `intersect_boxes`.
+/// A node's child boxes after `intersect_boxes`.
 #[derive(Clone, Copy, Debug)]
 pub struct BoxHits {
     /// Where the ray enters each box (meaningful for entered ones only).
-    pub t: Vec4,
+    pub t: [Real; BVH_WIDTH],
     /// Bit i set: the ray enters box i within (tmin, tmax).
     pub entered: u32,
 }
 
-/// Which of the node's four child boxes the ray enters within (tmin, tmax),
+/// Which of the node's eight child boxes the ray enters within (tmin, tmax),
 /// and where (an empty slot's inverted box is never entered unless the ray
 /// has a NaN or infinite component: traversal masks empty slots). Each
 /// plane's distance is one fused multiply-add. A NaN slab (from a NaN ray)
 /// is ignored as in the shader: `greater_of`/`lesser_of` keep the running
-/// bound when the comparison fails.
+/// bound when the comparison fails. Two 4-lane halves, as in the shader;
+/// `intersect_boxes_ymm` (x86 with AVX2) does the same in one register.
 #[inline(always)]
 pub fn intersect_boxes(ray: &Ray, slabs: &Slabs, node: &BvhNode) -> BoxHits {
-    let mut t_near = Vec4::splat(ray.tmin);
-    let mut t_far = Vec4::splat(ray.tmax);
-    for axis in 0..3 {
-        let flip = slabs.flip[axis] as usize;
-        let near_plane = vec4(node.bounds[2 * axis + flip]);
-        let far_plane = vec4(node.bounds[2 * axis + 1 - flip]);
-        let near = near_plane.mul_add(
-            Vec4::splat(slabs.inv_dir[axis]),
-            Vec4::splat(slabs.near_offset[axis]),
-        );
-        let far = far_plane.mul_add(
-            Vec4::splat(slabs.inv_dir_far[axis]),
-            Vec4::splat(slabs.far_offset[axis]),
-        );
-        t_near = greater_of(near, t_near);
-        t_far = lesser_of(far, t_far);
+    let mut t = [0.0; BVH_WIDTH];
+    let mut entered = 0;
+    for half in 0..2 {
+        let row = |r: usize| vec4(node.bounds[r][4 * half..4 * half + 4].try_into().unwrap());
+        let mut t_near = Vec4::splat(ray.tmin);
+        let mut t_far = Vec4::splat(ray.tmax);
+        for axis in 0..3 {
+            let flip = slabs.flip[axis] as usize;
+            let near = row(2 * axis + flip).mul_add(
+                Vec4::splat(slabs.inv_dir[axis]),
+                Vec4::splat(slabs.near_offset[axis]),
+            );
+            let far = row(2 * axis + 1 - flip).mul_add(
+                Vec4::splat(slabs.inv_dir_far[axis]),
+                Vec4::splat(slabs.far_offset[axis]),
+            );
+            t_near = greater_of(near, t_near);
+            t_far = lesser_of(far, t_far);
+        }
+        // Two comparisons side by side rather than one on a select of
+        // t_near: this is the critical path of a node visit.
+        let inside = t_near.cmple(t_far) & t_near.cmplt(Vec4::splat(ray.tmax));
+        entered |= inside.bitmask() << (4 * half);
+        t[4 * half..4 * half + 4].copy_from_slice(&t_near.to_array());
     }
-    // Two comparisons side by side rather than one on a select of t_near:
-    // this is the critical path of a node visit.
-    let entered = t_near.cmple(t_far) & t_near.cmplt(Vec4::splat(ray.tmax));
-    BoxHits {
-        t: t_near,
-        entered: entered.bitmask(),
-    }
+    BoxHits { t, entered }
 }
 
 fn sign_nonzero(x: Real) -> Real {
