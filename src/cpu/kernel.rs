@@ -448,11 +448,15 @@ impl<'a> Kernel<'a> {
         }
     }
 
+    /// Inlined, as `trace` is, so that inside `cpu::with_simd` (where
+    /// rendering calls it) the traversal runs with the vector instructions.
+    #[inline(always)]
     pub fn trace_closest(&self, ray: Ray) -> Hit {
         self.trace(ray, false)
     }
 
     /// Any hit in (tmin, tmax): stops at the first blocker.
+    #[inline(always)]
     pub fn trace_any(&self, ray: Ray) -> bool {
         self.trace(ray, true).prim != NO_HIT
     }

@@ -49,6 +49,11 @@ pub mod f32 {
     /// `greater_of` and `lesser_of`), so the same result, in half the
     /// instructions of two 4-lane halves.
     ///
+    /// Inlined into `with_simd`'s kernels, which every entry point of the
+    /// CPU path runs in. (Compiled for its own features instead, it was 4%
+    /// slower there; a caller outside them, as tests are, runs each
+    /// intrinsic as a call: the same result, slowly.)
+    ///
     /// # Safety
     /// The CPU must have AVX2 and FMA (`has_ymm_boxes`).
     #[cfg(target_arch = "x86_64")]
