@@ -7,7 +7,9 @@
 // 8-lane register, and whether the CPU can run it).
 
 use crate::bvh::STACK_SIZE;
-use crate::layout::{BVH_WIDTH, BvhNode, FLAG_SMOOTH, LEAF_BIT, LIGHT_POINT, NO_HIT, PrimBlock, leaf_range};
+use crate::layout::{
+    BVH_WIDTH, BvhNode, FLAG_SMOOTH, LEAF_BIT, LIGHT_POINT, NO_HIT, PrimBlock, leaf_range,
+};
 use crate::scene::{Accel, Camera, Intersect, Scene};
 
 /// Widens a box's exit distance so that rounding cannot cull a box the ray
