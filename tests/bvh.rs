@@ -451,12 +451,12 @@ fn slab_test_of_eight_boxes_matches_a_plain_one() {
     }
 }
 
-/// `cpu::trace_rays` traces two or four rays at a time per thread, a node
+/// `cpu::trace_rays` traces two or eight rays at a time per thread, a node
 /// visit each in turn; every ray must get exactly the hit it gets alone.
 #[test]
 fn interleaved_ray_queries_equal_single_ray_traces() {
     // Random small triangles, enough that incoherent rays through their BVH
-    // are traced four at a time rather than two.
+    // are traced eight at a time, with prefetching, rather than two.
     let soup = scene_of(
         random_rays(9, 400_000, [0.0; 3], 1.0)
             .iter()

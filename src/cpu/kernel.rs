@@ -323,19 +323,20 @@ impl<'a> Kernel<'a> {
         let mut traversal = Traversal::new(ray, *shear, any_hit);
         let mut stack = new_stack();
         // SAFETY: every pass gets this traversal's own stack.
-        while unsafe { self.visit(&mut traversal, &mut stack) } {}
+        while unsafe { self.visit::<false>(&mut traversal, &mut stack) } {}
         traversal.hit
     }
 
     /// One pass of `trace_bvh`'s loop: visits the traversal's current node or
-    /// leaf and picks the next. Returns false when the traversal is done (its
-    /// `hit` is then the answer).
+    /// leaf and picks the next (with `PREFETCH`, and starts loading it).
+    /// Returns false when the traversal is done (its `hit` is then the
+    /// answer).
     ///
     /// # Safety
     /// `stack` must be the one that every earlier pass of this traversal
     /// used: it reads the entries they pushed.
     #[inline(always)]
-    pub(crate) unsafe fn visit(
+    pub(crate) unsafe fn visit<const PREFETCH: bool>(
         &self,
         traversal: &mut Traversal,
         stack: &mut TraversalStack,
@@ -373,6 +374,7 @@ impl<'a> Kernel<'a> {
                 if entered == 0 {
                     // One child entered: visit it, nothing to push.
                     *child = node.children[first];
+                    self.prefetch::<PREFETCH>(*child);
                     return true;
                 }
                 let t = boxes.t;
@@ -390,6 +392,7 @@ impl<'a> Kernel<'a> {
                     stack[*sp].write((node.children[far], t[far]));
                     *sp += 1;
                     *child = node.children[near];
+                    self.prefetch::<PREFETCH>(*child);
                     return true;
                 }
                 // More: push them sorted, farthest deepest, then visit the
@@ -412,6 +415,7 @@ impl<'a> Kernel<'a> {
                 }
                 *sp -= 1;
                 *child = unsafe { stack[*sp].assume_init().0 };
+                self.prefetch::<PREFETCH>(*child);
                 return true;
             }
         }
@@ -422,10 +426,28 @@ impl<'a> Kernel<'a> {
             let (next, t_next) = unsafe { stack[*sp].assume_init() };
             if t_next < ray.tmax {
                 *child = next;
+                self.prefetch::<PREFETCH>(*child);
                 return true;
             }
         }
         false
+    }
+
+    /// With `PREFETCH`, asks the CPU to start loading what the traversal
+    /// visits next, so that the load overlaps the other interleaved rays'
+    /// work.
+    #[inline(always)]
+    fn prefetch<const PREFETCH: bool>(&self, child: u32) {
+        if !PREFETCH {
+            return;
+        }
+        let bvh = &self.scene.bvh;
+        if child & LEAF_BIT != 0 {
+            let (first, _) = leaf_range(child);
+            super::prefetch(bvh.blocks.as_ptr().wrapping_add(first as usize));
+        } else {
+            super::prefetch(bvh.nodes.as_ptr().wrapping_add(child as usize));
+        }
     }
 
     /// Every primitive in turn: the reference the BVH is tested against.
