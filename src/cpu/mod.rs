@@ -317,6 +317,9 @@ fn prefetch<T>(p: *const T) {
         // SAFETY: prefetching is a hint; it reads nothing.
         unsafe { _mm_prefetch::<_MM_HINT_T0>(p.cast::<i8>().wrapping_add(line)) };
     }
+    // Stable Rust has a prefetch intrinsic on x86 only.
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
 }
 
 /// Rays one thread traces together through the BVH, a node visit each in
@@ -330,8 +333,8 @@ const INTERLEAVED_RAYS: usize = 2;
 /// at nearly every node. Eight in turn, each asking for its next node or
 /// leaf as soon as it knows it (`Kernel::visit` with `PREFETCH`), keep
 /// many loads in flight: the dragon's 1M random rays trace 1.3× faster
-/// with prefetching (four rays either way) and 1.15× faster again with
-/// eight rays instead of four (twelve: +1–2%, noise). Coherent rays, or a
+/// with prefetching (four rays either way) and about 1.13× faster again
+/// with eight rays instead of four (twelve: +1–2%, noise). Coherent rays, or a
 /// BVH that stays in cache, lose to the book-keeping: 3–4% for the
 /// prefetches alone on the dragon's camera rays, 8% for both on
 /// dragon_res4's random rays (docs/benchmarks.md).
