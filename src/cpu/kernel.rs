@@ -4,7 +4,8 @@
 // oracle). The including module defines `Real`, `Vec3`, `Vec4`,
 // `greater_of` and `lesser_of` (the shader's NaN-ignoring selects), and
 // `intersect_boxes_ymm` with `has_ymm_boxes` (`intersect_boxes` in one
-// 8-lane register, and whether the CPU can run it).
+// 8-lane register, and whether the CPU can run it), and `push_sorted_zmm`
+// (the ordering of three or more entered children in vector registers).
 
 use crate::bvh::STACK_SIZE;
 use crate::layout::{
@@ -323,20 +324,23 @@ impl<'a> Kernel<'a> {
         let mut traversal = Traversal::new(ray, *shear, any_hit);
         let mut stack = new_stack();
         // SAFETY: every pass gets this traversal's own stack.
-        while unsafe { self.visit::<false>(&mut traversal, &mut stack) } {}
+        while unsafe { self.visit::<false, false>(&mut traversal, &mut stack) } {}
         traversal.hit
     }
 
     /// One pass of `trace_bvh`'s loop: visits the traversal's current node or
     /// leaf and picks the next (with `PREFETCH`, and starts loading it).
-    /// Returns false when the traversal is done (its `hit` is then the
-    /// answer).
+    /// With `VECTOR_SORT`, three or more entered children are ordered by
+    /// `push_sorted_zmm`, without the branches that mispredict on rays of
+    /// random directions. Returns false when the traversal is done (its
+    /// `hit` is then the answer).
     ///
     /// # Safety
     /// `stack` must be the one that every earlier pass of this traversal
-    /// used: it reads the entries they pushed.
+    /// used: it reads the entries they pushed. With `VECTOR_SORT`, the CPU
+    /// must have AVX-512 (`has_vector_sort`).
     #[inline(always)]
-    pub(crate) unsafe fn visit<const PREFETCH: bool>(
+    pub(crate) unsafe fn visit<const PREFETCH: bool, const VECTOR_SORT: bool>(
         &self,
         traversal: &mut Traversal,
         stack: &mut TraversalStack,
@@ -397,24 +401,13 @@ impl<'a> Kernel<'a> {
                 }
                 // More: push them sorted, farthest deepest, then visit the
                 // nearest at once.
-                entered |= 1 << second;
-                let base = *sp;
-                stack[*sp].write((node.children[first], t[first]));
-                *sp += 1;
-                while entered != 0 {
-                    let slot = entered.trailing_zeros() as usize;
-                    entered &= entered - 1;
-                    let mut j = *sp;
-                    // SAFETY (here and below): entries below `sp` are written.
-                    while j > base && unsafe { stack[j - 1].assume_init().1 } < t[slot] {
-                        stack[j] = stack[j - 1];
-                        j -= 1;
-                    }
-                    stack[j].write((node.children[slot], t[slot]));
-                    *sp += 1;
-                }
-                *sp -= 1;
-                *child = unsafe { stack[*sp].assume_init().0 };
+                let all = boxes.entered & node.occupied;
+                *child = if VECTOR_SORT {
+                    // SAFETY: the caller vouches for AVX-512.
+                    unsafe { push_sorted_zmm(stack, sp, &t, &node.children, all) }
+                } else {
+                    push_sorted(stack, sp, &t, &node.children, all)
+                };
                 self.prefetch::<PREFETCH>(*child);
                 return true;
             }
@@ -423,6 +416,7 @@ impl<'a> Kernel<'a> {
         // out of reach.
         while *sp > 0 {
             *sp -= 1;
+            // SAFETY: entries below `sp` are written.
             let (next, t_next) = unsafe { stack[*sp].assume_init() };
             if t_next < ray.tmax {
                 *child = next;
@@ -626,6 +620,36 @@ impl<'a> Kernel<'a> {
         };
         (mean, first_prim, variance)
     }
+}
+
+/// `visit`'s ordering of three or more entered children (`entered`): pushes
+/// them farthest deepest, lower slots deeper among equal distances, then
+/// pops the nearest and returns it. `push_sorted_zmm` gives the same order
+/// in vector registers.
+#[inline(always)]
+pub(crate) fn push_sorted(
+    stack: &mut TraversalStack,
+    sp: &mut usize,
+    t: &[Real; BVH_WIDTH],
+    children: &[u32; BVH_WIDTH],
+    mut entered: u32,
+) -> u32 {
+    let base = *sp;
+    while entered != 0 {
+        let slot = entered.trailing_zeros() as usize;
+        entered &= entered - 1;
+        let mut j = *sp;
+        // SAFETY: entries below `sp` are written.
+        while j > base && unsafe { stack[j - 1].assume_init().1 } < t[slot] {
+            stack[j] = stack[j - 1];
+            j -= 1;
+        }
+        stack[j].write((children[slot], t[slot]));
+        *sp += 1;
+    }
+    *sp -= 1;
+    // SAFETY: just written.
+    unsafe { stack[*sp].assume_init().0 }
 }
 
 /// The lecture's test: plane hit t = n·(a − o)/(n·d), then three edge tests
