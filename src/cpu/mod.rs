@@ -189,20 +189,8 @@ pub mod f32 {
         super::has_avx512()
     }
 
-    /// No AVX-512 here: `has_vector_sort` is false, so this never runs.
-    ///
-    /// # Safety
-    /// None needed: unsafe only as the x86 version is.
     #[cfg(not(target_arch = "x86_64"))]
-    pub(crate) unsafe fn push_sorted_zmm(
-        _stack: &mut TraversalStack,
-        _sp: &mut usize,
-        _t: &[Real; BVH_WIDTH],
-        _children: &[u32; BVH_WIDTH],
-        _entered: u32,
-    ) -> u32 {
-        unreachable!("push_sorted_zmm without AVX-512")
-    }
+    pub(crate) use super::no_push_sorted_zmm as push_sorted_zmm;
 
     /// No 8-lane registers here: `has_ymm_boxes` is false, so this never runs.
     ///
@@ -240,19 +228,7 @@ pub mod f64 {
         false
     }
 
-    /// Never runs: the oracle traverses with `visit::<_, false>` only.
-    ///
-    /// # Safety
-    /// None needed: unsafe only as its single-precision twin is.
-    pub(crate) unsafe fn push_sorted_zmm(
-        _stack: &mut TraversalStack,
-        _sp: &mut usize,
-        _t: &[Real; BVH_WIDTH],
-        _children: &[u32; BVH_WIDTH],
-        _entered: u32,
-    ) -> u32 {
-        unreachable!("the oracle orders children by insertion only")
-    }
+    use super::no_push_sorted_zmm as push_sorted_zmm;
 
     /// Never runs (`has_ymm_boxes` is false).
     ///
@@ -263,6 +239,22 @@ pub mod f64 {
     }
 
     include!("kernel.rs");
+}
+
+/// `push_sorted_zmm` where there is none (the oracle; CPUs other than x86):
+/// never called, since only `trace_rays` asks for it, in single precision
+/// and where `f32::has_vector_sort` says the CPU has AVX-512.
+///
+/// # Safety
+/// None needed: unsafe only as `f32::push_sorted_zmm` is.
+pub(crate) unsafe fn no_push_sorted_zmm<Stack, Distances>(
+    _stack: &mut Stack,
+    _sp: &mut usize,
+    _t: &Distances,
+    _children: &[u32; crate::layout::BVH_WIDTH],
+    _entered: u32,
+) -> u32 {
+    unreachable!("push_sorted_zmm needs AVX-512 and single precision")
 }
 
 /// Which precision the CPU path computes in.
