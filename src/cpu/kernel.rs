@@ -5,7 +5,7 @@
 // `greater_of` and `lesser_of` (the shader's NaN-ignoring selects), and
 // `intersect_boxes_ymm` with `has_ymm_boxes` (`intersect_boxes` in one
 // 8-lane register, and whether the CPU can run it), and `push_sorted_zmm`
-// (the ordering of three or more entered children in vector registers).
+// (the ordering of entered children in vector registers).
 
 use crate::bvh::STACK_SIZE;
 use crate::layout::{
@@ -330,10 +330,10 @@ impl<'a> Kernel<'a> {
 
     /// One pass of `trace_bvh`'s loop: visits the traversal's current node or
     /// leaf and picks the next (with `PREFETCH`, and starts loading it).
-    /// With `VECTOR_SORT`, three or more entered children are ordered by
-    /// `push_sorted_zmm`, without the branches that mispredict on rays of
-    /// random directions. Returns false when the traversal is done (its
-    /// `hit` is then the answer).
+    /// With `VECTOR_SORT`, entered children are ordered by `push_sorted_zmm`,
+    /// without the branches (on how many, and on their order) that
+    /// mispredict on rays of random directions. Returns false when the
+    /// traversal is done (its `hit` is then the answer).
     ///
     /// # Safety
     /// `stack` must be the one that every earlier pass of this traversal
@@ -371,6 +371,13 @@ impl<'a> Kernel<'a> {
                 intersect_boxes(ray, slabs, node)
             };
             let mut entered = boxes.entered & node.occupied;
+            if VECTOR_SORT && entered != 0 {
+                // However many children: no branch on their count either.
+                // SAFETY: the caller vouches for AVX-512.
+                *child = unsafe { push_sorted_zmm(stack, sp, &boxes.t, &node.children, entered) };
+                self.prefetch::<PREFETCH>(*child);
+                return true;
+            }
             if entered != 0 {
                 // The lowest entered slot.
                 let first = entered.trailing_zeros() as usize;
@@ -402,12 +409,7 @@ impl<'a> Kernel<'a> {
                 // More: push them sorted, farthest deepest, then visit the
                 // nearest at once.
                 let all = boxes.entered & node.occupied;
-                *child = if VECTOR_SORT {
-                    // SAFETY: the caller vouches for AVX-512.
-                    unsafe { push_sorted_zmm(stack, sp, &t, &node.children, all) }
-                } else {
-                    push_sorted(stack, sp, &t, &node.children, all)
-                };
+                *child = push_sorted(stack, sp, &t, &node.children, all);
                 self.prefetch::<PREFETCH>(*child);
                 return true;
             }
@@ -622,10 +624,11 @@ impl<'a> Kernel<'a> {
     }
 }
 
-/// `visit`'s ordering of three or more entered children (`entered`): pushes
-/// them farthest deepest, lower slots deeper among equal distances, then
-/// pops the nearest and returns it. `push_sorted_zmm` gives the same order
-/// in vector registers.
+/// `visit`'s ordering of three or more entered children (`entered`), as the
+/// shader's `trace_bvh` does it: pushes them farthest deepest, lower slots
+/// deeper among equal distances, then pops the nearest and returns it.
+/// `push_sorted_zmm` gives the same order in vector registers, for any
+/// number of children.
 #[inline(always)]
 pub(crate) fn push_sorted(
     stack: &mut TraversalStack,
