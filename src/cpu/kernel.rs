@@ -726,12 +726,15 @@ pub fn ray_shear(dir: Vec3) -> Shear {
     };
     let mut kx = (kz + 1) % 3;
     let mut ky = (kx + 1) % 3;
-    if dir[kz] < 0.0 {
+    // An array, not glam's Index: its match per access is a branch that
+    // mispredicts on rays of random directions.
+    let d = dir.to_array();
+    if d[kz] < 0.0 {
         std::mem::swap(&mut kx, &mut ky);
     }
     Shear {
         axes: [kx, ky, kz],
-        s: Vec3::new(dir[kx] / dir[kz], dir[ky] / dir[kz], 1.0 / dir[kz]),
+        s: Vec3::new(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]),
     }
 }
 
