@@ -484,10 +484,12 @@ const INTERLEAVED_INCOHERENT_RAYS: usize = 8;
 
 /// BVH nodes and blocks above this size count as larger than a core's cache
 /// (L2 is 1–2 MiB a core on current x86 servers). Random rays with eight in
-/// turn and prefetching, against two without: dragon_res4's 0.6 MiB BVH
-/// loses 8%, stanford_bunny's 7 MiB breaks even, dragon_res2's 10.5 MiB
-/// gains 6–13%, the dragon's 46 MiB 44%.
-pub const LARGE_BVH_BYTES: usize = 8 << 20;
+/// turn and prefetching, against two without (both ordering children in
+/// vector registers): stanford_bunny's 3.8 MiB BVH gains 7–14%,
+/// dragon_res3's 2.7 MiB loses up to 14%. Before that ordering:
+/// dragon_res4's 0.6 MiB lost 8%, dragon_res2's 11 MiB gained 6–13%, the
+/// dragon's 47 MiB 44%.
+pub const LARGE_BVH_BYTES: usize = 3 << 20;
 
 /// Whether most neighbouring rays leave from nearby points (closer than
 /// `nearby`) in nearly the same direction (within about 8°), as camera rays
