@@ -837,7 +837,25 @@ fn bench_time_vs_error(args: &BenchArgs) -> Result<ExitCode> {
 
 fn info(args: &AdapterArgs) -> Result<ExitCode> {
     let adapters = gpu::enumerate_adapters(&args.request())?;
-    println!("CPU path: {} threads", rayon::current_num_threads());
+    let kernel = cpu::CpuKernel::active();
+    println!(
+        "CPU path: {} threads, {} kernel",
+        rayon::current_num_threads(),
+        kernel.name()
+    );
+    for other in cpu::CpuKernel::ALL {
+        if let Some(missing) = other.missing() {
+            println!(
+                "  {} kernel: not on this CPU (needs {missing})",
+                other.name()
+            );
+        } else if other > kernel {
+            println!(
+                "  {} kernel: available, not chosen (LAMBERT_CPU_KERNEL)",
+                other.name()
+            );
+        }
+    }
     if adapters.is_empty() {
         println!("no GPU adapters (install Mesa's lavapipe: apt-get install mesa-vulkan-drivers)");
     }

@@ -1,6 +1,17 @@
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    // Mesa's device-select Vulkan layer connects to a Wayland display while
+    // listing adapters, and on a headless machine prints "error:
+    // XDG_RUNTIME_DIR is invalid or not set" twice. It only reorders the
+    // adapters, which lambert ranks itself, so it is switched off unless
+    // the user is steering it (MESA_VK_DEVICE_SELECT) or has set its switch.
+    if std::env::var_os("MESA_VK_DEVICE_SELECT").is_none()
+        && std::env::var_os("NODEVICE_SELECT").is_none()
+    {
+        // SAFETY: no other thread exists yet to read the environment.
+        unsafe { std::env::set_var("NODEVICE_SELECT", "1") };
+    }
     match lambert::cli::run() {
         Ok(code) => code,
         Err(e) => {

@@ -451,12 +451,9 @@ fn slab_test_of_eight_boxes_matches_a_plain_one() {
     }
 }
 
-/// `cpu::trace_rays` traces two or eight rays at a time per thread, a node
-/// visit each in turn; every ray must get exactly the hit it gets alone.
-#[test]
-fn interleaved_ray_queries_equal_single_ray_traces() {
-    // Random small triangles, enough that incoherent rays through their BVH
-    // are traced eight at a time, with prefetching, rather than two.
+/// Random small triangles, enough that incoherent rays through their BVH
+/// are traced eight at a time, with prefetching, rather than two.
+fn soup() -> Scene {
     let soup = scene_of(
         random_rays(9, 400_000, [0.0; 3], 1.0)
             .iter()
@@ -476,25 +473,102 @@ fn interleaved_ray_queries_equal_single_ray_traces() {
         bvh_bytes > lambert::cpu::LARGE_BVH_BYTES,
         "{bvh_bytes} bytes"
     );
+    soup
+}
+
+/// Random rays from around `scene`'s bounds, as a ray query.
+fn query_rays(scene: &Scene, seed: u64, n: usize) -> Vec<lambert::layout::Ray> {
+    let root = scene.bvh.bounds().expect("a non-empty scene");
+    let spread = (root.max - root.min).max_element();
+    random_rays(seed, n, root.centre().to_array(), spread)
+        .iter()
+        .map(|r| lambert::layout::Ray {
+            origin: r.origin.to_array(),
+            tmin: r.tmin,
+            dir: r.dir.to_array(),
+            tmax: r.tmax,
+        })
+        .collect()
+}
+
+/// Every SIMD kernel this CPU runs gives the portable kernel's hits and
+/// pixels bit for bit: camera and random rays, closest and any hit, through
+/// BVHs small and larger than cache (each of `trace_rays`' chunk kinds).
+/// A kernel the CPU lacks is skipped, saying so.
+#[test]
+fn every_cpu_kernel_equals_the_portable_one() {
+    use lambert::cpu::{CpuKernel, Precision, render_with, trace_rays_with};
+    let scenes = [
+        ("bunny", load("bunny")),
+        ("spheres", load("spheres")),
+        ("soup", soup()),
+    ];
+    for kernel in CpuKernel::ALL {
+        if let Some(missing) = kernel.missing() {
+            eprintln!(
+                "skipped: the {} kernel needs {missing}, which this CPU lacks",
+                kernel.name()
+            );
+            continue;
+        }
+        for (name, scene) in &scenes {
+            let camera = lambert::rays::camera_rays(scene);
+            for (rays, what) in [(query_rays(scene, 5, 5001), "random"), (camera, "camera")] {
+                for any_hit in [false, true] {
+                    let portable = trace_rays_with(scene, &rays, any_hit, CpuKernel::Portable);
+                    let simd = trace_rays_with(scene, &rays, any_hit, kernel);
+                    for (i, (a, b)) in portable.iter().zip(&simd).enumerate() {
+                        assert_eq!(
+                            (a.prim, a.t.to_bits(), a.u.to_bits(), a.v.to_bits()),
+                            (b.prim, b.t.to_bits(), b.u.to_bits(), b.v.to_bits()),
+                            "{name}, {what} ray {i}, any_hit {any_hit}: {} kernel",
+                            kernel.name()
+                        );
+                    }
+                }
+            }
+            if *name != "soup" {
+                let hidden = lambert::progress::Progress::hidden();
+                let portable = render_with(scene, Precision::F32, &hidden, CpuKernel::Portable);
+                let simd = render_with(scene, Precision::F32, &hidden, kernel);
+                assert_eq!(
+                    portable.prims,
+                    simd.prims,
+                    "{name}: {} kernel",
+                    kernel.name()
+                );
+                let bits = |r: &lambert::output::Rendered| {
+                    r.image
+                        .rgb
+                        .iter()
+                        .flatten()
+                        .map(|c| c.to_bits())
+                        .collect::<Vec<_>>()
+                };
+                assert_eq!(
+                    bits(&portable),
+                    bits(&simd),
+                    "{name}: {} kernel",
+                    kernel.name()
+                );
+            }
+        }
+    }
+}
+
+/// `cpu::trace_rays` traces two or eight rays at a time per thread, a node
+/// visit each in turn; every ray must get exactly the hit it gets alone.
+#[test]
+fn interleaved_ray_queries_equal_single_ray_traces() {
+    let soup = soup();
     for (name, scene) in [
         ("bunny", load("bunny")),
         ("spheres", load("spheres")),
         ("soup", soup),
     ] {
         let kernel = Kernel::new(&scene);
-        let root = scene.bvh.bounds().expect("a non-empty scene");
-        let spread = (root.max - root.min).max_element();
         // An odd count over several chunks, so that lanes run dry unevenly.
-        let rays: Vec<lambert::layout::Ray> =
-            random_rays(5, 5001, root.centre().to_array(), spread)
-                .iter()
-                .map(|r| lambert::layout::Ray {
-                    origin: r.origin.to_array(),
-                    tmin: r.tmin,
-                    dir: r.dir.to_array(),
-                    tmax: r.tmax,
-                })
-                .collect();
+        let rays = query_rays(&scene, 5, 5001);
         for any_hit in [false, true] {
             let hits = lambert::cpu::trace_rays(&scene, &rays, any_hit);
             let mut hit_count = 0;

@@ -687,3 +687,37 @@ fn time_budget_and_target_error_render_and_report() {
         assert_eq!(render(option, value).0, Some(expected), "{option} {value}");
     }
 }
+
+/// A headless machine's commands print no line that says "error" unless
+/// something failed (Mesa's device-select layer printed two about
+/// XDG_RUNTIME_DIR), and `info` names the CPU kernel in use.
+#[test]
+fn successful_commands_print_no_error_lines() {
+    let case = Case::new();
+    let scene = case.file("scene.toml", &format!("{CAMERA}{SPHERE}{LIGHT}"));
+    let out = case.path("out.png");
+    let runs = [
+        vec!["info"],
+        vec!["render", s(&scene), "-o", s(&out), "--device", "gpu"],
+        vec!["render", s(&scene), "-o", s(&out)],
+    ];
+    for args in runs {
+        // As on a headless CI machine.
+        let output = Command::new(env!("CARGO_BIN_EXE_lambert"))
+            .env_remove("XDG_RUNTIME_DIR")
+            .env_remove("WAYLAND_DISPLAY")
+            .args(&args)
+            .output()
+            .unwrap();
+        assert!(output.status.success(), "{args:?}: {output:?}");
+        let text = String::from_utf8_lossy(&output.stdout).to_string()
+            + &String::from_utf8_lossy(&output.stderr);
+        for line in text.lines() {
+            assert!(!line.to_lowercase().contains("error"), "{args:?} printed {line:?}");
+        }
+        if args == ["info"] {
+            let kernel = lambert::cpu::CpuKernel::active().name();
+            assert!(text.contains(&format!("{kernel} kernel")), "{text}");
+        }
+    }
+}

@@ -205,13 +205,19 @@ pub struct Kernel<'a> {
 
 impl<'a> Kernel<'a> {
     pub fn new(scene: &'a Scene) -> Kernel<'a> {
+        Kernel::new_for(scene, has_ymm_boxes())
+    }
+
+    /// `new`, with node visits through `intersect_boxes_ymm` or not: the
+    /// SIMD kernels' tests compare each against the portable one.
+    pub fn new_for(scene: &'a Scene, ymm_boxes: bool) -> Kernel<'a> {
         Kernel {
             camera: CameraBasis::new(&scene.camera),
             scene,
             background: vec3(scene.background),
             ambient: vec3(scene.ambient),
             strata_x: crate::scene::strata_columns(scene.spp),
-            ymm_boxes: has_ymm_boxes(),
+            ymm_boxes,
         }
     }
 

@@ -39,9 +39,9 @@ pub mod f32 {
         return Vec4::select(a.cmplt(b), a, b);
     }
 
-    /// Whether this CPU runs `intersect_boxes_ymm`.
+    /// Whether this process runs `intersect_boxes_ymm`.
     pub fn has_ymm_boxes() -> bool {
-        super::has_avx2_fma()
+        super::CpuKernel::active().ymm_boxes()
     }
 
     /// `intersect_boxes` with each row of eight planes in one AVX register:
@@ -186,9 +186,9 @@ pub mod f32 {
         }
     }
 
-    /// Whether this CPU runs `push_sorted_zmm`.
+    /// Whether this process runs `push_sorted_zmm`.
     pub fn has_vector_sort() -> bool {
-        super::has_avx512()
+        super::CpuKernel::active().vector_sort()
     }
 
     #[cfg(not(target_arch = "x86_64"))]
@@ -290,28 +290,52 @@ fn pixel(
 
 /// Renders every pixel with the scene's samples; rows run in parallel.
 pub fn render(scene: &Scene, precision: Precision, progress: &Progress) -> Rendered {
+    render_with(scene, precision, progress, CpuKernel::active())
+}
+
+/// Panics unless this CPU runs `kernel`: what makes `with_simd` safe for
+/// the `_with` entry points.
+fn check_runs(kernel: CpuKernel) {
+    if let Some(missing) = kernel.missing() {
+        panic!("the {} CPU kernel needs {missing}", kernel.name());
+    }
+}
+
+/// `render` with a given CPU kernel (one this CPU runs).
+pub fn render_with(
+    scene: &Scene,
+    precision: Precision,
+    progress: &Progress,
+    cpu_kernel: CpuKernel,
+) -> Rendered {
+    check_runs(cpu_kernel);
     let (width, height) = (scene.camera.width as usize, scene.camera.height as usize);
     let mut rgb = vec![[0.0; 3]; width * height];
     let mut prims = vec![0u32; width * height];
     let mut variance = vec![0.0; width * height];
-    let kernel32 = f32::Kernel::new(scene);
+    let kernel32 = f32::Kernel::new_for(scene, cpu_kernel.ymm_boxes());
     let kernel64 = f64::Kernel::new(scene);
     rgb.par_chunks_mut(width)
         .zip(prims.par_chunks_mut(width))
         .zip(variance.par_chunks_mut(width))
         .enumerate()
         .for_each(|(y, ((rgb_row, prim_row), variance_row))| {
-            with_simd(
-                #[inline(always)]
-                || {
-                    for x in 0..width {
-                        let (c, p, v) = pixel(&kernel32, &kernel64, precision, x as u32, y as u32);
-                        rgb_row[x] = c;
-                        prim_row[x] = p;
-                        variance_row[x] = v;
-                    }
-                },
-            );
+            // SAFETY: checked above.
+            unsafe {
+                with_simd(
+                    cpu_kernel,
+                    #[inline(always)]
+                    || {
+                        for x in 0..width {
+                            let (c, p, v) =
+                                pixel(&kernel32, &kernel64, precision, x as u32, y as u32);
+                            rgb_row[x] = c;
+                            prim_row[x] = p;
+                            variance_row[x] = v;
+                        }
+                    },
+                )
+            };
             progress.inc(1);
         });
     Rendered {
@@ -333,10 +357,14 @@ pub fn render_pixel_list(scene: &Scene, pixels: &[[u32; 2]]) -> Vec<[::core::pri
     pixels
         .par_iter()
         .map(|&[x, y]| {
-            let (c, _, v) = with_simd(
-                #[inline(always)]
-                || pixel(&kernel32, &kernel64, Precision::F32, x, y),
-            );
+            // SAFETY: the active kernel runs on this CPU.
+            let (c, _, v) = unsafe {
+                with_simd(
+                    CpuKernel::active(),
+                    #[inline(always)]
+                    || pixel(&kernel32, &kernel64, Precision::F32, x, y),
+                )
+            };
             [c[0], c[1], c[2], v]
         })
         .collect()
@@ -346,10 +374,21 @@ pub fn render_pixel_list(scene: &Scene, pixels: &[[u32; 2]]) -> Vec<[::core::pri
 /// closest hits, or with `any_hit` the first hit found. Misses report
 /// `layout::Hit::MISS`.
 pub fn trace_rays(scene: &Scene, rays: &[layout::Ray], any_hit: bool) -> Vec<layout::Hit> {
+    trace_rays_with(scene, rays, any_hit, CpuKernel::active())
+}
+
+/// `trace_rays` with a given CPU kernel (one this CPU runs).
+pub fn trace_rays_with(
+    scene: &Scene,
+    rays: &[layout::Ray],
+    any_hit: bool,
+    cpu_kernel: CpuKernel,
+) -> Vec<layout::Hit> {
     const CHUNK: usize = 1024;
-    let kernel = f32::Kernel::new(scene);
+    check_runs(cpu_kernel);
+    let kernel = f32::Kernel::new_for(scene, cpu_kernel.ymm_boxes());
     let large = scene.bvh.device_bytes() > LARGE_BVH_BYTES;
-    let vector_sort = f32::has_vector_sort();
+    let vector_sort = cpu_kernel.vector_sort();
     // Rays closer than this count as leaving from nearby points.
     let nearby = scene
         .bvh
@@ -371,16 +410,19 @@ pub fn trace_rays(scene: &Scene, rays: &[layout::Ray], any_hit: bool) -> Vec<lay
             // VECTOR_SORT.
             macro_rules! chunk {
                 ($lanes:expr, $prefetch:expr, $vector_sort:expr) => {
-                    with_simd(
-                        #[inline(always)]
-                        // SAFETY: VECTOR_SORT only where `vector_sort` says
-                        // the CPU can.
-                        || unsafe {
-                            trace_chunk::<{ $lanes }, $prefetch, $vector_sort>(
-                                &kernel, rays, hits, any_hit,
-                            )
-                        },
-                    )
+                    // SAFETY: the kernel was checked; VECTOR_SORT only
+                    // where `vector_sort` says the CPU can.
+                    unsafe {
+                        with_simd(
+                            cpu_kernel,
+                            #[inline(always)]
+                            || {
+                                trace_chunk::<{ $lanes }, $prefetch, $vector_sort>(
+                                    &kernel, rays, hits, any_hit,
+                                )
+                            },
+                        )
+                    }
                 };
             }
             match (incoherent, large, vector_sort) {
@@ -395,58 +437,131 @@ pub fn trace_rays(scene: &Scene, rays: &[layout::Ray], any_hit: bool) -> Vec<lay
     hits
 }
 
-/// Runs `f` (an `#[inline(always)]` closure) compiled for the widest vector
-/// instructions the CPU has, AVX-512 (with VL, so 128-bit operations get
-/// its embedded broadcasts and mask registers; and BMI) or AVX2 with FMA
-/// (x86 CPUs since 2013; without them each fused multiply-add of the slab
-/// test is a library call, correct but about 4× slower): the kernel's
-/// functions are inlined into it, so they run the same IEEE operations (the
-/// same results) in fewer instructions.
+/// The CPU kernels: the same functions compiled for different vector
+/// instructions. Each runs the same IEEE operations, so each gives the
+/// portable kernel's results bit for bit (tests/cpu_kernels.rs checks that
+/// on every kernel the test machine can run).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum CpuKernel {
+    /// Plain Rust (SSE2 on x86-64; NEON or none elsewhere).
+    Portable,
+    /// AVX2 with FMA (x86 since 2013): the 8-lane slab test in one
+    /// register, and fused multiply-adds (without FMA, each is a library
+    /// call per lane: about 4× slower traversal).
+    Avx2Fma,
+    /// AVX-512 (F, VL, DQ, BW, with BMI1/2 and LZCNT): AVX2's kernel with
+    /// mask registers and embedded broadcasts, and incoherent rays order
+    /// their entered children in vector registers (`push_sorted_zmm`).
+    Avx512,
+}
+
+impl CpuKernel {
+    pub const ALL: [CpuKernel; 3] = [CpuKernel::Portable, CpuKernel::Avx2Fma, CpuKernel::Avx512];
+
+    /// The name `LAMBERT_CPU_KERNEL` and `lambert info` use.
+    pub fn name(self) -> &'static str {
+        match self {
+            CpuKernel::Portable => "portable",
+            CpuKernel::Avx2Fma => "avx2+fma",
+            CpuKernel::Avx512 => "avx-512",
+        }
+    }
+
+    /// What this CPU lacks for the kernel, or None when it can run it.
+    pub fn missing(self) -> Option<&'static str> {
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::is_x86_feature_detected as has;
+            let avx2_fma = has!("avx2") && has!("fma");
+            match self {
+                CpuKernel::Portable => None,
+                CpuKernel::Avx2Fma => (!avx2_fma).then_some("AVX2 and FMA"),
+                CpuKernel::Avx512 => {
+                    let avx512 =
+                        has!("avx512f") && has!("avx512vl") && has!("avx512dq") && has!("avx512bw");
+                    let bits = has!("bmi1") && has!("bmi2") && has!("lzcnt");
+                    (!(avx2_fma && avx512 && bits))
+                        .then_some("AVX-512 F/VL/DQ/BW with BMI1, BMI2 and LZCNT")
+                }
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        return match self {
+            CpuKernel::Portable => None,
+            _ => Some("an x86-64 CPU"),
+        };
+    }
+
+    /// The widest kernel this CPU runs.
+    pub fn detect() -> CpuKernel {
+        *CpuKernel::ALL
+            .iter()
+            .rev()
+            .find(|k| k.missing().is_none())
+            .unwrap_or(&CpuKernel::Portable)
+    }
+
+    /// The kernel this process uses: `detect`'s, or a narrower one named by
+    /// `LAMBERT_CPU_KERNEL` (portable, avx2+fma or avx-512; one the CPU
+    /// lacks falls back to the widest it has). Decided once.
+    pub fn active() -> CpuKernel {
+        static ACTIVE: std::sync::OnceLock<CpuKernel> = std::sync::OnceLock::new();
+        *ACTIVE.get_or_init(|| {
+            let best = CpuKernel::detect();
+            std::env::var("LAMBERT_CPU_KERNEL")
+                .ok()
+                .and_then(|name| {
+                    CpuKernel::ALL
+                        .into_iter()
+                        .find(|k| k.name() == name.to_lowercase())
+                })
+                .map_or(best, |asked| asked.min(best))
+        })
+    }
+
+    /// Whether node visits take `f32::intersect_boxes_ymm`.
+    pub fn ymm_boxes(self) -> bool {
+        self >= CpuKernel::Avx2Fma
+    }
+
+    /// Whether incoherent rays order children with `f32::push_sorted_zmm`.
+    pub fn vector_sort(self) -> bool {
+        self == CpuKernel::Avx512
+    }
+}
+
+/// Runs `f` (an `#[inline(always)]` closure) compiled for `kernel`'s vector
+/// instructions: the kernel's functions are inlined into it, so they run
+/// the same IEEE operations (the same results) in fewer instructions.
+///
+/// # Safety
+/// The CPU must run `kernel` (`CpuKernel::missing` is None).
 #[inline(always)]
-fn with_simd<R>(f: impl FnOnce() -> R) -> R {
+unsafe fn with_simd<R>(kernel: CpuKernel, f: impl FnOnce() -> R) -> R {
     #[cfg(target_arch = "x86_64")]
-    {
-        if has_avx512() {
-            #[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,bmi1,bmi2,lzcnt")]
+    match kernel {
+        CpuKernel::Avx512 => {
+            #[target_feature(
+                enable = "avx2,fma,avx512f,avx512vl,avx512dq,avx512bw,bmi1,bmi2,lzcnt"
+            )]
             fn avx512<R>(f: impl FnOnce() -> R) -> R {
                 f()
             }
-            // SAFETY: the CPU has the features `avx512` is compiled for.
+            // SAFETY: the caller vouches for the features.
             return unsafe { avx512(f) };
         }
-        // FMA too: the slab test's multiply-adds are fused, which without it
-        // is a library call per lane (4× slower traversal).
-        if has_avx2_fma() {
+        CpuKernel::Avx2Fma => {
             #[target_feature(enable = "avx2,fma")]
             fn avx2<R>(f: impl FnOnce() -> R) -> R {
                 f()
             }
-            // SAFETY: the CPU has the features `avx2` is compiled for.
+            // SAFETY: the caller vouches for the features.
             return unsafe { avx2(f) };
         }
+        CpuKernel::Portable => {}
     }
+    let _ = kernel;
     f()
-}
-
-/// Whether the CPU has what `with_simd`'s AVX-512 kernel is compiled for.
-fn has_avx512() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    return {
-        use std::is_x86_feature_detected as has;
-        let avx512 = has!("avx512f") && has!("avx512vl") && has!("avx512dq") && has!("avx512bw");
-        avx512 && has!("bmi1") && has!("bmi2") && has!("lzcnt")
-    };
-    #[cfg(not(target_arch = "x86_64"))]
-    return false;
-}
-
-/// Whether the CPU has AVX2 and FMA (x86 since 2013): what `with_simd`'s
-/// AVX2 kernel and the 8-lane slab test need.
-fn has_avx2_fma() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    return std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma");
-    #[cfg(not(target_arch = "x86_64"))]
-    return false;
 }
 
 /// Starts loading the cache lines of the `T` at `p` (which may be out of
@@ -593,10 +708,14 @@ pub fn trace_rays_f64(scene: &Scene, rays: &[layout::Ray], any_hit: bool) -> Vec
     rays.par_iter()
         .with_min_len(1024)
         .map(|ray| {
-            let hit = with_simd(
-                #[inline(always)]
-                || kernel.trace(f64::Ray::from_query(ray), any_hit),
-            );
+            // SAFETY: the active kernel runs on this CPU.
+            let hit = unsafe {
+                with_simd(
+                    CpuKernel::active(),
+                    #[inline(always)]
+                    || kernel.trace(f64::Ray::from_query(ray), any_hit),
+                )
+            };
             if hit.prim == NO_HIT {
                 f64::Hit {
                     t: ::core::primitive::f64::INFINITY,
@@ -611,7 +730,7 @@ pub fn trace_rays_f64(scene: &Scene, rays: &[layout::Ray], any_hit: bool) -> Vec
 
 #[cfg(test)]
 mod tests {
-    use super::f32::{has_vector_sort, new_stack, push_sorted, push_sorted_zmm};
+    use super::f32::{new_stack, push_sorted, push_sorted_zmm};
     use crate::layout::{BVH_WIDTH, LEAF_BIT};
 
     /// `push_sorted_zmm` pushes exactly what the insertion pushes, in the
@@ -622,15 +741,8 @@ mod tests {
     /// entries already pushed.
     #[test]
     fn vector_child_ordering_equals_the_insertion() {
-        if !has_vector_sort() {
-            // Many CPUs lack AVX-512, and there the vector ordering never
-            // runs; CI's machine has it, and says so, so there this test
-            // cannot pass without running.
-            assert!(
-                std::env::var_os("LAMBERT_REQUIRE_AVX512").is_none(),
-                "LAMBERT_REQUIRE_AVX512 is set, but this CPU lacks AVX-512"
-            );
-            eprintln!("no AVX-512 on this CPU: push_sorted_zmm never runs here, nothing to test");
+        if let Some(missing) = super::CpuKernel::Avx512.missing() {
+            eprintln!("skipped: push_sorted_zmm needs {missing}, which this CPU lacks");
             return;
         }
         // Few distinct values, so that ties are common.
@@ -665,7 +777,7 @@ mod tests {
                 }
                 let (mut sp_scalar, mut sp_vector) = (below, below);
                 let nearest = push_sorted(&mut scalar, &mut sp_scalar, &t, &children, entered);
-                // SAFETY: has_vector_sort.
+                // SAFETY: the CPU has AVX-512.
                 let nearest_vector =
                     unsafe { push_sorted_zmm(&mut vector, &mut sp_vector, &t, &children, entered) };
                 assert_eq!(
