@@ -76,7 +76,13 @@ struct Params {
     seed: u32,
     // Columns of the spp-sample stratified grid (a divisor of spp).
     strata_x: u32,
-    _pad: u32,
+    // The samples this dispatch adds to each pixel's sums: [begin, end).
+    sample_begin: u32,
+    sample_end: u32,
+    // How often `loops_completed`'s loop must run (2).
+    canary_loops: u32,
+    _pad0: u32,
+    _pad1: u32,
 }
 
 struct Triangle {
@@ -190,6 +196,9 @@ struct Surface {
 @group(0) @binding(9) var<storage, read> triangle_normals_hi: array<TriangleNormals>;
 @group(0) @binding(10) var<storage, read> bvh_nodes_hi: array<BvhNode>;
 @group(0) @binding(11) var<storage, read> bvh_blocks_hi: array<PrimBlock>;
+// Set to 1 by an invocation whose loops the driver cut short (see
+// `loops_completed`); the host then splits the work finer or fails.
+@group(0) @binding(12) var<storage, read_write> loop_status: array<atomic<u32>>;
 // Group 1 holds what one entry point reads and writes: an image tile for
 // `render`, a batch of rays for `trace_rays`.
 @group(1) @binding(0) var out_color: texture_storage_2d<rgba32float, write>;
@@ -200,6 +209,9 @@ struct Surface {
 // variance of the mean (in w).
 @group(1) @binding(4) var<storage, read> pixel_list: array<vec2<u32>>;
 @group(1) @binding(5) var<storage, read_write> pixel_results: array<vec4<f32>>;
+// `render`: each tile pixel's running sums (colour, squared luminance)
+// between the dispatches that add its samples in turn.
+@group(1) @binding(6) var<storage, read_write> tile_sums: array<vec4<f32>>;
 
 // Storage access across the split (no CPU twin: the CPU reads one array).
 fn triangle_at(i: u32) -> Triangle {
@@ -870,27 +882,46 @@ fn sample_position(pixel: vec2<u32>, sample: u32) -> vec2<f32> {
     return corner + (cell + jitter) / vec2<f32>(f32(params.strata_x), f32(strata_y));
 }
 
-struct PixelResult {
-    color: vec3<f32>,
-    prim: u32,
-    // Variance of the mean luminance: the square of the pixel's standard
-    // error, from the spread of its samples (0 at 1 sample). Adaptive
-    // sampling refines where it is large.
-    variance: f32,
-}
-
 const LUMINANCE: vec3<f32> = vec3<f32>(0.2126, 0.7152, 0.0722);
 
-// One pixel: the box-filtered mean of its samples, and the primitive its
-// first sample hit.
-fn render_pixel(pixel: vec2<u32>) -> PixelResult {
-    var sum = vec3<f32>(0.0);
-    var sum_squares = 0.0;
+// Mesa's llvmpipe (lavapipe, and its GL driver) ends every loop after its
+// first iteration once an invocation group has run 65535 loop iterations in
+// all (gallivm's LP_MAX_TGSI_LOOP_ITERATIONS), silently: high-spp pixels
+// then lost their later samples' hits. A loop that must run
+// `params.canary_loops` (2) times, run last, tells whether that happened;
+// the host keeps each dispatch's samples under the budget and redoes the
+// work in smaller parts when it did. Other drivers never trip it.
+fn loops_completed() -> bool {
+    var runs = 0u;
+    for (var i = 0u; i < params.canary_loops; i++) {
+        runs += 1u;
+    }
+    return runs == params.canary_loops;
+}
+
+fn report_cut_loops() {
+    if !loops_completed() {
+        atomicOr(&loop_status[0], 1u);
+    }
+}
+
+// Samples `params.sample_begin` to `params.sample_end` of `pixel`, added in
+// turn to `sums` (colour, squared luminance): samples split over several
+// dispatches sum exactly as in one loop. `prim` is what the first of them
+// hit.
+struct SampleSums {
+    sums: vec4<f32>,
+    prim: u32,
+}
+
+fn add_samples(pixel: vec2<u32>, sums: vec4<f32>) -> SampleSums {
+    var sum = sums.xyz;
+    var sum_squares = sums.w;
     var first_prim = NO_HIT;
-    for (var sample = 0u; sample < params.spp; sample++) {
+    for (var sample = params.sample_begin; sample < params.sample_end; sample++) {
         let ray = camera_ray(sample_position(pixel, sample));
         let hit = trace_closest(ray);
-        if sample == 0u {
+        if sample == params.sample_begin {
             first_prim = hit.prim;
         }
         let color = shade(ray, hit);
@@ -898,14 +929,22 @@ fn render_pixel(pixel: vec2<u32>) -> PixelResult {
         let y = dot(color, LUMINANCE);
         sum_squares += y * y;
     }
+    return SampleSums(vec4<f32>(sum, sum_squares), first_prim);
+}
+
+// A pixel's box-filtered mean and the variance of its mean luminance (the
+// square of its standard error, from the spread of its samples; 0 at 1
+// sample: adaptive sampling refines where it is large), from the sums of
+// all `params.spp` samples.
+fn pixel_mean(sums: vec4<f32>) -> vec4<f32> {
     let n = f32(params.spp);
-    let mean = sum / n;
+    let mean = sums.xyz / n;
     let y = dot(mean, LUMINANCE);
     var variance = 0.0;
     if params.spp > 1u {
-        variance = max(0.0, sum_squares - n * y * y) / ((n - 1.0) * n);
+        variance = max(0.0, sums.w - n * y * y) / ((n - 1.0) * n);
     }
-    return PixelResult(mean, first_prim, variance);
+    return vec4<f32>(mean, variance);
 }
 
 @compute @workgroup_size(8, 8)
@@ -915,9 +954,21 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= size.x || id.y >= size.y || pixel.x >= params.width || pixel.y >= params.height {
         return;
     }
-    let result = render_pixel(pixel);
-    textureStore(out_color, id.xy, vec4<f32>(result.color, result.variance));
-    textureStore(out_prim, id.xy, vec4<u32>(result.prim, 0u, 0u, 0u));
+    let slot = id.y * size.x + id.x;
+    var sums = vec4<f32>(0.0);
+    if params.sample_begin > 0u {
+        sums = tile_sums[slot];
+    }
+    let result = add_samples(pixel, sums);
+    if params.sample_begin == 0u {
+        textureStore(out_prim, id.xy, vec4<u32>(result.prim, 0u, 0u, 0u));
+    }
+    if params.sample_end == params.spp {
+        textureStore(out_color, id.xy, pixel_mean(result.sums));
+    } else {
+        tile_sums[slot] = result.sums;
+    }
+    report_cut_loops();
 }
 
 // One ray of a `lambert trace` batch. Misses leave t = FAR, prim = NO_HIT.
@@ -927,15 +978,25 @@ fn trace_rays(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     hits[id.x] = trace(rays[id.x], ANY_HIT);
+    report_cut_loops();
 }
 
 // Adaptive sampling's later passes: `params.spp` more samples (seeded by
-// `params.seed`) for each listed pixel.
+// `params.seed`) for each listed pixel, in parts as `render` adds them.
 @compute @workgroup_size(64)
 fn render_pixel_list(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x >= arrayLength(&pixel_list) {
         return;
     }
-    let result = render_pixel(pixel_list[id.x]);
-    pixel_results[id.x] = vec4<f32>(result.color, result.variance);
+    var sums = vec4<f32>(0.0);
+    if params.sample_begin > 0u {
+        sums = pixel_results[id.x];
+    }
+    let result = add_samples(pixel_list[id.x], sums);
+    if params.sample_end == params.spp {
+        pixel_results[id.x] = pixel_mean(result.sums);
+    } else {
+        pixel_results[id.x] = result.sums;
+    }
+    report_cut_loops();
 }

@@ -97,6 +97,18 @@ fn is_software(info: &wgpu::AdapterInfo) -> bool {
     info.device_type == wgpu::DeviceType::Cpu
 }
 
+/// Mesa's llvmpipe, as lavapipe (Vulkan) or through GL: it cuts loops short
+/// after 65535 iterations an invocation group (the shader's
+/// `loops_completed`).
+fn is_llvmpipe(info: &wgpu::AdapterInfo) -> bool {
+    info.name.to_lowercase().contains("llvmpipe") || info.driver.to_lowercase().contains("llvmpipe")
+}
+
+/// Samples a dispatch adds to each pixel on llvmpipe: the bundled scenes'
+/// pixels ran out of loop iterations from about 192 (a 3,674-triangle
+/// bunny, two lights); a heavier scene halves it as often as it needs.
+const LLVMPIPE_SAMPLES_PER_DISPATCH: u32 = 32;
+
 /// An open device and queue.
 pub struct Gpu {
     pub device: wgpu::Device,
@@ -392,6 +404,14 @@ pub struct GpuRenderer {
     prim_texture: wgpu::Texture,
     color_staging: wgpu::Buffer,
     prim_staging: wgpu::Buffer,
+    /// The shader's flag that the driver cut its loops short, and its
+    /// readback.
+    loop_status: wgpu::Buffer,
+    loop_status_staging: wgpu::Buffer,
+    /// Samples one dispatch adds to a pixel: few enough that no invocation
+    /// trips llvmpipe's loop limit (`loops_completed` in the shader);
+    /// halved whenever one still does.
+    samples_per_dispatch: u32,
     /// Bytes of the scene's buffers on the device.
     pub device_bytes: u64,
     /// The arrays split over two bindings ("triangles" also stands for
@@ -430,7 +450,11 @@ pub fn params_for(scene: &Scene, camera: &Camera) -> Params {
         spp: scene.spp,
         seed: scene.seed,
         strata_x: crate::scene::strata_columns(scene.spp),
-        _pad: 0,
+        sample_begin: 0,
+        sample_end: scene.spp,
+        canary_loops: 2,
+        _pad0: 0,
+        _pad1: 0,
     }
 }
 
@@ -613,6 +637,26 @@ impl GpuRenderer {
         };
         let color_staging = staging("color readback", 16);
         let prim_staging = staging("prim readback", 4);
+        let tile_sums = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("tile sums"),
+            size: (TILE * TILE * 16) as u64,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        let loop_status = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("loop status"),
+            size: 4,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let loop_status_staging = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("loop status readback"),
+            size: 4,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
 
         let scene_layout = bind_group_layout(
             device,
@@ -630,6 +674,7 @@ impl GpuRenderer {
                 (9, BindingKind::Storage),
                 (10, BindingKind::Storage),
                 (11, BindingKind::Storage),
+                (12, BindingKind::StorageWrite),
             ],
         );
         let image_layout = bind_group_layout(
@@ -638,6 +683,7 @@ impl GpuRenderer {
             &[
                 (0, BindingKind::Image(wgpu::TextureFormat::Rgba32Float)),
                 (1, BindingKind::Image(wgpu::TextureFormat::R32Uint)),
+                (6, BindingKind::StorageWrite),
             ],
         );
         let rays_layout = bind_group_layout(
@@ -664,6 +710,7 @@ impl GpuRenderer {
             entry(9, normals.high_binding()),
             entry(10, nodes.high_binding()),
             entry(11, blocks.high_binding()),
+            entry(12, loop_status.as_entire_binding()),
         ];
         let color_view = color_texture.create_view(&Default::default());
         let prim_view = prim_texture.create_view(&Default::default());
@@ -686,6 +733,10 @@ impl GpuRenderer {
                     binding: 1,
                     resource: wgpu::BindingResource::TextureView(&prim_view),
                 },
+                wgpu::BindGroupEntry {
+                    binding: 6,
+                    resource: tile_sums.as_entire_binding(),
+                },
             ],
         });
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -697,6 +748,11 @@ impl GpuRenderer {
         }
         gpu.wait()?;
         let timer = Timer::new(&gpu);
+        let samples_per_dispatch = if is_llvmpipe(&gpu.info) {
+            LLVMPIPE_SAMPLES_PER_DISPATCH
+        } else {
+            u32::MAX
+        };
         Ok(GpuRenderer {
             gpu,
             module,
@@ -716,6 +772,9 @@ impl GpuRenderer {
             prim_texture,
             color_staging,
             prim_staging,
+            loop_status,
+            loop_status_staging,
+            samples_per_dispatch,
             device_bytes,
             split_arrays,
             timer,
@@ -746,7 +805,7 @@ impl GpuRenderer {
                 let tile_width = side.min(width - tile_x);
                 let tile_height = side.min(height - tile_y);
                 let start = Instant::now();
-                let device_time = self.dispatch_tile(tile_x, tile_y, tile_width, tile_height)?;
+                let device_time = self.render_tile(tile_x, tile_y, tile_width, tile_height)?;
                 timings.render += start.elapsed();
                 if let Some(t) = device_time {
                     *timings.device.get_or_insert(Duration::ZERO) += t;
@@ -776,12 +835,81 @@ impl GpuRenderer {
         ))
     }
 
-    /// Side of the tiles `render` dispatches: TILE at 1 sample per pixel,
-    /// smaller as samples grow, so that a dispatch traces about as many
-    /// camera rays (TILE²) at any spp.
+    /// Side of the tiles `render` dispatches: TILE at 1 sample per pixel
+    /// per dispatch, smaller as they grow, so that a dispatch traces about
+    /// as many camera rays (TILE²) at any spp.
     pub fn tile_side(&self) -> u32 {
-        let side = TILE / self.params.spp.isqrt().max(1);
+        let samples = self.params.spp.min(self.samples_per_dispatch);
+        let side = TILE / samples.isqrt().max(1);
         side.next_multiple_of(WORKGROUP).clamp(WORKGROUP, TILE)
+    }
+
+    /// Renders one tile, its samples over as many dispatches as
+    /// `samples_per_dispatch` asks; if the driver still cut the shader's
+    /// loops short, again with half as many per dispatch, down to one,
+    /// then fails rather than return a wrong picture. Returns the device
+    /// time where timestamps work.
+    fn render_tile(&mut self, x: u32, y: u32, width: u32, height: u32) -> Result<Option<Duration>> {
+        let spp = self.params.spp;
+        loop {
+            let step = self.samples_per_dispatch.min(spp);
+            let mut device_time = None;
+            for begin in (0..spp).step_by(step as usize) {
+                self.params.sample_begin = begin;
+                self.params.sample_end = (begin + step).min(spp);
+                if let Some(t) = self.dispatch_tile(x, y, width, height)? {
+                    *device_time.get_or_insert(Duration::ZERO) += t;
+                }
+            }
+            if !self.loops_were_cut()? {
+                return Ok(device_time);
+            }
+            self.fewer_samples_per_dispatch()?;
+        }
+    }
+
+    /// Halves `samples_per_dispatch` after the driver cut loops short.
+    fn fewer_samples_per_dispatch(&mut self) -> Result<()> {
+        let step = self.samples_per_dispatch.min(self.params.spp);
+        if step <= 1 {
+            return Err(Error::Gpu(format!(
+                "{} cut the shader's loops short even at one sample per pixel per dispatch \
+                 (Mesa's llvmpipe ends loops after 65535 iterations an invocation group): \
+                 this scene is too complex for this adapter; use --device cpu",
+                self.gpu.describe()
+            )));
+        }
+        self.samples_per_dispatch = step / 2;
+        Ok(())
+    }
+
+    /// Whether any invocation since the last call found its loops cut short
+    /// (the shader's `report_cut_loops`); clears the flag.
+    fn loops_were_cut(&self) -> Result<bool> {
+        let gpu = &self.gpu;
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(&self.loop_status, 0, &self.loop_status_staging, 0, 4);
+        encoder.clear_buffer(&self.loop_status, 0, None);
+        gpu.queue.submit([encoder.finish()]);
+        let (sender, receiver) = mpsc::channel();
+        self.loop_status_staging
+            .map_async(wgpu::MapMode::Read, .., move |r| {
+                let _ = sender.send(r);
+            });
+        gpu.wait()?;
+        receiver
+            .recv()
+            .map_err(|e| Error::Gpu(format!("readback: {e}")))?
+            .map_err(|e| Error::Gpu(format!("readback: {e}")))?;
+        let cut = {
+            let mapped = self
+                .loop_status_staging
+                .get_mapped_range(..)
+                .map_err(|e| Error::Gpu(format!("readback: {e}")))?;
+            bytemuck::cast_slice::<u8, u32>(&mapped)[0] != 0
+        };
+        self.loop_status_staging.unmap();
+        Ok(cut)
     }
 
     /// Number of tiles `render` dispatches for the current camera.
@@ -951,7 +1079,14 @@ impl GpuRenderer {
         let pipeline = self.trace_pipelines[any_hit as usize]
             .as_ref()
             .expect("prepared");
-        let hits: Vec<Hit> = self.run_list(pipeline, &self.rays_layout, 2, rays, 1 << 20)?;
+        let hits: Vec<Hit> = self.run_list(pipeline, &self.rays_layout, 2, rays, 1 << 20, None)?;
+        if self.loops_were_cut()? {
+            return Err(Error::Gpu(format!(
+                "{} cut the shader's loops short on a ray of this query (Mesa's llvmpipe \
+                 ends loops after 65535 iterations an invocation group): use --device cpu",
+                self.gpu.describe()
+            )));
+        }
         Ok(hits
             .into_iter()
             .map(|h| if h.prim == NO_HIT { Hit::MISS } else { h })
@@ -966,18 +1101,24 @@ impl GpuRenderer {
                 self.build_pipeline("render_pixel_list", &self.pixels_layout, &self.constants)?;
             self.pixel_list_pipeline = Some(pipeline);
         }
-        self.gpu
-            .queue
-            .write_buffer(&self.params_buffer, 0, bytemuck::bytes_of(&self.params));
-        let pipeline = self.pixel_list_pipeline.as_ref().expect("built");
-        // As many samples per dispatch as a full tile at 1 spp.
-        let batch = ((TILE * TILE) / self.params.spp).max(WORKGROUP * WORKGROUP) as usize;
-        self.run_list(pipeline, &self.pixels_layout, 4, pixels, batch)
+        loop {
+            let pipeline = self.pixel_list_pipeline.as_ref().expect("built");
+            let step = self.samples_per_dispatch.min(self.params.spp);
+            // As many samples per dispatch as a full tile at 1 spp.
+            let batch = ((TILE * TILE) / step).max(WORKGROUP * WORKGROUP) as usize;
+            let results =
+                self.run_list(pipeline, &self.pixels_layout, 4, pixels, batch, Some(step))?;
+            if !self.loops_were_cut()? {
+                return Ok(results);
+            }
+            self.fewer_samples_per_dispatch()?;
+        }
     }
 
     /// Runs a one-invocation-per-item entry point over `inputs` (bound at
     /// `binding`, outputs at `binding + 1`), `batch` items per dispatch so
-    /// that no dispatch runs long.
+    /// that no dispatch runs long; with `step`, the scene's samples that
+    /// many at a time, a dispatch each.
     fn run_list<I: bytemuck::Pod, O: bytemuck::Pod>(
         &self,
         pipeline: &wgpu::ComputePipeline,
@@ -985,6 +1126,7 @@ impl GpuRenderer {
         binding: u32,
         inputs: &[I],
         batch: usize,
+        step: Option<u32>,
     ) -> Result<Vec<O>> {
         const LIST_WORKGROUP: usize = 64;
         let gpu = &self.gpu;
@@ -1034,14 +1176,28 @@ impl GpuRenderer {
                     },
                 ],
             });
-            let mut encoder = gpu.device.create_command_encoder(&Default::default());
-            {
-                let mut pass = encoder.begin_compute_pass(&Default::default());
-                pass.set_pipeline(pipeline);
-                pass.set_bind_group(0, &self.scene_group, &[]);
-                pass.set_bind_group(1, &group, &[]);
-                pass.dispatch_workgroups(chunk.len().div_ceil(LIST_WORKGROUP) as u32, 1, 1);
+            let spp = self.params.spp;
+            let step = step.unwrap_or(spp);
+            for begin in (0..spp).step_by(step as usize) {
+                let params = Params {
+                    sample_begin: begin,
+                    sample_end: (begin + step).min(spp),
+                    ..self.params
+                };
+                gpu.queue
+                    .write_buffer(&self.params_buffer, 0, bytemuck::bytes_of(&params));
+                let mut encoder = gpu.device.create_command_encoder(&Default::default());
+                {
+                    let mut pass = encoder.begin_compute_pass(&Default::default());
+                    pass.set_pipeline(pipeline);
+                    pass.set_bind_group(0, &self.scene_group, &[]);
+                    pass.set_bind_group(1, &group, &[]);
+                    pass.dispatch_workgroups(chunk.len().div_ceil(LIST_WORKGROUP) as u32, 1, 1);
+                }
+                gpu.queue.submit([encoder.finish()]);
+                gpu.wait()?;
             }
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
             encoder.copy_buffer_to_buffer(&out_buffer, 0, &staging, 0, out_len);
             gpu.queue.submit([encoder.finish()]);
             let (sender, receiver) = mpsc::channel();

@@ -44,7 +44,13 @@ pub struct Params {
     pub seed: u32,
     /// Columns of the stratified sample grid (a divisor of spp).
     pub strata_x: u32,
-    pub _pad: u32,
+    /// The samples one dispatch adds to each pixel: [begin, end).
+    pub sample_begin: u32,
+    pub sample_end: u32,
+    /// Trip count of the shader's `loops_completed` check: 2.
+    pub canary_loops: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
 }
 
 #[repr(C)]

@@ -713,7 +713,10 @@ fn successful_commands_print_no_error_lines() {
         let text = String::from_utf8_lossy(&output.stdout).to_string()
             + &String::from_utf8_lossy(&output.stderr);
         for line in text.lines() {
-            assert!(!line.to_lowercase().contains("error"), "{args:?} printed {line:?}");
+            assert!(
+                !line.to_lowercase().contains("error"),
+                "{args:?} printed {line:?}"
+            );
         }
         if args == ["info"] {
             let kernel = lambert::cpu::CpuKernel::active().name();

@@ -164,3 +164,60 @@ fn adaptive_sampling_beats_uniform_at_the_same_sample_count() {
         );
     }
 }
+
+/// High spp on small and odd image sizes, up to the maximum, GPU against
+/// CPU, uniform and adaptive. llvmpipe (lavapipe, CI's adapter) ends every
+/// loop once an invocation group has run 65535 loop iterations: before the
+/// samples were split over dispatches (and that limit checked by the
+/// shader), the bunny's GPU pixels lost most of their light from about 192
+/// spp, with no warning.
+#[test]
+fn high_spp_renders_agree_on_both_paths_at_every_size() {
+    use lambert::adaptive::{AdaptiveSettings, render_adaptive};
+    use lambert::render::Renderer;
+    let bunny = load("bunny");
+    let gpu = open_gpu();
+    let mut renderer = lambert::gpu::GpuRenderer::new(gpu, &bunny).unwrap();
+    let sizes = [(1, 1), (5, 3), (9, 17)];
+    for (width, height) in sizes {
+        for spp in [1, 7, 64, 192, 256, 1000, lambert::scene::MAX_SPP] {
+            // 9×17 at the top spp costs the CPU path most; its smaller
+            // neighbours cover the same per-pixel work.
+            if width * height > 20 && spp > 256 {
+                continue;
+            }
+            let mut scene = at_spp(&bunny, spp);
+            scene.camera.width = width;
+            scene.camera.height = height;
+            renderer.set_camera(&scene, &scene.camera);
+            let gpu_image = renderer.render(&Progress::hidden()).unwrap().0;
+            let cpu_image = render_cpu(&scene);
+            let stats = compare(&gpu_image, &cpu_image, &Tolerance::default()).unwrap();
+            assert!(
+                stats.passed,
+                "{width}×{height} at {spp} spp: GPU vs CPU\n{stats}"
+            );
+            assert_eq!(
+                gpu_image.prims, cpu_image.prims,
+                "{width}×{height} at {spp} spp"
+            );
+        }
+    }
+    let mut scene = bunny.clone();
+    scene.camera.width = 7;
+    scene.camera.height = 5;
+    let settings = AdaptiveSettings {
+        target_error: 1e-5,
+        base_spp: 4,
+        max_spp: 1024,
+    };
+    let (cpu_image, report) = render_adaptive(&mut Renderer::Cpu, &scene, settings).unwrap();
+    let mut gpu = Renderer::Gpu(Box::new(
+        lambert::gpu::GpuRenderer::new(open_gpu(), &scene).unwrap(),
+    ));
+    let (gpu_image, gpu_report) = render_adaptive(&mut gpu, &scene, settings).unwrap();
+    assert_eq!(report.refined_per_pass, gpu_report.refined_per_pass);
+    assert!(report.refined_per_pass.len() >= 7, "{report:?}");
+    let stats = compare(&gpu_image, &cpu_image, &Tolerance::default()).unwrap();
+    assert!(stats.passed, "adaptive to 1024 spp: GPU vs CPU\n{stats}");
+}

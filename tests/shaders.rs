@@ -85,7 +85,11 @@ fn host_structs_match_wgsl_layout() {
             spp,
             seed,
             strata_x,
-            _pad,
+            sample_begin,
+            sample_end,
+            canary_loops,
+            _pad0,
+            _pad1,
         }
     );
     check_layout!(

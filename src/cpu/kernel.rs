@@ -601,16 +601,29 @@ impl<'a> Kernel<'a> {
     /// first sample hit, and the variance of its mean luminance.
     #[inline(always)]
     pub fn render_pixel(&self, x: u32, y: u32) -> (Vec3, u32, Real) {
+        let (sums, prim) = self.add_samples(x, y, 0..self.scene.spp, (Vec3::ZERO, 0.0));
+        let (mean, variance) = self.pixel_mean(sums);
+        (mean, prim, variance)
+    }
+
+    /// `samples` of the pixel added in turn to `sums` (colour, squared
+    /// luminance), and what the first of them hit.
+    pub fn add_samples(
+        &self,
+        x: u32,
+        y: u32,
+        samples: std::ops::Range<u32>,
+        sums: (Vec3, Real),
+    ) -> ((Vec3, Real), u32) {
         let luminance = Vec3::new(0.2126, 0.7152, 0.0722);
-        let mut sum = Vec3::ZERO;
-        let mut sum_squares: Real = 0.0;
+        let (mut sum, mut sum_squares) = sums;
         let mut first_prim = NO_HIT;
-        let spp = self.scene.spp;
-        for sample in 0..spp {
+        let first = samples.start;
+        for sample in samples {
             let (px, py) = self.sample_position(x, y, sample);
             let ray = self.camera_ray(px, py);
             let hit = self.trace_closest(ray);
-            if sample == 0 {
+            if sample == first {
                 first_prim = hit.prim;
             }
             let color = self.shade(&ray, &hit);
@@ -618,6 +631,14 @@ impl<'a> Kernel<'a> {
             let l = color.dot(luminance);
             sum_squares += l * l;
         }
+        ((sum, sum_squares), first_prim)
+    }
+
+    /// The pixel's mean and the variance of its mean luminance, from the
+    /// sums of all the scene's samples.
+    pub fn pixel_mean(&self, (sum, sum_squares): (Vec3, Real)) -> (Vec3, Real) {
+        let luminance = Vec3::new(0.2126, 0.7152, 0.0722);
+        let spp = self.scene.spp;
         let n = spp as Real;
         let mean = sum / n;
         let l = mean.dot(luminance);
@@ -626,7 +647,7 @@ impl<'a> Kernel<'a> {
         } else {
             0.0
         };
-        (mean, first_prim, variance)
+        (mean, variance)
     }
 }
 
