@@ -173,6 +173,9 @@ struct PrimBlock {
 struct Shear {
     axes: vec3<u32>,
     s: vec3<f32>,
+    // The power of two `trace` scaled the direction by (see the CPU twin's
+    // prepare_ray): hit distances are scaled back by it.
+    t_scale: f32,
 }
 
 struct Surface {
@@ -349,7 +352,7 @@ fn ray_shear(dir: vec3<f32>) -> Shear {
         kx = ky;
         ky = k;
     }
-    return Shear(vec3<u32>(kx, ky, kz), vec3<f32>(dir[kx] / dir[kz], dir[ky] / dir[kz], 1.0 / dir[kz]));
+    return Shear(vec3<u32>(kx, ky, kz), vec3<f32>(dir[kx] / dir[kz], dir[ky] / dir[kz], 1.0 / dir[kz]), 1.0);
 }
 
 // Woop, Benthin and Wald, "Watertight Ray/Triangle Intersection" (JCGT
@@ -717,17 +720,41 @@ fn trace_brute_force(ray_in: Ray, shear: Shear, any_hit: bool) -> Hit {
     return hit;
 }
 
+// Powers of two 2^k and 2^-k such that m (> 0)·2^k is in [1, 2); 1 and 1
+// for 0 or a subnormal (the CPU twin's direction_scale).
+fn direction_scale(m: f32) -> vec2<f32> {
+    let exponent = (bitcast<u32>(m) >> 23u) & 0xffu;
+    if exponent == 0u || exponent >= 254u {
+        return vec2<f32>(1.0);
+    }
+    return vec2<f32>(bitcast<f32>((254u - exponent) << 23u), bitcast<f32>(exponent << 23u));
+}
+
 fn trace(ray_in: Ray, any_hit: bool) -> Hit {
     var ray = ray_in;
+    // The direction scaled by a power of two, exactly (see the CPU twin's
+    // prepare_ray): tiny directions' clamped components stay negligible.
+    let m = abs(ray.dir);
+    let scale = direction_scale(max(max(m.x, m.y), m.z));
+    ray.dir *= scale.x;
+    ray.tmin *= scale.y;
+    ray.tmax *= scale.y;
     // Misses report FAR, so an infinite tmax must not let them through. A
     // comparison, not min (unspecified for NaN): a NaN tmax becomes FAR, as
     // on the CPU.
     ray.tmax = select(FAR, ray.tmax, ray.tmax < FAR);
-    let shear = ray_shear(ray.dir);
+    var shear = ray_shear(ray.dir);
+    shear.t_scale = scale.x;
+    var hit: Hit;
     if USE_BVH {
-        return trace_bvh(ray, shear, any_hit);
+        hit = trace_bvh(ray, shear, any_hit);
+    } else {
+        hit = trace_brute_force(ray, shear, any_hit);
     }
-    return trace_brute_force(ray, shear, any_hit);
+    if hit.prim != NO_HIT {
+        hit.t *= shear.t_scale;
+    }
+    return hit;
 }
 
 fn trace_closest(ray: Ray) -> Hit {
@@ -832,8 +859,12 @@ fn shade(ray: Ray, hit: Hit) -> vec3<f32> {
         if HAS_POINT_LIGHTS && (!HAS_DIRECTIONAL_LIGHTS || light.kind == LIGHT_POINT) {
             let d = light.vector - surface.position;
             let distance_squared = dot(d, d);
+            // A light on the shaded point: no light (see the CPU twin).
+            if distance_squared == 0.0 {
+                continue;
+            }
             to_light = d / sqrt(distance_squared);
-            irradiance = light.color / distance_squared;
+            irradiance = min(light.color / distance_squared, vec3<f32>(FAR));
             let s = light.vector - origin;
             let shadow_length = length(s);
             shadow_ray = Ray(origin, 0.0, s / shadow_length, shadow_length);

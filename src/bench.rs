@@ -91,20 +91,19 @@ pub fn load_input(path: &Path, size: u32) -> Result<Scene> {
     }
 }
 
-/// The ladder of issue 3, from `models` (normally ../shared/models), in
-/// order of size; those missing are skipped.
+/// The default ladder: every OBJ model in `models` (normally
+/// ../shared/models), smallest file first.
 pub fn default_ladder(models: &Path) -> Vec<PathBuf> {
-    [
-        "dragon_res4",
-        "dragon_res3",
-        "stanford_bunny",
-        "dragon_res2",
-        "dragon",
-    ]
-    .iter()
-    .map(|name| models.join(format!("{name}.obj")))
-    .filter(|p| p.exists())
-    .collect()
+    let mut found: Vec<(u64, PathBuf)> = std::fs::read_dir(models)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .map(|entry| entry.path())
+        .filter(|p| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("obj")))
+        .filter_map(|p| Some((std::fs::metadata(&p).ok()?.len(), p)))
+        .collect();
+    found.sort();
+    found.into_iter().map(|(_, p)| p).collect()
 }
 
 /// Which renderers a benchmark runs on.

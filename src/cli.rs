@@ -80,11 +80,22 @@ struct SceneOptions {
     /// Seed of the sample jitter [default: the scene's render.seed, else 0].
     #[arg(long)]
     seed: Option<u32>,
+    /// Image width [default: the scene's; a model file's 1024]; with only
+    /// one of --width and --height, the other keeps the aspect ratio.
+    #[arg(long)]
+    width: Option<u32>,
+    /// Image height [default: the scene's; a model file's 768, or its
+    /// glTF camera's aspect ratio].
+    #[arg(long)]
+    height: Option<u32>,
+    /// A glTF file's camera, by name [default: its first perspective one].
+    #[arg(long)]
+    camera: Option<String>,
 }
 
 impl SceneOptions {
     fn load(&self, path: &Path) -> Result<Scene> {
-        let mut scene = Scene::load(path)?;
+        let mut scene = Scene::load_with_camera(path, self.camera.as_deref())?;
         self.apply(&mut scene)?;
         Ok(scene)
     }
@@ -101,6 +112,17 @@ impl SceneOptions {
         if let Some(seed) = self.seed {
             scene.seed = seed;
         }
+        let (w, h) = (scene.camera.width as f64, scene.camera.height as f64);
+        let (width, height) = match (self.width, self.height) {
+            (None, None) => return Ok(()),
+            (Some(width), Some(height)) => (width, height),
+            (Some(width), None) => (width, ((width as f64 * h / w).round() as u32).max(1)),
+            (None, Some(height)) => (((height as f64 * w / h).round() as u32).max(1), height),
+        };
+        crate::scene::validate_resolution(width, height)
+            .map_err(|e| Error::Usage(format!("--width/--height: {e}")))?;
+        scene.camera.width = width;
+        scene.camera.height = height;
         Ok(())
     }
 }
@@ -218,15 +240,15 @@ struct DiffArgs {
     #[arg(long)]
     json: bool,
     /// Allowed channel difference: abs + rel·|value| (linear).
-    #[arg(long, default_value_t = Tolerance::default().abs)]
+    #[arg(long, default_value_t = Tolerance::default().abs, value_parser = non_negative)]
     tol_abs: f32,
-    #[arg(long, default_value_t = Tolerance::default().rel)]
+    #[arg(long, default_value_t = Tolerance::default().rel, value_parser = non_negative)]
     tol_rel: f32,
-    /// Fraction of pixels allowed beyond the tolerance.
-    #[arg(long, default_value_t = Tolerance::default().max_bad_fraction)]
+    /// Fraction of pixels allowed beyond the tolerance (0 to 1).
+    #[arg(long, default_value_t = Tolerance::default().max_bad_fraction, value_parser = fraction)]
     max_bad: f64,
-    /// Fraction of pixels allowed to hit a different primitive.
-    #[arg(long, default_value_t = Tolerance::default().max_prim_mismatch_fraction)]
+    /// Fraction of pixels allowed to hit a different primitive (0 to 1).
+    #[arg(long, default_value_t = Tolerance::default().max_prim_mismatch_fraction, value_parser = fraction)]
     max_prim_mismatch: f64,
     #[command(flatten)]
     options: SceneOptions,
@@ -317,10 +339,33 @@ struct CameraRaysArgs {
     output: PathBuf,
 }
 
+/// A finite number ≥ 0.
+fn non_negative(text: &str) -> std::result::Result<f32, String> {
+    match text.parse::<f32>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!("'{text}' is not a finite number ≥ 0")),
+    }
+}
+
+/// A number from 0 to 1.
+fn fraction(text: &str) -> std::result::Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
+        _ => Err(format!("'{text}' is not a fraction from 0 to 1")),
+    }
+}
+
+/// `lambert diff`'s exit code for an error (as diff(1)): 1 means only that
+/// the images differ.
+pub const DIFF_ERROR: u8 = 2;
+
 pub fn run() -> Result<ExitCode> {
     match Cli::parse().command {
         Command::Render(args) => render(&args),
-        Command::Diff(args) => diff(&args),
+        Command::Diff(args) => diff(&args).or_else(|e| {
+            eprintln!("error: {e}");
+            Ok(ExitCode::from(DIFF_ERROR))
+        }),
         Command::Trace(args) => trace(&args),
         Command::CameraRays(args) => camera_rays(&args),
         Command::Info(args) => info(&args),
@@ -375,7 +420,7 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
     let start = Instant::now();
     let (mut renderer, note) = Renderer::open(&scene, args.device, &args.adapter.request())?;
     let upload = start.elapsed();
-    if let Some(note) = note {
+    if let Some(note) = note.filter(|_| !args.quiet) {
         eprintln!("{note}");
     }
     if !args.quiet {
@@ -502,7 +547,7 @@ fn turntable(args: &RenderArgs, frames: u32) -> Result<ExitCode> {
     check_output_path(&frame_path(&args.output, 0)?)?;
     let mut scene = args.options.load(&args.scene)?;
     let (mut renderer, note) = Renderer::open(&scene, args.device, &args.adapter.request())?;
-    if let Some(note) = note {
+    if let Some(note) = note.filter(|_| !args.quiet) {
         eprintln!("{note}");
     }
     if !args.quiet {
@@ -540,7 +585,7 @@ fn check_output_path(path: &Path) -> Result<()> {
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
     match extension.as_deref() {
-        Some("png" | "exr" | "pfm") => Ok(()),
+        Some("png" | "exr" | "pfm") => crate::output::prepare_output(path),
         _ => Err(Error::Usage(format!(
             "{}: unknown image format; use .png, .exr or .pfm",
             path.display()
@@ -555,6 +600,9 @@ pub fn render_gpu(scene: &Scene, request: &AdapterRequest) -> Result<Rendered> {
 }
 
 fn diff(args: &DiffArgs) -> Result<ExitCode> {
+    if let Some(path) = &args.heatmap {
+        check_output_path(path)?;
+    }
     let scene = args.options.load(&args.scene)?;
     let tolerance = Tolerance {
         abs: args.tol_abs,
@@ -605,6 +653,7 @@ struct TraceReport {
 }
 
 fn trace(args: &TraceArgs) -> Result<ExitCode> {
+    crate::output::prepare_output(&args.output)?;
     let rays = rays::read_rays(&args.rays)?;
     let mut scene = match &args.scene {
         Some(path) => Scene::load(path)?,
@@ -672,6 +721,7 @@ fn trace(args: &TraceArgs) -> Result<ExitCode> {
 }
 
 fn camera_rays(args: &CameraRaysArgs) -> Result<ExitCode> {
+    crate::output::prepare_output(&args.output)?;
     let scene = Scene::load(&args.scene)?;
     let rays = rays::camera_rays(&scene);
     rays::write_rays(&args.output, &rays)?;
@@ -688,15 +738,20 @@ fn bench(args: &BenchArgs) -> Result<ExitCode> {
         return bench_time_vs_error(args);
     }
     let inputs = if args.inputs.is_empty() {
-        let ladder = bench::default_ladder(Path::new("../shared/models"));
+        let models = Path::new("../shared/models");
+        let ladder = bench::default_ladder(models);
         if ladder.is_empty() {
-            vec![PathBuf::from("assets/scenes/dragon.toml")]
-        } else {
-            ladder
+            return Err(Error::Usage(format!(
+                "lambert bench needs models to trace: name scene (.toml) or model (.obj) files, \
+                 or run it where {} holds OBJ models (it holds none)",
+                models.display()
+            )));
         }
+        ladder
     } else {
         args.inputs.clone()
     };
+    check_inputs_and_outputs(&inputs, args)?;
     let request = args.adapter.request();
     let mut rows = Vec::new();
     println!(
@@ -737,6 +792,21 @@ fn bench(args: &BenchArgs) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// Before any work: every input exists, and every output (--json, --plot)
+/// can be written.
+fn check_inputs_and_outputs(inputs: &[PathBuf], args: &BenchArgs) -> Result<()> {
+    if let Some(missing) = inputs.iter().find(|p| !p.exists()) {
+        return Err(Error::Usage(format!("{}: no such file", missing.display())));
+    }
+    if let Some(path) = &args.json {
+        crate::output::prepare_output(path)?;
+    }
+    if let Some(dir) = &args.plot {
+        crate::output::prepare_output(&dir.join("time_per_ray.png"))?;
+    }
+    Ok(())
+}
+
 /// A bench input's name in tables and plots: its file name without extension.
 fn input_name(path: &Path) -> String {
     path.file_stem()
@@ -755,14 +825,23 @@ fn bench_time_vs_error(args: &BenchArgs) -> Result<ExitCode> {
         .reference_spp
         .unwrap_or((4 * args.spp_list.iter().max().copied().unwrap_or(1)).min(MAX_SPP));
     validate_spp(reference_spp).map_err(|e| Error::Usage(format!("--reference-{e}")))?;
-    let inputs = if args.inputs.is_empty() {
-        ["edge_cases", "spheres", "triangle_oblique"]
+    let inputs: Vec<PathBuf> = if args.inputs.is_empty() {
+        let defaults: Vec<PathBuf> = ["edge_cases", "spheres", "triangle_oblique"]
             .iter()
             .map(|n| PathBuf::from(format!("assets/scenes/{n}.toml")))
-            .collect()
+            .collect();
+        if !defaults.iter().all(|p| p.exists()) {
+            return Err(Error::Usage(
+                "lambert bench --time-vs-error needs scenes to measure: name them, or run it \
+                 in the repository, whose assets/scenes it measures by default"
+                    .into(),
+            ));
+        }
+        defaults
     } else {
         args.inputs.clone()
     };
+    check_inputs_and_outputs(&inputs, args)?;
     let request = args.adapter.request();
     let gpu = match args.device {
         BenchDevices::Cpu => false,
@@ -836,7 +915,13 @@ fn bench_time_vs_error(args: &BenchArgs) -> Result<ExitCode> {
 }
 
 fn info(args: &AdapterArgs) -> Result<ExitCode> {
-    let adapters = gpu::enumerate_adapters(&args.request())?;
+    let request = args.request();
+    let all = gpu::enumerate_adapters(&request)?;
+    let none_at_all = all.is_empty();
+    let adapters: Vec<_> = all
+        .into_iter()
+        .filter(|a| request.matches(&a.get_info()))
+        .collect();
     let kernel = cpu::CpuKernel::active();
     println!(
         "CPU path: {} threads, {} kernel",
@@ -857,7 +942,19 @@ fn info(args: &AdapterArgs) -> Result<ExitCode> {
         }
     }
     if adapters.is_empty() {
-        println!("no GPU adapters (install Mesa's lavapipe: apt-get install mesa-vulkan-drivers)");
+        let wanted = request.describe_request()?;
+        let wanted = if wanted.is_empty() {
+            String::new()
+        } else {
+            format!(" {wanted}")
+        };
+        if none_at_all && request.wants_vulkan()? && cfg!(target_os = "linux") {
+            println!(
+                "no GPU adapters{wanted} (for a software one, install Mesa's lavapipe: apt-get install mesa-vulkan-drivers)"
+            );
+        } else {
+            println!("no GPU adapters{wanted}");
+        }
     }
     for adapter in adapters {
         let info = adapter.get_info();

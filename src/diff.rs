@@ -33,12 +33,16 @@ impl Default for Tolerance {
 #[derive(Clone, Debug, Serialize)]
 pub struct DiffStats {
     pub pixels: u64,
-    /// Largest channel difference, linear.
+    /// Pixels with a NaN or an infinity in either image: each counts as
+    /// beyond tolerance, and none enters the other statistics.
+    pub non_finite: u64,
+    /// Largest channel difference, linear, over the finite pixels.
     pub max_abs: f32,
     /// Largest channel difference in 8-bit sRGB steps.
     pub max_8bit_steps: u8,
     pub rmse: f64,
-    /// Against a peak of 1.0; None when the images are identical.
+    /// Against a peak of 1.0, over the finite pixels; None when those are
+    /// identical.
     pub psnr_db: Option<f64>,
     pub beyond_tolerance: u64,
     pub prim_mismatches: u64,
@@ -67,22 +71,33 @@ pub fn compare(a: &Rendered, b: &Rendered, tol: &Tolerance) -> Result<DiffStats>
     let mut max_8bit_steps = 0u8;
     let mut squared = 0.0f64;
     let mut beyond_tolerance = 0;
+    let mut non_finite = 0;
     for (pa, pb) in ia.rgb.iter().zip(&ib.rgb) {
+        beyond_tolerance += pixel_beyond(*pa, *pb, tol) as u64;
+        if !pa.iter().chain(pb).all(|c| c.is_finite()) {
+            non_finite += 1;
+            continue;
+        }
         for (x, y) in pa.iter().zip(pb) {
             let d = (x - y).abs();
-            max_abs = max_abs.max(if d.is_nan() { f32::INFINITY } else { d });
+            max_abs = max_abs.max(d);
             max_8bit_steps = max_8bit_steps.max(linear_to_srgb8(*x).abs_diff(linear_to_srgb8(*y)));
             squared += (d as f64).powi(2);
         }
-        beyond_tolerance += pixel_beyond(*pa, *pb, tol) as u64;
     }
     let pixels = ia.rgb.len() as u64;
+    let finite = pixels - non_finite;
     let prim_mismatches = a.prims.iter().zip(&b.prims).filter(|(x, y)| x != y).count() as u64;
-    let rmse = (squared / (3 * pixels) as f64).sqrt();
+    let rmse = if finite > 0 {
+        (squared / (3 * finite) as f64).sqrt()
+    } else {
+        0.0
+    };
     let passed = beyond_tolerance as f64 <= tol.max_bad_fraction * pixels as f64
         && prim_mismatches as f64 <= tol.max_prim_mismatch_fraction * pixels as f64;
     Ok(DiffStats {
         pixels,
+        non_finite,
         max_abs,
         max_8bit_steps,
         rmse,
@@ -135,14 +150,28 @@ impl std::fmt::Display for DiffStats {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let percent = |n: u64| 100.0 * n as f64 / self.pixels as f64;
         writeln!(f, "pixels compared      {}", self.pixels)?;
+        let of_finite = if self.non_finite > 0 {
+            writeln!(
+                f,
+                "not finite           {} ({:.4}%): NaN or infinity in either image",
+                self.non_finite,
+                percent(self.non_finite)
+            )?;
+            " (finite pixels)"
+        } else {
+            ""
+        };
         writeln!(
             f,
-            "max abs difference   {:.3e} linear, {} 8-bit steps",
+            "max abs difference   {:.3e} linear, {} 8-bit steps{of_finite}",
             self.max_abs, self.max_8bit_steps
         )?;
-        writeln!(f, "RMSE                 {:.3e}", self.rmse)?;
+        writeln!(f, "RMSE                 {:.3e}{of_finite}", self.rmse)?;
         match self.psnr_db {
-            Some(p) => writeln!(f, "PSNR                 {p:.1} dB")?,
+            Some(p) => writeln!(f, "PSNR                 {p:.1} dB{of_finite}")?,
+            None if self.non_finite > 0 => {
+                writeln!(f, "PSNR                 inf (finite pixels identical)")?
+            }
             None => writeln!(f, "PSNR                 inf (identical)")?,
         }
         writeln!(

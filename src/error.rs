@@ -15,7 +15,7 @@ pub enum Error {
     #[error("{path}: {message}")]
     Scene { path: PathBuf, message: String },
     #[error("{path}:{line}: {message}")]
-    Obj {
+    Line {
         path: PathBuf,
         line: usize,
         message: String,

@@ -48,20 +48,65 @@ impl AdapterRequest {
         self.name_filter().is_some()
     }
 
-    /// The backends asked for, if any were.
+    /// The backends asked for, if any were: `--backend`, else wgpu's
+    /// `WGPU_BACKEND` (a comma-separated list), each name checked alike.
     fn backends(&self) -> Result<Option<wgpu::Backends>> {
+        let parse = |name: &str, source: &str| match name.trim().to_lowercase().as_str() {
+            "vulkan" | "vk" => Ok(wgpu::Backends::VULKAN),
+            "metal" | "mtl" => Ok(wgpu::Backends::METAL),
+            "dx12" | "d3d12" => Ok(wgpu::Backends::DX12),
+            "gl" | "gles" | "opengl" => Ok(wgpu::Backends::GL),
+            other => Err(Error::Usage(format!(
+                "unknown backend '{other}'{source}: use vulkan, metal, dx12 or gl"
+            ))),
+        };
         match self.backend.as_deref() {
-            None => Ok(wgpu::Backends::from_env()),
-            Some(name) => match name.to_lowercase().as_str() {
-                "vulkan" | "vk" => Ok(Some(wgpu::Backends::VULKAN)),
-                "metal" | "mtl" => Ok(Some(wgpu::Backends::METAL)),
-                "dx12" | "d3d12" => Ok(Some(wgpu::Backends::DX12)),
-                "gl" | "gles" | "opengl" => Ok(Some(wgpu::Backends::GL)),
-                other => Err(Error::Usage(format!(
-                    "unknown backend '{other}': use vulkan, metal, dx12 or gl"
-                ))),
+            Some(name) => parse(name, "").map(Some),
+            None => match std::env::var("WGPU_BACKEND") {
+                Ok(list) => list
+                    .split(',')
+                    .try_fold(wgpu::Backends::empty(), |all, name| {
+                        Ok(all | parse(name, " in WGPU_BACKEND")?)
+                    })
+                    .map(Some),
+                Err(_) => Ok(None),
             },
         }
+    }
+
+    /// Whether the adapter's name matches `--adapter`/`WGPU_ADAPTER_NAME`.
+    pub fn matches(&self, info: &wgpu::AdapterInfo) -> bool {
+        self.name_filter()
+            .is_none_or(|f| info.name.to_lowercase().contains(&f))
+    }
+
+    /// What was asked for, in words, for "no adapter" messages.
+    pub fn describe_request(&self) -> Result<String> {
+        let mut parts = Vec::new();
+        if let Some(name) = self.name_filter() {
+            parts.push(format!("whose name contains '{name}'"));
+        }
+        if let Some(backends) = self.backends()? {
+            let names: Vec<&str> = [
+                (wgpu::Backends::VULKAN, "Vulkan"),
+                (wgpu::Backends::METAL, "Metal"),
+                (wgpu::Backends::DX12, "DX12"),
+                (wgpu::Backends::GL, "GL"),
+            ]
+            .iter()
+            .filter(|(b, _)| backends.contains(*b))
+            .map(|(_, name)| *name)
+            .collect();
+            parts.push(format!("on {}", names.join(" or ")));
+        }
+        Ok(parts.join(" "))
+    }
+
+    /// Whether Vulkan is among the backends asked for (lavapipe can help).
+    pub fn wants_vulkan(&self) -> Result<bool> {
+        Ok(self
+            .backends()?
+            .is_none_or(|b| b.contains(wgpu::Backends::VULKAN)))
     }
 }
 

@@ -12,6 +12,13 @@ fn main() -> ExitCode {
         // SAFETY: no other thread exists yet to read the environment.
         unsafe { std::env::set_var("NODEVICE_SELECT", "1") };
     }
+    // Ctrl-C, SIGTERM or SIGHUP mid-write: no temporary file stays behind
+    // (the previous output is untouched: it is only ever replaced whole).
+    if let Err(e) = ctrlc::set_handler(|| lambert::output::remove_temporaries_and_exit(130)) {
+        eprintln!(
+            "warning: cannot handle Ctrl-C ({e}): an interrupted write may leave a temporary file"
+        );
+    }
     match lambert::cli::run() {
         Ok(code) => code,
         Err(e) => {

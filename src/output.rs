@@ -114,27 +114,125 @@ pub fn encode_png_rgb8(width: u32, height: u32, rgb: &[u8]) -> Result<Vec<u8>> {
     encode_rgb8(width, height, rgb).map_err(|e| Error::Usage(format!("encoding PNG: {e}")))
 }
 
-/// Writes a temporary file beside `path`, then renames it over `path`: a
-/// failure leaves any previous file untouched and no partial file behind.
-pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
-    let directory = match path.parent() {
+/// Temporary files being written, removed by `remove_temporaries` when a
+/// signal ends the process mid-write.
+static TEMPORARIES: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+/// Removes every temporary file still being written: the CLI's SIGINT,
+/// SIGTERM and SIGHUP handler calls it before exiting. Holds the registry
+/// until the process exits, so no rename can complete behind it.
+pub fn remove_temporaries_and_exit(code: i32) -> ! {
+    let guard = TEMPORARIES.lock().unwrap_or_else(|e| e.into_inner());
+    for path in guard.iter() {
+        let _ = std::fs::remove_file(path);
+    }
+    std::process::exit(code)
+}
+
+/// Where writing `path` lands: symlinks followed (a dangling one to the
+/// file it names), so that the link stays and its target is replaced.
+fn resolve_target(path: &Path) -> Result<PathBuf> {
+    let mut target = path.to_path_buf();
+    for _ in 0..40 {
+        match std::fs::symlink_metadata(&target) {
+            Ok(m) if m.file_type().is_symlink() => {
+                let link = std::fs::read_link(&target).map_err(|e| Error::io(&target, e))?;
+                target = match target.parent() {
+                    Some(dir) if link.is_relative() => dir.join(link),
+                    _ => link,
+                };
+            }
+            _ => return Ok(target),
+        }
+    }
+    Err(Error::Usage(format!(
+        "{}: too many levels of symbolic links",
+        path.display()
+    )))
+}
+
+/// The folder a new file at `target` goes in.
+fn folder_of(target: &Path) -> &Path {
+    match target.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
-    };
-    let name = path
+    }
+}
+
+/// Whether `target` exists and is neither a regular file nor a folder (a
+/// device, a FIFO, a socket): such a target is written directly.
+fn is_special(target: &Path) -> bool {
+    std::fs::metadata(target).is_ok_and(|m| !m.is_file() && !m.is_dir())
+}
+
+/// Makes ready to write `path` before any work is done: its folder is
+/// created when missing (the one rule for every output, --plot's folder
+/// included), and must take a new file; a folder at `path` is an error.
+pub fn prepare_output(path: &Path) -> Result<()> {
+    let target = resolve_target(path)?;
+    if target.is_dir() {
+        return Err(Error::Usage(format!(
+            "{}: is a folder, not a file",
+            path.display()
+        )));
+    }
+    if is_special(&target) {
+        return Ok(());
+    }
+    let folder = folder_of(&target);
+    std::fs::create_dir_all(folder).map_err(|e| Error::io(folder, e))?;
+    let probe = temporary_beside(&target, "probe")?;
+    std::fs::File::create(&probe).map_err(|e| {
+        Error::Usage(format!(
+            "{}: cannot write in {}: {e}",
+            path.display(),
+            folder.display()
+        ))
+    })?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(())
+}
+
+fn temporary_beside(target: &Path, kind: &str) -> Result<PathBuf> {
+    let name = target
         .file_name()
-        .ok_or_else(|| Error::Usage(format!("{}: not a file name", path.display())))?;
-    let temporary: PathBuf = directory.join(format!(
-        ".{}.{}.tmp",
+        .ok_or_else(|| Error::Usage(format!("{}: not a file name", target.display())))?;
+    Ok(folder_of(target).join(format!(
+        ".{}.{}.{kind}",
         name.to_string_lossy(),
         std::process::id()
-    ));
-    let result = (|| {
+    )))
+}
+
+/// Writes `bytes` to `path` atomically: a temporary file beside its target
+/// (symlinks followed), then a rename over it, so that a failure or a
+/// signal leaves any previous file untouched and no partial or temporary
+/// file behind, and of two writers at once one complete file wins. A
+/// device or FIFO is written directly, as a shell redirection would.
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
+    let target = resolve_target(path)?;
+    if is_special(&target) {
+        let mut file = std::fs::OpenOptions::new()
+            .write(true)
+            .open(&target)
+            .map_err(|e| Error::io(path, e))?;
+        return file
+            .write_all(bytes)
+            .and_then(|_| file.flush())
+            .map_err(|e| Error::io(path, e));
+    }
+    let temporary = temporary_beside(&target, "tmp")?;
+    let registry = || TEMPORARIES.lock().unwrap_or_else(|e| e.into_inner());
+    registry().push(temporary.clone());
+    let written = (|| {
         let mut file = std::fs::File::create(&temporary)?;
         file.write_all(bytes)?;
-        file.sync_all()?;
-        std::fs::rename(&temporary, path)
+        file.sync_all()
     })();
+    let mut live = registry();
+    let result = written.and_then(|_| std::fs::rename(&temporary, &target));
+    live.retain(|p| p != &temporary);
+    drop(live);
     if let Err(e) = result {
         let _ = std::fs::remove_file(&temporary);
         return Err(Error::io(path, e));

@@ -157,12 +157,20 @@ pub fn camera_rays(scene: &Scene) -> Vec<Ray> {
         .collect()
 }
 
+/// Relative distance error beyond which a hit on the oracle's primitive
+/// still disagrees with it (f32 triangle hits err by about 1e-7).
+pub const AGREE_T_REL: f64 = 1e-4;
+
 /// How one set of hits agrees with the f64 oracle's.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct Agreement {
     pub rays: usize,
-    /// Same primitive (or both miss).
+    /// Same primitive at the same distance (within AGREE_T_REL), or both
+    /// miss.
     pub same: usize,
+    /// Same primitive, but a distance off by more than AGREE_T_REL (a
+    /// sphere's far side for its near one, say).
+    pub other_distance: usize,
     /// Hit where the oracle misses.
     pub false_hits: usize,
     /// Miss where the oracle hits.
@@ -190,8 +198,13 @@ impl Agreement {
                 (true, false) => a.false_misses += 1,
                 (false, false) if h.prim != o.prim => a.other_primitive += 1,
                 (false, false) => {
-                    a.same += 1;
-                    errors.push(((h.t as f64 - o.t) / o.t).abs());
+                    let error = ((h.t as f64 - o.t) / o.t).abs();
+                    if error <= AGREE_T_REL {
+                        a.same += 1;
+                    } else {
+                        a.other_distance += 1;
+                    }
+                    errors.push(error);
                 }
             }
         }
@@ -225,8 +238,8 @@ impl std::fmt::Display for Agreement {
         )?;
         writeln!(
             f,
-            "  false hits {}, false misses {}, other primitive {}",
-            self.false_hits, self.false_misses, self.other_primitive
+            "  false hits {}, false misses {}, other primitive {}, same primitive at another distance {}",
+            self.false_hits, self.false_misses, self.other_primitive, self.other_distance
         )?;
         write!(
             f,

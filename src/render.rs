@@ -55,7 +55,7 @@ impl Renderer {
                 Ok(gpu) => gpu,
                 Err(e) => {
                     let note = format!(
-                        "{e}\nnote: rendering on the CPU path instead (--device gpu uses a software adapter such as lavapipe)"
+                        "{e}\nnote: using the CPU path instead (--device gpu uses a software adapter such as lavapipe)"
                     );
                     return Ok((Renderer::Cpu, Some(note)));
                 }

@@ -16,6 +16,12 @@ use crate::loading::{self, NormalMode};
 /// Coordinates beyond this magnitude are rejected: the f32 edge tests take
 /// fourth powers of lengths and would overflow.
 pub const MAX_COORDINATE: f64 = 1e9;
+
+/// Largest sphere radius. A sphere's hit distance errs by about 1.4e-8 ×
+/// its radius (f32 rounding of |o − c|² − r²): measured from five units
+/// off the surface, radius 1e6 gives 5.374 for 5.360 (0.26%), 1e8 gives
+/// 5.75, and at 5e8 the camera ray reports the far side.
+pub const MAX_SPHERE_RADIUS: f64 = 1e6;
 /// Largest image side, in pixels.
 pub const MAX_SIDE: u32 = 65_536;
 /// Largest image, in pixels (16K × 16K): 5 GiB of host buffers.
@@ -114,9 +120,12 @@ enum Scale {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct MeshEntry {
-    obj: PathBuf,
-    #[serde(default = "default_albedo")]
-    albedo: Rgb,
+    /// Any model format (`obj` is its older name).
+    #[serde(alias = "obj")]
+    file: PathBuf,
+    /// Overrides every material of the file when given.
+    #[serde(default)]
+    albedo: Option<Rgb>,
     #[serde(default)]
     normals: NormalMode,
     #[serde(default)]
@@ -126,6 +135,9 @@ struct MeshEntry {
     #[serde(default)]
     rotate_deg: Option<[f64; 3]>,
 }
+
+/// A face's albedo when neither the scene nor its file gives one.
+pub const DEFAULT_ALBEDO: [f32; 3] = [0.8; 3];
 
 fn default_albedo() -> Rgb {
     Rgb::Uniform(0.8)
@@ -182,6 +194,9 @@ pub struct Scene {
     pub spp: u32,
     /// Seed of the sample jitter.
     pub seed: u32,
+    /// What loading read but ignored or could not find (each names its
+    /// file); the CLI prints them.
+    pub warnings: Vec<String>,
 }
 
 /// `--intersect`: the ray/triangle test. See docs/accuracy.md for what each
@@ -236,10 +251,154 @@ pub enum Accel {
 }
 
 impl Scene {
-    /// Loads a scene file; mesh paths are relative to its folder.
+    /// Loads a scene file (mesh paths are relative to its folder), or a
+    /// model file alone as a whole scene (`from_model`).
     pub fn load(path: &Path) -> Result<Scene> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        Scene::from_toml(&text, path)
+        Scene::load_with_camera(path, None)
+    }
+
+    /// `load`, with a glTF file's camera chosen by name.
+    pub fn load_with_camera(path: &Path, camera: Option<&str>) -> Result<Scene> {
+        let is_toml = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+        if is_toml {
+            if camera.is_some() {
+                return Err(Error::Usage(
+                    "--camera picks a glTF file's camera; a TOML scene has one camera".into(),
+                ));
+            }
+            let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+            return Scene::from_toml(&text, path);
+        }
+        let format = loading::Format::of(path).map_err(|_| {
+            Error::Usage(format!(
+                "{}: not a scene (.toml) or a model file ({})",
+                path.display(),
+                loading::SUPPORTED
+            ))
+        })?;
+        Scene::from_model(path, format, camera)
+    }
+
+    /// A model file alone as a scene: its geometry and materials; a glTF
+    /// file's first perspective camera (or `camera`, by name) and its
+    /// lights. With no camera, one is framed on the model; with no light,
+    /// the default light (docs/scene-format.md). The file's own normals
+    /// shade smoothly where it gives them at every corner.
+    pub fn from_model(path: &Path, format: loading::Format, camera: Option<&str>) -> Result<Scene> {
+        let mut scene = Scene::bare();
+        scene.shadows = true;
+        scene.ambient = [DEFAULT_AMBIENT; 3];
+        let (mut mesh, cameras, lights) = if format.is_gltf() {
+            let g = loading::gltf::load_scene(path, NormalMode::Smooth)?;
+            (g.mesh, g.cameras, g.lights)
+        } else {
+            (
+                loading::load_mesh(path, NormalMode::Smooth)?,
+                Vec::new(),
+                Vec::new(),
+            )
+        };
+        if !mesh.file_normals {
+            mesh.normals = None;
+        }
+        let bounds = mesh_bounds(&mesh);
+        let identity = Transform {
+            linear: DMat3::IDENTITY,
+            normal: DMat3::IDENTITY,
+            translate: DVec3::ZERO,
+        };
+        scene.add_mesh(path, "the model", mesh, &identity, None)?;
+        let chosen = match camera {
+            Some(name) => Some(
+                cameras
+                    .iter()
+                    .find(|c| c.name.as_deref() == Some(name))
+                    .ok_or_else(|| {
+                        let names: Vec<String> = cameras
+                            .iter()
+                            .map(|c| format!("'{}'", c.name.as_deref().unwrap_or("")))
+                            .collect();
+                        Error::scene(
+                            path,
+                            format!(
+                                "no perspective camera named '{name}' (the file has {})",
+                                if names.is_empty() {
+                                    "none".to_string()
+                                } else {
+                                    names.join(", ")
+                                }
+                            ),
+                        )
+                    })?,
+            ),
+            None => cameras.first(),
+        };
+        scene.camera = match chosen {
+            Some(c) => {
+                let width = DEFAULT_WIDTH;
+                let aspect = c.aspect_ratio.filter(|a| a.is_finite() && *a > 0.0);
+                let height = aspect.map_or(DEFAULT_HEIGHT, |a| {
+                    ((width as f64 / a).round() as u32).clamp(1, MAX_SIDE)
+                });
+                Camera {
+                    eye: c.eye.to_array(),
+                    look_at: (c.eye + c.forward).to_array(),
+                    up: c.up.to_array(),
+                    vfov: c.yfov_deg,
+                    width,
+                    height,
+                }
+            }
+            None => frame_camera(&bounds),
+        };
+        validate_camera(&scene.camera)
+            .map_err(|e| Error::scene(path, format!("its camera: {e}")))?;
+        for light in &lights {
+            let fail = |m: String| Error::scene(path, m);
+            match light {
+                loading::gltf::GltfLight::Point {
+                    position,
+                    intensity,
+                } => scene.lights.push(Light {
+                    vector: point("a point light's position", position.to_array()).map_err(fail)?,
+                    kind: LIGHT_POINT,
+                    color: colour(
+                        "a point light's intensity × color",
+                        Rgb::PerChannel(*intensity),
+                    )
+                    .map_err(fail)?,
+                    _pad: 0,
+                }),
+                loading::gltf::GltfLight::Directional {
+                    direction,
+                    irradiance,
+                } => {
+                    if direction.length_squared() == 0.0 {
+                        return Err(fail(
+                            "a directional light's node has a degenerate transform".into(),
+                        ));
+                    }
+                    scene.lights.push(Light {
+                        vector: (-direction.normalize()).as_vec3().to_array(),
+                        kind: LIGHT_DIRECTIONAL,
+                        color: colour(
+                            "a directional light's intensity × color",
+                            Rgb::PerChannel(*irradiance),
+                        )
+                        .map_err(fail)?,
+                        _pad: 0,
+                    });
+                }
+            }
+        }
+        if scene.lights.is_empty() {
+            scene.lights.push(default_light(&scene.camera));
+        }
+        scene.check_primitive_count(path)?;
+        scene.rebuild_bvh();
+        Ok(scene)
     }
 
     /// Parses scene text; `path` names it in errors and anchors relative paths.
@@ -267,18 +426,28 @@ impl Scene {
 
         for (i, entry) in file.mesh.iter().enumerate() {
             let field = format!("mesh[{i}]");
-            let albedo = colour(&format!("{field}.albedo"), entry.albedo).map_err(fail)?;
+            let albedo = entry
+                .albedo
+                .map(|a| colour(&format!("{field}.albedo"), a))
+                .transpose()
+                .map_err(fail)?;
             let transform = mesh_transform(&field, entry).map_err(fail)?;
-            let obj_path = base.join(&entry.obj);
-            let mesh = loading::load_obj(&obj_path, entry.normals)?;
-            scene.add_mesh(&obj_path, mesh, &transform, albedo)?;
+            let model = base.join(&entry.file);
+            let mesh = loading::load_mesh(&model, entry.normals)?;
+            let what = format!("{field} ({})", entry.file.display());
+            scene.add_mesh(path, &what, mesh, &transform, albedo)?;
         }
         for (i, entry) in file.sphere.iter().enumerate() {
             let field = format!("sphere[{i}]");
             let center = point(&format!("{field}.center"), entry.center).map_err(fail)?;
-            if !(entry.radius.is_finite() && entry.radius > 0.0 && entry.radius <= MAX_COORDINATE) {
+            if !(entry.radius.is_finite()
+                && entry.radius > 0.0
+                && entry.radius <= MAX_SPHERE_RADIUS)
+            {
                 return Err(fail(format!(
-                    "{field}.radius = {} must be positive and at most {MAX_COORDINATE:e}",
+                    "{field}.radius = {} must be positive and at most {MAX_SPHERE_RADIUS:e} \
+                     (a larger sphere's f32 hit distances err by more than 1% five units from it; \
+                     model a ground plane with triangles)",
                     entry.radius
                 )));
             }
@@ -364,6 +533,7 @@ impl Scene {
             intersect: Intersect::default(),
             spp: 1,
             seed: 0,
+            warnings: Vec::new(),
         }
     }
 
@@ -377,8 +547,8 @@ impl Scene {
             translate: DVec3::ZERO,
         };
         for path in paths {
-            let mesh = loading::load_obj(path, NormalMode::Face)?;
-            scene.add_mesh(path, mesh, &identity, [0.8; 3])?;
+            let mesh = loading::load_mesh(path, NormalMode::Face)?;
+            scene.add_mesh(path, "the mesh", mesh, &identity, None)?;
         }
         if scene.triangles.is_empty() {
             return Err(Error::Usage(format!(
@@ -399,21 +569,55 @@ impl Scene {
         (self.materials.len() - 1) as u32
     }
 
+    /// Adds `mesh` (called `what` in errors about the file at `path`),
+    /// every face with `albedo` when given, else with its file's material
+    /// (DEFAULT_ALBEDO where it has none).
     fn add_mesh(
         &mut self,
-        obj_path: &Path,
-        mesh: loading::Mesh,
+        path: &Path,
+        what: &str,
+        mut mesh: loading::Mesh,
         transform: &Transform,
-        albedo: [f32; 3],
+        albedo: Option<[f32; 3]>,
     ) -> Result<()> {
-        let material = self.add_material(albedo);
-        let to_f32 = |p: DVec3| -> Result<[f32; 3]> {
+        self.warnings.append(&mut mesh.warnings);
+        let uniform = match albedo {
+            Some(a) => Some(a),
+            None if mesh.face_materials.is_empty() => Some(DEFAULT_ALBEDO),
+            None => None,
+        };
+        let (material, file_materials, fallback) = match uniform {
+            Some(a) => (self.add_material(a), Vec::new(), 0),
+            None => {
+                let ids: Vec<u32> = mesh
+                    .materials
+                    .iter()
+                    .map(|&a| self.add_material(a))
+                    .collect();
+                let fallback = if mesh.face_materials.iter().any(Option::is_none) {
+                    self.add_material(DEFAULT_ALBEDO)
+                } else {
+                    0
+                };
+                (0, ids, fallback)
+            }
+        };
+        let face_material = |i: usize| match mesh.face_materials.get(i) {
+            _ if file_materials.is_empty() => material,
+            Some(Some(m)) => file_materials[*m as usize],
+            _ => fallback,
+        };
+        let to_f32 = |v: u32| -> Result<[f32; 3]> {
+            let p = mesh.positions[v as usize];
             let q = transform.point(p);
             if !q.is_finite() || q.abs().max_element() > MAX_COORDINATE {
                 return Err(Error::scene(
-                    obj_path,
+                    path,
                     format!(
-                        "a transformed vertex {q:?} exceeds the supported magnitude {MAX_COORDINATE:e}"
+                        "{what}: vertex {} at {} is transformed to {}, beyond the supported magnitude {MAX_COORDINATE:e}",
+                        v + 1,
+                        vector_text(p),
+                        vector_text(q)
                     ),
                 ));
             }
@@ -426,10 +630,10 @@ impl Scene {
         }
         self.triangles.reserve(mesh.triangles.len());
         for (i, tri) in mesh.triangles.iter().enumerate() {
-            let [a, b, c] = tri.map(|v| mesh.positions[v as usize]);
+            let [a, b, c] = *tri;
             self.triangles.push(Triangle {
                 v0: to_f32(a)?,
-                material,
+                material: face_material(i),
                 v1: to_f32(b)?,
                 flags: if smooth { FLAG_SMOOTH } else { 0 },
                 v2: to_f32(c)?,
@@ -449,7 +653,7 @@ impl Scene {
                 self.normals.push(TriangleNormals::default());
             }
         }
-        self.check_primitive_count(obj_path)
+        self.check_primitive_count(path)
     }
 
     /// The BVH addresses at most `MAX_PRIMITIVES` primitives.
@@ -502,12 +706,16 @@ fn mesh_transform(field: &str, entry: &MeshEntry) -> Result<Transform, String> {
     };
     if !scale.is_finite() || scale.abs().min_element() == 0.0 {
         return Err(format!(
-            "{field}.scale = {scale:?} must be finite and non-zero on every axis"
+            "{field}.scale = {} must be finite and non-zero on every axis",
+            vector_text(scale)
         ));
     }
     let rotate = DVec3::from(entry.rotate_deg.unwrap_or([0.0; 3]));
     if !rotate.is_finite() {
-        return Err(format!("{field}.rotate_deg = {rotate:?} must be finite"));
+        return Err(format!(
+            "{field}.rotate_deg = {} must be finite",
+            vector_text(rotate)
+        ));
     }
     let translate = entry.translate.unwrap_or([0.0; 3]);
     let translate = DVec3::from(checked_point(&format!("{field}.translate"), translate)?);
@@ -521,6 +729,11 @@ fn mesh_transform(field: &str, entry: &MeshEntry) -> Result<Transform, String> {
         translate,
     })
 }
+
+/// Smallest sine of the angle between camera.up and the view direction:
+/// closer, the camera's right vector (f × up) is mostly rounding. Any up
+/// that passes gives the same camera as its part perpendicular to f.
+pub const MIN_UP_SINE: f64 = 1e-6;
 
 pub fn validate_camera(camera: &Camera) -> Result<(), String> {
     for (name, v) in [
@@ -540,10 +753,10 @@ pub fn validate_camera(camera: &Camera) -> Result<(), String> {
         return Err("camera.up is the zero vector".into());
     }
     let sine = forward.normalize().cross(up.normalize()).length();
-    if sine < 1e-6 {
+    if sine < MIN_UP_SINE {
         return Err(format!(
-            "camera.up = {:?} is parallel to the view direction (look_at − eye)",
-            camera.up
+            "camera.up = {} is parallel to the view direction (look_at − eye): the angle between them must be at least {MIN_UP_SINE:e} rad",
+            vector_text(DVec3::from(camera.up))
         ));
     }
     if !(camera.vfov > 0.0 && camera.vfov < 180.0) {
@@ -553,6 +766,70 @@ pub fn validate_camera(camera: &Camera) -> Result<(), String> {
         ));
     }
     validate_resolution(camera.width, camera.height).map_err(|e| format!("camera: {e}"))
+}
+
+/// A model rendered alone: its resolution unless its camera's aspect ratio
+/// or --width/--height say otherwise.
+pub const DEFAULT_WIDTH: u32 = 1024;
+pub const DEFAULT_HEIGHT: u32 = 768;
+/// A model rendered alone: ambient light, so that no face is black.
+pub const DEFAULT_AMBIENT: f32 = 0.1;
+/// Field of view of the camera framed on a model with none.
+pub const FRAMED_VFOV_DEG: f64 = 40.0;
+
+fn mesh_bounds(mesh: &loading::Mesh) -> (DVec3, DVec3) {
+    mesh.positions.iter().fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), &p| (lo.min(p), hi.max(p)),
+    )
+}
+
+/// The camera framed on a model with none: looking at the centre of its
+/// bounding box from the front-right and above (along (1, 0.75, 2) from
+/// it, +Y up), at the distance where the box's bounding sphere just fits
+/// the narrower field of view, with a 5% margin.
+pub fn frame_camera(&(lo, hi): &(DVec3, DVec3)) -> Camera {
+    let centre = 0.5 * (lo + hi);
+    let radius = (0.5 * (hi - lo).length()).max(1e-6);
+    let aspect = DEFAULT_WIDTH as f64 / DEFAULT_HEIGHT as f64;
+    let half_v = (FRAMED_VFOV_DEG / 2.0).to_radians();
+    let half_h = (half_v.tan() * aspect).atan();
+    let distance = 1.05 * radius / half_v.min(half_h).sin();
+    let eye = centre + distance * DVec3::new(1.0, 0.75, 2.0).normalize();
+    Camera {
+        eye: eye.to_array(),
+        look_at: centre.to_array(),
+        up: default_up(),
+        vfov: FRAMED_VFOV_DEG,
+        width: DEFAULT_WIDTH,
+        height: DEFAULT_HEIGHT,
+    }
+}
+
+/// The light of a model with none: directional, irradiance 1, shining
+/// from behind the camera's right shoulder (from the camera, 30% to its
+/// right and 50% up), so that what the camera sees is lit.
+pub fn default_light(camera: &Camera) -> Light {
+    let basis = crate::cpu::f64::CameraBasis::new(camera);
+    let travel = basis.forward - 0.3 * basis.right - 0.5 * basis.up;
+    Light {
+        vector: (-travel.normalize()).as_vec3().to_array(),
+        kind: LIGHT_DIRECTIONAL,
+        color: [1.0; 3],
+        _pad: 0,
+    }
+}
+
+/// A vector as a user writes it: [x, y, z].
+pub fn vector_text(v: DVec3) -> String {
+    let number = |x: f64| {
+        if x != 0.0 && !(1e-4..1e7).contains(&x.abs()) {
+            format!("{x:e}")
+        } else {
+            format!("{x}")
+        }
+    };
+    format!("[{}, {}, {}]", number(v.x), number(v.y), number(v.z))
 }
 
 /// Columns of the stratified sample grid: the largest divisor of `spp` not

@@ -290,3 +290,46 @@ fn shadows_fall_and_can_be_switched_off() {
         assert_close(colour, [1.0; 3], 1e-5, &format!("{path}: shadows off"));
     }
 }
+
+/// A point light lying on a visible surface (the plane z = 0, the light at
+/// the origin, seen head-on): the shaded point at r = 0 gets no light from
+/// it (documented), never NaN, on both paths and in the oracle; points
+/// around it get the light's finite k·I·cosθ/r², which is 0 in the plane.
+#[test]
+fn a_point_light_on_the_surface_gives_no_nan() {
+    let scene = scene(
+        r#"
+[camera]
+eye = [0.0, 0.0, 5.0]
+look_at = [0.0, 0.0, 0.0]
+vfov = 30.0
+width = 9
+height = 9
+[render]
+ambient = [0.1, 0.1, 0.1]
+[[mesh]]
+obj = "meshes/quad.obj"
+albedo = [0.5, 0.0, 0.5]
+scale = 4.0
+rotate_deg = [90.0, 0.0, 0.0]
+[[point_light]]
+position = [0.0, 0.0, 0.0]
+intensity = 10.0
+"#,
+    );
+    for (what, image) in [
+        ("GPU", render_gpu(&scene)),
+        ("CPU", render_cpu(&scene)),
+        ("oracle", render_oracle(&scene)),
+    ] {
+        for (i, p) in image.image.rgb.iter().enumerate() {
+            assert!(
+                p.iter().all(|c| c.is_finite()),
+                "{what}: pixel {i} is {p:?}"
+            );
+        }
+        // The centre pixel's camera ray hits the plane at the light.
+        let centre = image.image.rgb[4 * 9 + 4];
+        assert_close(centre, [0.05, 0.0, 0.05], 1e-6, what);
+    }
+}

@@ -257,7 +257,7 @@ fn bad_numbers_in_the_scene() {
         ),
         (
             "[[mesh]]\nobj = \"t.obj\"\nscale = 1e30\n",
-            "exceeds the supported magnitude",
+            "beyond the supported magnitude",
         ),
         ("[[mesh]]\nobj = \"t.obj\"\nscale = 0.0\n", "mesh[0].scale"),
         (
@@ -334,10 +334,12 @@ fn bad_output_names_and_options() {
         &lambert(&["render", s(&scene), "-o", s(&out)]),
         &["out.jpg", "unknown image format"],
     );
-    let out = case.path("no/such/dir/out.png");
+    // A folder under a regular file cannot be made: refused before the work.
+    std::fs::write(case.path("plain"), "").unwrap();
+    let out = case.path("plain/dir/out.png");
     expect_failure(
         &lambert(&["render", s(&scene), "-o", s(&out), "--device", "cpu"]),
-        &["no/such/dir/out.png"],
+        &["plain/dir"],
     );
     let out = case.path("out.png");
     expect_failure(

@@ -69,6 +69,10 @@ impl Hit {
 pub struct Shear {
     pub axes: [usize; 3],
     pub s: Vec3,
+    /// The power of two `prepare_ray` scaled the direction by: a hit's
+    /// distance along the scaled ray times this is its distance along the
+    /// ray as given.
+    pub t_scale: Real,
 }
 
 pub struct Surface {
@@ -122,6 +126,41 @@ impl Traversal {
             child: 0,
         }
     }
+
+    /// The hit found, its distance along the ray as given.
+    #[inline(always)]
+    #[allow(dead_code)] // the oracle traces through `Kernel::trace` alone
+    pub(crate) fn answer(&self) -> Hit {
+        unscale(self.hit, &self.shear)
+    }
+}
+
+/// `hit` (of a ray `prepare_ray` scaled) with its distance along the ray as
+/// given; a miss stays at FAR.
+#[inline(always)]
+fn unscale(hit: Hit, shear: &Shear) -> Hit {
+    if hit.prim == NO_HIT {
+        hit
+    } else {
+        Hit {
+            t: hit.t * shear.t_scale,
+            ..hit
+        }
+    }
+}
+
+/// Powers of two 2^k and 2^−k such that the largest of `m` (> 0)·2^k is in
+/// [1, 2), from the exponent of `m` in single precision (as the shader's
+/// frexp); 1 and 1 for 0 or a subnormal.
+#[inline(always)]
+fn direction_scale(m: Real) -> (Real, Real) {
+    let exponent = ((m as f32).to_bits() >> 23) & 0xff;
+    if exponent == 0 || exponent >= 254 {
+        return (1.0, 1.0);
+    }
+    let up = f32::from_bits((254 - exponent) << 23);
+    let down = f32::from_bits(exponent << 23);
+    (up as Real, down as Real)
 }
 
 /// The ray as `trace` traces it (misses report FAR, so an infinite tmax must
@@ -129,9 +168,21 @@ impl Traversal {
 #[inline(always)]
 pub fn prepare_ray(ray_in: Ray) -> (Ray, Shear) {
     let mut ray = ray_in;
+    // The direction scaled by a power of two to a largest component in
+    // [1, 2), and tmin, tmax by its inverse: exact, so every distance is
+    // the same times that power; but the slab test's clamp of tiny
+    // components (MIN_SLAB_DIR) then sees them relative to the largest,
+    // so a ray of direction (0, 0, −1e-18) is not stopped by the clamped
+    // x and y. The hit's distance is scaled back (`unscale`).
+    let (up, down) = direction_scale(ray.dir.abs().max_element());
+    ray.dir *= up;
+    ray.tmin *= down;
     // As the shader's select: a NaN tmax becomes FAR.
+    ray.tmax *= down;
     ray.tmax = if ray.tmax < FAR { ray.tmax } else { FAR };
-    (ray, ray_shear(ray.dir))
+    let mut shear = ray_shear(ray.dir);
+    shear.t_scale = up;
+    (ray, shear)
 }
 
 pub fn miss() -> Hit {
@@ -468,10 +519,11 @@ impl<'a> Kernel<'a> {
     #[inline(always)]
     pub fn trace(&self, ray_in: Ray, any_hit: bool) -> Hit {
         let (ray, shear) = prepare_ray(ray_in);
-        match self.scene.accel {
+        let hit = match self.scene.accel {
             Accel::Bvh => self.trace_bvh(ray, &shear, any_hit),
             Accel::BruteForce => self.trace_brute_force(ray, &shear, any_hit),
-        }
+        };
+        unscale(hit, &shear)
     }
 
     /// Inlined, as `trace` is, so that inside `cpu::with_simd` (where
@@ -544,11 +596,17 @@ impl<'a> Kernel<'a> {
             let (to_light, irradiance, shadow_ray) = if light.kind == LIGHT_POINT {
                 let d = light_vector - surface.position;
                 let distance_squared = d.dot(d);
+                // A point light on the shaded point lies in its tangent
+                // plane: cos θ = 0, no light (not 0/0). Close by, I/r² is
+                // held finite, so that a black albedo gives 0, not 0·∞.
+                if distance_squared == 0.0 {
+                    continue;
+                }
                 let s = light_vector - origin;
                 let shadow_length = s.length();
                 (
                     d / distance_squared.sqrt(),
-                    vec3(light.color) / distance_squared,
+                    (vec3(light.color) / distance_squared).min(Vec3::splat(FAR)),
                     Ray {
                         origin,
                         tmin: 0.0,
@@ -762,6 +820,7 @@ pub fn ray_shear(dir: Vec3) -> Shear {
     Shear {
         axes: [kx, ky, kz],
         s: Vec3::new(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]),
+        t_scale: 1.0,
     }
 }
 

@@ -689,7 +689,7 @@ unsafe fn trace_chunk<const LANES: usize, const PREFETCH: bool, const VECTOR_SOR
             {
                 continue;
             }
-            hits[index[k]].write(answer(traversals[k].hit));
+            hits[index[k]].write(answer(traversals[k].answer()));
             if next < rays.len() {
                 index[k] = next;
                 traversals[k] = start(&rays[next], any_hit);

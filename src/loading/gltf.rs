@@ -1,0 +1,348 @@
+//! glTF 2.0 (`.gltf` with external or data-URI buffers, and `.glb`), with
+//! the `gltf` crate: every mesh primitive of the default scene (else the
+//! first), placed by its node's world transform; its cameras; and its
+//! KHR_lights_punctual lights.
+
+use std::path::Path;
+
+use glam::{DMat4, DVec3};
+
+use super::{Mesh, NormalMode, check_coordinate, vertex_normals};
+use crate::error::{Error, Result};
+
+/// Extensions lambert implements, so a file may require them.
+const IMPLEMENTED: &[&str] = &["KHR_lights_punctual"];
+
+/// A perspective camera of the file, in world space.
+#[derive(Clone, Debug)]
+pub struct GltfCamera {
+    pub name: Option<String>,
+    pub eye: DVec3,
+    /// The node's −Z, normalised.
+    pub forward: DVec3,
+    /// The node's +Y, normalised.
+    pub up: DVec3,
+    /// Vertical field of view, degrees.
+    pub yfov_deg: f64,
+    pub aspect_ratio: Option<f64>,
+}
+
+/// A light lambert can model: a point light (intensity in candela, as
+/// lambert's) or a directional one (irradiance in lux, travelling along
+/// `vector`).
+#[derive(Clone, Debug)]
+pub enum GltfLight {
+    Point {
+        position: DVec3,
+        intensity: [f64; 3],
+    },
+    Directional {
+        direction: DVec3,
+        irradiance: [f64; 3],
+    },
+}
+
+/// What a glTF file holds for lambert.
+#[derive(Debug, Default)]
+pub struct GltfScene {
+    pub mesh: Mesh,
+    pub cameras: Vec<GltfCamera>,
+    pub lights: Vec<GltfLight>,
+}
+
+/// Reads `path`: geometry (smooth normals from NORMAL, or computed, with
+/// `NormalMode::Smooth`), materials, cameras and lights.
+pub fn load_scene(path: &Path, mode: NormalMode) -> Result<GltfScene> {
+    let fail = |message: String| Error::scene(path, message);
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    // Required extensions first: the crate's own validation would call an
+    // unknown one merely invalid.
+    let unchecked = gltf::Gltf::from_slice_without_validation(&bytes)
+        .map_err(|e| fail(format!("not a readable glTF file: {e}")))?;
+    if let Some(missing) = unchecked
+        .extensions_required()
+        .find(|e| !IMPLEMENTED.contains(e))
+    {
+        return Err(fail(format!(
+            "the file requires the extension {missing}, which lambert does not implement"
+        )));
+    }
+    drop(unchecked);
+    let gltf::Gltf { document, blob } =
+        gltf::Gltf::from_slice(&bytes).map_err(|e| fail(format!("invalid glTF: {e}")))?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let buffers = gltf::import_buffers(&document, Some(base), blob)
+        .map_err(|e| fail(format!("reading its buffers: {e}")))?;
+
+    let mut scene = GltfScene::default();
+    let Some(root) = document
+        .default_scene()
+        .or_else(|| document.scenes().next())
+    else {
+        return Err(fail("the file has no scene".into()));
+    };
+    let mut normals: Vec<DVec3> = Vec::new();
+    let mut all_normals = true;
+    let mut default_material: Option<u32> = None;
+    let mut material_ids: Vec<Option<u32>> = vec![None; document.materials().len()];
+    let mut stack: Vec<(gltf::Node, DMat4)> = root.nodes().map(|n| (n, DMat4::IDENTITY)).collect();
+    // Nodes in document order within each level, as the file lists them.
+    stack.reverse();
+    let mut visited = 0usize;
+    while let Some((node, parent)) = stack.pop() {
+        visited += 1;
+        if visited > 1_000_000 {
+            return Err(fail("the node hierarchy is too deep or cyclic".into()));
+        }
+        let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
+        let world = parent * local;
+        if !world.is_finite() {
+            return Err(fail(format!(
+                "node {}: its transform is not finite",
+                node.index()
+            )));
+        }
+        let children: Vec<_> = node.children().collect();
+        for child in children.into_iter().rev() {
+            stack.push((child, world));
+        }
+        if let Some(camera) = node.camera() {
+            read_camera(&camera, &world, &mut scene, path);
+        }
+        if let Some(light) = node.light() {
+            read_light(&light, &world, &mut scene, path);
+        }
+        let Some(mesh) = node.mesh() else { continue };
+        let normal_matrix = glam::DMat3::from_mat4(world).inverse().transpose();
+        for primitive in mesh.primitives() {
+            let what = format!("mesh {} primitive {}", mesh.index(), primitive.index());
+            use gltf::mesh::Mode;
+            let mode_kind = primitive.mode();
+            if !matches!(
+                mode_kind,
+                Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+            ) {
+                scene.mesh.warnings.push(format!(
+                    "{}: {what}: mode {mode_kind:?} skipped (lambert renders triangles)",
+                    path.display()
+                ));
+                continue;
+            }
+            let position_accessor = primitive
+                .get(&gltf::Semantic::Positions)
+                .ok_or_else(|| fail(format!("{what} has no POSITION")))?;
+            check_accessor(&position_accessor, &buffers)
+                .map_err(|m| fail(format!("{what}: POSITION {m}")))?;
+            if let Some(indices) = primitive.indices() {
+                check_accessor(&indices, &buffers)
+                    .map_err(|m| fail(format!("{what}: indices {m}")))?;
+            }
+            let normal_accessor = primitive.get(&gltf::Semantic::Normals);
+            if let Some(n) = &normal_accessor {
+                check_accessor(n, &buffers).map_err(|m| fail(format!("{what}: NORMAL {m}")))?;
+            }
+            let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+            let first = scene.mesh.positions.len() as u32;
+            let positions: Vec<[f32; 3]> = reader
+                .read_positions()
+                .ok_or_else(|| fail(format!("{what}: POSITION cannot be read")))?
+                .collect();
+            for (i, p) in positions.iter().enumerate() {
+                let q = world.transform_point3(DVec3::from(p.map(f64::from)));
+                for x in q.to_array() {
+                    check_coordinate(x, &x.to_string()).map_err(|m| {
+                        fail(format!("{what}: vertex {i} (placed by its node): {m}"))
+                    })?;
+                }
+                scene.mesh.positions.push(q);
+            }
+            match reader.read_normals() {
+                Some(iter) if normal_accessor.is_some() => {
+                    normals.extend(iter.map(|n| {
+                        (normal_matrix * DVec3::from(n.map(f64::from))).normalize_or_zero()
+                    }));
+                }
+                _ => {
+                    all_normals = false;
+                    normals.extend(std::iter::repeat_n(DVec3::ZERO, positions.len()));
+                }
+            }
+            let count = positions.len() as u32;
+            let indices: Vec<u32> = match reader.read_indices() {
+                Some(i) => i.into_u32().collect(),
+                None => (0..count).collect(),
+            };
+            if let Some(bad) = indices.iter().find(|&&i| i >= count) {
+                return Err(fail(format!(
+                    "{what}: index {bad} is out of range ({count} vertices)"
+                )));
+            }
+            let corners = |i: usize| indices[i] + first;
+            let mut triangles: Vec<[u32; 3]> = Vec::new();
+            match mode_kind {
+                Mode::Triangles => {
+                    for t in 0..indices.len() / 3 {
+                        triangles.push([corners(3 * t), corners(3 * t + 1), corners(3 * t + 2)]);
+                    }
+                }
+                Mode::TriangleStrip => {
+                    for t in 0..indices.len().saturating_sub(2) {
+                        // Every other triangle reversed, keeping the winding.
+                        let tri = if t % 2 == 0 {
+                            [corners(t), corners(t + 1), corners(t + 2)]
+                        } else {
+                            [corners(t + 1), corners(t), corners(t + 2)]
+                        };
+                        triangles.push(tri);
+                    }
+                }
+                _ => {
+                    for t in 1..indices.len().saturating_sub(1) {
+                        triangles.push([corners(0), corners(t), corners(t + 1)]);
+                    }
+                }
+            }
+            let material = primitive.material();
+            let id = match material.index() {
+                Some(m) => *material_ids[m].get_or_insert_with(|| {
+                    let [r, g, b, _] = material.pbr_metallic_roughness().base_color_factor();
+                    scene.mesh.materials.push([r, g, b]);
+                    (scene.mesh.materials.len() - 1) as u32
+                }),
+                None => *default_material.get_or_insert_with(|| {
+                    // glTF's default material: base colour 1.
+                    scene.mesh.materials.push([1.0; 3]);
+                    (scene.mesh.materials.len() - 1) as u32
+                }),
+            };
+            if material
+                .pbr_metallic_roughness()
+                .base_color_texture()
+                .is_some()
+            {
+                let name = material.name().map_or_else(
+                    || format!("{}", material.index().unwrap_or(0)),
+                    str::to_string,
+                );
+                let warning = format!(
+                    "{}: material {name}: its baseColorTexture is ignored (textures are not supported; baseColorFactor is used)",
+                    path.display()
+                );
+                if !scene.mesh.warnings.contains(&warning) {
+                    scene.mesh.warnings.push(warning);
+                }
+            }
+            scene
+                .mesh
+                .face_materials
+                .extend(std::iter::repeat_n(Some(id), triangles.len()));
+            scene.mesh.triangles.extend(triangles);
+        }
+    }
+    if scene.mesh.triangles.is_empty() {
+        return Err(fail(
+            "the scene has no triangles (points or lines only, or no meshes)".into(),
+        ));
+    }
+    if mode == NormalMode::Smooth {
+        let given = all_normals.then_some(&normals[..]);
+        scene.mesh.file_normals = all_normals;
+        scene.mesh.normals = Some(vertex_normals(&scene.mesh, given));
+    }
+    Ok(scene)
+}
+
+/// An accessor's bytes lie inside its buffer view, and the view inside its
+/// buffer (the crate's reader would index past them).
+fn check_accessor(
+    accessor: &gltf::Accessor,
+    buffers: &[gltf::buffer::Data],
+) -> std::result::Result<(), String> {
+    if accessor.sparse().is_some() {
+        return Err(format!(
+            "accessor {} is sparse, which lambert does not read",
+            accessor.index()
+        ));
+    }
+    let Some(view) = accessor.view() else {
+        return Err(format!("accessor {} has no buffer view", accessor.index()));
+    };
+    let buffer = &buffers[view.buffer().index()];
+    let view_end = view.offset().checked_add(view.length());
+    if view_end.is_none_or(|end| end > buffer.len()) {
+        return Err(format!(
+            "accessor {}: buffer view {} ends beyond its buffer ({} bytes)",
+            accessor.index(),
+            view.index(),
+            buffer.len()
+        ));
+    }
+    let stride = view.stride().unwrap_or(accessor.size());
+    let needed = match accessor.count() {
+        0 => Some(0),
+        n => (n - 1)
+            .checked_mul(stride)
+            .and_then(|b| b.checked_add(accessor.offset() + accessor.size())),
+    };
+    if needed.is_none_or(|n| n > view.length()) {
+        return Err(format!(
+            "accessor {} ({} elements) reaches beyond its buffer view {} ({} bytes)",
+            accessor.index(),
+            accessor.count(),
+            view.index(),
+            view.length()
+        ));
+    }
+    Ok(())
+}
+
+fn read_camera(camera: &gltf::Camera, world: &DMat4, scene: &mut GltfScene, path: &Path) {
+    match camera.projection() {
+        gltf::camera::Projection::Perspective(p) => scene.cameras.push(GltfCamera {
+            name: camera.name().map(str::to_string),
+            eye: world.transform_point3(DVec3::ZERO),
+            forward: world.transform_vector3(DVec3::NEG_Z).normalize_or_zero(),
+            up: world.transform_vector3(DVec3::Y).normalize_or_zero(),
+            yfov_deg: f64::from(p.yfov()).to_degrees(),
+            aspect_ratio: p.aspect_ratio().map(f64::from),
+        }),
+        gltf::camera::Projection::Orthographic(_) => scene.mesh.warnings.push(format!(
+            "{}: camera {}: orthographic, skipped (lambert's camera is a pinhole)",
+            path.display(),
+            camera.name().unwrap_or("(unnamed)")
+        )),
+    }
+}
+
+fn read_light(
+    light: &gltf::khr_lights_punctual::Light,
+    world: &DMat4,
+    scene: &mut GltfScene,
+    path: &Path,
+) {
+    use gltf::khr_lights_punctual::Kind;
+    let name = light.name().unwrap_or("(unnamed)");
+    let power = light
+        .color()
+        .map(|c| f64::from(c) * f64::from(light.intensity()));
+    if light.range().is_some() {
+        scene.mesh.warnings.push(format!(
+            "{}: light {name}: its range is ignored (lambert's lights fall off as 1/r² without a cut-off)",
+            path.display()
+        ));
+    }
+    match light.kind() {
+        Kind::Point => scene.lights.push(GltfLight::Point {
+            position: world.transform_point3(DVec3::ZERO),
+            intensity: power,
+        }),
+        Kind::Directional => scene.lights.push(GltfLight::Directional {
+            direction: world.transform_vector3(DVec3::NEG_Z).normalize_or_zero(),
+            irradiance: power,
+        }),
+        Kind::Spot { .. } => scene.mesh.warnings.push(format!(
+            "{}: light {name}: a spot light, skipped (not in lambert's light model)",
+            path.display()
+        )),
+    }
+}

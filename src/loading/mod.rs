@@ -1,0 +1,150 @@
+//! Model files, one loader per format behind `load_mesh`: OBJ (with MTL
+//! materials), PLY (ascii and binary, optionally gzipped) and glTF 2.0
+//! (`.gltf` and `.glb`, whose cameras and lights `gltf::load_scene` also
+//! reads). Every loader numbers triangles in file order, polygons
+//! fan-triangulated as (v0,v1,v2), (v0,v2,v3), …, so that the same
+//! triangles from any format are the same primitives.
+
+pub mod gltf;
+pub mod obj;
+pub mod ply;
+
+use std::path::Path;
+
+use glam::DVec3;
+use serde::Deserialize;
+
+use crate::error::{Error, Result};
+
+pub use obj::{load_obj, parse_obj};
+
+/// How a mesh's shading normals are chosen (`normals = "face" | "smooth"`).
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum NormalMode {
+    /// The geometric normal of each triangle.
+    #[default]
+    Face,
+    /// The file's normals (OBJ `vn`, PLY `nx ny nz`, glTF NORMAL) where
+    /// every corner of a face has one, else area-weighted vertex normals.
+    Smooth,
+}
+
+/// A triangle mesh, in f64 as parsed (a glTF file's already placed by its
+/// nodes' transforms), with the materials its file gives its faces.
+#[derive(Debug, Default)]
+pub struct Mesh {
+    pub positions: Vec<DVec3>,
+    /// Position indices, three per triangle, in file order.
+    pub triangles: Vec<[u32; 3]>,
+    /// Per-triangle corner normals (unnormalised), for smooth meshes.
+    pub normals: Option<Vec<[DVec3; 3]>>,
+    /// Per triangle, an index into `materials`, or None for the format's
+    /// default; empty when the file names no materials.
+    pub face_materials: Vec<Option<u32>>,
+    /// Linear RGB albedo of each material the file defines.
+    pub materials: Vec<[f32; 3]>,
+    /// What was read but ignored or not found, each naming the file.
+    pub warnings: Vec<String>,
+    /// Whether `normals` are the file's own at every corner (not computed).
+    pub file_normals: bool,
+}
+
+/// The model formats, chosen by file extension (case-insensitive).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    Obj,
+    Ply,
+    /// `.ply.gz`
+    PlyGz,
+    Gltf,
+    Glb,
+}
+
+pub const SUPPORTED: &str = ".obj, .ply, .ply.gz, .gltf and .glb";
+
+impl Format {
+    pub fn of(path: &Path) -> Result<Format> {
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().to_lowercase())
+            .unwrap_or_default();
+        let format = if name.ends_with(".obj") {
+            Format::Obj
+        } else if name.ends_with(".ply.gz") {
+            Format::PlyGz
+        } else if name.ends_with(".ply") {
+            Format::Ply
+        } else if name.ends_with(".gltf") {
+            Format::Gltf
+        } else if name.ends_with(".glb") {
+            Format::Glb
+        } else {
+            return Err(Error::Usage(format!(
+                "{}: not a model format lambert reads; use {SUPPORTED}",
+                path.display()
+            )));
+        };
+        Ok(format)
+    }
+
+    pub fn is_gltf(self) -> bool {
+        matches!(self, Format::Gltf | Format::Glb)
+    }
+}
+
+/// Loads any model file: its geometry and materials (a glTF file's default
+/// scene, placed by its nodes; its cameras and lights are
+/// `gltf::load_scene`'s).
+pub fn load_mesh(path: &Path, mode: NormalMode) -> Result<Mesh> {
+    match Format::of(path)? {
+        Format::Obj => load_obj(path, mode),
+        Format::Ply | Format::PlyGz => ply::load_ply(path, mode),
+        Format::Gltf | Format::Glb => Ok(gltf::load_scene(path, mode)?.mesh),
+    }
+}
+
+/// Corner normals of every triangle: the given per-vertex normals where
+/// there are some (`vertex_normals`, one per position), else area-weighted
+/// vertex normals.
+pub fn vertex_normals(mesh: &Mesh, vertex_normals: Option<&[DVec3]>) -> Vec<[DVec3; 3]> {
+    let computed;
+    let per_vertex = match vertex_normals {
+        Some(n) => n,
+        None => {
+            computed = area_weighted_normals(mesh);
+            &computed
+        }
+    };
+    mesh.triangles
+        .iter()
+        .map(|tri| tri.map(|i| per_vertex[i as usize]))
+        .collect()
+}
+
+/// Per position, the sum of its triangles' unnormalised normals (twice
+/// their areas times their unit normals).
+pub fn area_weighted_normals(mesh: &Mesh) -> Vec<DVec3> {
+    let mut normals = vec![DVec3::ZERO; mesh.positions.len()];
+    for tri in &mesh.triangles {
+        let [a, b, c] = tri.map(|i| mesh.positions[i as usize]);
+        let n = (b - a).cross(c - a);
+        for i in tri {
+            normals[*i as usize] += n;
+        }
+    }
+    normals
+}
+
+/// Checks a coordinate read from a model file: finite, and within the
+/// magnitude the f32 tests support.
+/// `text` is the coordinate as the file wrote it.
+pub fn check_coordinate(x: f64, text: &str) -> std::result::Result<f64, String> {
+    if !x.is_finite() || x.abs() > crate::scene::MAX_COORDINATE {
+        return Err(format!(
+            "coordinate {text} must be finite with magnitude at most {:e}",
+            crate::scene::MAX_COORDINATE
+        ));
+    }
+    Ok(x)
+}

@@ -1,0 +1,492 @@
+//! PLY (the Stanford repository's format): ascii, binary_little_endian and
+//! binary_big_endian, gzipped when the name ends in `.gz`.
+//!
+//! A reader of our own rather than ply-rs-bw: it reads the two elements a
+//! renderer needs straight into the mesh (ply-rs-bw builds a map of
+//! properties per element, and allocates for the counts a header claims),
+//! checks every count against what the file can hold before allocating,
+//! and names the element, line or byte at fault.
+//!
+//! `vertex` gives `x y z` (float or double, or any other numeric type) and,
+//! when present, `nx ny nz`; `face` gives a `vertex_indices` or
+//! `vertex_index` list of any integer types, fan-triangulated in file order
+//! as OBJ's polygons are. Other elements and properties are ignored.
+
+use std::io::Read;
+use std::path::Path;
+
+use glam::DVec3;
+
+use super::{Mesh, NormalMode, check_coordinate, vertex_normals};
+use crate::error::{Error, Result};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Encoding {
+    Ascii,
+    LittleEndian,
+    BigEndian,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Scalar {
+    I8,
+    U8,
+    I16,
+    U16,
+    I32,
+    U32,
+    F32,
+    F64,
+}
+
+impl Scalar {
+    fn parse(name: &str) -> Option<Scalar> {
+        Some(match name {
+            "char" | "int8" => Scalar::I8,
+            "uchar" | "uint8" => Scalar::U8,
+            "short" | "int16" => Scalar::I16,
+            "ushort" | "uint16" => Scalar::U16,
+            "int" | "int32" => Scalar::I32,
+            "uint" | "uint32" => Scalar::U32,
+            "float" | "float32" => Scalar::F32,
+            "double" | "float64" => Scalar::F64,
+            _ => return None,
+        })
+    }
+
+    fn size(self) -> usize {
+        match self {
+            Scalar::I8 | Scalar::U8 => 1,
+            Scalar::I16 | Scalar::U16 => 2,
+            Scalar::I32 | Scalar::U32 | Scalar::F32 => 4,
+            Scalar::F64 => 8,
+        }
+    }
+
+    fn is_integer(self) -> bool {
+        !matches!(self, Scalar::F32 | Scalar::F64)
+    }
+}
+
+#[derive(Debug)]
+struct Property {
+    name: String,
+    /// For a list: the type of its count.
+    count: Option<Scalar>,
+    value: Scalar,
+}
+
+#[derive(Debug)]
+struct Element {
+    name: String,
+    count: usize,
+    properties: Vec<Property>,
+}
+
+impl Element {
+    /// The fewest bytes one element takes in a binary file.
+    fn min_bytes(&self) -> usize {
+        self.properties
+            .iter()
+            .map(|p| p.count.unwrap_or(p.value).size())
+            .sum()
+    }
+
+    fn property(&self, name: &str) -> Option<usize> {
+        self.properties.iter().position(|p| p.name == name)
+    }
+}
+
+/// Reads a PLY file (gunzipped first when its name ends in `.gz`).
+pub fn load_ply(path: &Path, mode: NormalMode) -> Result<Mesh> {
+    let raw = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let gzipped = path.to_string_lossy().to_lowercase().ends_with(".gz");
+    let bytes = if gzipped {
+        let mut out = Vec::new();
+        flate2::read::MultiGzDecoder::new(&raw[..])
+            .read_to_end(&mut out)
+            .map_err(|e| Error::scene(path, format!("not a readable gzip file: {e}")))?;
+        out
+    } else {
+        raw
+    };
+    parse_ply(&bytes, path, mode)
+}
+
+/// Parses PLY bytes; `path` names them in errors.
+pub fn parse_ply(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<Mesh> {
+    let (encoding, elements, body, header_lines) = parse_header(bytes, path)?;
+    let vertex = elements
+        .iter()
+        .position(|e| e.name == "vertex")
+        .ok_or_else(|| Error::scene(path, "no vertex element in the header"))?;
+    let face = elements.iter().position(|e| e.name == "face");
+    let fail = |message: String| Error::scene(path, message);
+    for name in ["x", "y", "z"] {
+        if elements[vertex].property(name).is_none() {
+            return Err(fail(format!("the vertex element has no '{name}' property")));
+        }
+        if elements[vertex].properties[elements[vertex].property(name).unwrap()]
+            .count
+            .is_some()
+        {
+            return Err(fail(format!("vertex property '{name}' is a list")));
+        }
+    }
+    let indices = match face {
+        Some(f) => {
+            let element = &elements[f];
+            let index = element
+                .property("vertex_indices")
+                .or_else(|| element.property("vertex_index"))
+                .ok_or_else(|| {
+                    fail("the face element has no vertex_indices or vertex_index list".into())
+                })?;
+            let property = &element.properties[index];
+            if property.count.is_none() || !property.value.is_integer() {
+                return Err(fail(format!(
+                    "face property '{}' must be a list of integers",
+                    property.name
+                )));
+            }
+            Some(index)
+        }
+        None => None,
+    };
+    if face.is_none_or(|f| elements[f].count == 0) {
+        return Err(fail(
+            "the file has no faces (points only); lambert renders triangles".into(),
+        ));
+    }
+    // Every count checked against what the rest of the file can hold,
+    // before anything is allocated for it.
+    match encoding {
+        Encoding::Ascii => {
+            let lines = body
+                .split(|&b| b == b'\n')
+                .filter(|l| !l.iter().all(u8::is_ascii_whitespace))
+                .count();
+            let claimed: usize = elements
+                .iter()
+                .map(|e| e.count)
+                .fold(0, usize::saturating_add);
+            if claimed > lines {
+                return Err(fail(format!(
+                    "the header declares {claimed} elements, but only {lines} lines follow it"
+                )));
+            }
+        }
+        _ => {
+            let needed = elements
+                .iter()
+                .map(|e| e.count.saturating_mul(e.min_bytes()))
+                .fold(0, usize::saturating_add);
+            if needed > body.len() {
+                let e = elements
+                    .iter()
+                    .max_by_key(|e| e.count.saturating_mul(e.min_bytes()))
+                    .unwrap();
+                return Err(fail(format!(
+                    "the header declares {} '{}' elements, which need at least {needed} bytes in all, but {} follow the header",
+                    e.count,
+                    e.name,
+                    body.len()
+                )));
+            }
+        }
+    }
+
+    let mut reader = Reader {
+        encoding,
+        body,
+        at: 0,
+        line: header_lines,
+        path,
+        tokens: Vec::new(),
+        token: 0,
+    };
+    let mut mesh = Mesh::default();
+    let mut normals: Vec<DVec3> = Vec::new();
+    let normal_slots = ["nx", "ny", "nz"].map(|n| elements[vertex].property(n));
+    let has_normals = normal_slots.iter().all(Option::is_some);
+    let xyz = ["x", "y", "z"].map(|n| elements[vertex].property(n).unwrap());
+    let mut values: Vec<f64> = Vec::new();
+    let mut list: Vec<i64> = Vec::new();
+    for (e, element) in elements.iter().enumerate() {
+        if e == vertex {
+            mesh.positions.reserve(element.count);
+        }
+        for i in 0..element.count {
+            reader.begin_element()?;
+            let what = || format!("{} {i}", element.name);
+            values.clear();
+            list.clear();
+            for (p, property) in element.properties.iter().enumerate() {
+                match property.count {
+                    None => values.push(reader.scalar(property.value, &what)?),
+                    Some(count_type) => {
+                        let count = reader.scalar(count_type, &what)?;
+                        if !(0.0..=1e9).contains(&count) || count.fract() != 0.0 {
+                            return Err(reader
+                                .error(format!("{}: list length {count} is not a count", what())));
+                        }
+                        let keep = Some(e) == face && Some(p) == indices;
+                        for _ in 0..count as usize {
+                            let v = reader.scalar(property.value, &what)?;
+                            if keep {
+                                list.push(v as i64);
+                            }
+                        }
+                        values.push(f64::NAN);
+                    }
+                }
+            }
+            reader.end_element(&what)?;
+            if e == vertex {
+                let mut p = [0.0; 3];
+                for (axis, &slot) in xyz.iter().enumerate() {
+                    let v = values[slot];
+                    p[axis] = check_coordinate(v, &v.to_string())
+                        .map_err(|m| reader.error(format!("{}: {m}", what())))?;
+                }
+                mesh.positions.push(DVec3::from(p));
+                if has_normals {
+                    normals.push(DVec3::from(normal_slots.map(|s| values[s.unwrap()])));
+                }
+            } else if Some(e) == face {
+                if list.len() < 3 {
+                    return Err(reader.error(format!(
+                        "{}: a face needs at least 3 vertices, this one has {}",
+                        what(),
+                        list.len()
+                    )));
+                }
+                let count = mesh.positions.len() as i64;
+                if let Some(bad) = list.iter().find(|&&v| v < 0 || v >= count) {
+                    return Err(reader.error(format!(
+                        "{}: vertex index {bad} is out of range: the file has {count} vertices (indices from 0)",
+                        what()
+                    )));
+                }
+                for k in 1..list.len() - 1 {
+                    mesh.triangles
+                        .push([list[0], list[k], list[k + 1]].map(|v| v as u32));
+                }
+            }
+        }
+    }
+    if face.is_some_and(|f| f < vertex) {
+        return Err(fail(
+            "the face element comes before the vertex element".into(),
+        ));
+    }
+    if mode == NormalMode::Smooth {
+        let given = has_normals.then_some(&normals[..]);
+        mesh.file_normals = has_normals;
+        mesh.normals = Some(vertex_normals(&mesh, given));
+    }
+    Ok(mesh)
+}
+
+type Header<'a> = (Encoding, Vec<Element>, &'a [u8], usize);
+
+fn parse_header<'a>(bytes: &'a [u8], path: &Path) -> Result<Header<'a>> {
+    let mut at = 0;
+    let mut line_number = 0;
+    let mut encoding = None;
+    let mut elements: Vec<Element> = Vec::new();
+    loop {
+        let end = bytes[at..]
+            .iter()
+            .position(|&b| b == b'\n')
+            .ok_or_else(|| Error::scene(path, "the header has no end_header line"))?;
+        let raw = &bytes[at..at + end];
+        at += end + 1;
+        line_number += 1;
+        let fail = |message: String| Error::Line {
+            path: path.to_path_buf(),
+            line: line_number,
+            message,
+        };
+        let text = std::str::from_utf8(raw)
+            .map_err(|_| fail("the header is not text".into()))?
+            .trim_end_matches('\r');
+        if line_number == 1 {
+            if text.trim() != "ply" {
+                return Err(fail("not a PLY file: the first line must be 'ply'".into()));
+            }
+            continue;
+        }
+        let mut tokens = text.split_whitespace();
+        match tokens.next() {
+            Some("format") => {
+                encoding = Some(match (tokens.next(), tokens.next()) {
+                    (Some("ascii"), Some("1.0")) => Encoding::Ascii,
+                    (Some("binary_little_endian"), Some("1.0")) => Encoding::LittleEndian,
+                    (Some("binary_big_endian"), Some("1.0")) => Encoding::BigEndian,
+                    _ => {
+                        return Err(fail(format!(
+                            "unknown format line '{text}': use ascii, binary_little_endian or binary_big_endian 1.0"
+                        )));
+                    }
+                });
+            }
+            Some("element") => {
+                let (Some(name), Some(count)) = (tokens.next(), tokens.next()) else {
+                    return Err(fail("an element line needs a name and a count".into()));
+                };
+                let count: usize = count
+                    .parse()
+                    .map_err(|_| fail(format!("element '{name}': '{count}' is not a count")))?;
+                elements.push(Element {
+                    name: name.to_string(),
+                    count,
+                    properties: Vec::new(),
+                });
+            }
+            Some("property") => {
+                let element = elements
+                    .last_mut()
+                    .ok_or_else(|| fail("a property before any element".into()))?;
+                let words: Vec<&str> = tokens.collect();
+                let scalar = |name: &str| {
+                    Scalar::parse(name)
+                        .ok_or_else(|| fail(format!("unknown property type '{name}'")))
+                };
+                let property = match words.as_slice() {
+                    ["list", count, value, name] => Property {
+                        name: name.to_string(),
+                        count: Some(scalar(count)?),
+                        value: scalar(value)?,
+                    },
+                    [value, name] if *value != "list" => Property {
+                        name: name.to_string(),
+                        count: None,
+                        value: scalar(value)?,
+                    },
+                    _ => return Err(fail(format!("malformed property line '{text}'"))),
+                };
+                if let Some(count) = property.count
+                    && !count.is_integer()
+                {
+                    return Err(fail(format!(
+                        "list '{}': its count must be an integer type",
+                        property.name
+                    )));
+                }
+                element.properties.push(property);
+            }
+            Some("end_header") => break,
+            Some("comment" | "obj_info") | None => {}
+            Some(other) => return Err(fail(format!("unknown header line '{other}'"))),
+        }
+    }
+    let encoding = encoding.ok_or_else(|| Error::scene(path, "the header has no format line"))?;
+    Ok((encoding, elements, &bytes[at..], line_number))
+}
+
+/// Reads values from the body: whitespace-separated numbers, one element
+/// a line (ascii), or packed bytes (binary).
+struct Reader<'a> {
+    encoding: Encoding,
+    body: &'a [u8],
+    at: usize,
+    /// Ascii: the line last read, counted in the whole file.
+    line: usize,
+    path: &'a Path,
+    tokens: Vec<&'a str>,
+    token: usize,
+}
+
+impl<'a> Reader<'a> {
+    fn error(&self, message: String) -> Error {
+        match self.encoding {
+            Encoding::Ascii => Error::Line {
+                path: self.path.to_path_buf(),
+                line: self.line,
+                message,
+            },
+            _ => Error::scene(
+                self.path,
+                format!("byte {} of the body: {message}", self.at),
+            ),
+        }
+    }
+
+    /// Ascii: takes the next non-blank line's tokens.
+    fn begin_element(&mut self) -> Result<()> {
+        if self.encoding != Encoding::Ascii {
+            return Ok(());
+        }
+        loop {
+            if self.at >= self.body.len() {
+                return Err(
+                    self.error("the file ends before every element the header declares".into())
+                );
+            }
+            let end = self.body[self.at..]
+                .iter()
+                .position(|&b| b == b'\n')
+                .map_or(self.body.len(), |e| self.at + e);
+            let raw = &self.body[self.at..end];
+            self.at = (end + 1).min(self.body.len().max(end));
+            self.line += 1;
+            let text = std::str::from_utf8(raw).map_err(|_| self.error("not text".into()))?;
+            self.tokens = text.split_whitespace().collect();
+            self.token = 0;
+            if !self.tokens.is_empty() {
+                return Ok(());
+            }
+        }
+    }
+
+    fn end_element(&self, what: &dyn Fn() -> String) -> Result<()> {
+        if self.encoding == Encoding::Ascii && self.token != self.tokens.len() {
+            return Err(self.error(format!(
+                "{}: {} values on the line, the header declares {}",
+                what(),
+                self.tokens.len(),
+                self.token
+            )));
+        }
+        Ok(())
+    }
+
+    fn scalar(&mut self, kind: Scalar, what: &dyn Fn() -> String) -> Result<f64> {
+        if self.encoding == Encoding::Ascii {
+            let Some(token) = self.tokens.get(self.token).copied() else {
+                return Err(
+                    self.error(format!("{}: fewer values than the header declares", what()))
+                );
+            };
+            self.token += 1;
+            let value: f64 = token
+                .parse()
+                .map_err(|_| self.error(format!("{}: '{token}' is not a number", what())))?;
+            if kind.is_integer() && value.fract() != 0.0 {
+                return Err(self.error(format!("{}: '{token}' is not an integer", what())));
+            }
+            return Ok(value);
+        }
+        let size = kind.size();
+        let Some(raw) = self.body.get(self.at..self.at + size) else {
+            return Err(self.error(format!("{}: the file ends inside it (truncated)", what())));
+        };
+        self.at += size;
+        let mut b = [0u8; 8];
+        b[..size].copy_from_slice(raw);
+        if self.encoding == Encoding::BigEndian {
+            b[..size].reverse();
+        }
+        Ok(match kind {
+            Scalar::I8 => b[0] as i8 as f64,
+            Scalar::U8 => b[0] as f64,
+            Scalar::I16 => i16::from_le_bytes([b[0], b[1]]) as f64,
+            Scalar::U16 => u16::from_le_bytes([b[0], b[1]]) as f64,
+            Scalar::I32 => i32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+            Scalar::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+            Scalar::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+            Scalar::F64 => f64::from_le_bytes(b),
+        })
+    }
+}
