@@ -41,10 +41,22 @@ enum Command {
     /// Write a scene's camera rays (pixel centres, row by row) as a ray file.
     CameraRays(CameraRaysArgs),
     /// List adapters, backends and limits.
-    Info(AdapterArgs),
+    Info(InfoArgs),
     /// Measure trace speed over a ladder of models, or run time against
     /// error over the settings (--time-vs-error).
     Bench(BenchArgs),
+}
+
+#[derive(Args)]
+struct InfoArgs {
+    /// A scene or model file: print what it holds (triangles, bounds,
+    /// materials, camera, lights, warnings) instead of the adapters.
+    model: Option<PathBuf>,
+    /// A glTF file's camera, by name.
+    #[arg(long)]
+    camera: Option<String>,
+    #[command(flatten)]
+    adapter: AdapterArgs,
 }
 
 #[derive(Args, Clone)]
@@ -368,9 +380,77 @@ pub fn run() -> Result<ExitCode> {
         }),
         Command::Trace(args) => trace(&args),
         Command::CameraRays(args) => camera_rays(&args),
-        Command::Info(args) => info(&args),
+        Command::Info(args) => match &args.model {
+            Some(model) => model_info(model, args.camera.as_deref()),
+            None => info(&args.adapter),
+        },
         Command::Bench(args) => bench(&args),
     }
+}
+
+/// Loading's warnings, each on its own line.
+fn print_warnings(scene: &Scene, quiet: bool) {
+    if !quiet {
+        for warning in &scene.warnings {
+            eprintln!("warning: {warning}");
+        }
+    }
+}
+
+/// `lambert info MODEL`.
+fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> {
+    let scene = Scene::load_with_camera(path, camera)?;
+    println!("{}", path.display());
+    println!("  triangles: {}", scene.triangles.len());
+    if !scene.spheres.is_empty() {
+        println!("  spheres: {}", scene.spheres.len());
+    }
+    if let Some(b) = scene.bvh.bounds() {
+        println!(
+            "  bounds: {} to {}",
+            crate::scene::vector_text(b.min.as_dvec3()),
+            crate::scene::vector_text(b.max.as_dvec3())
+        );
+    }
+    let smooth = !scene.normals.is_empty();
+    println!(
+        "  normals: {}",
+        if smooth {
+            "smooth (the file's)"
+        } else {
+            "face"
+        }
+    );
+    println!("  materials: {}", scene.materials.len());
+    for (i, m) in scene.materials.iter().enumerate().take(32) {
+        let [r, g, b] = m.albedo;
+        println!("    {i}: albedo [{r}, {g}, {b}]");
+    }
+    let c = &scene.camera;
+    let v = |a: [f64; 3]| crate::scene::vector_text(glam::DVec3::from(a));
+    println!(
+        "  camera: eye {}, look_at {}, up {}, vfov {:.4}°, {}×{}",
+        v(c.eye),
+        v(c.look_at),
+        v(c.up),
+        c.vfov,
+        c.width,
+        c.height
+    );
+    println!("  lights: {}", scene.lights.len());
+    for light in &scene.lights {
+        let vector = crate::scene::vector_text(glam::Vec3::from(light.vector).as_dvec3());
+        let color = crate::scene::vector_text(glam::Vec3::from(light.color).as_dvec3());
+        if light.kind == crate::layout::LIGHT_POINT {
+            println!("    point at {vector}, intensity {color}");
+        } else {
+            println!("    directional towards {vector} (from the surface), irradiance {color}");
+        }
+    }
+    for warning in &scene.warnings {
+        println!("  warning: {warning}");
+    }
+    Ok(ExitCode::SUCCESS)
 }
 
 fn seconds(d: Duration) -> String {
@@ -416,6 +496,7 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
     let start = Instant::now();
     let scene = args.options.load(&args.scene)?;
     let load = start.elapsed();
+    print_warnings(&scene, args.quiet);
 
     let start = Instant::now();
     let (mut renderer, note) = Renderer::open(&scene, args.device, &args.adapter.request())?;
@@ -546,6 +627,7 @@ fn turntable(args: &RenderArgs, frames: u32) -> Result<ExitCode> {
     }
     check_output_path(&frame_path(&args.output, 0)?)?;
     let mut scene = args.options.load(&args.scene)?;
+    print_warnings(&scene, args.quiet);
     let (mut renderer, note) = Renderer::open(&scene, args.device, &args.adapter.request())?;
     if let Some(note) = note.filter(|_| !args.quiet) {
         eprintln!("{note}");
@@ -604,6 +686,7 @@ fn diff(args: &DiffArgs) -> Result<ExitCode> {
         check_output_path(path)?;
     }
     let scene = args.options.load(&args.scene)?;
+    print_warnings(&scene, args.json);
     let tolerance = Tolerance {
         abs: args.tol_abs,
         rel: args.tol_rel,

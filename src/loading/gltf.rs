@@ -187,11 +187,12 @@ pub fn load_scene(path: &Path, mode: NormalMode) -> Result<GltfScene> {
                 }
                 Mode::TriangleStrip => {
                     for t in 0..indices.len().saturating_sub(2) {
-                        // Every other triangle reversed, keeping the winding.
+                        // As the glTF spec orders them: (i, i+1, i+2) for
+                        // even i, (i, i+2, i+1) for odd, one winding.
                         let tri = if t % 2 == 0 {
                             [corners(t), corners(t + 1), corners(t + 2)]
                         } else {
-                            [corners(t + 1), corners(t), corners(t + 2)]
+                            [corners(t), corners(t + 2), corners(t + 1)]
                         };
                         triangles.push(tri);
                     }

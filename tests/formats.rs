@@ -1,0 +1,581 @@
+//! Model formats (issue 17): PLY, OBJ with MTL materials, glTF/GLB, one
+//! `file` key for all, and a model file rendered with no scene file.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use common::*;
+use glam::DVec3;
+use lambert::Scene;
+use lambert::loading::{NormalMode, load_mesh};
+
+fn meshes(name: &str) -> PathBuf {
+    asset(&format!("scenes/meshes/{name}"))
+}
+
+fn bits(r: &lambert::output::Rendered) -> Vec<u32> {
+    r.image.rgb.iter().flatten().map(|c| c.to_bits()).collect()
+}
+
+fn write(dir: &Path, name: &str, bytes: impl AsRef<[u8]>) -> PathBuf {
+    let path = dir.join(name);
+    std::fs::write(&path, bytes).unwrap();
+    path
+}
+
+fn error_of(path: &Path) -> String {
+    match load_mesh(path, NormalMode::Face) {
+        Ok(m) => panic!(
+            "{} loaded ({} triangles)",
+            path.display(),
+            m.triangles.len()
+        ),
+        Err(e) => e.to_string(),
+    }
+}
+
+/// The bunny scene with its mesh read from `file` (relative to
+/// assets/scenes), through the `file` key.
+fn bunny_from(file: &str) -> Scene {
+    let text = std::fs::read_to_string(asset("scenes/bunny.toml"))
+        .unwrap()
+        .replace(
+            "obj = \"meshes/bunny_lowres.obj\"",
+            &format!("file = \"{file}\""),
+        );
+    assert!(text.contains(file));
+    scene(&text)
+}
+
+#[test]
+fn ply_and_obj_give_the_same_image_bit_for_bit_on_both_paths() {
+    let obj = bunny_from("meshes/bunny_lowres.obj");
+    for ply in [
+        "meshes/bunny_lowres.ply",
+        "meshes/bunny_lowres_ascii.ply.gz",
+    ] {
+        let ply = bunny_from(ply);
+        assert_eq!(obj.triangles, ply.triangles);
+        assert_eq!(obj.normals, ply.normals, "smooth normals");
+        assert_eq!(bits(&render_cpu(&obj)), bits(&render_cpu(&ply)));
+        assert_eq!(bits(&render_gpu(&obj)), bits(&render_gpu(&ply)));
+    }
+}
+
+#[test]
+fn ply_encodings_types_and_lists() {
+    let dir = tempfile::tempdir().unwrap();
+    let header = |format: &str| {
+        format!(
+            "ply\nformat {format} 1.0\ncomment two triangles as a quad\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
+             property float nx\nproperty float ny\nproperty float nz\nproperty uchar red\n\
+             element edge 1\nproperty int vertex1\nproperty int vertex2\n\
+             element face 1\nproperty list ushort short vertex_index\nproperty list uchar float texcoord\nend_header\n"
+        )
+    };
+    let vertices = [
+        [0.0f32, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+    ];
+    let mut ascii = header("ascii");
+    for v in vertices {
+        ascii += &format!("{} {} {} 0 0 1 255\n", v[0], v[1], v[2]);
+    }
+    ascii += "0 1\n4 0 1 2 3 2 0.5 0.5\n";
+    let mut big = header("binary_big_endian").into_bytes();
+    let mut little = header("binary_little_endian").into_bytes();
+    for (out, be) in [(&mut big, true), (&mut little, false)] {
+        let f = |x: f32| if be { x.to_be_bytes() } else { x.to_le_bytes() };
+        for v in vertices {
+            for c in v.into_iter().chain([0.0, 0.0, 1.0]) {
+                out.extend(f(c));
+            }
+            out.push(255);
+        }
+        let i32b = |x: i32| if be { x.to_be_bytes() } else { x.to_le_bytes() };
+        out.extend(i32b(0));
+        out.extend(i32b(1));
+        let u16b = |x: u16| if be { x.to_be_bytes() } else { x.to_le_bytes() };
+        out.extend(u16b(4));
+        for i in [0i16, 1, 2, 3] {
+            out.extend(if be { i.to_be_bytes() } else { i.to_le_bytes() });
+        }
+        out.push(2);
+        out.extend(f(0.5));
+        out.extend(f(0.5));
+    }
+    for (name, bytes) in [
+        ("a.ply", ascii.into_bytes()),
+        ("be.ply", big),
+        ("le.ply", little),
+    ] {
+        let path = write(dir.path(), name, bytes);
+        let mesh = load_mesh(&path, NormalMode::Smooth).unwrap();
+        assert_eq!(mesh.triangles, vec![[0, 1, 2], [0, 2, 3]], "{name}");
+        assert_eq!(mesh.positions[2], DVec3::new(1.0, 1.0, 0.0), "{name}");
+        assert!(mesh.file_normals, "{name}");
+        assert_eq!(mesh.normals.unwrap()[1], [DVec3::Z; 3], "{name}");
+    }
+}
+
+#[test]
+fn malformed_ply_files_are_clear_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let ok_header = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    let binary_header = |vertices: u64| {
+        format!(
+            "ply\nformat binary_little_endian 1.0\nelement vertex {vertices}\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+        )
+    };
+    let mut truncated = binary_header(3).into_bytes();
+    truncated.extend([0u8; 36]);
+    truncated.extend([3u8, 0, 0, 0, 0]);
+    let cases: Vec<(&str, Vec<u8>, &str)> = vec![
+        ("not.ply", b"plx\nformat ascii 1.0\n".to_vec(), "not.ply:1: not a PLY file"),
+        ("format.ply", b"ply\nformat binary_middle_endian 1.0\nend_header\n".to_vec(), "format.ply:2: unknown format line"),
+        ("noend.ply", b"ply\nformat ascii 1.0\nelement vertex 1\n".to_vec(), "no end_header"),
+        ("type.ply", b"ply\nformat ascii 1.0\nelement vertex 1\nproperty quad x\nend_header\n".to_vec(), "type.ply:4: unknown property type 'quad'"),
+        ("range.ply", format!("{ok_header}0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n").into_bytes(), "range.ply:13: face 0: vertex index 3 is out of range"),
+        ("nan.ply", format!("{ok_header}0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n").into_bytes(), "nan.ply:11: vertex 1: coordinate NaN must be finite"),
+        ("huge.ply", format!("{ok_header}0 0 0\n1 1e30 0\n0 1 0\n3 0 1 2\n").into_bytes(), "vertex 1: coordinate 1000000000000000000000000000000 must be finite"),
+        ("word.ply", format!("{ok_header}0 0 0\n1 x 0\n0 1 0\n3 0 1 2\n").into_bytes(), "word.ply:11: vertex 1: 'x' is not a number"),
+        ("short.ply", format!("{ok_header}0 0 0\n1 0 0\n").into_bytes(), "only 2 lines follow"),
+        ("truncated.ply", truncated, "face 0: the file ends inside it"),
+        ("claims.ply", { let mut b = binary_header(4_000_000_000).into_bytes(); b.extend([0u8; 64]); b }, "declares 4000000000 'vertex' elements"),
+        ("points.ply", b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n".to_vec(), "no faces"),
+        ("noxyz.ply", b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n0 0\n".to_vec(), "no 'z' property"),
+        ("two.ply", format!("{ok_header}0 0 0\n1 0 0\n0 1 0\n2 0 1\n").into_bytes(), "a face needs at least 3 vertices"),
+        ("gz.ply.gz", b"not gzip".to_vec(), "not a readable gzip file"),
+    ];
+    for (name, bytes, expected) in cases {
+        let path = write(dir.path(), name, bytes);
+        let start = std::time::Instant::now();
+        let message = error_of(&path);
+        assert!(message.contains(name), "{name}: {message}");
+        assert!(
+            message.contains(expected),
+            "{name}: expected '{expected}' in: {message}"
+        );
+        assert!(
+            start.elapsed().as_secs() < 5,
+            "{name} took {:?}",
+            start.elapsed()
+        );
+    }
+}
+
+#[test]
+fn obj_materials_from_mtl_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write(
+        d,
+        "colours.mtl",
+        "# made by hand\nnewmtl red.paint-1\nKd 0.8 0.1 0.1\nnewmtl blue\nKa 0 0 0\nKd 0.1 0.1 0.9\n",
+    );
+    write(
+        d,
+        "boxes.obj",
+        "mtllib colours.mtl missing.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nusemtl red.paint-1\nf 2 4 3\nusemtl blue\nf 1 3 2\nusemtl nonesuch\nf 2 3 4\n",
+    );
+    let mesh = load_mesh(&d.join("boxes.obj"), NormalMode::Face).unwrap();
+    assert_eq!(mesh.face_materials, vec![None, Some(0), Some(1), None]);
+    assert_eq!(mesh.materials, vec![[0.8, 0.1, 0.1], [0.1, 0.1, 0.9]]);
+    let warnings = mesh.warnings.join("\n");
+    assert!(warnings.contains("missing.mtl"), "{warnings}");
+    assert!(
+        warnings.contains("boxes.obj:11: unknown material 'nonesuch'"),
+        "{warnings}"
+    );
+
+    let camera = "[camera]\neye = [0.5, 0.5, 3.0]\nlook_at = [0.5, 0.5, 0.0]\nvfov = 40.0\nwidth = 8\nheight = 8\n[render]\nambient = 1.0\nshadows = false\n";
+    let scene_at = |extra: &str| {
+        let text = format!("{camera}[[mesh]]\nfile = \"boxes.obj\"\n{extra}");
+        Scene::from_toml(&text, &d.join("s.toml")).unwrap()
+    };
+    let s = scene_at("");
+    let albedo = |t: usize| s.materials[s.triangles[t].material as usize].albedo;
+    assert_eq!(
+        [albedo(0), albedo(1), albedo(2), albedo(3)],
+        [[0.8; 3], [0.8, 0.1, 0.1], [0.1, 0.1, 0.9], [0.8; 3]]
+    );
+    assert_eq!(s.warnings.len(), 2);
+    let overridden = scene_at("albedo = [0.2, 0.3, 0.4]\n");
+    assert!(
+        overridden
+            .triangles
+            .iter()
+            .all(|t| overridden.materials[t.material as usize].albedo == [0.2, 0.3, 0.4])
+    );
+    // Per-face materials on both paths: ambient 1 shows each face's albedo.
+    let (gpu, cpu) = (render_gpu(&s), render_cpu(&s));
+    assert_eq!(gpu.prims, cpu.prims);
+    let stats = lambert::diff::compare(&gpu, &cpu, &Default::default()).unwrap();
+    assert!(stats.passed, "{stats}");
+    let reds = cpu
+        .image
+        .rgb
+        .iter()
+        .filter(|p| **p == [0.8, 0.1, 0.1])
+        .count();
+    assert!(reds > 0, "no pixel shows the red material");
+
+    for (mtl, expected) in [
+        ("newmtl a\nKd 0.5 0.5\n", "bad.mtl:2: Kd needs 3 numbers"),
+        (
+            "newmtl a\nKd 0.5 x 0.5\n",
+            "bad.mtl:2: Kd: 'x' is not a number",
+        ),
+        (
+            "newmtl a\nKd 0.5 -1 0.5\n",
+            "bad.mtl:2: Kd: -1 must be finite and non-negative",
+        ),
+        ("Kd 1 1 1\n", "bad.mtl:1: Kd before any newmtl"),
+    ] {
+        write(d, "bad.mtl", mtl);
+        write(
+            d,
+            "bad.obj",
+            "mtllib bad.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+        );
+        let message = error_of(&d.join("bad.obj"));
+        assert!(message.contains(expected), "{message}");
+    }
+}
+
+#[test]
+fn gltf_hierarchy_camera_lights_and_materials() {
+    let path = meshes("boxes.glb");
+    let g = lambert::loading::gltf::load_scene(&path, NormalMode::Face).unwrap();
+    assert_eq!(g.mesh.triangles.len(), 12 + 2);
+    // The box: scaled 1.5 by its node, raised 0.75, then turned 30° about
+    // y and moved 0.5 along x by its parent.
+    let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
+    let corner = DVec3::new(0.75, 1.5, 0.75);
+    let expected = DVec3::new(
+        corner.x * c + corner.z * s + 0.5,
+        corner.y,
+        -corner.x * s + corner.z * c,
+    );
+    assert!(
+        g.mesh
+            .positions
+            .iter()
+            .any(|p| (*p - expected).length() < 1e-6),
+        "no box corner at {expected}"
+    );
+    assert_eq!(g.mesh.materials, vec![[0.8, 0.1, 0.1], [0.6, 0.6, 0.6]]);
+    let camera = &g.cameras[0];
+    assert_eq!(camera.name.as_deref(), Some("view"));
+    let pitch = (2.0f64).atan2(7.0);
+    assert!((camera.eye - DVec3::new(0.0, 2.5, 7.0)).length() < 1e-6);
+    assert!((camera.forward - DVec3::new(0.0, -pitch.sin(), -pitch.cos())).length() < 1e-6);
+    assert!((camera.yfov_deg - 40.0).abs() < 1e-4);
+    assert!((camera.aspect_ratio.unwrap() - 4.0 / 3.0).abs() < 1e-6);
+
+    let scene = Scene::load(&path).unwrap();
+    assert_eq!((scene.camera.width, scene.camera.height), (1024, 768));
+    assert_eq!(scene.lights.len(), 2);
+    let point = scene
+        .lights
+        .iter()
+        .find(|l| l.kind == lambert::layout::LIGHT_POINT)
+        .unwrap();
+    assert_eq!(point.vector, [-3.0, 4.0, 3.0]);
+    assert_eq!(point.color, [40.0, 36.0, 32.0]);
+    let sun = scene
+        .lights
+        .iter()
+        .find(|l| l.kind == lambert::layout::LIGHT_DIRECTIONAL)
+        .unwrap();
+    let to_light = DVec3::new(0.0, 60f64.to_radians().sin(), 60f64.to_radians().cos());
+    assert!((glam::Vec3::from(sun.vector).as_dvec3() - to_light).length() < 1e-6);
+    assert!((glam::Vec3::from(sun.color) - glam::Vec3::new(0.75, 0.75, 0.9)).length() < 1e-6);
+
+    let mut small = scene.clone();
+    small.camera.width = 64;
+    small.camera.height = 48;
+    let (gpu, cpu) = (render_gpu(&small), render_cpu(&small));
+    let stats = lambert::diff::compare(&gpu, &cpu, &Default::default()).unwrap();
+    assert!(stats.passed, "{stats}");
+    assert!(cpu.prims.iter().any(|&p| p < 12) && cpu.prims.iter().any(|&p| p == 12 || p == 13));
+}
+
+#[test]
+fn gltf_in_a_toml_scene_brings_geometry_only() {
+    let text = "[camera]\neye = [0.0, 8.0, 0.1]\nlook_at = [0.0, 0.0, 0.0]\nvfov = 50.0\nwidth = 8\nheight = 8\n\
+                [[mesh]]\nfile = \"meshes/BOXES.GLB\"\nscale = 2.0\n[[point_light]]\nposition = [0.0, 5.0, 0.0]\nintensity = 1.0\n";
+    // The extension is matched case-insensitively; the file itself is boxes.glb.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("meshes")).unwrap();
+    std::fs::copy(meshes("boxes.glb"), dir.path().join("meshes/BOXES.GLB")).unwrap();
+    let s = Scene::from_toml(text, &dir.path().join("s.toml")).unwrap();
+    assert_eq!(s.lights.len(), 1);
+    assert_eq!(s.camera.vfov, 50.0);
+    assert_eq!(s.triangles.len(), 14);
+    let max_x = s
+        .triangles
+        .iter()
+        .flat_map(|t| [t.v0[0], t.v1[0], t.v2[0]])
+        .fold(f32::MIN, f32::max);
+    assert_eq!(max_x, 6.0, "scale = 2 applies to glTF geometry");
+}
+
+/// Writes a .gltf whose JSON is `json` with one buffer of `buffer` bytes
+/// as a data URI (or `uri` as given).
+fn gltf_file(dir: &Path, name: &str, json: serde_json::Value) -> PathBuf {
+    write(dir, name, serde_json::to_vec(&json).unwrap())
+}
+
+fn triangle_gltf(
+    buffer_uri: &str,
+    byte_length: usize,
+    count: usize,
+    extra: serde_json::Value,
+) -> serde_json::Value {
+    let mut doc = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "buffers": [{"uri": buffer_uri, "byteLength": byte_length}],
+        "bufferViews": [{"buffer": 0, "byteLength": 36}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": count, "type": "VEC3",
+                       "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 0.0]}]
+    });
+    for (k, v) in extra.as_object().unwrap() {
+        doc[k] = v.clone();
+    }
+    doc
+}
+
+#[test]
+fn gltf_data_uris_external_buffers_and_malformed_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let floats: Vec<u8> = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]
+        .iter()
+        .flat_map(|f| f.to_le_bytes())
+        .collect();
+    use base64_like::encode;
+    let data_uri = format!("data:application/octet-stream;base64,{}", encode(&floats));
+    let ok = gltf_file(
+        d,
+        "ok.gltf",
+        triangle_gltf(&data_uri, 36, 3, serde_json::json!({})),
+    );
+    assert_eq!(
+        load_mesh(&ok, NormalMode::Face).unwrap().triangles,
+        vec![[0, 1, 2]]
+    );
+    write(d, "tri.bin", &floats);
+    let external = gltf_file(
+        d,
+        "external.gltf",
+        triangle_gltf("tri.bin", 36, 3, serde_json::json!({})),
+    );
+    assert_eq!(
+        load_mesh(&external, NormalMode::Face)
+            .unwrap()
+            .positions
+            .len(),
+        3
+    );
+
+    let cases = [
+        (
+            write(d, "json.gltf", "{\"asset\": "),
+            "json.gltf: not a readable glTF file",
+        ),
+        (
+            gltf_file(
+                d,
+                "missing.gltf",
+                triangle_gltf("nothere.bin", 36, 3, serde_json::json!({})),
+            ),
+            "reading its buffers",
+        ),
+        (
+            gltf_file(
+                d,
+                "short.gltf",
+                triangle_gltf(
+                    &format!(
+                        "data:application/octet-stream;base64,{}",
+                        encode(&floats[..24])
+                    ),
+                    36,
+                    3,
+                    serde_json::json!({}),
+                ),
+            ),
+            "reading its buffers",
+        ),
+        (
+            gltf_file(
+                d,
+                "beyond.gltf",
+                triangle_gltf(&data_uri, 36, 4, serde_json::json!({})),
+            ),
+            "accessor 0 (4 elements) reaches beyond its buffer view 0",
+        ),
+        (
+            gltf_file(
+                d,
+                "draco.gltf",
+                triangle_gltf(
+                    &data_uri,
+                    36,
+                    3,
+                    serde_json::json!({"extensionsUsed": ["KHR_draco_mesh_compression"], "extensionsRequired": ["KHR_draco_mesh_compression"]}),
+                ),
+            ),
+            "requires the extension KHR_draco_mesh_compression",
+        ),
+        (
+            gltf_file(
+                d,
+                "points.gltf",
+                triangle_gltf(
+                    &data_uri,
+                    36,
+                    3,
+                    serde_json::json!({"meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "mode": 0}]}]}),
+                ),
+            ),
+            "no triangles",
+        ),
+        (
+            gltf_file(
+                d,
+                "index.gltf",
+                triangle_gltf(
+                    &data_uri,
+                    36,
+                    3,
+                    serde_json::json!({"nodes": [{"mesh": 5}]}),
+                ),
+            ),
+            "invalid glTF",
+        ),
+    ];
+    for (path, expected) in cases {
+        let message = error_of(&path);
+        assert!(
+            message.contains(expected),
+            "{}: expected '{expected}' in: {message}",
+            path.display()
+        );
+        assert!(
+            message.contains(&*path.file_name().unwrap().to_string_lossy()),
+            "{message}"
+        );
+    }
+}
+
+/// Base64 for the data-URI test, written out rather than a dependency.
+mod base64_like {
+    pub fn encode(bytes: &[u8]) -> String {
+        const TABLE: &[u8; 64] =
+            b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+        let mut out = String::new();
+        for chunk in bytes.chunks(3) {
+            let b = [
+                chunk[0],
+                *chunk.get(1).unwrap_or(&0),
+                *chunk.get(2).unwrap_or(&0),
+            ];
+            let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
+            for i in 0..4 {
+                if i <= chunk.len() {
+                    out.push(TABLE[(n >> (18 - 6 * i) & 63) as usize] as char);
+                } else {
+                    out.push('=');
+                }
+            }
+        }
+        out
+    }
+}
+
+/// `lambert render MODEL` for every format, with no scene file: a framed
+/// camera or the file's, a light, never a black picture; `--camera` picks
+/// a glTF camera by name; an unknown extension names the supported ones.
+#[test]
+fn a_model_file_alone_renders() {
+    let dir = tempfile::tempdir().unwrap();
+    for model in [
+        "bunny_lowres.obj",
+        "bunny_lowres.ply",
+        "bunny_lowres_ascii.ply.gz",
+        "boxes.glb",
+    ] {
+        let out = dir.path().join(format!("{model}.png"));
+        let output = Command::new(env!("CARGO_BIN_EXE_lambert"))
+            .args([
+                "render",
+                meshes(model).to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+                "--width",
+                "64",
+            ])
+            .output()
+            .unwrap();
+        assert!(
+            output.status.success(),
+            "{model}: {}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        let image = image::open(&out).unwrap().to_rgb8();
+        assert_eq!(image.width(), 64);
+        assert_eq!(image.height(), 48, "{model}: the aspect ratio is kept");
+        let lit = image
+            .pixels()
+            .filter(|p| p.0.iter().any(|&c| c > 40))
+            .count();
+        assert!(lit > 64 * 48 / 10, "{model}: only {lit} lit pixels");
+    }
+    let output = Command::new(env!("CARGO_BIN_EXE_lambert"))
+        .args([
+            "render",
+            meshes("boxes.glb").to_str().unwrap(),
+            "-o",
+            "x.png",
+            "--camera",
+            "nonesuch",
+        ])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    assert_eq!(output.status.code(), Some(1));
+    let text = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        text.contains("no perspective camera named 'nonesuch' (the file has 'view')"),
+        "{text}"
+    );
+    let stl = write(dir.path(), "model.stl", "solid");
+    let message = Scene::load(&stl).unwrap_err().to_string();
+    assert!(
+        message.contains(".obj, .ply, .ply.gz, .gltf and .glb"),
+        "{message}"
+    );
+    let output = Command::new(env!("CARGO_BIN_EXE_lambert"))
+        .args(["info", meshes("boxes.glb").to_str().unwrap()])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&output.stdout);
+    for expected in [
+        "triangles: 14",
+        "materials: 2",
+        "lights: 2",
+        "eye [0, 2.5, 7]",
+    ] {
+        assert!(text.contains(expected), "info lacks {expected}: {text}");
+    }
+}
