@@ -45,6 +45,18 @@ enum Command {
     /// Measure trace speed over a ladder of models, or run time against
     /// error over the settings (--time-vs-error).
     Bench(BenchArgs),
+    /// Assemble the parts of a render (`render --tile I/N`) into one image.
+    Merge(MergeArgs),
+}
+
+#[derive(Args)]
+struct MergeArgs {
+    /// Every part file of one render (any order).
+    #[arg(required = true)]
+    parts: Vec<PathBuf>,
+    /// Output image: .png, .exr or .pfm.
+    #[arg(short, long)]
+    output: PathBuf,
 }
 
 #[derive(Args)]
@@ -178,9 +190,117 @@ struct RenderArgs {
     /// rest of the budget allows. Reports the error it expects.
     #[arg(long, value_name = "SECONDS", conflicts_with = "target_error")]
     time_budget: Option<f64>,
+    /// Render only part I (from 0) of N of the image, as an EXR part file
+    /// for `lambert merge` (bands of rows; see docs/distributed.md).
+    #[arg(long, value_name = "I/N")]
+    tile: Option<String>,
+    /// With --turntable: only frames A to B (inclusive, from 0, as Slurm and
+    /// Blender count), named as in a full run.
+    #[arg(long, value_name = "A-B", requires = "turntable")]
+    frames: Option<String>,
     /// Print nothing but errors.
     #[arg(short, long)]
     quiet: bool,
+}
+
+/// `--frames A-B` (or `A`) of `frames`: inclusive, within 0..frames.
+fn frame_range(text: &str, frames: u32) -> Result<std::ops::RangeInclusive<u32>> {
+    let usage = || {
+        Error::Usage(format!(
+            "--frames {text}: expected A-B (or A), with 0 ≤ A ≤ B < {frames}"
+        ))
+    };
+    let (a, b) = text.split_once('-').unwrap_or((text, text));
+    let (a, b): (u32, u32) = (
+        a.trim().parse().map_err(|_| usage())?,
+        b.trim().parse().map_err(|_| usage())?,
+    );
+    if a > b || b >= frames {
+        return Err(usage());
+    }
+    Ok(a..=b)
+}
+
+/// `lambert render --tile I/N`: renders the part and writes it.
+fn render_part(args: &RenderArgs, tile_text: &str) -> Result<ExitCode> {
+    let tile = crate::parts::Tile::parse(tile_text)?;
+    let refuse = |what: &str, why: &str| Err(Error::Usage(format!("--tile with {what}: {why}")));
+    if args.target_error.is_some() {
+        return refuse(
+            "--target-error",
+            "adaptive sampling looks at neighbouring pixels, across part edges too, so parts would not merge into the single render; use --spp",
+        );
+    }
+    if args.time_budget.is_some() {
+        return refuse(
+            "--time-budget",
+            "each part would choose its own spp; use --spp",
+        );
+    }
+    if args.turntable.is_some() {
+        return refuse("--turntable", "split a turntable by --frames instead");
+    }
+    let is_exr = args
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    if !is_exr {
+        return Err(Error::Usage(format!(
+            "{}: a part is an OpenEXR file; name it .exr (lambert merge writes any format)",
+            args.output.display()
+        )));
+    }
+    check_output_path(&args.output)?;
+    let scene = args.options.load(&args.scene)?;
+    print_warnings(&scene, args.quiet);
+    let rows = tile.rows(scene.camera.height)?;
+    let (mut renderer, note) = Renderer::open(&scene, args.device, &args.adapter.request())?;
+    if let Some(note) = note.filter(|_| !args.quiet) {
+        eprintln!("{note}");
+    }
+    let device = match renderer {
+        Renderer::Gpu(_) => "gpu",
+        Renderer::Cpu => "cpu",
+    };
+    let start = Instant::now();
+    let (rendered, _) = renderer.render_rows(&scene, rows.clone(), !args.quiet)?;
+    let hash = crate::parts::settings_hash(&scene, device);
+    crate::parts::write_part(
+        &args.output,
+        &rendered.image,
+        tile,
+        scene.camera.height,
+        rows.clone(),
+        &hash,
+    )?;
+    if !args.quiet {
+        eprintln!(
+            "wrote {}: part {}/{} (rows {} to {} of {}×{}) on {} in {}",
+            args.output.display(),
+            tile.index,
+            tile.count,
+            rows.start,
+            rows.end - 1,
+            scene.camera.width,
+            scene.camera.height,
+            renderer.describe(),
+            seconds(start.elapsed())
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn merge(args: &MergeArgs) -> Result<ExitCode> {
+    check_output_path(&args.output)?;
+    let image = crate::parts::merge(&args.parts, &args.output)?;
+    eprintln!(
+        "wrote {} ({}×{}, from {} parts)",
+        args.output.display(),
+        image.width,
+        image.height,
+        args.parts.len()
+    );
+    Ok(ExitCode::SUCCESS)
 }
 
 /// `frames/frame_{:04}.png` with frame 7 → `frames/frame_0007.png`.
@@ -385,6 +505,7 @@ pub fn run() -> Result<ExitCode> {
             None => info(&args.adapter),
         },
         Command::Bench(args) => bench(&args),
+        Command::Merge(args) => merge(&args),
     }
 }
 
@@ -487,6 +608,9 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
                 "--time-budget and --turntable cannot be combined".into(),
             ));
         }
+    }
+    if let Some(tile) = &args.tile {
+        return render_part(args, tile);
     }
     if let Some(frames) = args.turntable {
         return turntable(args, frames);
@@ -625,7 +749,11 @@ fn turntable(args: &RenderArgs, frames: u32) -> Result<ExitCode> {
     if frames == 0 {
         return Err(Error::Usage("--turntable needs at least 1 frame".into()));
     }
-    check_output_path(&frame_path(&args.output, 0)?)?;
+    let range = match &args.frames {
+        Some(text) => frame_range(text, frames)?,
+        None => 0..=frames - 1,
+    };
+    check_output_path(&frame_path(&args.output, *range.start())?)?;
     let mut scene = args.options.load(&args.scene)?;
     print_warnings(&scene, args.quiet);
     let (mut renderer, note) = Renderer::open(&scene, args.device, &args.adapter.request())?;
@@ -637,7 +765,8 @@ fn turntable(args: &RenderArgs, frames: u32) -> Result<ExitCode> {
     }
     let start_camera = scene.camera.clone();
     let mut total = Duration::ZERO;
-    for frame in 0..frames {
+    let rendered_frames = range.clone().count() as u32;
+    for frame in range {
         scene.camera = orbit(&start_camera, frame, frames);
         let start = Instant::now();
         let (rendered, _) = renderer.render(&scene, false)?;
@@ -654,8 +783,8 @@ fn turntable(args: &RenderArgs, frames: u32) -> Result<ExitCode> {
     }
     if !args.quiet {
         eprintln!(
-            "{frames} frames, {} per frame on average (render and readback; the scene was uploaded once)",
-            seconds(total / frames)
+            "{rendered_frames} of {frames} frames, {} per frame on average (render and readback; the scene was uploaded once)",
+            seconds(total / rendered_frames)
         );
     }
     Ok(ExitCode::SUCCESS)

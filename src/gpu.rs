@@ -838,17 +838,27 @@ impl GpuRenderer {
 
     /// Renders tile by tile, reading each back before the next.
     pub fn render(&mut self, progress: &Progress) -> Result<(Rendered, GpuTimings)> {
-        let (width, height) = (self.params.width, self.params.height);
+        self.render_rows(0..self.params.height, progress)
+    }
+
+    /// Renders rows `rows` of the image alone (a part of it), tile by tile.
+    pub fn render_rows(
+        &mut self,
+        rows: std::ops::Range<u32>,
+        progress: &Progress,
+    ) -> Result<(Rendered, GpuTimings)> {
+        let width = self.params.width;
+        let height = rows.len() as u32;
         let mut rgb = vec![[0.0f32; 3]; width as usize * height as usize];
         let mut prims = vec![0u32; width as usize * height as usize];
         let mut variance = vec![0.0f32; width as usize * height as usize];
         let mut timings = GpuTimings::default();
         self.prepare_render()?;
         let side = self.tile_side();
-        for tile_y in (0..height).step_by(side as usize) {
+        for tile_y in rows.clone().step_by(side as usize) {
             for tile_x in (0..width).step_by(side as usize) {
                 let tile_width = side.min(width - tile_x);
-                let tile_height = side.min(height - tile_y);
+                let tile_height = side.min(rows.end - tile_y);
                 let start = Instant::now();
                 let device_time = self.render_tile(tile_x, tile_y, tile_width, tile_height)?;
                 timings.render += start.elapsed();
@@ -858,7 +868,7 @@ impl GpuRenderer {
 
                 let start = Instant::now();
                 self.read_tile(tile_width, tile_height, |row, colors, ids| {
-                    let offset = ((tile_y + row) * width + tile_x) as usize;
+                    let offset = ((tile_y - rows.start + row) * width + tile_x) as usize;
                     let n = tile_width as usize;
                     for (i, src) in colors.chunks(4).enumerate() {
                         rgb[offset + i] = [src[0], src[1], src[2]];

@@ -17,6 +17,7 @@ pub mod gpu;
 pub mod layout;
 pub mod loading;
 pub mod output;
+pub mod parts;
 pub mod plot;
 pub mod probe;
 pub mod progress;

@@ -80,6 +80,17 @@ impl Renderer {
         scene: &Scene,
         show_progress: bool,
     ) -> Result<(Rendered, RenderTimings)> {
+        self.render_rows(scene, 0..scene.camera.height, show_progress)
+    }
+
+    /// Renders rows `rows` of `scene`'s image (a part of it: `--tile`),
+    /// each pixel exactly as in the whole image.
+    pub fn render_rows(
+        &mut self,
+        scene: &Scene,
+        rows: std::ops::Range<u32>,
+        show_progress: bool,
+    ) -> Result<(Rendered, RenderTimings)> {
         match self {
             Renderer::Gpu(renderer) => {
                 renderer.set_camera(scene, &scene.camera);
@@ -88,7 +99,7 @@ impl Renderer {
                 } else {
                     Progress::hidden()
                 };
-                let (rendered, t) = renderer.render(&progress)?;
+                let (rendered, t) = renderer.render_rows(rows, &progress)?;
                 progress.finish();
                 Ok((
                     rendered,
@@ -101,12 +112,12 @@ impl Renderer {
             }
             Renderer::Cpu => {
                 let progress = if show_progress {
-                    Progress::new(scene.camera.height as u64, "rows")
+                    Progress::new(rows.len() as u64, "rows")
                 } else {
                     Progress::hidden()
                 };
                 let start = Instant::now();
-                let rendered = cpu::render(scene, Precision::F32, &progress);
+                let rendered = cpu::render_rows(scene, Precision::F32, rows, &progress);
                 progress.finish();
                 Ok((
                     rendered,

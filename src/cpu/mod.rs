@@ -301,6 +301,16 @@ fn check_runs(kernel: CpuKernel) {
     }
 }
 
+/// Renders rows `rows` of the scene's image alone (a part of it).
+pub fn render_rows(
+    scene: &Scene,
+    precision: Precision,
+    rows: std::ops::Range<u32>,
+    progress: &Progress,
+) -> Rendered {
+    render_rows_with(scene, precision, rows, progress, CpuKernel::active())
+}
+
 /// `render` with a given CPU kernel (one this CPU runs).
 pub fn render_with(
     scene: &Scene,
@@ -308,8 +318,25 @@ pub fn render_with(
     progress: &Progress,
     cpu_kernel: CpuKernel,
 ) -> Rendered {
+    render_rows_with(
+        scene,
+        precision,
+        0..scene.camera.height,
+        progress,
+        cpu_kernel,
+    )
+}
+
+fn render_rows_with(
+    scene: &Scene,
+    precision: Precision,
+    rows: std::ops::Range<u32>,
+    progress: &Progress,
+    cpu_kernel: CpuKernel,
+) -> Rendered {
     check_runs(cpu_kernel);
-    let (width, height) = (scene.camera.width as usize, scene.camera.height as usize);
+    let first_row = rows.start as usize;
+    let (width, height) = (scene.camera.width as usize, rows.len());
     let mut rgb = vec![[0.0; 3]; width * height];
     let mut prims = vec![0u32; width * height];
     let mut variance = vec![0.0; width * height];
@@ -319,7 +346,8 @@ pub fn render_with(
         .zip(prims.par_chunks_mut(width))
         .zip(variance.par_chunks_mut(width))
         .enumerate()
-        .for_each(|(y, ((rgb_row, prim_row), variance_row))| {
+        .for_each(|(row, ((rgb_row, prim_row), variance_row))| {
+            let y = first_row + row;
             // SAFETY: checked above.
             unsafe {
                 with_simd(

@@ -1,0 +1,347 @@
+//! Renders in parts (`--tile I/N`) merged by `lambert merge`, and turntable
+//! frames in ranges (`--frames A-B`), equal to single renders (issue 20).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn lambert(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lambert"))
+        .args(args)
+        .output()
+        .expect("lambert runs")
+}
+
+fn scene(name: &str) -> &'static str {
+    // Leaked: a few short paths, for the argument lists' lifetimes.
+    Box::leak(format!("{}/assets/scenes/{name}.toml", env!("CARGO_MANIFEST_DIR")).into_boxed_str())
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+fn ok(out: Output, what: &str) {
+    assert!(
+        out.status.success(),
+        "{what}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// Renders `scene` in `count` parts and merges them to `out`.
+fn parts_and_merge(
+    dir: &Path,
+    scene: &str,
+    count: u32,
+    extra: &[&str],
+    out: &Path,
+) -> Vec<PathBuf> {
+    let mut parts = Vec::new();
+    for i in 0..count {
+        let part = dir.join(format!("part{i}.exr"));
+        let tile = format!("{i}/{count}");
+        let mut args = vec!["render", scene, "--tile", &tile, "-o", s(&part), "-q"];
+        args.extend(extra);
+        ok(lambert(&args), &tile);
+        parts.push(part);
+    }
+    // Any order.
+    let mut merge = vec!["merge".to_string()];
+    merge.extend(parts.iter().rev().map(|p| s(p).to_string()));
+    merge.extend(["-o".into(), s(out).into()]);
+    ok(
+        lambert(&merge.iter().map(String::as_str).collect::<Vec<_>>()),
+        "merge",
+    );
+    parts
+}
+
+#[test]
+fn merged_parts_equal_the_single_render() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for (name, count, spp, device) in [
+        ("spheres", 3, "1", "cpu"),
+        ("bunny", 4, "3", "cpu"),
+        ("cornell", 2, "2", "gpu"),
+        ("edge_cases", 7, "1", "gpu"),
+    ] {
+        let extra = ["--spp", spp, "--device", device];
+        for format in ["png", "exr"] {
+            let merged = d.join(format!("{name}_merged.{format}"));
+            let single = d.join(format!("{name}_single.{format}"));
+            parts_and_merge(d, scene(name), count, &extra, &merged);
+            let mut args = vec!["render", scene(name), "-o", s(&single), "-q"];
+            args.extend(extra);
+            ok(lambert(&args), "single");
+            let what = format!("{name}, {count} parts, {spp} spp on the {device}, {format}");
+            if format == "png" {
+                assert!(
+                    std::fs::read(&merged).unwrap() == std::fs::read(&single).unwrap(),
+                    "{what}: PNGs differ"
+                );
+            } else {
+                let read = |p: &Path| image::open(p).unwrap().to_rgb32f().into_raw();
+                let (a, b) = (read(&merged), read(&single));
+                assert_eq!(a.len(), b.len());
+                assert!(
+                    a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()),
+                    "{what}: values differ"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn bad_merges_are_refused_and_write_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let out = d.join("out.png");
+    let parts = parts_and_merge(d, scene("spheres"), 3, &["--device", "cpu"], &out);
+    std::fs::write(&out, "previous").unwrap();
+    let other_spp = d.join("other_spp.exr");
+    ok(
+        lambert(&[
+            "render",
+            scene("spheres"),
+            "--tile",
+            "1/3",
+            "-o",
+            s(&other_spp),
+            "--spp",
+            "2",
+            "--device",
+            "cpu",
+            "-q",
+        ]),
+        "spp 2",
+    );
+    let other_scene = d.join("other_scene.exr");
+    ok(
+        lambert(&[
+            "render",
+            scene("bunny"),
+            "--tile",
+            "1/3",
+            "-o",
+            s(&other_scene),
+            "--device",
+            "cpu",
+            "-q",
+            "--width",
+            "200",
+            "--height",
+            "150",
+        ]),
+        "bunny",
+    );
+    let other_count = d.join("other_count.exr");
+    ok(
+        lambert(&[
+            "render",
+            scene("spheres"),
+            "--tile",
+            "1/4",
+            "-o",
+            s(&other_count),
+            "--device",
+            "cpu",
+            "-q",
+        ]),
+        "1/4",
+    );
+    let other_size = d.join("other_size.exr");
+    ok(
+        lambert(&[
+            "render",
+            scene("spheres"),
+            "--tile",
+            "1/3",
+            "-o",
+            s(&other_size),
+            "--device",
+            "cpu",
+            "-q",
+            "--width",
+            "100",
+        ]),
+        "size",
+    );
+    let gpu_part = d.join("gpu.exr");
+    ok(
+        lambert(&[
+            "render",
+            scene("spheres"),
+            "--tile",
+            "1/3",
+            "-o",
+            s(&gpu_part),
+            "--device",
+            "gpu",
+            "-q",
+        ]),
+        "gpu",
+    );
+    let not_part = d.join("plain.exr");
+    ok(
+        lambert(&[
+            "render",
+            scene("spheres"),
+            "-o",
+            s(&not_part),
+            "--device",
+            "cpu",
+            "-q",
+        ]),
+        "plain",
+    );
+    let [p0, p1, p2] = [&parts[0], &parts[1], &parts[2]].map(|p| s(p));
+    let cases: Vec<(Vec<&str>, Vec<&str>)> = vec![
+        (vec![p0, p2], vec!["parts missing: 1/3"]),
+        (vec![p0, p1, p1, p2], vec!["part1.exr", "both part 1/3"]),
+        (
+            vec![p0, s(&other_spp), p2],
+            vec!["other_spp.exr", "other settings"],
+        ),
+        (
+            vec![p0, s(&other_scene), p2],
+            vec!["other_scene.exr", "other settings"],
+        ),
+        (vec![p0, s(&gpu_part), p2], vec!["gpu.exr", "device"]),
+        (
+            vec![p0, s(&other_count), p2],
+            vec!["other_count.exr", "one of 4 parts"],
+        ),
+        (
+            vec![p0, s(&other_size), p2],
+            vec!["other_size.exr", "100×75"],
+        ),
+        (
+            vec![p0, s(&not_part), p2],
+            vec!["plain.exr", "not a lambert part"],
+        ),
+    ];
+    for (inputs, expected) in cases {
+        let mut args = vec!["merge"];
+        args.extend(&inputs);
+        args.extend(["-o", s(&out)]);
+        let output = lambert(&args);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(1), "{inputs:?}: {stderr}");
+        for e in expected {
+            assert!(
+                stderr.contains(e),
+                "{inputs:?}: stderr lacks '{e}': {stderr}"
+            );
+        }
+        assert_eq!(
+            std::fs::read(&out).unwrap(),
+            b"previous",
+            "{inputs:?} touched the output"
+        );
+    }
+    for (args, expected) in [
+        (vec!["--tile", "3/3"], "0 ≤ I < N"),
+        (vec!["--tile", "1/0"], "0 ≤ I < N"),
+        (vec!["--tile", "x"], "expected I/N"),
+        (vec!["--tile", "0/200"], "N must be at most"),
+        (
+            vec!["--tile", "0/2", "--target-error", "0.01"],
+            "--target-error",
+        ),
+        (vec!["--tile", "0/2", "--time-budget", "1"], "--time-budget"),
+    ] {
+        let part = d.join("p.exr");
+        let mut full = vec![
+            "render",
+            scene("spheres"),
+            "-o",
+            s(&part),
+            "--device",
+            "cpu",
+        ];
+        full.extend(&args);
+        let output = lambert(&full);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(1), "{args:?}: {stderr}");
+        assert!(stderr.contains(expected), "{args:?}: {stderr}");
+    }
+    let output = lambert(&[
+        "render",
+        scene("spheres"),
+        "--tile",
+        "0/2",
+        "-o",
+        s(&d.join("p.png")),
+    ]);
+    assert!(String::from_utf8_lossy(&output.stderr).contains("name it .exr"));
+}
+
+#[test]
+fn frame_ranges_render_only_their_frames_with_the_full_names() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let full = d.join("full/f_{:03}.png");
+    let split = d.join("split/f_{:03}.png");
+    let base = [
+        "--turntable",
+        "5",
+        "--device",
+        "cpu",
+        "-q",
+        "--width",
+        "40",
+        "--height",
+        "30",
+    ];
+    let mut args = vec!["render", scene("spheres"), "-o", s(&full)];
+    args.extend(base);
+    ok(lambert(&args), "full");
+    for range in ["0-1", "2", "3-4"] {
+        let mut args = vec![
+            "render",
+            scene("spheres"),
+            "-o",
+            s(&split),
+            "--frames",
+            range,
+        ];
+        args.extend(base);
+        ok(lambert(&args), range);
+    }
+    for frame in 0..5 {
+        let name = format!("f_{frame:03}.png");
+        assert_eq!(
+            std::fs::read(d.join("full").join(&name)).unwrap(),
+            std::fs::read(d.join("split").join(&name)).unwrap(),
+            "{name}"
+        );
+    }
+    let only = d.join("only/f_{:03}.png");
+    let mut args = vec![
+        "render",
+        scene("spheres"),
+        "-o",
+        s(&only),
+        "--frames",
+        "3-4",
+    ];
+    args.extend(base);
+    ok(lambert(&args), "3-4");
+    let names: Vec<_> = std::fs::read_dir(d.join("only"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(names.len(), 2, "{names:?}");
+    for bad in ["4-3", "0-5", "x", "-1"] {
+        let mut args = vec!["render", scene("spheres"), "-o", s(&only), "--frames", bad];
+        args.extend(base);
+        let output = lambert(&args);
+        assert_eq!(
+            output.status.code().filter(|c| *c != 0).is_some(),
+            true,
+            "--frames {bad} accepted"
+        );
+    }
+}
