@@ -251,6 +251,36 @@ impl Gpu {
         self.check_errors()
     }
 
+    /// Maps the first `len` bytes of `buffer` (MAP_READ) once the queue's
+    /// work is done, hands them to `read`, and unmaps; `what` names the
+    /// data in errors.
+    fn read_mapped<T>(
+        &self,
+        buffer: &wgpu::Buffer,
+        len: u64,
+        what: &str,
+        read: impl FnOnce(&[u8]) -> T,
+    ) -> Result<T> {
+        let (sender, receiver) = mpsc::channel();
+        buffer.map_async(wgpu::MapMode::Read, ..len, move |r| {
+            let _ = sender.send(r);
+        });
+        self.wait()?;
+        let fail = |e: String| Error::Gpu(format!("reading back the {what}: {e}"));
+        receiver
+            .recv()
+            .map_err(|e| fail(e.to_string()))?
+            .map_err(|e| fail(e.to_string()))?;
+        let result = {
+            let mapped = buffer
+                .get_mapped_range(..len)
+                .map_err(|e| fail(e.to_string()))?;
+            read(&mapped)
+        };
+        buffer.unmap();
+        Ok(result)
+    }
+
     /// Largest storage binding, bytes.
     fn binding_limit(&self) -> u64 {
         self.limits
@@ -403,24 +433,10 @@ impl Timer {
 
     /// The pass's device time, once its submission has completed.
     fn read(&self, gpu: &Gpu) -> Result<Duration> {
-        let (sender, receiver) = mpsc::channel();
-        self.staging.map_async(wgpu::MapMode::Read, .., move |r| {
-            let _ = sender.send(r);
-        });
-        gpu.wait()?;
-        receiver
-            .recv()
-            .map_err(|e| Error::Gpu(format!("timestamps: {e}")))?
-            .map_err(|e| Error::Gpu(format!("timestamps: {e}")))?;
-        let ticks = {
-            let mapped = self
-                .staging
-                .get_mapped_range(..)
-                .map_err(|e| Error::Gpu(format!("timestamps: {e}")))?;
-            let t: &[u64] = bytemuck::cast_slice(&mapped);
+        let ticks = gpu.read_mapped(&self.staging, 16, "timestamps", |bytes| {
+            let t: &[u64] = bytemuck::cast_slice(bytes);
             t[1].saturating_sub(t[0])
-        };
-        self.staging.unmap();
+        })?;
         Ok(Duration::from_nanos((ticks as f64 * self.period) as u64))
     }
 }
@@ -946,25 +962,9 @@ impl GpuRenderer {
         encoder.copy_buffer_to_buffer(&self.loop_status, 0, &self.loop_status_staging, 0, 4);
         encoder.clear_buffer(&self.loop_status, 0, None);
         gpu.queue.submit([encoder.finish()]);
-        let (sender, receiver) = mpsc::channel();
-        self.loop_status_staging
-            .map_async(wgpu::MapMode::Read, .., move |r| {
-                let _ = sender.send(r);
-            });
-        gpu.wait()?;
-        receiver
-            .recv()
-            .map_err(|e| Error::Gpu(format!("readback: {e}")))?
-            .map_err(|e| Error::Gpu(format!("readback: {e}")))?;
-        let cut = {
-            let mapped = self
-                .loop_status_staging
-                .get_mapped_range(..)
-                .map_err(|e| Error::Gpu(format!("readback: {e}")))?;
-            bytemuck::cast_slice::<u8, u32>(&mapped)[0] != 0
-        };
-        self.loop_status_staging.unmap();
-        Ok(cut)
+        gpu.read_mapped(&self.loop_status_staging, 4, "loop status", |bytes| {
+            bytemuck::cast_slice::<u8, u32>(bytes)[0] != 0
+        })
     }
 
     /// Number of tiles `render` dispatches for the current camera.
@@ -1255,22 +1255,9 @@ impl GpuRenderer {
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
             encoder.copy_buffer_to_buffer(&out_buffer, 0, &staging, 0, out_len);
             gpu.queue.submit([encoder.finish()]);
-            let (sender, receiver) = mpsc::channel();
-            staging.map_async(wgpu::MapMode::Read, ..out_len, move |r| {
-                let _ = sender.send(r);
-            });
-            gpu.wait()?;
-            receiver
-                .recv()
-                .map_err(|e| Error::Gpu(format!("readback: {e}")))?
-                .map_err(|e| Error::Gpu(format!("readback: {e}")))?;
-            {
-                let mapped = staging
-                    .get_mapped_range(..out_len)
-                    .map_err(|e| Error::Gpu(format!("readback: {e}")))?;
-                outputs.extend_from_slice(bytemuck::cast_slice::<u8, O>(&mapped));
-            }
-            staging.unmap();
+            gpu.read_mapped(&staging, out_len, "results", |bytes| {
+                outputs.extend_from_slice(bytemuck::cast_slice::<u8, O>(bytes))
+            })?;
         }
         Ok(outputs)
     }

@@ -246,6 +246,34 @@ fn outputs_follow_links_and_write_into_fifos() {
             .is_fifo()
     );
     assert!(temporaries(d).is_empty(), "{:?}", temporaries(d));
+
+    // A device that fails the write, as /dev/full does (a copy of it here:
+    // making device nodes needs root, which CI has).
+    let full = d.join("full.pfm");
+    let made = Command::new("mknod")
+        .arg(&full)
+        .args(["c", "1", "7"])
+        .status()
+        .unwrap()
+        .success();
+    if !made {
+        use std::io::Write;
+        let _ = writeln!(
+            std::io::stderr(),
+            "skipped: the /dev/full case needs root to make a device node"
+        );
+        return;
+    }
+    let out = lambert(&["render", s(&scene), "-o", s(&full), "--device", "cpu"]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(stderr(&out).contains("full.pfm"), "{}", stderr(&out));
+    assert!(
+        std::fs::symlink_metadata(&full)
+            .unwrap()
+            .file_type()
+            .is_char_device()
+    );
+    assert!(temporaries(d).is_empty(), "{:?}", temporaries(d));
 }
 
 /// SIGINT or SIGTERM at any moment of a render and its write (a PFM,
