@@ -464,6 +464,57 @@ fn gltf_data_uris_external_buffers_and_malformed_files() {
             "invalid glTF",
         ),
     ];
+    // What lambert's model lacks is a warning: spot lights, range,
+    // textures, non-triangle modes; a second node places the mesh again.
+    let warned = gltf_file(
+        d,
+        "warned.gltf",
+        triangle_gltf(
+            &data_uri,
+            36,
+            3,
+            serde_json::json!({
+                "extensionsUsed": ["KHR_lights_punctual"],
+                "extensions": {"KHR_lights_punctual": {"lights": [
+                    {"name": "spot", "type": "spot", "intensity": 2.0, "spot": {}},
+                    {"name": "lamp", "type": "point", "intensity": 3.0, "range": 10.0}
+                ]}},
+                "nodes": [
+                    {"mesh": 0, "matrix": [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 5.0, 0.0, 0.0, 1.0]},
+                    {"extensions": {"KHR_lights_punctual": {"light": 0}}},
+                    {"translation": [0.0, 0.0, 4.0], "extensions": {"KHR_lights_punctual": {"light": 1}}},
+                    {"mesh": 1}
+                ],
+                "scenes": [{"nodes": [0, 1, 2, 3]}],
+                "meshes": [
+                    {"primitives": [{"attributes": {"POSITION": 0}, "material": 0}]},
+                    {"primitives": [{"attributes": {"POSITION": 0}, "mode": 1}]}
+                ],
+                "materials": [{"name": "painted", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
+                "textures": [{"source": 0}],
+                "images": [{"uri": "paint.png"}]
+            }),
+        ),
+    );
+    let scene = Scene::load(&warned).unwrap();
+    let warnings = scene.warnings.join("\n");
+    for expected in [
+        "light spot: a spot light, skipped",
+        "light lamp: its range is ignored",
+        "material painted: its baseColorTexture is ignored",
+        "mode Lines skipped",
+    ] {
+        assert!(
+            warnings.contains(expected),
+            "lacks '{expected}': {warnings}"
+        );
+    }
+    assert_eq!(scene.lights.len(), 1);
+    assert_eq!(scene.lights[0].vector, [0.0, 0.0, 4.0]);
+    assert_eq!(scene.lights[0].color, [3.0; 3]);
+    // The node's matrix (column-major) moved the triangle 5 along x.
+    assert_eq!(scene.triangles[0].v1, [6.0, 0.0, 0.0]);
+
     for (path, expected) in cases {
         let message = error_of(&path);
         assert!(
