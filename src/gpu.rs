@@ -858,9 +858,28 @@ impl GpuRenderer {
     }
 
     /// Renders rows `rows` of the image alone (a part of it), tile by tile.
+    /// If the driver cut the shader's loops short anywhere (checked once,
+    /// after the last tile), renders again with half as many samples per
+    /// dispatch, down to one, then fails rather than return a wrong
+    /// picture.
     pub fn render_rows(
         &mut self,
         rows: std::ops::Range<u32>,
+        progress: &Progress,
+    ) -> Result<(Rendered, GpuTimings)> {
+        self.prepare_render()?;
+        loop {
+            let result = self.render_rows_once(&rows, progress)?;
+            if !self.loops_were_cut()? {
+                return Ok(result);
+            }
+            self.fewer_samples_per_dispatch()?;
+        }
+    }
+
+    fn render_rows_once(
+        &mut self,
+        rows: &std::ops::Range<u32>,
         progress: &Progress,
     ) -> Result<(Rendered, GpuTimings)> {
         let width = self.params.width;
@@ -869,7 +888,6 @@ impl GpuRenderer {
         let mut prims = vec![0u32; width as usize * height as usize];
         let mut variance = vec![0.0f32; width as usize * height as usize];
         let mut timings = GpuTimings::default();
-        self.prepare_render()?;
         let side = self.tile_side();
         for tile_y in rows.clone().step_by(side as usize) {
             for tile_x in (0..width).step_by(side as usize) {
@@ -916,27 +934,20 @@ impl GpuRenderer {
     }
 
     /// Renders one tile, its samples over as many dispatches as
-    /// `samples_per_dispatch` asks; if the driver still cut the shader's
-    /// loops short, again with half as many per dispatch, down to one,
-    /// then fails rather than return a wrong picture. Returns the device
-    /// time where timestamps work.
+    /// `samples_per_dispatch` asks. Returns the device time where
+    /// timestamps work.
     fn render_tile(&mut self, x: u32, y: u32, width: u32, height: u32) -> Result<Option<Duration>> {
         let spp = self.params.spp;
-        loop {
-            let step = self.samples_per_dispatch.min(spp);
-            let mut device_time = None;
-            for begin in (0..spp).step_by(step as usize) {
-                self.params.sample_begin = begin;
-                self.params.sample_end = (begin + step).min(spp);
-                if let Some(t) = self.dispatch_tile(x, y, width, height)? {
-                    *device_time.get_or_insert(Duration::ZERO) += t;
-                }
+        let step = self.samples_per_dispatch.min(spp);
+        let mut device_time = None;
+        for begin in (0..spp).step_by(step as usize) {
+            self.params.sample_begin = begin;
+            self.params.sample_end = (begin + step).min(spp);
+            if let Some(t) = self.dispatch_tile(x, y, width, height)? {
+                *device_time.get_or_insert(Duration::ZERO) += t;
             }
-            if !self.loops_were_cut()? {
-                return Ok(device_time);
-            }
-            self.fewer_samples_per_dispatch()?;
         }
+        Ok(device_time)
     }
 
     /// Halves `samples_per_dispatch` after the driver cut loops short.

@@ -355,43 +355,19 @@ impl Scene {
         };
         validate_camera(&scene.camera)
             .map_err(|e| Error::scene(path, format!("its camera: {e}")))?;
-        for light in &lights {
-            let fail = |m: String| Error::scene(path, m);
-            match light {
+        for (i, light) in lights.iter().enumerate() {
+            let field = format!("light {i} (KHR_lights_punctual, placed by its node)");
+            let light = match light {
                 loading::gltf::GltfLight::Point {
                     position,
                     intensity,
-                } => scene.lights.push(Light {
-                    vector: point("a point light's position", position.to_array()).map_err(fail)?,
-                    kind: LIGHT_POINT,
-                    color: colour(
-                        "a point light's intensity × color",
-                        Rgb::PerChannel(*intensity),
-                    )
-                    .map_err(fail)?,
-                    _pad: 0,
-                }),
+                } => point_light(&field, position.to_array(), Rgb::PerChannel(*intensity)),
                 loading::gltf::GltfLight::Directional {
                     direction,
                     irradiance,
-                } => {
-                    if direction.length_squared() == 0.0 {
-                        return Err(fail(
-                            "a directional light's node has a degenerate transform".into(),
-                        ));
-                    }
-                    scene.lights.push(Light {
-                        vector: (-direction.normalize()).as_vec3().to_array(),
-                        kind: LIGHT_DIRECTIONAL,
-                        color: colour(
-                            "a directional light's intensity × color",
-                            Rgb::PerChannel(*irradiance),
-                        )
-                        .map_err(fail)?,
-                        _pad: 0,
-                    });
-                }
-            }
+                } => directional_light(&field, *direction, Rgb::PerChannel(*irradiance)),
+            };
+            scene.lights.push(light.map_err(|m| Error::scene(path, m))?);
         }
         if scene.lights.is_empty() {
             scene.lights.push(default_light(&scene.camera));
@@ -464,28 +440,14 @@ impl Scene {
         }
         for (i, entry) in file.point_light.iter().enumerate() {
             let field = format!("point_light[{i}]");
-            scene.lights.push(Light {
-                vector: point(&format!("{field}.position"), entry.position).map_err(fail)?,
-                kind: LIGHT_POINT,
-                color: colour(&format!("{field}.intensity"), entry.intensity).map_err(fail)?,
-                _pad: 0,
-            });
+            let light = point_light(&field, entry.position, entry.intensity).map_err(fail)?;
+            scene.lights.push(light);
         }
         for (i, entry) in file.directional_light.iter().enumerate() {
             let field = format!("directional_light[{i}]");
             let direction = DVec3::from(entry.direction);
-            if !direction.is_finite() || direction.length_squared() == 0.0 {
-                return Err(fail(format!(
-                    "{field}.direction = {:?} must be a finite, non-zero vector",
-                    entry.direction
-                )));
-            }
-            scene.lights.push(Light {
-                vector: (-direction.normalize()).as_vec3().to_array(),
-                kind: LIGHT_DIRECTIONAL,
-                color: colour(&format!("{field}.irradiance"), entry.irradiance).map_err(fail)?,
-                _pad: 0,
-            });
+            let light = directional_light(&field, direction, entry.irradiance).map_err(fail)?;
+            scene.lights.push(light);
         }
         if scene.triangles.is_empty() && scene.spheres.is_empty() {
             return Err(fail(
@@ -812,12 +774,36 @@ pub fn frame_camera(&(lo, hi): &(DVec3, DVec3)) -> Camera {
 pub fn default_light(camera: &Camera) -> Light {
     let basis = crate::cpu::f64::CameraBasis::new(camera);
     let travel = basis.forward - 0.3 * basis.right - 0.5 * basis.up;
-    Light {
-        vector: (-travel.normalize()).as_vec3().to_array(),
-        kind: LIGHT_DIRECTIONAL,
-        color: [1.0; 3],
+    directional_light("the default light", travel, Rgb::Uniform(1.0))
+        .expect("a valid camera's basis is orthonormal")
+}
+
+/// A point light at `position` of `intensity` (candela); `field` names it
+/// in errors.
+fn point_light(field: &str, position: [f64; 3], intensity: Rgb) -> Result<Light, String> {
+    Ok(Light {
+        vector: point(&format!("{field}.position"), position)?,
+        kind: LIGHT_POINT,
+        color: colour(&format!("{field}.intensity"), intensity)?,
         _pad: 0,
+    })
+}
+
+/// A directional light travelling along `direction` (finite, non-zero)
+/// with `irradiance`; the shader takes the way to the light.
+fn directional_light(field: &str, direction: DVec3, irradiance: Rgb) -> Result<Light, String> {
+    if !direction.is_finite() || direction.length_squared() == 0.0 {
+        return Err(format!(
+            "{field}.direction = {} must be a finite, non-zero vector",
+            vector_text(direction)
+        ));
     }
+    Ok(Light {
+        vector: (-direction.normalize()).as_vec3().to_array(),
+        kind: LIGHT_DIRECTIONAL,
+        color: colour(&format!("{field}.irradiance"), irradiance)?,
+        _pad: 0,
+    })
 }
 
 /// A vector as a user writes it: [x, y, z].

@@ -100,89 +100,43 @@ fn bad_merges_are_refused_and_write_nothing() {
     let out = d.join("out.png");
     let parts = parts_and_merge(d, scene("spheres"), 3, &["--device", "cpu"], &out);
     std::fs::write(&out, "previous").unwrap();
-    let other_spp = d.join("other_spp.exr");
-    ok(
-        lambert(&[
+    // One part of `scene` as `name` in the folder, with `extra` options.
+    let part = |name: &str, scene_name: &str, tile: &str, extra: &[&str]| {
+        let path = d.join(name);
+        let mut args = vec![
             "render",
-            scene("spheres"),
+            scene(scene_name),
             "--tile",
-            "1/3",
+            tile,
             "-o",
-            s(&other_spp),
-            "--spp",
-            "2",
-            "--device",
-            "cpu",
+            s(&path),
             "-q",
-        ]),
-        "spp 2",
+        ];
+        args.extend(extra);
+        ok(lambert(&args), name);
+        path
+    };
+    let cpu = ["--device", "cpu"];
+    let other_spp = part(
+        "other_spp.exr",
+        "spheres",
+        "1/3",
+        &["--spp", "2", "--device", "cpu"],
     );
-    let other_scene = d.join("other_scene.exr");
-    ok(
-        lambert(&[
-            "render",
-            scene("bunny"),
-            "--tile",
-            "1/3",
-            "-o",
-            s(&other_scene),
-            "--device",
-            "cpu",
-            "-q",
-            "--width",
-            "200",
-            "--height",
-            "150",
-        ]),
+    let other_scene = part(
+        "other_scene.exr",
         "bunny",
+        "1/3",
+        &["--device", "cpu", "--width", "200", "--height", "150"],
     );
-    let other_count = d.join("other_count.exr");
-    ok(
-        lambert(&[
-            "render",
-            scene("spheres"),
-            "--tile",
-            "1/4",
-            "-o",
-            s(&other_count),
-            "--device",
-            "cpu",
-            "-q",
-        ]),
-        "1/4",
+    let other_count = part("other_count.exr", "spheres", "1/4", &cpu);
+    let other_size = part(
+        "other_size.exr",
+        "spheres",
+        "1/3",
+        &["--device", "cpu", "--width", "100"],
     );
-    let other_size = d.join("other_size.exr");
-    ok(
-        lambert(&[
-            "render",
-            scene("spheres"),
-            "--tile",
-            "1/3",
-            "-o",
-            s(&other_size),
-            "--device",
-            "cpu",
-            "-q",
-            "--width",
-            "100",
-        ]),
-        "size",
-    );
-    let gpu_part = d.join("gpu.exr");
-    ok(
-        lambert(&[
-            "render",
-            scene("spheres"),
-            "--tile",
-            "1/3",
-            "-o",
-            s(&gpu_part),
-            "--device",
-            "gpu",
-            "-q",
-        ]),
-        "gpu",
-    );
+    let gpu_part = part("gpu.exr", "spheres", "1/3", &["--device", "gpu"]);
     let not_part = d.join("plain.exr");
     ok(
         lambert(&[
@@ -338,9 +292,8 @@ fn frame_ranges_render_only_their_frames_with_the_full_names() {
         let mut args = vec!["render", scene("spheres"), "-o", s(&only), "--frames", bad];
         args.extend(base);
         let output = lambert(&args);
-        assert_eq!(
-            output.status.code().filter(|c| *c != 0).is_some(),
-            true,
+        assert!(
+            output.status.code().is_some_and(|c| c != 0),
             "--frames {bad} accepted"
         );
     }
