@@ -201,10 +201,10 @@ pub fn ladder_rows(
         + scene.bvh.device_bytes();
     let mut rows = Vec::new();
     for mut renderer in devices.renderers(scene, request)? {
-        renderer.prepare_trace(false)?;
-        renderer.prepare_trace(true)?;
-        let (t_primary, _) = median_time(runs, || renderer.trace(scene, &primary, false))?;
-        let (t_shadow, _) = median_time(runs, || renderer.trace(scene, &shadow, true))?;
+        renderer.prepare_trace(false, scene.intersect)?;
+        renderer.prepare_trace(true, scene.intersect)?;
+        let (t_primary, _) = median_time(runs, || renderer.trace(scene, &primary, false, scene.intersect))?;
+        let (t_shadow, _) = median_time(runs, || renderer.trace(scene, &shadow, true, scene.intersect))?;
         rows.push(LadderRow {
             model: name.to_string(),
             triangles: scene.triangles.len(),
@@ -297,7 +297,7 @@ fn leaks(path: Path32, intersect: Intersect, request: &AdapterRequest) -> Result
                 .count(),
             Path32::GpuF32 => {
                 let mut r = GpuRenderer::new(Gpu::open(request, false)?, &scene)?;
-                probe::count_misses(&r.trace_rays(&rays, false)?)
+                probe::count_misses(&r.trace_rays(&rays, false, scene.intersect)?)
             }
         };
     }

@@ -104,6 +104,13 @@ struct SceneOptions {
     /// Seed of the sample jitter [default: the scene's render.seed, else 0].
     #[arg(long)]
     seed: Option<u32>,
+    #[command(flatten)]
+    view: ViewOptions,
+}
+
+/// The image size and a glTF file's camera.
+#[derive(Args, Clone)]
+struct ViewOptions {
     /// Image width [default: the scene's; a model file's 1024]; with only
     /// one of --width and --height, the other keeps the aspect ratio.
     #[arg(long)]
@@ -117,9 +124,25 @@ struct SceneOptions {
     camera: Option<String>,
 }
 
-impl SceneOptions {
+impl ViewOptions {
     fn load(&self, path: &Path) -> Result<Scene> {
         let mut scene = Scene::load_with_camera(path, self.camera.as_deref())?;
+        self.apply(&mut scene)?;
+        Ok(scene)
+    }
+
+    fn apply(&self, scene: &mut Scene) -> Result<()> {
+        scene.camera = scene
+            .camera
+            .resized(self.width, self.height)
+            .map_err(|e| Error::Usage(format!("--width/--height: {e}")))?;
+        Ok(())
+    }
+}
+
+impl SceneOptions {
+    fn load(&self, path: &Path) -> Result<Scene> {
+        let mut scene = Scene::load_with_camera(path, self.view.camera.as_deref())?;
         self.apply(&mut scene)?;
         Ok(scene)
     }
@@ -136,18 +159,7 @@ impl SceneOptions {
         if let Some(seed) = self.seed {
             scene.seed = seed;
         }
-        let (w, h) = (scene.camera.width as f64, scene.camera.height as f64);
-        let (width, height) = match (self.width, self.height) {
-            (None, None) => return Ok(()),
-            (Some(width), Some(height)) => (width, height),
-            (Some(width), None) => (width, ((width as f64 * h / w).round() as u32).max(1)),
-            (None, Some(height)) => (((height as f64 * w / h).round() as u32).max(1), height),
-        };
-        crate::scene::validate_resolution(width, height)
-            .map_err(|e| Error::Usage(format!("--width/--height: {e}")))?;
-        scene.camera.width = width;
-        scene.camera.height = height;
-        Ok(())
+        self.view.apply(scene)
     }
 }
 
@@ -469,6 +481,8 @@ struct CameraRaysArgs {
     scene: PathBuf,
     #[arg(short, long)]
     output: PathBuf,
+    #[command(flatten)]
+    view: ViewOptions,
 }
 
 /// A finite number ≥ 0.
@@ -857,16 +871,22 @@ struct TraceReport {
     any_hit: bool,
     rays: usize,
     hits: usize,
+    /// Reading and checking the ray file.
+    read_seconds: f64,
     /// The untimed warm-up trace's time, with --warmup.
     warmup_seconds: Option<f64>,
     trace_seconds: f64,
+    /// Writing the hit file (atomically, synced to disk).
+    write_seconds: f64,
     mrays_per_second: f64,
     oracle: Option<rays::Agreement>,
 }
 
 fn trace(args: &TraceArgs) -> Result<ExitCode> {
     crate::output::prepare_output(&args.output)?;
+    let start = Instant::now();
     let rays = rays::read_rays(&args.rays)?;
+    let read_seconds = start.elapsed().as_secs_f64();
     let mut scene = match &args.scene {
         Some(path) => Scene::load(path)?,
         None => Scene::from_objs(&args.obj)?,
@@ -876,18 +896,20 @@ fn trace(args: &TraceArgs) -> Result<ExitCode> {
     if let Some(note) = note {
         eprintln!("{note}");
     }
-    renderer.prepare_trace(args.any_hit)?;
+    renderer.prepare_trace(args.any_hit, scene.intersect)?;
     let warmup_seconds = if args.warmup {
         let start = Instant::now();
-        renderer.trace(&scene, &rays, args.any_hit)?;
+        renderer.trace(&scene, &rays, args.any_hit, scene.intersect)?;
         Some(start.elapsed().as_secs_f64())
     } else {
         None
     };
     let start = Instant::now();
-    let hits = renderer.trace(&scene, &rays, args.any_hit)?;
+    let hits = renderer.trace(&scene, &rays, args.any_hit, scene.intersect)?;
     let elapsed = start.elapsed();
+    let start = Instant::now();
     rays::write_hits(&args.output, &hits)?;
+    let write_seconds = start.elapsed().as_secs_f64();
     let oracle = args.oracle.then(|| {
         let truth = cpu::trace_rays_f64(&oracle_scene(&scene), &rays, args.any_hit);
         rays::Agreement::measure(&hits, &truth)
@@ -898,8 +920,10 @@ fn trace(args: &TraceArgs) -> Result<ExitCode> {
         any_hit: args.any_hit,
         rays: rays.len(),
         hits: hits.iter().filter(|h| h.prim != NO_HIT).count(),
+        read_seconds,
         warmup_seconds,
         trace_seconds: elapsed.as_secs_f64(),
+        write_seconds,
         mrays_per_second: rays.len() as f64 / elapsed.as_secs_f64() / 1e6,
         oracle,
     };
@@ -911,7 +935,7 @@ fn trace(args: &TraceArgs) -> Result<ExitCode> {
     }
     if !args.quiet {
         eprintln!(
-            "traced {} rays ({}, {}) on {}: {} hit; {} ({:.2} Mrays/s); wrote {}",
+            "traced {} rays ({}, {}) on {}: {} hit; {} ({:.2} Mrays/s); wrote {}; read {:.3} s, write {:.3} s",
             report.rays,
             report.intersect,
             if args.any_hit {
@@ -923,7 +947,9 @@ fn trace(args: &TraceArgs) -> Result<ExitCode> {
             report.hits,
             seconds(elapsed),
             report.mrays_per_second,
-            args.output.display()
+            args.output.display(),
+            read_seconds,
+            write_seconds
         );
         if let Some(agreement) = &report.oracle {
             eprintln!("{agreement}");
@@ -934,7 +960,7 @@ fn trace(args: &TraceArgs) -> Result<ExitCode> {
 
 fn camera_rays(args: &CameraRaysArgs) -> Result<ExitCode> {
     crate::output::prepare_output(&args.output)?;
-    let scene = Scene::load(&args.scene)?;
+    let scene = args.view.load(&args.scene)?;
     let rays = rays::camera_rays(&scene);
     rays::write_rays(&args.output, &rays)?;
     eprintln!(

@@ -15,7 +15,7 @@ use crate::layout::{
 };
 use crate::output::{Image, Rendered};
 use crate::progress::Progress;
-use crate::scene::{Accel, Camera, Scene};
+use crate::scene::{Accel, Camera, Intersect, Scene};
 
 /// The kernel's source, validated by naga in tests/shaders.rs.
 pub const SHADER_SOURCE: &str = include_str!("../shaders/trace.wgsl");
@@ -235,6 +235,11 @@ impl Gpu {
 
     pub fn describe(&self) -> String {
         describe(&self.info)
+    }
+
+    /// A software rasteriser such as lavapipe.
+    pub fn is_software(&self) -> bool {
+        is_software(&self.info)
     }
 
     fn check_errors(&self) -> Result<()> {
@@ -458,7 +463,8 @@ pub struct GpuRenderer {
     scene_group: wgpu::BindGroup,
     image_group: wgpu::BindGroup,
     /// `trace_rays` pipelines, closest hit and any hit, built on first use.
-    trace_pipelines: [Option<wgpu::ComputePipeline>; 2],
+    /// By any-hit or closest hit, then by ray/triangle test.
+    trace_pipelines: [[Option<wgpu::ComputePipeline>; 3]; 2],
     params: Params,
     params_buffer: wgpu::Buffer,
     color_texture: wgpu::Texture,
@@ -826,7 +832,7 @@ impl GpuRenderer {
             pixel_list_pipeline: None,
             scene_group,
             image_group,
-            trace_pipelines: [None, None],
+            trace_pipelines: Default::default(),
             params,
             params_buffer,
             color_texture,
@@ -1124,25 +1130,31 @@ impl GpuRenderer {
         Ok(())
     }
 
-    /// Builds the `trace_rays` pipeline for closest or any hit, if not built
-    /// yet.
-    pub fn prepare_trace(&mut self, any_hit: bool) -> Result<()> {
-        let index = any_hit as usize;
-        if self.trace_pipelines[index].is_none() {
-            let mut constants = self.constants.clone();
+    /// Builds the `trace_rays` pipeline for closest or any hit with the
+    /// given ray/triangle test, if not built yet.
+    pub fn prepare_trace(&mut self, any_hit: bool, intersect: Intersect) -> Result<()> {
+        let (a, i) = (any_hit as usize, intersect.shader_value() as usize);
+        if self.trace_pipelines[a][i].is_none() {
+            let mut constants: Vec<(&str, f64)> = self
+                .constants
+                .iter()
+                .filter(|(name, _)| *name != "INTERSECT")
+                .copied()
+                .collect();
+            constants.push(("INTERSECT", intersect.shader_value() as f64));
             constants.push(("ANY_HIT", if any_hit { 1.0 } else { 0.0 }));
             let pipeline = self.build_pipeline("trace_rays", &self.rays_layout, &constants)?;
-            self.trace_pipelines[index] = Some(pipeline);
+            self.trace_pipelines[a][i] = Some(pipeline);
         }
         Ok(())
     }
 
-    /// Traces `rays` against the resident scene: closest hits, or with
-    /// `any_hit` the first hit each ray finds. Misses come back as t = +inf,
-    /// prim = NO_HIT.
-    pub fn trace_rays(&mut self, rays: &[Ray], any_hit: bool) -> Result<Vec<Hit>> {
-        self.prepare_trace(any_hit)?;
-        let pipeline = self.trace_pipelines[any_hit as usize]
+    /// Traces `rays` against the resident scene with the ray/triangle test
+    /// `intersect`: closest hits, or with `any_hit` the first hit each ray
+    /// finds. Misses come back as t = +inf, prim = NO_HIT.
+    pub fn trace_rays(&mut self, rays: &[Ray], any_hit: bool, intersect: Intersect) -> Result<Vec<Hit>> {
+        self.prepare_trace(any_hit, intersect)?;
+        let pipeline = self.trace_pipelines[any_hit as usize][intersect.shader_value() as usize]
             .as_ref()
             .expect("prepared");
         let hits: Vec<Hit> = self.run_list(pipeline, &self.rays_layout, 2, rays, 1 << 20, None)?;

@@ -22,127 +22,198 @@ const FIELDS: [&str; 8] = ["ox", "oy", "oz", "tmin", "dx", "dy", "dz", "tmax"];
 pub const MIN_DIRECTION: f64 = 1e-18;
 pub const MAX_DIRECTION: f64 = 1e18;
 
-/// Reads and validates a ray file.
+/// Reads and validates a ray file: one bulk read straight into the rays.
 pub fn read_rays(path: &Path) -> Result<Vec<Ray>> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    parse_rays(&bytes, path)
-}
-
-/// Decodes a ray file's bytes; `path` names it in errors.
-pub fn parse_rays(bytes: &[u8], path: &Path) -> Result<Vec<Ray>> {
-    let fail = |message: String| Error::Usage(format!("{}: {message}", path.display()));
-    if !bytes.len().is_multiple_of(RAY_BYTES) {
-        return Err(fail(format!(
-            "{} bytes is not a whole number of rays ({RAY_BYTES} bytes each: 8 little-endian f32 \
-             ox oy oz tmin dx dy dz tmax); {} bytes left over",
-            bytes.len(),
-            bytes.len() % RAY_BYTES
+    use std::io::Read;
+    let mut file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let length = file.metadata().map_err(|e| Error::io(path, e))?.len() as usize;
+    check_ray_bytes(length, path)?;
+    let mut rays = vec![Ray::default(); length / RAY_BYTES];
+    file.read_exact(bytemuck::cast_slice_mut(&mut rays))
+        .map_err(|e| Error::io(path, e))?;
+    // A file that grew since its length was read is not a ray file we know.
+    if file.read(&mut [0u8]).map_err(|e| Error::io(path, e))? != 0 {
+        return Err(Error::Usage(format!(
+            "{}: the file grew while it was read",
+            path.display()
         )));
     }
-    let rays: Vec<Ray> = bytes
-        .chunks_exact(RAY_BYTES)
-        .map(|chunk| {
-            let f: [f32; 8] = std::array::from_fn(|i| {
-                f32::from_le_bytes(chunk[4 * i..4 * i + 4].try_into().unwrap())
-            });
-            Ray {
-                origin: [f[0], f[1], f[2]],
-                tmin: f[3],
-                dir: [f[4], f[5], f[6]],
-                tmax: f[7],
-            }
-        })
-        .collect();
-    validate_rays(&rays).map_err(fail)?;
+    validate_rays(&rays).map_err(|bad| Error::Usage(format!("{}: {}", path.display(), bad.in_file())))?;
     Ok(rays)
 }
 
-/// Every value finite except tmax, which may be +inf; a direction of length
-/// within [MIN_DIRECTION, MAX_DIRECTION]; tmin ≤ tmax. The message names the first bad ray, its byte offset and
-/// the field.
-pub fn validate_rays(rays: &[Ray]) -> Result<(), String> {
-    for (i, ray) in rays.iter().enumerate() {
-        let values = [
-            ray.origin[0],
-            ray.origin[1],
-            ray.origin[2],
-            ray.tmin,
-            ray.dir[0],
-            ray.dir[1],
-            ray.dir[2],
-            ray.tmax,
-        ];
-        let at = format!("ray {i} (byte offset {})", i * RAY_BYTES);
-        for (value, field) in values.iter().zip(FIELDS) {
-            let allowed = value.is_finite() || (field == "tmax" && *value == f32::INFINITY);
-            if !allowed {
-                return Err(format!(
-                    "{at}: {field} is {value}; only tmax may be infinite (+inf), and nothing NaN"
-                ));
-            }
-        }
-        let length = glam::Vec3::from(ray.dir).as_dvec3().length();
-        if !(MIN_DIRECTION..=MAX_DIRECTION).contains(&length) {
-            return Err(format!(
-                "{at}: the direction (dx, dy, dz) has length {length:e}; it must be between \
-                 {MIN_DIRECTION:e} and {MAX_DIRECTION:e} (f32 squares of it must not under- or overflow)"
-            ));
-        }
-        if ray.tmin > ray.tmax {
-            return Err(format!(
-                "{at}: tmin = {} is greater than tmax = {}",
-                ray.tmin, ray.tmax
-            ));
-        }
+fn check_ray_bytes(length: usize, path: &Path) -> Result<()> {
+    if !length.is_multiple_of(RAY_BYTES) {
+        return Err(Error::Usage(format!(
+            "{}: {length} bytes is not a whole number of rays ({RAY_BYTES} bytes each: 8 \
+             little-endian f32 ox oy oz tmin dx dy dz tmax); {} bytes left over",
+            path.display(),
+            length % RAY_BYTES
+        )));
     }
     Ok(())
 }
 
-pub fn rays_to_bytes(rays: &[Ray]) -> Vec<u8> {
-    // The layout struct is exactly the file's 8 floats; the file is
-    // little-endian, as is every target wgpu runs on.
-    bytemuck::cast_slice(rays).to_vec()
+/// Decodes a ray file's bytes; `path` names it in errors.
+pub fn parse_rays(bytes: &[u8], path: &Path) -> Result<Vec<Ray>> {
+    check_ray_bytes(bytes.len(), path)?;
+    // The file is little-endian f32s in the struct's order, as every target
+    // wgpu runs on is; a copy rather than a cast, as `bytes` may be unaligned.
+    let rays: Vec<Ray> = bytemuck::pod_collect_to_vec(bytes);
+    validate_rays(&rays).map_err(|bad| Error::Usage(format!("{}: {}", path.display(), bad.in_file())))?;
+    Ok(rays)
 }
 
-pub fn hits_to_bytes(hits: &[Hit]) -> Vec<u8> {
-    bytemuck::cast_slice(hits).to_vec()
+/// The first ray `validate_rays` refused, and why.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BadRay {
+    pub index: usize,
+    pub problem: String,
+}
+
+impl BadRay {
+    /// The message for a ray file: the ray's byte offset too.
+    pub fn in_file(&self) -> String {
+        format!(
+            "ray {} (byte offset {}): {}",
+            self.index,
+            self.index * RAY_BYTES,
+            self.problem
+        )
+    }
+}
+
+impl std::fmt::Display for BadRay {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "ray {}: {}", self.index, self.problem)
+    }
+}
+
+/// Every value finite except tmax, which may be +inf; a direction of length
+/// within [MIN_DIRECTION, MAX_DIRECTION]; tmin ≤ tmax. The error names the
+/// first bad ray and the field; nothing is allocated unless one is bad.
+pub fn validate_rays(rays: &[Ray]) -> Result<(), BadRay> {
+    use rayon::prelude::*;
+    // In parallel, and the first bad ray reported (not just any one).
+    match rays.par_iter().position_first(|ray| ray_problem(ray).is_some()) {
+        None => Ok(()),
+        Some(index) => Err(BadRay {
+            index,
+            problem: ray_problem(&rays[index]).expect("found bad"),
+        }),
+    }
+}
+
+#[inline]
+fn ray_problem(ray: &Ray) -> Option<String> {
+    let values = [
+        ray.origin[0],
+        ray.origin[1],
+        ray.origin[2],
+        ray.tmin,
+        ray.dir[0],
+        ray.dir[1],
+        ray.dir[2],
+        ray.tmax,
+    ];
+    let finite = values[..7].iter().all(|v| v.is_finite())
+        && (ray.tmax.is_finite() || ray.tmax == f32::INFINITY);
+    if !finite {
+        let (value, field) = values
+            .iter()
+            .zip(FIELDS)
+            .find(|(v, field)| !(v.is_finite() || (*field == "tmax" && **v == f32::INFINITY)))
+            .expect("a field is not finite");
+        return Some(format!(
+            "{field} is {value}; only tmax may be infinite (+inf), and nothing NaN"
+        ));
+    }
+    let length = glam::Vec3::from(ray.dir).as_dvec3().length();
+    if !(MIN_DIRECTION..=MAX_DIRECTION).contains(&length) {
+        return Some(format!(
+            "the direction (dx, dy, dz) has length {length:e}; it must be between \
+             {MIN_DIRECTION:e} and {MAX_DIRECTION:e} (f32 squares of it must not under- or overflow)"
+        ));
+    }
+    if ray.tmin > ray.tmax {
+        return Some(format!(
+            "tmin = {} is greater than tmax = {}",
+            ray.tmin, ray.tmax
+        ));
+    }
+    None
+}
+
+/// A ray file's bytes: the layout struct is exactly the file's 8 floats,
+/// and the file is little-endian, as is every target wgpu runs on.
+pub fn rays_to_bytes(rays: &[Ray]) -> &[u8] {
+    bytemuck::cast_slice(rays)
+}
+
+/// A hit file's bytes (the same reasoning as `rays_to_bytes`).
+pub fn hits_to_bytes(hits: &[Hit]) -> &[u8] {
+    bytemuck::cast_slice(hits)
 }
 
 pub fn write_rays(path: &Path, rays: &[Ray]) -> Result<()> {
-    write_atomically(path, &rays_to_bytes(rays))
+    write_atomically(path, rays_to_bytes(rays))
 }
 
 pub fn write_hits(path: &Path, hits: &[Hit]) -> Result<()> {
-    write_atomically(path, &hits_to_bytes(hits))
+    write_atomically(path, hits_to_bytes(hits))
 }
 
 /// Reads a hit file.
 pub fn read_hits(path: &Path) -> Result<Vec<Hit>> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    if bytes.len() % 16 != 0 {
+    if !bytes.len().is_multiple_of(16) {
         return Err(Error::Usage(format!(
             "{}: {} bytes is not a whole number of 16-byte hits",
             path.display(),
             bytes.len()
         )));
     }
-    Ok(bytes
-        .chunks_exact(16)
-        .map(|c| Hit {
-            t: f32::from_le_bytes(c[0..4].try_into().unwrap()),
-            prim: u32::from_le_bytes(c[4..8].try_into().unwrap()),
-            u: f32::from_le_bytes(c[8..12].try_into().unwrap()),
-            v: f32::from_le_bytes(c[12..16].try_into().unwrap()),
+    Ok(bytemuck::pod_collect_to_vec(&bytes))
+}
+
+/// The unnormalised geometric normal at each hit: (v1 − v0) × (v2 − v0) of
+/// the triangle hit (Embree's Ng), the centre-to-hit vector of a sphere
+/// (length: its radius), zero on a miss.
+pub fn hit_normals(scene: &Scene, rays: &[Ray], hits: &[Hit]) -> Vec<[f32; 3]> {
+    use glam::Vec3;
+    use rayon::prelude::*;
+    let triangles = &scene.triangles;
+    rays.par_iter()
+        .zip(hits)
+        .map(|(ray, hit)| {
+            let prim = hit.prim as usize;
+            if hit.prim == NO_HIT {
+                [0.0; 3]
+            } else if prim < triangles.len() {
+                let t = &triangles[prim];
+                let v0 = Vec3::from(t.v0);
+                (Vec3::from(t.v1) - v0).cross(Vec3::from(t.v2) - v0).to_array()
+            } else {
+                let sphere = &scene.spheres[prim - triangles.len()];
+                let point = Vec3::from(ray.origin) + hit.t * Vec3::from(ray.dir);
+                (point - Vec3::from(sphere.center)).to_array()
+            }
         })
-        .collect())
+        .collect()
 }
 
 /// The camera rays of `scene` through its pixel centres, row by row from the
 /// top: the same rays `render` shoots at spp = 1 (unit direction, tmin 0,
 /// tmax +inf).
 pub fn camera_rays(scene: &Scene) -> Vec<Ray> {
-    let kernel = cpu::f32::Kernel::new(scene);
-    let (width, height) = (scene.camera.width, scene.camera.height);
+    camera_rays_for(scene, &scene.camera)
+}
+
+/// `camera_rays` through another camera (another image size, say).
+pub fn camera_rays_for(scene: &Scene, camera: &crate::scene::Camera) -> Vec<Ray> {
+    let mut kernel = cpu::f32::Kernel::new(scene);
+    kernel.camera = cpu::f32::CameraBasis::new(camera);
+    let (width, height) = (camera.width, camera.height);
     (0..height)
         .flat_map(|y| (0..width).map(move |x| (x, y)))
         .map(|(x, y)| {

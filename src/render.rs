@@ -9,7 +9,7 @@ use crate::gpu::{AdapterRequest, Gpu, GpuRenderer};
 use crate::layout::{Hit, Ray};
 use crate::output::Rendered;
 use crate::progress::Progress;
-use crate::scene::Scene;
+use crate::scene::{Intersect, Scene};
 
 /// `--device`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -29,6 +29,82 @@ pub enum DeviceChoice {
 pub enum Renderer {
     Gpu(Box<GpuRenderer>),
     Cpu,
+}
+
+/// Why `--device auto` took the CPU path.
+fn fallback_note(error: &crate::Error) -> String {
+    format!(
+        "{error}\nnote: using the CPU path instead (--device gpu uses a software adapter such as lavapipe)"
+    )
+}
+
+/// The renderers of one scene, each opened (and the scene uploaded to it)
+/// once, on first use: what a long-lived scene (the Python package's)
+/// keeps, so that `auto` and `gpu` share one GPU where they can.
+pub struct Renderers {
+    request: AdapterRequest,
+    cpu: Renderer,
+    gpu: Option<Renderer>,
+    /// Whether `gpu` is a hardware adapter (`auto` uses it then).
+    gpu_is_hardware: bool,
+    /// Set once `auto` found no GPU to use: the note it gave.
+    auto_fell_back: Option<String>,
+}
+
+impl Renderers {
+    pub fn new(request: AdapterRequest) -> Renderers {
+        Renderers {
+            request,
+            cpu: Renderer::Cpu,
+            gpu: None,
+            gpu_is_hardware: false,
+            auto_fell_back: None,
+        }
+    }
+
+    /// The renderer `choice` asks for, opening it if need be. The note, on
+    /// the first fallback of `auto` to the CPU path only, says why.
+    pub fn get(
+        &mut self,
+        scene: &Scene,
+        choice: DeviceChoice,
+    ) -> Result<(&mut Renderer, Option<String>)> {
+        let named = self.request.names_adapter();
+        match choice {
+            DeviceChoice::Cpu => Ok((&mut self.cpu, None)),
+            DeviceChoice::Gpu => {
+                if self.gpu.is_none() {
+                    self.open_gpu(scene, Gpu::open(&self.request, false)?)?;
+                }
+                Ok((self.gpu.as_mut().expect("opened"), None))
+            }
+            DeviceChoice::Auto => {
+                if self.gpu.is_some() && (self.gpu_is_hardware || named) {
+                    return Ok((self.gpu.as_mut().expect("opened"), None));
+                }
+                if self.auto_fell_back.is_some() {
+                    return Ok((&mut self.cpu, None));
+                }
+                match Gpu::open(&self.request, !named) {
+                    Ok(gpu) => {
+                        self.open_gpu(scene, gpu)?;
+                        Ok((self.gpu.as_mut().expect("opened"), None))
+                    }
+                    Err(e) => {
+                        let note = fallback_note(&e);
+                        self.auto_fell_back = Some(note.clone());
+                        Ok((&mut self.cpu, Some(note)))
+                    }
+                }
+            }
+        }
+    }
+
+    fn open_gpu(&mut self, scene: &Scene, gpu: Gpu) -> Result<()> {
+        self.gpu_is_hardware = !gpu.is_software();
+        self.gpu = Some(Renderer::Gpu(Box::new(GpuRenderer::new(gpu, scene)?)));
+        Ok(())
+    }
 }
 
 /// Time spent in each stage of one render.
@@ -53,15 +129,14 @@ impl Renderer {
             DeviceChoice::Gpu => Gpu::open(request, false)?,
             DeviceChoice::Auto => match Gpu::open(request, !request.names_adapter()) {
                 Ok(gpu) => gpu,
-                Err(e) => {
-                    let note = format!(
-                        "{e}\nnote: using the CPU path instead (--device gpu uses a software adapter such as lavapipe)"
-                    );
-                    return Ok((Renderer::Cpu, Some(note)));
-                }
+                Err(e) => return Ok((Renderer::Cpu, Some(fallback_note(&e)))),
             },
         };
         Ok((Renderer::Gpu(Box::new(GpuRenderer::new(gpu, scene)?)), None))
+    }
+
+    pub fn is_cpu(&self) -> bool {
+        matches!(self, Renderer::Cpu)
     }
 
     pub fn describe(&self) -> String {
@@ -148,19 +223,31 @@ impl Renderer {
     }
 
     /// Readies the device for `trace` (builds its pipeline).
-    pub fn prepare_trace(&mut self, any_hit: bool) -> Result<()> {
+    pub fn prepare_trace(&mut self, any_hit: bool, intersect: Intersect) -> Result<()> {
         match self {
-            Renderer::Gpu(renderer) => renderer.prepare_trace(any_hit),
+            Renderer::Gpu(renderer) => renderer.prepare_trace(any_hit, intersect),
             Renderer::Cpu => Ok(()),
         }
     }
 
     /// Traces a ray query against `scene` (which must be the scene the
-    /// engine was opened with).
-    pub fn trace(&mut self, scene: &Scene, rays: &[Ray], any_hit: bool) -> Result<Vec<Hit>> {
+    /// engine was opened with) with the ray/triangle test `intersect`.
+    pub fn trace(
+        &mut self,
+        scene: &Scene,
+        rays: &[Ray],
+        any_hit: bool,
+        intersect: Intersect,
+    ) -> Result<Vec<Hit>> {
         match self {
-            Renderer::Gpu(renderer) => renderer.trace_rays(rays, any_hit),
-            Renderer::Cpu => Ok(cpu::trace_rays(scene, rays, any_hit)),
+            Renderer::Gpu(renderer) => renderer.trace_rays(rays, any_hit, intersect),
+            Renderer::Cpu => Ok(cpu::trace_rays_with(
+                scene,
+                rays,
+                any_hit,
+                intersect,
+                cpu::CpuKernel::active(),
+            )),
         }
     }
 }

@@ -287,9 +287,7 @@ impl Scene {
     /// the default light (docs/scene-format.md). The file's own normals
     /// shade smoothly where it gives them at every corner.
     pub fn from_model(path: &Path, format: loading::Format, camera: Option<&str>) -> Result<Scene> {
-        let mut scene = Scene::bare();
-        scene.shadows = true;
-        scene.ambient = [DEFAULT_AMBIENT; 3];
+        let mut scene = Scene::model_bare();
         let (mut mesh, cameras, lights) = if format.is_gltf() {
             let g = loading::gltf::load_scene(path, NormalMode::Smooth)?;
             (g.mesh, g.cameras, g.lights)
@@ -304,12 +302,7 @@ impl Scene {
             mesh.normals = None;
         }
         let bounds = mesh_bounds(&mesh);
-        let identity = Transform {
-            linear: DMat3::IDENTITY,
-            normal: DMat3::IDENTITY,
-            translate: DVec3::ZERO,
-        };
-        scene.add_mesh(path, "the model", mesh, &identity, None)?;
+        scene.add_mesh(path, "the model", mesh, &Transform::IDENTITY, None)?;
         let chosen = match camera {
             Some(name) => Some(
                 cameras
@@ -375,6 +368,66 @@ impl Scene {
         scene.check_primitive_count(path)?;
         scene.rebuild_bvh();
         Ok(scene)
+    }
+
+    /// A mesh given as arrays (the Python package's `Scene.from_arrays`):
+    /// triangle i is `faces[i]`, so primitive ids are face rows; every face
+    /// with `albedo` (else the default); the framed camera and the default
+    /// light of a model file alone. Errors name the row at fault.
+    pub fn from_arrays(
+        vertices: &[[f64; 3]],
+        faces: &[[i64; 3]],
+        albedo: Option<[f64; 3]>,
+    ) -> Result<Scene> {
+        let positions: Vec<DVec3> = vertices
+            .iter()
+            .enumerate()
+            .map(|(row, &v)| {
+                checked_point(&format!("vertices row {row}"), v)
+                    .map(DVec3::from)
+                    .map_err(Error::Usage)
+            })
+            .collect::<Result<_>>()?;
+        let count = positions.len() as i64;
+        let triangles: Vec<[u32; 3]> = faces
+            .iter()
+            .enumerate()
+            .map(|(row, face)| match face.iter().find(|&&i| !(0..count).contains(&i)) {
+                Some(i) => Err(Error::Usage(format!(
+                    "faces row {row} = {face:?}: index {i} is out of range (there are {count} vertices, indexed from 0)"
+                ))),
+                None => Ok(face.map(|i| i as u32)),
+            })
+            .collect::<Result<_>>()?;
+        if triangles.len() > MAX_PRIMITIVES {
+            return Err(Error::Usage(format!(
+                "{} faces; lambert supports at most {MAX_PRIMITIVES}",
+                triangles.len()
+            )));
+        }
+        let albedo = albedo
+            .map(|a| colour("albedo", Rgb::PerChannel(a)).map_err(Error::Usage))
+            .transpose()?;
+        let mesh = loading::Mesh {
+            positions,
+            triangles,
+            ..loading::Mesh::default()
+        };
+        let mut scene = Scene::model_bare();
+        scene.camera = frame_camera(&mesh_bounds(&mesh));
+        scene.add_mesh(Path::new("arrays"), "the mesh", mesh, &Transform::IDENTITY, albedo)?;
+        scene.lights.push(default_light(&scene.camera));
+        scene.rebuild_bvh();
+        Ok(scene)
+    }
+
+    /// `bare`, lit as a model file alone is: shadows and the default ambient.
+    fn model_bare() -> Scene {
+        Scene {
+            shadows: true,
+            ambient: [DEFAULT_AMBIENT; 3],
+            ..Scene::bare()
+        }
     }
 
     /// Parses scene text; `path` names it in errors and anchors relative paths.
@@ -503,14 +556,9 @@ impl Scene {
     /// (`lambert trace --obj`): no lights, and a camera that nothing uses.
     pub fn from_objs(paths: &[PathBuf]) -> Result<Scene> {
         let mut scene = Scene::bare();
-        let identity = Transform {
-            linear: DMat3::IDENTITY,
-            normal: DMat3::IDENTITY,
-            translate: DVec3::ZERO,
-        };
         for path in paths {
             let mesh = loading::load_mesh(path, NormalMode::Face)?;
-            scene.add_mesh(path, "the mesh", mesh, &identity, None)?;
+            scene.add_mesh(path, "the mesh", mesh, &Transform::IDENTITY, None)?;
         }
         if scene.triangles.is_empty() {
             return Err(Error::Usage(format!(
@@ -651,6 +699,12 @@ struct Transform {
 }
 
 impl Transform {
+    const IDENTITY: Transform = Transform {
+        linear: DMat3::IDENTITY,
+        normal: DMat3::IDENTITY,
+        translate: DVec3::ZERO,
+    };
+
     fn point(&self, p: DVec3) -> DVec3 {
         self.linear * p + self.translate
     }
@@ -848,6 +902,26 @@ pub fn validate_resolution(width: u32, height: u32) -> Result<(), String> {
         ));
     }
     Ok(())
+}
+
+impl Camera {
+    /// This camera at another image size: with only one of width and
+    /// height given, the other keeps the aspect ratio.
+    pub fn resized(&self, width: Option<u32>, height: Option<u32>) -> Result<Camera, String> {
+        let (w, h) = (self.width as f64, self.height as f64);
+        let (width, height) = match (width, height) {
+            (None, None) => return Ok(self.clone()),
+            (Some(width), Some(height)) => (width, height),
+            (Some(width), None) => (width, ((width as f64 * h / w).round() as u32).max(1)),
+            (None, Some(height)) => (((height as f64 * w / h).round() as u32).max(1), height),
+        };
+        validate_resolution(width, height)?;
+        Ok(Camera {
+            width,
+            height,
+            ..self.clone()
+        })
+    }
 }
 
 /// A position: finite and within MAX_COORDINATE, rounded to f32.

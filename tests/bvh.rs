@@ -518,8 +518,8 @@ fn every_cpu_kernel_equals_the_portable_one() {
             let camera = lambert::rays::camera_rays(scene);
             for (rays, what) in [(query_rays(scene, 5, 5001), "random"), (camera, "camera")] {
                 for any_hit in [false, true] {
-                    let portable = trace_rays_with(scene, &rays, any_hit, CpuKernel::Portable);
-                    let simd = trace_rays_with(scene, &rays, any_hit, kernel);
+                    let portable = trace_rays_with(scene, &rays, any_hit, scene.intersect, CpuKernel::Portable);
+                    let simd = trace_rays_with(scene, &rays, any_hit, scene.intersect, kernel);
                     for (i, (a, b)) in portable.iter().zip(&simd).enumerate() {
                         assert_eq!(
                             (a.prim, a.t.to_bits(), a.u.to_bits(), a.v.to_bits()),

@@ -249,6 +249,8 @@ pub struct Kernel<'a> {
     background: Vec3,
     ambient: Vec3,
     strata_x: u32,
+    /// The ray/triangle test: the scene's, unless a query asks for another.
+    pub intersect: Intersect,
     /// Whether node visits take `intersect_boxes_ymm` (the CPU has 8-lane
     /// vector registers and fused multiply-adds).
     ymm_boxes: bool,
@@ -268,6 +270,7 @@ impl<'a> Kernel<'a> {
             background: vec3(scene.background),
             ambient: vec3(scene.ambient),
             strata_x: crate::scene::strata_columns(scene.spp),
+            intersect: scene.intersect,
             ymm_boxes,
         }
     }
@@ -296,7 +299,7 @@ impl<'a> Kernel<'a> {
         b: Vec3,
         c: Vec3,
     ) -> (Real, Real, Real) {
-        match self.scene.intersect {
+        match self.intersect {
             Intersect::Seed => intersect_triangle_seed(ray, a, b, c),
             Intersect::MollerTrumbore => intersect_triangle_moller_trumbore(ray, a, b, c),
             Intersect::Watertight => intersect_triangle_watertight(ray, shear, a, b, c),
@@ -341,7 +344,7 @@ impl<'a> Kernel<'a> {
         block: &PrimBlock,
     ) -> bool {
         let scene = self.scene;
-        let watertight = scene.intersect == Intersect::Watertight;
+        let watertight = self.intersect == Intersect::Watertight;
         let mut recorded = false;
         let num_triangles = scene.triangles.len() as u32;
         if watertight && num_triangles > 0 {

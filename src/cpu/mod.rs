@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use crate::layout::{self, NO_HIT};
 use crate::output::{Image, Rendered};
 use crate::progress::Progress;
-use crate::scene::{Accel, Scene};
+use crate::scene::{Accel, Intersect, Scene};
 
 /// Single precision, as on the GPU.
 #[allow(clippy::unnecessary_cast)]
@@ -402,19 +402,22 @@ pub fn render_pixel_list(scene: &Scene, pixels: &[[u32; 2]]) -> Vec<[::core::pri
 /// closest hits, or with `any_hit` the first hit found. Misses report
 /// `layout::Hit::MISS`.
 pub fn trace_rays(scene: &Scene, rays: &[layout::Ray], any_hit: bool) -> Vec<layout::Hit> {
-    trace_rays_with(scene, rays, any_hit, CpuKernel::active())
+    trace_rays_with(scene, rays, any_hit, scene.intersect, CpuKernel::active())
 }
 
-/// `trace_rays` with a given CPU kernel (one this CPU runs).
+/// `trace_rays` with a given ray/triangle test and CPU kernel (one this
+/// CPU runs).
 pub fn trace_rays_with(
     scene: &Scene,
     rays: &[layout::Ray],
     any_hit: bool,
+    intersect: Intersect,
     cpu_kernel: CpuKernel,
 ) -> Vec<layout::Hit> {
     const CHUNK: usize = 1024;
     check_runs(cpu_kernel);
-    let kernel = f32::Kernel::new_for(scene, cpu_kernel.ymm_boxes());
+    let mut kernel = f32::Kernel::new_for(scene, cpu_kernel.ymm_boxes());
+    kernel.intersect = intersect;
     let large = scene.bvh.device_bytes() > LARGE_BVH_BYTES;
     let vector_sort = cpu_kernel.vector_sort();
     // Rays closer than this count as leaving from nearby points.
