@@ -176,18 +176,20 @@ pub fn read_hits(path: &Path) -> Result<Vec<Hit>> {
     Ok(bytemuck::pod_collect_to_vec(&bytes))
 }
 
-/// The unnormalised geometric normal at each hit: (v1 − v0) × (v2 − v0) of
-/// the triangle hit (Embree's Ng), the centre-to-hit vector of a sphere
-/// (length: its radius), zero on a miss.
-pub fn hit_normals(scene: &Scene, rays: &[Ray], hits: &[Hit]) -> Vec<[f32; 3]> {
+/// The unnormalised geometric normal at each hit, written to `normals`:
+/// (v1 − v0) × (v2 − v0) of the triangle hit (Embree's Ng), the
+/// centre-to-hit vector of a sphere (length: its radius), zero on a miss.
+pub fn hit_normals(scene: &Scene, rays: &[Ray], hits: &[Hit], normals: &mut [[f32; 3]]) {
     use glam::Vec3;
     use rayon::prelude::*;
     let triangles = &scene.triangles;
-    rays.par_iter()
-        .zip(hits)
-        .map(|(ray, hit)| {
+    normals
+        .par_iter_mut()
+        .zip(rays.par_iter().zip(hits))
+        .with_min_len(4096)
+        .for_each(|(normal, (ray, hit))| {
             let prim = hit.prim as usize;
-            if hit.prim == NO_HIT {
+            *normal = if hit.prim == NO_HIT {
                 [0.0; 3]
             } else if prim < triangles.len() {
                 let t = &triangles[prim];
@@ -197,9 +199,8 @@ pub fn hit_normals(scene: &Scene, rays: &[Ray], hits: &[Hit]) -> Vec<[f32; 3]> {
                 let sphere = &scene.spheres[prim - triangles.len()];
                 let point = Vec3::from(ray.origin) + hit.t * Vec3::from(ray.dir);
                 (point - Vec3::from(sphere.center)).to_array()
-            }
-        })
-        .collect()
+            };
+        });
 }
 
 /// The camera rays of `scene` through its pixel centres, row by row from the

@@ -1,0 +1,194 @@
+"""lambert: ray queries and renders on numpy arrays, on the GPU or the CPU.
+
+A :class:`Scene` is built once (its BVH, and its upload to each device it
+is used on) and then queried any number of times, from any thread::
+
+    import numpy as np, lambert
+    scene = lambert.Scene.from_arrays(vertices, faces)
+    hits = scene.intersect(origins, directions)       # dict of numpy arrays
+    depth = hits["t"].reshape(h, w)
+
+Hits follow Embree's conventions: ``t`` (inf on a miss), ``prim_id`` (the
+face row, -1 on a miss), barycentrics ``u``, ``v`` with
+P = (1-u-v)·v0 + u·v1 + v·v2, and ``normal``, the unnormalised geometric
+normal (v1-v0)×(v2-v0). Triangles are watertight: no ray passes between
+two that share an edge. See docs/python.md.
+"""
+
+import os
+
+import numpy as np
+
+from . import _lambert
+
+__all__ = ["RAY_DTYPE", "Scene", "write_image"]
+
+#: The record layout of a ray file (docs/ray-query.md): little-endian
+#: float32 ox oy oz tmin dx dy dz tmax, 32 bytes a ray. An array of it goes
+#: straight into :meth:`Scene.intersect` and :meth:`Scene.occluded`, e.g.
+#: ``np.fromfile("rays.bin", dtype=lambert.RAY_DTYPE)``.
+RAY_DTYPE = np.dtype(
+    [(name, "<f4") for name in ("ox", "oy", "oz", "tmin", "dx", "dy", "dz", "tmax")]
+)
+
+_DEVICES = ("auto", "gpu", "cpu")
+
+
+def _floats(name, array):
+    """An (N, 3) float32 or float64 array, converted only if it is neither."""
+    a = np.asarray(array)
+    if a.dtype.kind not in "fiu" or a.dtype.kind == "c":
+        raise ValueError(f"{name} must be a real-valued (N, 3) array, not {a.dtype}")
+    if a.dtype not in (np.float32, np.float64):
+        a = a.astype(np.float64)
+    if a.ndim != 2 or a.shape[1] != 3:
+        raise ValueError(f"{name} has shape {a.shape}; it must be (N, 3)")
+    return a
+
+
+def _bound(name, value, n):
+    """tmin or tmax: a Python float, or a (N,) float32 array."""
+    a = np.asarray(value)
+    if a.dtype.kind not in "fiub":
+        raise ValueError(f"{name} must be a number or a (N,) array, not {a.dtype}")
+    if a.ndim == 0:
+        return float(a)
+    if a.ndim != 1 or a.shape[0] != n:
+        raise ValueError(f"{name} has shape {a.shape}; give a scalar or one value per ray ({n},)")
+    return a.astype(np.float32, copy=False)
+
+
+def _query(origins, directions, tmin, tmax):
+    """(origins, directions, tmin, tmax) as the native module takes them:
+    RAY_DTYPE records become an (N, 8) float32 view and directions None."""
+    if directions is None:
+        records = np.asarray(origins)
+        if records.dtype != RAY_DTYPE:
+            raise ValueError(
+                "with no directions, the first argument must be an array of lambert.RAY_DTYPE "
+                f"records, not {records.dtype}"
+            )
+        if not (np.isscalar(tmin) and tmin == 0.0 and np.isscalar(tmax) and tmax == np.inf):
+            raise ValueError("ray records carry their own tmin and tmax; do not pass them too")
+        records = np.ascontiguousarray(records.reshape(-1))
+        return records.view(np.float32).reshape(-1, 8), None, 0.0, 0.0
+    o = _floats("origins", origins)
+    d = _floats("directions", directions)
+    if o.shape[0] != d.shape[0]:
+        raise ValueError(f"{o.shape[0]} origins but {d.shape[0]} directions")
+    return o, d, _bound("tmin", tmin, o.shape[0]), _bound("tmax", tmax, o.shape[0])
+
+
+class Scene:
+    """Triangles (and, from a scene file, spheres, materials, lights and a
+    camera), resident for queries and renders.
+
+    Build one with :meth:`from_arrays` or :meth:`load`. Tracing releases the
+    GIL; several threads may query one Scene at once.
+    """
+
+    __slots__ = ("_native", "__weakref__")
+
+    def __init__(self, native):
+        if not isinstance(native, _lambert.NativeScene):
+            raise TypeError("use Scene.from_arrays(vertices, faces) or Scene.load(path)")
+        self._native = native
+
+    @classmethod
+    def from_arrays(cls, vertices, faces, albedo=None):
+        """A mesh from a (V, 3) vertex array of any float dtype and a (F, 3)
+        face array of any integer dtype; triangle i is faces[i]. Raises
+        ValueError naming the row of a NaN, infinite or huge coordinate (over
+        1e9) or an index out of range. With a framed camera and a default
+        light, as ``lambert render model.obj`` uses."""
+        v = np.asarray(vertices)
+        if v.dtype.kind not in "fiu":
+            raise ValueError(f"vertices must be a float array, not {v.dtype}")
+        f = np.asarray(faces)
+        if f.dtype.kind not in "iu":
+            raise ValueError(f"faces must be an integer array, not {f.dtype}")
+        if v.ndim != 2 or v.shape[1] != 3:
+            raise ValueError(f"vertices has shape {v.shape}; it must be (V, 3)")
+        if f.ndim != 2 or f.shape[1] != 3:
+            raise ValueError(f"faces has shape {f.shape}; it must be (F, 3)")
+        if f.dtype == np.uint64 and f.size and f.max() > np.iinfo(np.int64).max:
+            row = int(np.argmax(f.max(axis=1) > np.iinfo(np.int64).max))
+            raise ValueError(f"faces row {row} = {f[row].tolist()}: index out of range")
+        if albedo is not None:
+            albedo = [float(c) for c in np.broadcast_to(np.asarray(albedo, dtype=np.float64), (3,))]
+        native = _lambert.NativeScene.from_arrays(
+            v.astype(np.float64, copy=False), f.astype(np.int64, copy=False), albedo
+        )
+        return cls(native)
+
+    @classmethod
+    def load(cls, path):
+        """A scene TOML file, or any model file the CLI reads alone (.obj,
+        .ply, .ply.gz, .gltf, .glb). Raises OSError for a file that cannot
+        be read, ValueError (naming file and line or field) for bad content."""
+        return cls(_lambert.NativeScene.load(os.fspath(path)))
+
+    def intersect(self, origins, directions=None, tmin=0.0, tmax=np.inf, *, device="auto",
+                  intersect="watertight"):
+        """Closest hits of rays (origins and directions (N, 3) of any float
+        dtype; tmin and tmax scalars or (N,) arrays; or one array of
+        RAY_DTYPE records). Returns a dict of numpy arrays: ``t`` float32
+        (inf on a miss), ``prim_id`` int64 (-1 on a miss), ``u``, ``v``
+        float32, ``normal`` float32 (N, 3). Hits count where
+        tmin < t < tmax."""
+        o, d, lo, hi = _query(origins, directions, tmin, tmax)
+        return self._native.intersect(o, d, lo, hi, device, intersect)
+
+    def occluded(self, origins, directions=None, tmin=0.0, tmax=np.inf, *, device="auto",
+                 intersect="watertight"):
+        """(N,) bool: whether anything lies on each ray with tmin < t < tmax
+        (shadow rays: the first hit found ends the search)."""
+        o, d, lo, hi = _query(origins, directions, tmin, tmax)
+        return self._native.occluded(o, d, lo, hi, device, intersect)
+
+    def camera_rays(self, width=None, height=None):
+        """(origins, directions), each (width·height, 3) float32: the scene
+        camera's rays through pixel centres, row-major from the top (unit
+        directions). Give one of width and height to keep the aspect ratio."""
+        return self._native.camera_rays(width, height)
+
+    def render(self, width=None, height=None, spp=1, device="auto"):
+        """The image, (H, W, 3) float32 linear RGB: Lambert shading from the
+        scene's lights with shadows, ``spp`` stratified samples per pixel."""
+        return self._native.render(width, height, spp, device)
+
+    def device(self, device="auto"):
+        """What ``device`` resolves to for this scene, e.g. "GPU: llvmpipe
+        (Vulkan, software)" or "CPU reference path (8 threads)"."""
+        return self._native.device_name(device)
+
+    @property
+    def triangle_count(self):
+        return self._native.triangle_count
+
+    @property
+    def sphere_count(self):
+        return self._native.sphere_count
+
+    @property
+    def bounds(self):
+        """((xmin, ymin, zmin), (xmax, ymax, zmax)), or None when empty."""
+        return self._native.bounds
+
+    @property
+    def camera(self):
+        """The scene's camera: eye, look_at, up, vfov (degrees), width, height."""
+        return self._native.camera
+
+    def __repr__(self):
+        return f"<lambert.Scene: {self.triangle_count} triangles, {self.sphere_count} spheres>"
+
+
+def write_image(path, image):
+    """Writes a linear-RGB (H, W, 3) image as .png (8-bit sRGB), .exr or .pfm
+    (float32), chosen by the extension, atomically: a failed write leaves no
+    partial file and any previous one untouched."""
+    a = np.asarray(image)
+    if a.ndim != 3 or a.shape[2] != 3:
+        raise ValueError(f"image has shape {a.shape}; it must be (H, W, 3)")
+    _lambert.write_image(os.fspath(path), np.ascontiguousarray(a, dtype=np.float32))

@@ -1,0 +1,115 @@
+"""A drop-in for trimesh's ray intersector, traced by lambert.
+
+Switch with one line::
+
+    mesh.ray = lambert.trimesh.RayMeshIntersector(mesh)
+
+The methods take and return what ``trimesh.ray.ray_pyembree``'s do. Unlike
+Embree's, no ray passes between two triangles that share an edge, and
+multiple hits are found by raising each ray's tmin past its last hit, not
+by moving its origin by an offset, so no hit is skipped or repeated.
+"""
+
+import numpy as np
+
+from . import Scene
+
+__all__ = ["RayMeshIntersector"]
+
+
+def _rays(ray_origins, ray_directions):
+    """float64 origins and unit directions, and which rays are traceable
+    (finite, with a non-zero direction); trimesh reports the others as
+    misses rather than raising."""
+    o = np.array(ray_origins, dtype=np.float64).reshape(-1, 3)
+    d = np.array(ray_directions, dtype=np.float64).reshape(-1, 3)
+    if o.shape != d.shape:
+        raise ValueError("Ray origin and direction don't match!")
+    with np.errstate(invalid="ignore", divide="ignore"):
+        length = np.linalg.norm(d, axis=1)
+        d = d / length[:, None]
+    ok = np.isfinite(o).all(axis=1) & np.isfinite(d).all(axis=1) & (length > 0)
+    return o, d, ok
+
+
+class RayMeshIntersector:
+    """Ray queries on a ``trimesh.Trimesh``, on lambert's GPU path or its
+    CPU path (``device="auto"`` takes a GPU when there is a hardware one).
+    The scene is built on first use and rebuilt if the mesh changes."""
+
+    def __init__(self, geometry, device="auto"):
+        self.mesh = geometry
+        self.device = device
+        self._built = None
+
+    @property
+    def _scene(self):
+        key = hash(self.mesh)
+        if self._built is None or self._built[0] != key:
+            self._built = (key, Scene.from_arrays(self.mesh.vertices, self.mesh.faces))
+        return self._built[1]
+
+    def _first(self, o, d, ok, tmin=0.0):
+        """Closest hits of the traceable rays: (t, prim_id) for every ray."""
+        t = np.full(len(o), np.inf, dtype=np.float32)
+        prim = np.full(len(o), -1, dtype=np.int64)
+        if ok.any():
+            tmin = tmin[ok] if np.ndim(tmin) else tmin
+            hits = self._scene.intersect(o[ok], d[ok], tmin, device=self.device)
+            t[ok], prim[ok] = hits["t"], hits["prim_id"]
+        return t, prim
+
+    def intersects_first(self, ray_origins, ray_directions):
+        """(n,) int: the index of the first triangle each ray hits, -1 for none."""
+        o, d, ok = _rays(ray_origins, ray_directions)
+        return self._first(o, d, ok)[1]
+
+    def intersects_any(self, ray_origins, ray_directions):
+        """(n,) bool: whether each ray hits the mesh."""
+        o, d, ok = _rays(ray_origins, ray_directions)
+        hit = np.zeros(len(o), dtype=bool)
+        if ok.any():
+            hit[ok] = self._scene.occluded(o[ok], d[ok], device=self.device)
+        return hit
+
+    def intersects_id(self, ray_origins, ray_directions, multiple_hits=True, max_hits=100,
+                      return_locations=False):
+        """(index_tri, index_ray[, locations]): the triangles each ray hits
+        (every hit along it with ``multiple_hits``, at most ``max_hits``),
+        ordered as trimesh's: all first hits, then all second hits, and so on."""
+        o, d, ok = _rays(ray_origins, ray_directions)
+        tris, rays, locations = [], [], []
+        live = np.flatnonzero(ok)
+        tmin = np.zeros(len(live), dtype=np.float32)
+        for _ in range(max_hits if multiple_hits else 1):
+            if len(live) == 0:
+                break
+            hits = self._scene.intersect(o[live], d[live], tmin, device=self.device)
+            hit = hits["prim_id"] >= 0
+            live, t = live[hit], hits["t"][hit]
+            tris.append(hits["prim_id"][hit])
+            rays.append(live)
+            locations.append(o[live] + d[live] * t.astype(np.float64)[:, None])
+            # The next hit lies strictly beyond this one (hits count where
+            # t > tmin), on the same ray: nothing is skipped or found twice.
+            tmin = t
+        index_tri = np.concatenate(tris) if tris else np.zeros(0, dtype=np.int64)
+        index_ray = np.concatenate(rays) if rays else np.zeros(0, dtype=np.int64)
+        if return_locations:
+            loc = np.concatenate(locations) if locations else np.zeros((0, 3))
+            return index_tri, index_ray, loc
+        return index_tri, index_ray
+
+    def intersects_location(self, ray_origins, ray_directions, multiple_hits=True):
+        """(locations, index_ray, index_tri): where the rays hit the mesh."""
+        index_tri, index_ray, locations = self.intersects_id(
+            ray_origins, ray_directions, multiple_hits=multiple_hits, return_locations=True
+        )
+        return locations, index_ray, index_tri
+
+    def contains_points(self, points):
+        """(n,) bool: whether each point lies inside the (closed) mesh, by
+        trimesh's own ray-parity test over this intersector."""
+        from trimesh.ray.ray_util import contains_points
+
+        return contains_points(self, points)

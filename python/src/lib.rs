@@ -1,0 +1,576 @@
+//! `lambert._lambert`: the extension module under the `lambert` Python
+//! package (python/lambert/). Arrays cross without per-ray Python work:
+//! rays are read from numpy views into one buffer (the one copy in), and
+//! each result column is a numpy array that owns the vector it was filled
+//! into (the one copy out). Tracing and rendering run with the GIL released.
+
+use std::panic::AssertUnwindSafe;
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+
+use lambert::gpu::AdapterRequest;
+use lambert::layout::{Hit, NO_HIT, Ray};
+use lambert::output::Image;
+use lambert::render::{DeviceChoice, Renderer, Renderers};
+use lambert::scene::{Intersect, Scene};
+use lambert::{Error, rays};
+use numpy::ndarray::{Array2, Array3, ArrayView2};
+use numpy::{
+    IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray1,
+    PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods,
+};
+use pyo3::exceptions::{
+    PyFileNotFoundError, PyOSError, PyPermissionError, PyRuntimeError, PyValueError,
+};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+/// The library's errors as the exceptions a Python user expects, with the
+/// CLI's messages.
+fn to_py(e: Error) -> PyErr {
+    let message = e.to_string();
+    match &e {
+        Error::Io { source, .. } => match source.kind() {
+            std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(message),
+            std::io::ErrorKind::PermissionDenied => PyPermissionError::new_err(message),
+            _ => PyOSError::new_err(message),
+        },
+        Error::Gpu(_) => PyRuntimeError::new_err(message),
+        Error::Scene { .. } | Error::Line { .. } | Error::Usage(_) => {
+            PyValueError::new_err(message)
+        }
+    }
+}
+
+/// Runs `work` without the GIL; a panic (a bug) becomes a RuntimeError
+/// rather than tearing through the interpreter.
+fn detached<T: Send>(py: Python<'_>, work: impl FnOnce() -> Result<T, Error> + Send) -> PyResult<T> {
+    py.detach(|| std::panic::catch_unwind(AssertUnwindSafe(work)))
+        .map_err(|panic| {
+            let what = panic
+                .downcast_ref::<String>()
+                .cloned()
+                .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+                .unwrap_or_default();
+            PyRuntimeError::new_err(format!("internal error in lambert (please report): {what}"))
+        })?
+        .map_err(to_py)
+}
+
+fn device_choice(device: &str) -> PyResult<DeviceChoice> {
+    match device {
+        "auto" => Ok(DeviceChoice::Auto),
+        "gpu" => Ok(DeviceChoice::Gpu),
+        "cpu" => Ok(DeviceChoice::Cpu),
+        other => Err(PyValueError::new_err(format!(
+            "device={other:?}: use \"auto\", \"gpu\" or \"cpu\""
+        ))),
+    }
+}
+
+fn intersect_choice(name: &str) -> PyResult<Intersect> {
+    Intersect::ALL
+        .into_iter()
+        .find(|i| i.name() == name.replace('_', "-"))
+        .ok_or_else(|| {
+            PyValueError::new_err(format!(
+                "intersect={name:?}: use \"watertight\", \"moller-trumbore\" or \"seed\""
+            ))
+        })
+}
+
+/// A (N, 3) float array of either width, as numpy gave it (any strides).
+enum Rows<'py> {
+    F32(PyReadonlyArray2<'py, f32>),
+    F64(PyReadonlyArray2<'py, f64>),
+}
+
+impl<'py> Rows<'py> {
+    fn extract(name: &str, value: &Bound<'py, PyAny>) -> PyResult<Rows<'py>> {
+        let rows = if let Ok(a) = value.extract::<PyReadonlyArray2<f32>>() {
+            Rows::F32(a)
+        } else if let Ok(a) = value.extract::<PyReadonlyArray2<f64>>() {
+            Rows::F64(a)
+        } else {
+            return Err(PyValueError::new_err(format!(
+                "{name} must be a (N, 3) float32 or float64 array"
+            )));
+        };
+        let shape = match &rows {
+            Rows::F32(a) => a.shape().to_vec(),
+            Rows::F64(a) => a.shape().to_vec(),
+        };
+        if shape[1] != 3 {
+            return Err(PyValueError::new_err(format!(
+                "{name} has shape {shape:?}; it must be (N, 3)"
+            )));
+        }
+        Ok(rows)
+    }
+
+    fn len(&self) -> usize {
+        match self {
+            Rows::F32(a) => a.shape()[0],
+            Rows::F64(a) => a.shape()[0],
+        }
+    }
+
+    fn view(&self) -> RowsView<'_> {
+        match self {
+            Rows::F32(a) => RowsView::F32(a.as_array()),
+            Rows::F64(a) => RowsView::F64(a.as_array()),
+        }
+    }
+}
+
+/// `Rows` as a view the tracing threads can share.
+#[derive(Clone, Copy)]
+enum RowsView<'a> {
+    F32(ArrayView2<'a, f32>),
+    F64(ArrayView2<'a, f64>),
+}
+
+impl RowsView<'_> {
+    #[inline]
+    fn row(&self, i: usize) -> [f32; 3] {
+        match self {
+            RowsView::F32(a) => [a[[i, 0]], a[[i, 1]], a[[i, 2]]],
+            RowsView::F64(a) => [a[[i, 0]] as f32, a[[i, 1]] as f32, a[[i, 2]] as f32],
+        }
+    }
+}
+
+/// tmin or tmax: one value for every ray, or one each.
+enum Bound1<'py> {
+    All(f32),
+    Each(PyReadonlyArray1<'py, f32>),
+}
+
+impl<'py> Bound1<'py> {
+    fn extract(name: &str, value: &Bound<'py, PyAny>, n: usize) -> PyResult<Bound1<'py>> {
+        if let Ok(a) = value.extract::<PyReadonlyArray1<f32>>() {
+            if a.len() != n {
+                return Err(PyValueError::new_err(format!(
+                    "{name} has {} values for {n} rays; give one per ray or a scalar",
+                    a.len()
+                )));
+            }
+            return Ok(Bound1::Each(a));
+        }
+        match value.extract::<f64>() {
+            Ok(v) => Ok(Bound1::All(v as f32)),
+            Err(_) => Err(PyValueError::new_err(format!(
+                "{name} must be a number or a (N,) float32 array"
+            ))),
+        }
+    }
+
+    fn view(&self) -> Bound1View<'_> {
+        match self {
+            Bound1::All(v) => Bound1View::All(*v),
+            Bound1::Each(a) => Bound1View::Each(a.as_array()),
+        }
+    }
+}
+
+#[derive(Clone, Copy)]
+enum Bound1View<'a> {
+    All(f32),
+    Each(numpy::ndarray::ArrayView1<'a, f32>),
+}
+
+impl Bound1View<'_> {
+    #[inline]
+    fn at(&self, i: usize) -> f32 {
+        match self {
+            Bound1View::All(v) => *v,
+            Bound1View::Each(a) => a[i],
+        }
+    }
+}
+
+/// The rays of a query, assembled in parallel from the caller's arrays.
+fn assemble(
+    origins: RowsView<'_>,
+    directions: RowsView<'_>,
+    tmin: Bound1View<'_>,
+    tmax: Bound1View<'_>,
+    n: usize,
+) -> Vec<Ray> {
+    use rayon::prelude::*;
+    (0..n)
+        .into_par_iter()
+        .with_min_len(4096)
+        .map(|i| Ray {
+            origin: origins.row(i),
+            tmin: tmin.at(i),
+            dir: directions.row(i),
+            tmax: tmax.at(i),
+        })
+        .collect()
+}
+
+/// A scene resident in memory: its BVH built once, and uploaded once to
+/// each device it is traced or rendered on.
+#[pyclass(frozen, module = "lambert._lambert")]
+struct NativeScene {
+    scene: Arc<Scene>,
+    renderers: Mutex<Renderers>,
+}
+
+/// What a query's rays are: borrowed records, or assembled from arrays.
+enum QueryRays<'a> {
+    Records(&'a [Ray]),
+    Owned(Vec<Ray>),
+}
+
+impl NativeScene {
+    fn new(scene: Scene) -> NativeScene {
+        NativeScene {
+            scene: Arc::new(scene),
+            renderers: Mutex::new(Renderers::new(AdapterRequest::default())),
+        }
+    }
+
+    /// Traces `rays` on `device` with the GIL released. The CPU path runs
+    /// without the renderers' lock, so threads trace at once; a GPU's queue
+    /// is taken in turn. Returns the hits and the fallback note, if any.
+    fn trace_hits(
+        &self,
+        py: Python<'_>,
+        rays: &[Ray],
+        any_hit: bool,
+        device: DeviceChoice,
+        intersect: Intersect,
+    ) -> PyResult<(Vec<Hit>, Option<String>)> {
+        let scene = &self.scene;
+        detached(py, || {
+            rays::validate_rays(rays).map_err(|bad| Error::Usage(bad.to_string()))?;
+            let mut renderers = self.renderers.lock().unwrap_or_else(|e| e.into_inner());
+            let (renderer, note) = renderers.get(scene, device)?;
+            if renderer.is_cpu() {
+                drop(renderers);
+                let hits = Renderer::Cpu.trace(scene, rays, any_hit, intersect)?;
+                return Ok((hits, note));
+            }
+            Ok((renderer.trace(scene, rays, any_hit, intersect)?, note))
+        })
+    }
+
+    fn warn(py: Python<'_>, note: Option<String>) -> PyResult<()> {
+        if let Some(note) = note {
+            let warning = py.get_type::<pyo3::exceptions::PyRuntimeWarning>();
+            PyErr::warn(py, &warning, &std::ffi::CString::new(note).unwrap_or_default(), 2)?;
+        }
+        Ok(())
+    }
+}
+
+fn query_rays<'a>(
+    records: Option<&'a PyReadonlyArray2<'_, f32>>,
+    arrays: Option<(&Rows<'_>, &Rows<'_>, &Bound1<'_>, &Bound1<'_>)>,
+) -> PyResult<QueryRays<'a>> {
+    if let Some(records) = records {
+        let flat = records.as_slice().map_err(|_| {
+            PyValueError::new_err("ray records must be a contiguous lambert.RAY_DTYPE array")
+        })?;
+        return Ok(QueryRays::Records(bytemuck::cast_slice(flat)));
+    }
+    let (origins, directions, tmin, tmax) = arrays.expect("records or arrays");
+    let n = origins.len();
+    if directions.len() != n {
+        return Err(PyValueError::new_err(format!(
+            "{n} origins but {} directions",
+            directions.len()
+        )));
+    }
+    Ok(QueryRays::Owned(assemble(
+        origins.view(),
+        directions.view(),
+        tmin.view(),
+        tmax.view(),
+        n,
+    )))
+}
+
+impl QueryRays<'_> {
+    fn as_slice(&self) -> &[Ray] {
+        match self {
+            QueryRays::Records(r) => r,
+            QueryRays::Owned(r) => r,
+        }
+    }
+}
+
+/// Parses a query's arguments: either `records` (an (N, 8) float32 view of
+/// RAY_DTYPE records) or origins, directions, tmin and tmax.
+macro_rules! with_query_rays {
+    ($origins:expr, $directions:expr, $tmin:expr, $tmax:expr, |$rays:ident| $body:expr) => {{
+        match $directions {
+            None => {
+                let records: PyReadonlyArray2<f32> = $origins.extract()?;
+                if records.shape()[1] != 8 {
+                    return Err(PyValueError::new_err("ray records must be (N, 8) float32"));
+                }
+                let $rays = query_rays(Some(&records), None)?;
+                $body
+            }
+            Some(directions) => {
+                let origins = Rows::extract("origins", $origins)?;
+                let directions = Rows::extract("directions", directions)?;
+                let n = origins.len();
+                let tmin = Bound1::extract("tmin", $tmin, n)?;
+                let tmax = Bound1::extract("tmax", $tmax, n)?;
+                let $rays = query_rays(None, Some((&origins, &directions, &tmin, &tmax)))?;
+                $body
+            }
+        }
+    }};
+}
+
+#[pymethods]
+impl NativeScene {
+    #[staticmethod]
+    #[pyo3(signature = (vertices, faces, albedo=None))]
+    fn from_arrays(
+        py: Python<'_>,
+        vertices: PyReadonlyArray2<'_, f64>,
+        faces: PyReadonlyArray2<'_, i64>,
+        albedo: Option<[f64; 3]>,
+    ) -> PyResult<NativeScene> {
+        if vertices.shape()[1] != 3 || faces.shape()[1] != 3 {
+            return Err(PyValueError::new_err(format!(
+                "vertices {:?} and faces {:?} must both be (N, 3)",
+                vertices.shape(),
+                faces.shape()
+            )));
+        }
+        let v: Vec<[f64; 3]> = vertices.as_array().rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect();
+        let f: Vec<[i64; 3]> = faces.as_array().rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect();
+        let scene = detached(py, || Scene::from_arrays(&v, &f, albedo))?;
+        Ok(NativeScene::new(scene))
+    }
+
+    #[staticmethod]
+    fn load(py: Python<'_>, path: PathBuf) -> PyResult<NativeScene> {
+        let scene = detached(py, || Scene::load(&path))?;
+        for warning in &scene.warnings {
+            NativeScene::warn(py, Some(warning.clone()))?;
+        }
+        Ok(NativeScene::new(scene))
+    }
+
+    /// Closest hits: (t, prim_id, u, v, normal).
+    #[pyo3(signature = (origins, directions, tmin, tmax, device, intersect))]
+    #[allow(clippy::type_complexity)]
+    fn intersect<'py>(
+        &self,
+        py: Python<'py>,
+        origins: &Bound<'py, PyAny>,
+        directions: Option<&Bound<'py, PyAny>>,
+        tmin: &Bound<'py, PyAny>,
+        tmax: &Bound<'py, PyAny>,
+        device: &str,
+        intersect: &str,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let (device, intersect) = (device_choice(device)?, intersect_choice(intersect)?);
+        with_query_rays!(origins, directions, tmin, tmax, |rays| {
+            let rays = rays.as_slice();
+            let (hits, note) = self.trace_hits(py, rays, false, device, intersect)?;
+            NativeScene::warn(py, note)?;
+            let n = hits.len();
+            let scene = &self.scene;
+            let (t, prim, u, v, normal) = detached(py, || {
+                let mut normal = vec![0f32; 3 * n];
+                rays::hit_normals(scene, rays, &hits, bytemuck::cast_slice_mut(&mut normal));
+                let t: Vec<f32> = hits.iter().map(|h| h.t).collect();
+                let prim: Vec<i64> = hits
+                    .iter()
+                    .map(|h| if h.prim == NO_HIT { -1 } else { h.prim as i64 })
+                    .collect();
+                let u: Vec<f32> = hits.iter().map(|h| h.u).collect();
+                let v: Vec<f32> = hits.iter().map(|h| h.v).collect();
+                Ok((t, prim, u, v, normal))
+            })?;
+            let normal = Array2::from_shape_vec((n, 3), normal).expect("3 per hit");
+            let out = PyDict::new(py);
+            out.set_item("t", t.into_pyarray(py))?;
+            out.set_item("prim_id", prim.into_pyarray(py))?;
+            out.set_item("u", u.into_pyarray(py))?;
+            out.set_item("v", v.into_pyarray(py))?;
+            out.set_item("normal", normal.into_pyarray(py))?;
+            Ok(out)
+        })
+    }
+
+    /// Whether anything lies on each ray within (tmin, tmax).
+    #[pyo3(signature = (origins, directions, tmin, tmax, device, intersect))]
+    fn occluded<'py>(
+        &self,
+        py: Python<'py>,
+        origins: &Bound<'py, PyAny>,
+        directions: Option<&Bound<'py, PyAny>>,
+        tmin: &Bound<'py, PyAny>,
+        tmax: &Bound<'py, PyAny>,
+        device: &str,
+        intersect: &str,
+    ) -> PyResult<Bound<'py, PyArray1<bool>>> {
+        let (device, intersect) = (device_choice(device)?, intersect_choice(intersect)?);
+        with_query_rays!(origins, directions, tmin, tmax, |rays| {
+            let (hits, note) = self.trace_hits(py, rays.as_slice(), true, device, intersect)?;
+            NativeScene::warn(py, note)?;
+            let hit: Vec<bool> = hits.iter().map(|h| h.prim != NO_HIT).collect();
+            Ok(hit.into_pyarray(py))
+        })
+    }
+
+    /// The camera's rays through pixel centres, row-major from the top.
+    #[pyo3(signature = (width=None, height=None))]
+    #[allow(clippy::type_complexity)]
+    fn camera_rays<'py>(
+        &self,
+        py: Python<'py>,
+        width: Option<u32>,
+        height: Option<u32>,
+    ) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<f32>>)> {
+        let scene = &self.scene;
+        let (origins, directions) = detached(py, || {
+            let camera = scene.camera.resized(width, height).map_err(Error::Usage)?;
+            let rays = rays::camera_rays_for(scene, &camera);
+            let origins: Vec<f32> = rays.iter().flat_map(|r| r.origin).collect();
+            let directions: Vec<f32> = rays.iter().flat_map(|r| r.dir).collect();
+            Ok((origins, directions))
+        })?;
+        let n = origins.len() / 3;
+        let rows = |v: Vec<f32>| Array2::from_shape_vec((n, 3), v).expect("3 per ray");
+        Ok((rows(origins).into_pyarray(py), rows(directions).into_pyarray(py)))
+    }
+
+    /// A linear-RGB render, (H, W, 3) float32.
+    #[pyo3(signature = (width, height, spp, device))]
+    fn render<'py>(
+        &self,
+        py: Python<'py>,
+        width: Option<u32>,
+        height: Option<u32>,
+        spp: Option<u32>,
+        device: &str,
+    ) -> PyResult<Bound<'py, PyArray3<f32>>> {
+        let device = device_choice(device)?;
+        let scene = &self.scene;
+        let (image, note) = detached(py, || {
+            let camera = scene.camera.resized(width, height).map_err(Error::Usage)?;
+            let spp = spp.unwrap_or(scene.spp);
+            lambert::scene::validate_spp(spp).map_err(Error::Usage)?;
+            // Another size or sample count is another scene to the
+            // renderers: a copy with those settings (the GPU's buffers
+            // stay the ones uploaded).
+            let view = (camera != scene.camera || spp != scene.spp).then(|| Scene {
+                camera,
+                spp,
+                ..Scene::clone(scene)
+            });
+            let view = view.as_ref().unwrap_or(scene);
+            let mut renderers = self.renderers.lock().unwrap_or_else(|e| e.into_inner());
+            let (renderer, note) = renderers.get(scene, device)?;
+            let (rendered, _) = if renderer.is_cpu() {
+                drop(renderers);
+                Renderer::Cpu.render(view, false)?
+            } else {
+                renderer.render(view, false)?
+            };
+            Ok((rendered.image, note))
+        })?;
+        NativeScene::warn(py, note)?;
+        let (w, h) = (image.width as usize, image.height as usize);
+        let flat: Vec<f32> = image.rgb.into_iter().flatten().collect();
+        Ok(Array3::from_shape_vec((h, w, 3), flat)
+            .expect("3 per pixel")
+            .into_pyarray(py))
+    }
+
+    /// What `device` resolves to for this scene ("GPU: …" or "CPU …").
+    #[pyo3(signature = (device="auto"))]
+    fn device_name(&self, py: Python<'_>, device: &str) -> PyResult<String> {
+        let device = device_choice(device)?;
+        let (name, note) = detached(py, || {
+            let mut renderers = self.renderers.lock().unwrap_or_else(|e| e.into_inner());
+            let (renderer, note) = renderers.get(&self.scene, device)?;
+            Ok((renderer.describe(), note))
+        })?;
+        NativeScene::warn(py, note)?;
+        Ok(name)
+    }
+
+    #[getter]
+    fn triangle_count(&self) -> usize {
+        self.scene.triangles.len()
+    }
+
+    #[getter]
+    fn sphere_count(&self) -> usize {
+        self.scene.spheres.len()
+    }
+
+    /// (min, max) corners of the scene's bounding box, or None if empty.
+    #[getter]
+    fn bounds(&self) -> Option<([f32; 3], [f32; 3])> {
+        self.scene
+            .bvh
+            .bounds()
+            .map(|b| (b.min.to_array(), b.max.to_array()))
+    }
+
+    /// The scene's camera: eye, look_at, up, vfov (degrees), width, height.
+    #[getter]
+    fn camera<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let c = &self.scene.camera;
+        let out = PyDict::new(py);
+        out.set_item("eye", c.eye)?;
+        out.set_item("look_at", c.look_at)?;
+        out.set_item("up", c.up)?;
+        out.set_item("vfov", c.vfov)?;
+        out.set_item("width", c.width)?;
+        out.set_item("height", c.height)?;
+        Ok(out)
+    }
+
+    #[getter]
+    fn spp(&self) -> u32 {
+        self.scene.spp
+    }
+}
+
+/// Writes a linear-RGB (H, W, 3) float32 image as .png (8-bit sRGB), .exr
+/// or .pfm, atomically, as the CLI does.
+#[pyfunction]
+fn write_image(py: Python<'_>, path: PathBuf, image: PyReadonlyArray3<'_, f32>) -> PyResult<()> {
+    let shape = image.shape().to_vec();
+    if shape[2] != 3 || shape[0] == 0 || shape[1] == 0 {
+        return Err(PyValueError::new_err(format!(
+            "image has shape {shape:?}; it must be (H, W, 3) with H, W ≥ 1"
+        )));
+    }
+    let (height, width) = (u32::try_from(shape[0]), u32::try_from(shape[1]));
+    let (Ok(height), Ok(width)) = (height, width) else {
+        return Err(PyValueError::new_err(format!("image of shape {shape:?} is too large")));
+    };
+    let rgb: Vec<[f32; 3]> = image
+        .as_array()
+        .rows()
+        .into_iter()
+        .map(|p| [p[0], p[1], p[2]])
+        .collect();
+    let image = Image { width, height, rgb };
+    detached(py, || {
+        lambert::output::prepare_output(&path)?;
+        image.save(&path)
+    })
+}
+
+#[pymodule]
+fn _lambert(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<NativeScene>()?;
+    m.add_function(wrap_pyfunction!(write_image, m)?)?;
+    Ok(())
+}
