@@ -94,14 +94,37 @@ impl std::fmt::Display for BadRay {
 /// first bad ray and the field; nothing is allocated unless one is bad.
 pub fn validate_rays(rays: &[Ray]) -> Result<(), BadRay> {
     use rayon::prelude::*;
-    // In parallel, and the first bad ray reported (not just any one).
-    match rays.par_iter().position_first(|ray| ray_problem(ray).is_some()) {
+    const CHUNK: usize = 8192;
+    // In parallel chunks, and the first bad ray reported (not just any one).
+    let chunk = rays
+        .par_chunks(CHUNK)
+        .position_first(|chunk| !chunk.iter().all(ray_is_valid));
+    match chunk {
         None => Ok(()),
-        Some(index) => Err(BadRay {
-            index,
-            problem: ray_problem(&rays[index]).expect("found bad"),
-        }),
+        Some(c) => {
+            let index = c * CHUNK
+                + rays[c * CHUNK..]
+                    .iter()
+                    .position(|r| !ray_is_valid(r))
+                    .expect("a bad ray in the chunk");
+            Err(BadRay {
+                index,
+                problem: ray_problem(&rays[index]).expect("found bad"),
+            })
+        }
     }
+}
+
+/// `ray_problem(ray).is_none()`, without building a message.
+#[inline]
+fn ray_is_valid(ray: &Ray) -> bool {
+    let finite = ray.origin.iter().chain(&ray.dir).chain([&ray.tmin]).all(|v| v.is_finite())
+        && (ray.tmax.is_finite() || ray.tmax == f32::INFINITY);
+    let [x, y, z] = ray.dir.map(f64::from);
+    let squared = x * x + y * y + z * z;
+    finite
+        && (MIN_DIRECTION * MIN_DIRECTION..=MAX_DIRECTION * MAX_DIRECTION).contains(&squared)
+        && ray.tmin <= ray.tmax
 }
 
 #[inline]
@@ -128,8 +151,10 @@ fn ray_problem(ray: &Ray) -> Option<String> {
             "{field} is {value}; only tmax may be infinite (+inf), and nothing NaN"
         ));
     }
-    let length = glam::Vec3::from(ray.dir).as_dvec3().length();
-    if !(MIN_DIRECTION..=MAX_DIRECTION).contains(&length) {
+    let [x, y, z] = ray.dir.map(f64::from);
+    let squared = x * x + y * y + z * z;
+    if !(MIN_DIRECTION * MIN_DIRECTION..=MAX_DIRECTION * MAX_DIRECTION).contains(&squared) {
+        let length = squared.sqrt();
         return Some(format!(
             "the direction (dx, dy, dz) has length {length:e}; it must be between \
              {MIN_DIRECTION:e} and {MAX_DIRECTION:e} (f32 squares of it must not under- or overflow)"
@@ -176,31 +201,25 @@ pub fn read_hits(path: &Path) -> Result<Vec<Hit>> {
     Ok(bytemuck::pod_collect_to_vec(&bytes))
 }
 
-/// The unnormalised geometric normal at each hit, written to `normals`:
-/// (v1 − v0) × (v2 − v0) of the triangle hit (Embree's Ng), the
-/// centre-to-hit vector of a sphere (length: its radius), zero on a miss.
-pub fn hit_normals(scene: &Scene, rays: &[Ray], hits: &[Hit], normals: &mut [[f32; 3]]) {
+/// The unnormalised geometric normal at `hit` of `ray`: (v1 − v0) × (v2 − v0)
+/// of the triangle hit (Embree's Ng), the centre-to-hit vector of a sphere
+/// (length: its radius), zero on a miss.
+#[inline]
+pub fn hit_normal(scene: &Scene, ray: &Ray, hit: &Hit) -> [f32; 3] {
     use glam::Vec3;
-    use rayon::prelude::*;
+    let prim = hit.prim as usize;
     let triangles = &scene.triangles;
-    normals
-        .par_iter_mut()
-        .zip(rays.par_iter().zip(hits))
-        .with_min_len(4096)
-        .for_each(|(normal, (ray, hit))| {
-            let prim = hit.prim as usize;
-            *normal = if hit.prim == NO_HIT {
-                [0.0; 3]
-            } else if prim < triangles.len() {
-                let t = &triangles[prim];
-                let v0 = Vec3::from(t.v0);
-                (Vec3::from(t.v1) - v0).cross(Vec3::from(t.v2) - v0).to_array()
-            } else {
-                let sphere = &scene.spheres[prim - triangles.len()];
-                let point = Vec3::from(ray.origin) + hit.t * Vec3::from(ray.dir);
-                (point - Vec3::from(sphere.center)).to_array()
-            };
-        });
+    if hit.prim == NO_HIT {
+        [0.0; 3]
+    } else if prim < triangles.len() {
+        let t = &triangles[prim];
+        let v0 = Vec3::from(t.v0);
+        (Vec3::from(t.v1) - v0).cross(Vec3::from(t.v2) - v0).to_array()
+    } else {
+        let sphere = &scene.spheres[prim - triangles.len()];
+        let point = Vec3::from(ray.origin) + hit.t * Vec3::from(ray.dir);
+        (point - Vec3::from(sphere.center)).to_array()
+    }
 }
 
 /// The camera rays of `scene` through its pixel centres, row by row from the

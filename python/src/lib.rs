@@ -8,6 +8,7 @@ use std::panic::AssertUnwindSafe;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
+use lambert::cpu::{CpuKernel, SharedOut};
 use lambert::gpu::AdapterRequest;
 use lambert::layout::{Hit, NO_HIT, Ray};
 use lambert::output::Image;
@@ -210,6 +211,57 @@ fn assemble(
         .collect()
 }
 
+/// The hit columns Python receives.
+struct Columns {
+    t: Vec<f32>,
+    prim: Vec<i64>,
+    u: Vec<f32>,
+    v: Vec<f32>,
+    normal: Vec<f32>,
+}
+
+impl Columns {
+    /// Fills the columns from hits, chunk by chunk in parallel (on the CPU
+    /// path, as each chunk is traced, while its triangles are in cache).
+    fn fill(scene: &Scene, rays: &[Ray], chunks: impl FnOnce(&(dyn Fn(usize, &[Hit]) + Sync))) -> Columns {
+        let n = rays.len();
+        let mut c = Columns {
+            t: vec![0.0; n],
+            prim: vec![0; n],
+            u: vec![0.0; n],
+            v: vec![0.0; n],
+            normal: vec![0.0; 3 * n],
+        };
+        let (t, prim) = (SharedOut::new(&mut c.t), SharedOut::new(&mut c.prim));
+        let (u, v) = (SharedOut::new(&mut c.u), SharedOut::new(&mut c.v));
+        let normal = SharedOut::new(&mut c.normal);
+        chunks(&|start, hits| {
+            for (i, hit) in (start..).zip(hits) {
+                // SAFETY: each chunk's rows are written by one thread, within
+                // the n rows allocated; `c` outlives the closure.
+                unsafe {
+                    *t.at(i) = hit.t;
+                    *prim.at(i) = if hit.prim == NO_HIT { -1 } else { hit.prim as i64 };
+                    *u.at(i) = hit.u;
+                    *v.at(i) = hit.v;
+                    let ng = rays::hit_normal(scene, &rays[i], hit);
+                    std::ptr::copy_nonoverlapping(ng.as_ptr(), normal.at(3 * i), 3);
+                }
+            }
+        });
+        c
+    }
+}
+
+/// Calls `each` on `hits` in parallel chunks (as `trace_rays_each` does).
+fn each_chunk(hits: &[Hit], each: &(dyn Fn(usize, &[Hit]) + Sync)) {
+    use rayon::prelude::*;
+    const CHUNK: usize = 4096;
+    hits.par_chunks(CHUNK)
+        .enumerate()
+        .for_each(|(i, chunk)| each(i * CHUNK, chunk));
+}
+
 /// A scene resident in memory: its BVH built once, and uploaded once to
 /// each device it is traced or rendered on.
 #[pyclass(frozen, module = "lambert._lambert")]
@@ -232,29 +284,32 @@ impl NativeScene {
         }
     }
 
-    /// Traces `rays` on `device` with the GIL released. The CPU path runs
-    /// without the renderers' lock, so threads trace at once; a GPU's queue
-    /// is taken in turn. Returns the hits and the fallback note, if any.
-    fn trace_hits(
+    /// Traces `rays` on `device` with the GIL released, handing the hits
+    /// to `sink` chunk by chunk. The CPU path runs without the renderers'
+    /// lock, so threads trace at once; a GPU's queue is taken in turn.
+    /// Returns the fallback note, if any.
+    fn trace_into(
         &self,
-        py: Python<'_>,
         rays: &[Ray],
         any_hit: bool,
         device: DeviceChoice,
         intersect: Intersect,
-    ) -> PyResult<(Vec<Hit>, Option<String>)> {
+        sink: &(dyn Fn(usize, &[Hit]) + Sync),
+    ) -> Result<Option<String>, Error> {
         let scene = &self.scene;
-        detached(py, || {
-            rays::validate_rays(rays).map_err(|bad| Error::Usage(bad.to_string()))?;
-            let mut renderers = self.renderers.lock().unwrap_or_else(|e| e.into_inner());
-            let (renderer, note) = renderers.get(scene, device)?;
-            if renderer.is_cpu() {
-                drop(renderers);
-                let hits = Renderer::Cpu.trace(scene, rays, any_hit, intersect)?;
-                return Ok((hits, note));
-            }
-            Ok((renderer.trace(scene, rays, any_hit, intersect)?, note))
-        })
+        rays::validate_rays(rays).map_err(|bad| Error::Usage(bad.to_string()))?;
+        let mut renderers = self.renderers.lock().unwrap_or_else(|e| e.into_inner());
+        let (renderer, note) = renderers.get(scene, device)?;
+        if renderer.is_cpu() {
+            drop(renderers);
+            let kernel = CpuKernel::active();
+            lambert::cpu::trace_rays_each(scene, rays, any_hit, intersect, kernel, sink);
+        } else {
+            let hits = renderer.trace(scene, rays, any_hit, intersect)?;
+            drop(renderers);
+            each_chunk(&hits, sink);
+        }
+        Ok(note)
     }
 
     fn warn(py: Python<'_>, note: Option<String>) -> PyResult<()> {
@@ -376,22 +431,17 @@ impl NativeScene {
         let (device, intersect) = (device_choice(device)?, intersect_choice(intersect)?);
         with_query_rays!(origins, directions, tmin, tmax, |rays| {
             let rays = rays.as_slice();
-            let (hits, note) = self.trace_hits(py, rays, false, device, intersect)?;
-            NativeScene::warn(py, note)?;
-            let n = hits.len();
             let scene = &self.scene;
-            let (t, prim, u, v, normal) = detached(py, || {
-                let mut normal = vec![0f32; 3 * n];
-                rays::hit_normals(scene, rays, &hits, bytemuck::cast_slice_mut(&mut normal));
-                let t: Vec<f32> = hits.iter().map(|h| h.t).collect();
-                let prim: Vec<i64> = hits
-                    .iter()
-                    .map(|h| if h.prim == NO_HIT { -1 } else { h.prim as i64 })
-                    .collect();
-                let u: Vec<f32> = hits.iter().map(|h| h.u).collect();
-                let v: Vec<f32> = hits.iter().map(|h| h.v).collect();
-                Ok((t, prim, u, v, normal))
+            let (columns, note) = detached(py, || {
+                let mut note = None;
+                let columns = Columns::fill(scene, rays, |sink| {
+                    note = Some(self.trace_into(rays, false, device, intersect, sink));
+                });
+                Ok((columns, note.expect("traced")?))
             })?;
+            NativeScene::warn(py, note)?;
+            let Columns { t, prim, u, v, normal } = columns;
+            let n = t.len();
             let normal = Array2::from_shape_vec((n, 3), normal).expect("3 per hit");
             let out = PyDict::new(py);
             out.set_item("t", t.into_pyarray(py))?;
@@ -417,9 +467,19 @@ impl NativeScene {
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
         let (device, intersect) = (device_choice(device)?, intersect_choice(intersect)?);
         with_query_rays!(origins, directions, tmin, tmax, |rays| {
-            let (hits, note) = self.trace_hits(py, rays.as_slice(), true, device, intersect)?;
+            let rays = rays.as_slice();
+            let (hit, note) = detached(py, || {
+                let mut hit = vec![false; rays.len()];
+                let out = SharedOut::new(&mut hit);
+                let note = self.trace_into(rays, true, device, intersect, &|start, hits| {
+                    for (i, h) in (start..).zip(hits) {
+                        // SAFETY: one thread per chunk, within the rays.
+                        unsafe { *out.at(i) = h.prim != NO_HIT };
+                    }
+                })?;
+                Ok((hit, note))
+            })?;
             NativeScene::warn(py, note)?;
-            let hit: Vec<bool> = hits.iter().map(|h| h.prim != NO_HIT).collect();
             Ok(hit.into_pyarray(py))
         })
     }

@@ -414,6 +414,50 @@ pub fn trace_rays_with(
     intersect: Intersect,
     cpu_kernel: CpuKernel,
 ) -> Vec<layout::Hit> {
+    // Written by the threads themselves: filling it first on one thread
+    // would cost a twentieth of the trace.
+    let mut hits: Vec<layout::Hit> = Vec::with_capacity(rays.len());
+    let out = SharedOut(hits.as_mut_ptr());
+    trace_rays_each(scene, rays, any_hit, intersect, cpu_kernel, |start, chunk| {
+        // SAFETY: chunks are disjoint and within the capacity.
+        unsafe { std::ptr::copy_nonoverlapping(chunk.as_ptr(), out.at(start), chunk.len()) }
+    });
+    // SAFETY: every chunk was written.
+    unsafe { hits.set_len(rays.len()) };
+    hits
+}
+
+/// A buffer that parallel threads write disjoint ranges of (the chunks of
+/// `trace_rays_each`).
+pub struct SharedOut<T>(*mut T);
+// SAFETY: each thread writes its own range.
+unsafe impl<T> Sync for SharedOut<T> {}
+unsafe impl<T> Send for SharedOut<T> {}
+impl<T> SharedOut<T> {
+    pub fn new(buffer: &mut [T]) -> SharedOut<T> {
+        SharedOut(buffer.as_mut_ptr())
+    }
+
+    /// # Safety
+    /// `start` within the buffer, its range written by one thread at a
+    /// time, and the buffer alive and not otherwise borrowed meanwhile.
+    pub unsafe fn at(&self, start: usize) -> *mut T {
+        unsafe { self.0.add(start) }
+    }
+}
+
+/// Traces `rays` in parallel chunks, handing each chunk's hits (with the
+/// index of its first ray) to `each` while they are hot in cache: the
+/// Python binding fills its numpy columns this way, with no hit buffer
+/// between.
+pub fn trace_rays_each(
+    scene: &Scene,
+    rays: &[layout::Ray],
+    any_hit: bool,
+    intersect: Intersect,
+    cpu_kernel: CpuKernel,
+    each: impl Fn(usize, &[layout::Hit]) + Sync,
+) {
     const CHUNK: usize = 1024;
     check_runs(cpu_kernel);
     let mut kernel = f32::Kernel::new_for(scene, cpu_kernel.ymm_boxes());
@@ -428,13 +472,11 @@ pub fn trace_rays_with(
     // Judged once for the whole query: judged per chunk, it cost camera
     // rays through small models up to 5%.
     let incoherent = (large || vector_sort) && !coherent(rays, nearby);
-    // Written by the threads themselves: filling it first on one thread
-    // would cost a twentieth of the trace.
-    let mut hits = Vec::with_capacity(rays.len());
-    hits.spare_capacity_mut()[..rays.len()]
-        .par_chunks_mut(CHUNK)
-        .zip(rays.par_chunks(CHUNK))
-        .for_each(|(hits, rays)| {
+    rays.par_chunks(CHUNK)
+        .enumerate()
+        .for_each(|(index, rays)| {
+            let mut buffer = [std::mem::MaybeUninit::<layout::Hit>::uninit(); CHUNK];
+            let hits = &mut buffer[..rays.len()];
             // One `with_simd` per kind of chunk, each then a function of its
             // own: in one, camera rays through small models ran 2% slower,
             // and incoherent ones gained about half as much from
@@ -462,10 +504,10 @@ pub fn trace_rays_with(
                 (true, false, true) => chunk!(INTERLEAVED_RAYS, false, true),
                 _ => chunk!(INTERLEAVED_RAYS, false, false),
             }
+            // SAFETY: trace_chunk wrote every element.
+            let hits = unsafe { &*(hits as *const [_] as *const [layout::Hit]) };
+            each(index * CHUNK, hits);
         });
-    // SAFETY: trace_chunk wrote every element.
-    unsafe { hits.set_len(rays.len()) };
-    hits
 }
 
 /// The CPU kernels: the same functions compiled for different vector

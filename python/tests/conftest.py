@@ -1,0 +1,87 @@
+"""Shared fixtures: the repository's assets and the `lambert` binary the
+hits are compared with (built by scripts/test before pytest runs)."""
+
+import json
+import os
+import subprocess
+
+import numpy as np
+import pytest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+MESHES = os.path.join(ROOT, "assets", "scenes", "meshes")
+SCENES = os.path.join(ROOT, "assets", "scenes")
+TARGET = os.environ.get("CARGO_TARGET_DIR", os.path.join(ROOT, "target"))
+LAMBERT = os.environ.get("LAMBERT", os.path.join(TARGET, "release", "lambert"))
+HIT_DTYPE = np.dtype([("t", "<f4"), ("prim", "<u4"), ("u", "<f4"), ("v", "<f4")])
+
+
+@pytest.fixture(scope="session")
+def cli():
+    """Runs the lambert binary; returns its stdout."""
+    if not os.path.exists(LAMBERT):
+        pytest.fail(f"{LAMBERT} is missing: build it with cargo build --release")
+
+    def run(*args, env=None):
+        full_env = dict(os.environ, NODEVICE_SELECT="1", **(env or {}))
+        done = subprocess.run([LAMBERT, *args], capture_output=True, text=True, env=full_env)
+        if done.returncode != 0:
+            raise AssertionError(f"lambert {' '.join(args)} failed: {done.stderr}")
+        return done.stdout
+
+    return run
+
+
+def read_obj(path):
+    """Vertices and triangles of a triangles-only OBJ, in file order."""
+    vertices, faces = [], []
+    with open(path) as f:
+        for line in f:
+            parts = line.split()
+            if not parts:
+                continue
+            if parts[0] == "v":
+                vertices.append([float(x) for x in parts[1:4]])
+            elif parts[0] == "f":
+                idx = [int(p.split("/")[0]) for p in parts[1:]]
+                idx = [i - 1 if i > 0 else len(vertices) + i for i in idx]
+                for k in range(1, len(idx) - 1):
+                    faces.append([idx[0], idx[k], idx[k + 1]])
+    return np.array(vertices), np.array(faces)
+
+
+def random_rays(scene, n, seed):
+    """Rays from around the scene's bounding box in random directions."""
+    lo, hi = (np.array(b, dtype=np.float64) for b in scene.bounds)
+    centre, size = (lo + hi) / 2, np.linalg.norm(hi - lo)
+    rng = np.random.default_rng(seed)
+    o = centre + size * (rng.random((n, 3)) - 0.5)
+    d = rng.normal(size=(n, 3))
+    return o, d
+
+
+def records(o, d, tmin=0.0, tmax=np.inf):
+    import lambert
+
+    r = np.zeros(len(o), dtype=lambert.RAY_DTYPE)
+    for i, k in enumerate(("ox", "oy", "oz")):
+        r[k] = o[:, i]
+    for i, k in enumerate(("dx", "dy", "dz")):
+        r[k] = d[:, i]
+    r["tmin"], r["tmax"] = tmin, tmax
+    return r
+
+
+@pytest.fixture(scope="session")
+def trace_cli(cli, tmp_path_factory):
+    """`lambert trace` on a ray-record array; returns its HIT_DTYPE hits."""
+
+    def trace(mesh, rays, device="cpu", any_hit=False):
+        tmp = tmp_path_factory.mktemp("trace")
+        rays.tofile(tmp / "rays.bin")
+        args = ["trace", "--obj", mesh, "--rays", str(tmp / "rays.bin"), "-o", str(tmp / "hits.bin"),
+                "--device", device, "-q"]
+        cli(*args, *(["--any-hit"] if any_hit else []))
+        return np.fromfile(tmp / "hits.bin", dtype=HIT_DTYPE)
+
+    return trace
