@@ -5,9 +5,12 @@ Switch with one line::
     mesh.ray = lambert.trimesh.RayMeshIntersector(mesh)
 
 The methods take and return what ``trimesh.ray.ray_pyembree``'s do. Unlike
-Embree's, no ray passes between two triangles that share an edge, and
-multiple hits are found by raising each ray's tmin past its last hit, not
-by moving its origin by an offset, so no hit is skipped or repeated.
+Embree's, no ray passes between two triangles that share an edge. Multiple
+hits are found by raising each ray's tmin past its last hit rather than by
+moving its origin, so rounding never makes a ray hit the same triangle
+twice; hits within trimesh's own step (1e-6 of the mesh's scale) beyond the
+last one are the same point of the surface (a shared edge or vertex) and
+count once, as in trimesh.
 """
 
 import numpy as np
@@ -49,20 +52,13 @@ class RayMeshIntersector:
             self._built = (key, Scene.from_arrays(self.mesh.vertices, self.mesh.faces))
         return self._built[1]
 
-    def _first(self, o, d, ok, tmin=0.0):
-        """Closest hits of the traceable rays: (t, prim_id) for every ray."""
-        t = np.full(len(o), np.inf, dtype=np.float32)
-        prim = np.full(len(o), -1, dtype=np.int64)
-        if ok.any():
-            tmin = tmin[ok] if np.ndim(tmin) else tmin
-            hits = self._scene.intersect(o[ok], d[ok], tmin, device=self.device)
-            t[ok], prim[ok] = hits["t"], hits["prim_id"]
-        return t, prim
-
     def intersects_first(self, ray_origins, ray_directions):
         """(n,) int: the index of the first triangle each ray hits, -1 for none."""
         o, d, ok = _rays(ray_origins, ray_directions)
-        return self._first(o, d, ok)[1]
+        prim = np.full(len(o), -1, dtype=np.int64)
+        if ok.any():
+            prim[ok] = self._scene.intersect(o[ok], d[ok], device=self.device)["prim_id"]
+        return prim
 
     def intersects_any(self, ray_origins, ray_directions):
         """(n,) bool: whether each ray hits the mesh."""
@@ -78,6 +74,7 @@ class RayMeshIntersector:
         (every hit along it with ``multiple_hits``, at most ``max_hits``),
         ordered as trimesh's: all first hits, then all second hits, and so on."""
         o, d, ok = _rays(ray_origins, ray_directions)
+        step = max(1e-8, 1e-6 * float(self.mesh.scale))
         tris, rays, locations = [], [], []
         live = np.flatnonzero(ok)
         tmin = np.zeros(len(live), dtype=np.float32)
@@ -90,9 +87,9 @@ class RayMeshIntersector:
             tris.append(hits["prim_id"][hit])
             rays.append(live)
             locations.append(o[live] + d[live] * t.astype(np.float64)[:, None])
-            # The next hit lies strictly beyond this one (hits count where
-            # t > tmin), on the same ray: nothing is skipped or found twice.
-            tmin = t
+            # The next hit lies beyond this one on the same ray (hits count
+            # where t > tmin), past the other triangles at this edge or vertex.
+            tmin = t + np.float32(step)
         index_tri = np.concatenate(tris) if tris else np.zeros(0, dtype=np.int64)
         index_ray = np.concatenate(rays) if rays else np.zeros(0, dtype=np.int64)
         if return_locations:

@@ -495,7 +495,7 @@ impl NativeScene {
     ) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<f32>>)> {
         let scene = &self.scene;
         let (origins, directions) = detached(py, || {
-            let camera = scene.camera.resized(width, height).map_err(Error::Usage)?;
+            let camera = scene.camera.resized(width, height).map_err(|e| Error::Usage(format!("width/height: {e}")))?;
             let rays = rays::camera_rays_for(scene, &camera);
             let origins: Vec<f32> = rays.iter().flat_map(|r| r.origin).collect();
             let directions: Vec<f32> = rays.iter().flat_map(|r| r.dir).collect();
@@ -519,7 +519,7 @@ impl NativeScene {
         let device = device_choice(device)?;
         let scene = &self.scene;
         let (image, note) = detached(py, || {
-            let camera = scene.camera.resized(width, height).map_err(Error::Usage)?;
+            let camera = scene.camera.resized(width, height).map_err(|e| Error::Usage(format!("width/height: {e}")))?;
             let spp = spp.unwrap_or(scene.spp);
             lambert::scene::validate_spp(spp).map_err(Error::Usage)?;
             // Another size or sample count is another scene to the

@@ -1,0 +1,54 @@
+"""Renders from Python: the CLI's images, on both devices."""
+
+import os
+
+import numpy as np
+import pytest
+
+import lambert
+from conftest import MESHES, SCENES
+
+
+def read_pfm(path):
+    with open(path, "rb") as f:
+        assert f.readline().strip() == b"PF"
+        width, height = (int(x) for x in f.readline().split())
+        scale = float(f.readline())
+        data = np.frombuffer(f.read(), dtype="<f4" if scale < 0 else ">f4")
+    return data.reshape(height, width, 3)[::-1]
+
+
+@pytest.mark.parametrize("device", ["cpu", "gpu"])
+def test_render_equals_the_cli(device, cli, tmp_path):
+    path = os.path.join(SCENES, "cornell.toml")
+    cli("render", path, "-o", str(tmp_path / "cli.pfm"), "--device", device, "--width", "48", "--height", "40",
+        "--spp", "4", "-q")
+    image = lambert.Scene.load(path).render(48, 40, spp=4, device=device)
+    assert image.shape == (40, 48, 3) and image.dtype == np.float32
+    np.testing.assert_array_equal(image, read_pfm(tmp_path / "cli.pfm"))
+
+
+def test_gpu_and_cpu_renders_agree():
+    scene = lambert.Scene.load(os.path.join(MESHES, "bunny_lowres.obj"))
+    cpu = scene.render(64, 48, device="cpu")
+    gpu = scene.render(64, 48, device="gpu")
+    assert cpu.max() > 0.1
+    np.testing.assert_allclose(cpu, gpu, atol=2e-5)
+    # Its own size by default (a model alone: 1024x768), and one side alone
+    # keeps the aspect ratio.
+    assert scene.render(width=32, device="cpu").shape == (24, 32, 3)
+
+
+def test_write_image_formats_round_trip(tmp_path, cli):
+    scene = lambert.Scene.load(os.path.join(SCENES, "spheres.toml"))
+    image = scene.render(40, 30, device="cpu")
+    lambert.write_image(tmp_path / "a.pfm", image)
+    np.testing.assert_array_equal(read_pfm(tmp_path / "a.pfm"), image)
+    lambert.write_image(tmp_path / "a.png", image)
+    lambert.write_image(tmp_path / "a.exr", image.astype(np.float64))
+    cli("render", os.path.join(SCENES, "spheres.toml"), "-o", str(tmp_path / "cli.png"), "--device", "cpu",
+        "--width", "40", "--height", "30", "-q")
+    assert (tmp_path / "a.png").read_bytes() == (tmp_path / "cli.png").read_bytes()
+    assert (tmp_path / "a.exr").read_bytes()[:4] == b"\x76\x2f\x31\x01"  # OpenEXR magic
+    lambert.write_image(tmp_path / "new" / "folder" / "b.png", image)
+    assert (tmp_path / "new" / "folder" / "b.png").exists()

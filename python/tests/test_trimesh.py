@@ -1,0 +1,101 @@
+"""lambert.trimesh.RayMeshIntersector against trimesh's own intersectors."""
+
+import numpy as np
+import pytest
+
+import trimesh  # noqa: E402  (scripts/test installs it)
+
+import lambert.trimesh  # noqa: E402
+
+
+def meshes():
+    yield trimesh.creation.icosphere(subdivisions=3)
+    yield trimesh.creation.box(extents=[1.0, 2.0, 0.5])
+    torus = trimesh.creation.torus(major_radius=1.0, minor_radius=0.3)
+    yield torus
+
+
+def rays(mesh, n, seed):
+    """From outside the mesh's bounding sphere towards points near its centre."""
+    rng = np.random.default_rng(seed)
+    centre, size = mesh.bounds.mean(axis=0), mesh.scale
+    away = rng.normal(size=(n, 3))
+    o = centre + 2 * size * away / np.linalg.norm(away, axis=1)[:, None]
+    target = centre + size * (rng.random((n, 3)) - 0.5) * 0.5
+    return o, target - o
+
+
+def reference(mesh):
+    """trimesh's own: the Embree one where embreex is installed, else its
+    pure-numpy one."""
+    try:
+        from trimesh.ray.ray_pyembree import RayMeshIntersector
+    except ImportError:
+        from trimesh.ray.ray_triangle import RayMeshIntersector
+    return RayMeshIntersector(mesh)
+
+
+@pytest.mark.parametrize("index", range(3))
+def test_first_and_any_hits_match_trimesh(index):
+    mesh = list(meshes())[index]
+    ours, theirs = lambert.trimesh.RayMeshIntersector(mesh, device="cpu"), reference(mesh)
+    o, d = rays(mesh, 3000, seed=index)
+    first, expected = ours.intersects_first(o, d), theirs.intersects_first(o, d)
+    assert (expected >= 0).sum() > 1000
+    # Rays through a shared edge may name either triangle; none are missed.
+    assert np.mean(first == expected) > 0.999
+    np.testing.assert_array_equal(first >= 0, expected >= 0)
+    np.testing.assert_array_equal(ours.intersects_any(o, d), theirs.intersects_any(o, d))
+
+
+@pytest.mark.parametrize("index", range(3))
+def test_every_hit_along_each_ray_matches_trimesh(index):
+    mesh = list(meshes())[index]
+    ours, theirs = lambert.trimesh.RayMeshIntersector(mesh, device="cpu"), reference(mesh)
+    o, d = rays(mesh, 2000, seed=10 + index)
+    tri, ray = ours.intersects_id(o, d)
+    tri_ref, ray_ref = theirs.intersects_id(o, d)
+    pairs, pairs_ref = set(zip(ray.tolist(), tri.tolist())), set(zip(ray_ref.tolist(), tri_ref.tolist()))
+    assert len(pairs_ref) > 2000
+    # The same (ray, triangle) hits, but for rays through shared edges.
+    assert len(pairs ^ pairs_ref) <= 0.002 * len(pairs_ref), (len(pairs - pairs_ref), len(pairs_ref - pairs))
+    # A closed mesh: every ray that hits enters and leaves.
+    counts = np.bincount(ray, minlength=len(o))
+    assert np.all(counts % 2 == 0)
+    # Locations lie on their triangles' planes, as trimesh's do.
+    locations, index_ray, index_tri = ours.intersects_location(o, d)
+    plane = np.einsum("ij,ij->i", locations - mesh.triangles[index_tri, 0], mesh.face_normals[index_tri])
+    assert np.abs(plane).max() < 1e-5 * mesh.scale
+    # First hits only.
+    tri1, ray1 = ours.intersects_id(o, d, multiple_hits=False)
+    first = ours.intersects_first(o, d)
+    np.testing.assert_array_equal(ray1, np.flatnonzero(first >= 0))
+    np.testing.assert_array_equal(tri1, first[first >= 0])
+
+
+def test_degenerate_rays_are_misses_as_in_trimesh():
+    mesh = trimesh.creation.icosphere()
+    ours = lambert.trimesh.RayMeshIntersector(mesh, device="cpu")
+    o = np.array([[0, 0, 5.0], [0, 0, 5.0], [np.nan, 0, 5.0]])
+    d = np.array([[0, 0, -1.0], [0, 0, 0.0], [0, 0, -1.0]])
+    np.testing.assert_array_equal(ours.intersects_first(o, d) >= 0, [True, False, False])
+    np.testing.assert_array_equal(ours.intersects_any(o, d), [True, False, False])
+
+
+def test_contains_points_and_one_line_switch():
+    mesh = trimesh.creation.icosphere(subdivisions=3)
+    mesh.ray = lambert.trimesh.RayMeshIntersector(mesh, device="cpu")
+    points = np.array([[0, 0, 0], [0.5, 0.2, 0.1], [2, 0, 0], [0, 1.5, 0]])
+    np.testing.assert_array_equal(mesh.contains(points), [True, True, False, False])
+    # trimesh's own API through the new intersector.
+    locations, index_ray, _ = mesh.ray.intersects_location([[0, 0, 5]], [[0, 0, -1]])
+    assert len(index_ray) == 2 and np.allclose(sorted(locations[:, 2]), [-1, 1], atol=2e-2)
+
+
+def test_the_gpu_gives_the_cpu_hits():
+    mesh = trimesh.creation.torus(major_radius=1.0, minor_radius=0.3)
+    o, d = rays(mesh, 2000, seed=4)
+    cpu = lambert.trimesh.RayMeshIntersector(mesh, device="cpu").intersects_id(o, d)
+    gpu = lambert.trimesh.RayMeshIntersector(mesh, device="gpu").intersects_id(o, d)
+    np.testing.assert_array_equal(cpu[0], gpu[0])
+    np.testing.assert_array_equal(cpu[1], gpu[1])
