@@ -107,17 +107,22 @@ pub fn validate_rays(rays: &[Ray]) -> Result<(), BadRay> {
                     .iter()
                     .position(|r| !ray_is_valid(r))
                     .expect("a bad ray in the chunk");
-            Err(BadRay {
-                index,
-                problem: ray_problem(&rays[index]).expect("found bad"),
-            })
+            Err(bad_ray(rays, index))
         }
     }
 }
 
-/// `ray_problem(ray).is_none()`, without building a message.
+/// What is wrong with `rays[index]`, which `ray_is_valid` refused.
+pub fn bad_ray(rays: &[Ray], index: usize) -> BadRay {
+    BadRay {
+        index,
+        problem: ray_problem(&rays[index]).expect("an invalid ray"),
+    }
+}
+
+/// Whether `validate_rays` accepts `ray` (without building a message).
 #[inline]
-fn ray_is_valid(ray: &Ray) -> bool {
+pub fn ray_is_valid(ray: &Ray) -> bool {
     let finite = ray.origin.iter().chain(&ray.dir).chain([&ray.tmin]).all(|v| v.is_finite())
         && (ray.tmax.is_finite() || ray.tmax == f32::INFINITY);
     let [x, y, z] = ray.dir.map(f64::from);

@@ -118,15 +118,22 @@ impl<'py> Rows<'py> {
 
     fn view(&self) -> RowsView<'_> {
         match self {
-            Rows::F32(a) => RowsView::F32(a.as_array()),
-            Rows::F64(a) => RowsView::F64(a.as_array()),
+            Rows::F32(a) => a
+                .as_slice()
+                .map_or_else(|_| RowsView::F32(a.as_array()), RowsView::PackedF32),
+            Rows::F64(a) => a
+                .as_slice()
+                .map_or_else(|_| RowsView::F64(a.as_array()), RowsView::PackedF64),
         }
     }
 }
 
-/// `Rows` as a view the tracing threads can share.
+/// `Rows` as a view the tracing threads can share: packed rows (the usual
+/// case) read as slices, others through their strides.
 #[derive(Clone, Copy)]
 enum RowsView<'a> {
+    PackedF32(&'a [f32]),
+    PackedF64(&'a [f64]),
     F32(ArrayView2<'a, f32>),
     F64(ArrayView2<'a, f64>),
 }
@@ -135,6 +142,8 @@ impl RowsView<'_> {
     #[inline]
     fn row(&self, i: usize) -> [f32; 3] {
         match self {
+            RowsView::PackedF32(a) => [a[3 * i], a[3 * i + 1], a[3 * i + 2]],
+            RowsView::PackedF64(a) => [a[3 * i] as f32, a[3 * i + 1] as f32, a[3 * i + 2] as f32],
             RowsView::F32(a) => [a[[i, 0]], a[[i, 1]], a[[i, 2]]],
             RowsView::F64(a) => [a[[i, 0]] as f32, a[[i, 1]] as f32, a[[i, 2]] as f32],
         }
@@ -190,25 +199,38 @@ impl Bound1View<'_> {
     }
 }
 
-/// The rays of a query, assembled in parallel from the caller's arrays.
+/// The rays of a query, assembled and checked in parallel from the
+/// caller's arrays (one pass over them).
 fn assemble(
     origins: RowsView<'_>,
     directions: RowsView<'_>,
     tmin: Bound1View<'_>,
     tmax: Bound1View<'_>,
     n: usize,
-) -> Vec<Ray> {
+) -> Result<Vec<Ray>, Error> {
     use rayon::prelude::*;
-    (0..n)
-        .into_par_iter()
-        .with_min_len(4096)
-        .map(|i| Ray {
-            origin: origins.row(i),
-            tmin: tmin.at(i),
-            dir: directions.row(i),
-            tmax: tmax.at(i),
+    const CHUNK: usize = 4096;
+    let mut rays: Vec<Ray> = bytemuck::zeroed_vec(n);
+    let first_bad = rays
+        .par_chunks_mut(CHUNK)
+        .enumerate()
+        .filter_map(|(c, chunk)| {
+            let start = c * CHUNK;
+            for (i, ray) in (start..).zip(chunk.iter_mut()) {
+                *ray = Ray {
+                    origin: origins.row(i),
+                    tmin: tmin.at(i),
+                    dir: directions.row(i),
+                    tmax: tmax.at(i),
+                };
+            }
+            chunk.iter().position(|r| !rays::ray_is_valid(r)).map(|k| start + k)
         })
-        .collect()
+        .min();
+    match first_bad {
+        Some(index) => Err(Error::Usage(rays::bad_ray(&rays, index).to_string())),
+        None => Ok(rays),
+    }
 }
 
 /// The hit columns Python receives.
@@ -270,10 +292,11 @@ struct NativeScene {
     renderers: Mutex<Renderers>,
 }
 
-/// What a query's rays are: borrowed records, or assembled from arrays.
+/// What a query's rays are: borrowed records (still to be checked), or
+/// assembled from arrays and checked.
 enum QueryRays<'a> {
     Records(&'a [Ray]),
-    Owned(Vec<Ray>),
+    Checked(Vec<Ray>),
 }
 
 impl NativeScene {
@@ -297,7 +320,6 @@ impl NativeScene {
         sink: &(dyn Fn(usize, &[Hit]) + Sync),
     ) -> Result<Option<String>, Error> {
         let scene = &self.scene;
-        rays::validate_rays(rays).map_err(|bad| Error::Usage(bad.to_string()))?;
         let mut renderers = self.renderers.lock().unwrap_or_else(|e| e.into_inner());
         let (renderer, note) = renderers.get(scene, device)?;
         if renderer.is_cpu() {
@@ -339,20 +361,19 @@ fn query_rays<'a>(
             directions.len()
         )));
     }
-    Ok(QueryRays::Owned(assemble(
-        origins.view(),
-        directions.view(),
-        tmin.view(),
-        tmax.view(),
-        n,
-    )))
+    let rays = assemble(origins.view(), directions.view(), tmin.view(), tmax.view(), n);
+    Ok(QueryRays::Checked(rays.map_err(to_py)?))
 }
 
 impl QueryRays<'_> {
-    fn as_slice(&self) -> &[Ray] {
+    /// The rays, once checked as a ray file's are.
+    fn checked(&self) -> Result<&[Ray], Error> {
         match self {
-            QueryRays::Records(r) => r,
-            QueryRays::Owned(r) => r,
+            QueryRays::Records(r) => {
+                rays::validate_rays(r).map_err(|bad| Error::Usage(bad.to_string()))?;
+                Ok(r)
+            }
+            QueryRays::Checked(r) => Ok(r),
         }
     }
 }
@@ -430,9 +451,9 @@ impl NativeScene {
     ) -> PyResult<Bound<'py, PyDict>> {
         let (device, intersect) = (device_choice(device)?, intersect_choice(intersect)?);
         with_query_rays!(origins, directions, tmin, tmax, |rays| {
-            let rays = rays.as_slice();
             let scene = &self.scene;
             let (columns, note) = detached(py, || {
+                let rays = rays.checked()?;
                 let mut note = None;
                 let columns = Columns::fill(scene, rays, |sink| {
                     note = Some(self.trace_into(rays, false, device, intersect, sink));
@@ -467,8 +488,8 @@ impl NativeScene {
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
         let (device, intersect) = (device_choice(device)?, intersect_choice(intersect)?);
         with_query_rays!(origins, directions, tmin, tmax, |rays| {
-            let rays = rays.as_slice();
             let (hit, note) = detached(py, || {
+                let rays = rays.checked()?;
                 let mut hit = vec![false; rays.len()];
                 let out = SharedOut::new(&mut hit);
                 let note = self.trace_into(rays, true, device, intersect, &|start, hits| {

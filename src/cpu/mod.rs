@@ -418,7 +418,7 @@ pub fn trace_rays_with(
     // would cost a twentieth of the trace.
     let mut hits: Vec<layout::Hit> = Vec::with_capacity(rays.len());
     let out = SharedOut(hits.as_mut_ptr());
-    trace_rays_each(scene, rays, any_hit, intersect, cpu_kernel, |start, chunk| {
+    trace_rays_each(scene, rays, any_hit, intersect, cpu_kernel, &|start, chunk| {
         // SAFETY: chunks are disjoint and within the capacity.
         unsafe { std::ptr::copy_nonoverlapping(chunk.as_ptr(), out.at(start), chunk.len()) }
     });
@@ -456,7 +456,9 @@ pub fn trace_rays_each(
     any_hit: bool,
     intersect: Intersect,
     cpu_kernel: CpuKernel,
-    each: impl Fn(usize, &[layout::Hit]) + Sync,
+    // Not generic: a generic would be compiled in the caller's crate, with
+    // its codegen settings, and the kernel ran up to 40% slower there.
+    each: &(dyn Fn(usize, &[layout::Hit]) + Sync),
 ) {
     const CHUNK: usize = 1024;
     check_runs(cpu_kernel);
