@@ -395,7 +395,7 @@ fn parallel_in_plane_and_degenerate_cases_give_no_false_hits() {
 fn invalid_rays_are_rejected_with_the_ray_and_field_named() {
     let good = ray(Vec3::ZERO, Vec3::Z);
     let path = std::path::Path::new("probe.rays");
-    let bytes = |rays: &[Ray]| lambert::rays::rays_to_bytes(rays);
+    let bytes = |rays: &[Ray]| lambert::rays::rays_to_bytes(rays).to_vec();
     assert!(lambert::rays::parse_rays(&bytes(&[good]), path).is_ok());
     let cases: Vec<(Ray, &str)> = vec![
         (

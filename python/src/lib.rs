@@ -438,7 +438,6 @@ impl NativeScene {
 
     /// Closest hits: (t, prim_id, u, v, normal).
     #[pyo3(signature = (origins, directions, tmin, tmax, device, intersect))]
-    #[allow(clippy::type_complexity)]
     fn intersect<'py>(
         &self,
         py: Python<'py>,
