@@ -14,6 +14,7 @@ pub mod cpu;
 pub mod diff;
 pub mod error;
 pub mod gpu;
+pub mod inputs;
 pub mod layout;
 pub mod loading;
 pub mod output;
