@@ -4,7 +4,7 @@
 use std::time::{Duration, Instant};
 
 use crate::cpu::{self, Precision};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::gpu::{AdapterRequest, Gpu, GpuRenderer};
 use crate::layout::{Hit, Ray};
 use crate::output::Rendered;
@@ -61,7 +61,15 @@ impl Renderer {
                 }
             },
         };
-        Ok((Renderer::Gpu(Box::new(GpuRenderer::new(gpu, scene)?)), None))
+        match GpuRenderer::new(gpu, scene) {
+            Ok(renderer) => Ok((Renderer::Gpu(Box::new(renderer)), None)),
+            // A scene too large for the adapter still renders with auto.
+            Err(Error::GpuLimit(e)) if choice == DeviceChoice::Auto => Ok((
+                Renderer::Cpu,
+                Some(format!("GPU: {e}\nnote: using the CPU path instead")),
+            )),
+            Err(e) => Err(e),
+        }
     }
 
     pub fn describe(&self) -> String {
