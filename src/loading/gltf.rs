@@ -94,6 +94,7 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
     let gltf::Gltf { document, blob } =
         gltf::Gltf::from_slice(bytes).map_err(|e| fail(format!("invalid glTF: {e}")))?;
     let base = path.parent().unwrap_or(Path::new("."));
+    check_buffer_files(&document, base).map_err(fail)?;
     let buffers = gltf::import_buffers(&document, Some(base), blob)
         .map_err(|e| fail(format!("reading its buffers: {e}")))?;
 
@@ -287,6 +288,60 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
 
 /// An accessor's bytes lie inside its buffer view, and the view inside its
 /// buffer (the crate's reader would index past them).
+/// Checks the files that buffers name before the crate reads them: it
+/// panics on a URI whose percent-encoding is not UTF-8, and would read a
+/// device or FIFO (`/dev/zero`, an absolute path being allowed) forever.
+fn check_buffer_files(document: &gltf::Document, base: &Path) -> std::result::Result<(), String> {
+    for buffer in document.buffers() {
+        let gltf::buffer::Source::Uri(uri) = buffer.source() else {
+            continue;
+        };
+        let index = buffer.index();
+        let file = if uri.contains(':') {
+            // data: is decoded in memory; file: is a path as it stands.
+            match uri.strip_prefix("file://").or_else(|| uri.strip_prefix("file:")) {
+                Some(rest) => rest.to_string(),
+                None => continue,
+            }
+        } else {
+            percent_decoded(uri).ok_or_else(|| {
+                format!("buffer {index}: its uri {uri:?} is not percent-encoded UTF-8")
+            })?
+        };
+        let file = base.join(file);
+        if let Ok(meta) = std::fs::metadata(&file)
+            && !meta.is_file()
+        {
+            return Err(format!(
+                "buffer {index}: {} is not a regular file",
+                file.display()
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// `%XX` escapes decoded, or None where the result is not UTF-8.
+fn percent_decoded(uri: &str) -> Option<String> {
+    let bytes = uri.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        let hex = |b: u8| (b as char).to_digit(16);
+        match (bytes[i], bytes.get(i + 1).copied().and_then(hex), bytes.get(i + 2).copied().and_then(hex)) {
+            (b'%', Some(h), Some(l)) => {
+                out.push((h * 16 + l) as u8);
+                i += 3;
+            }
+            (b, _, _) => {
+                out.push(b);
+                i += 1;
+            }
+        }
+    }
+    String::from_utf8(out).ok()
+}
+
 /// Checks what the crate's readers assume of an accessor: its element type
 /// (they panic on another one) and its extent within its buffer.
 fn check_accessor(
