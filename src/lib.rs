@@ -17,6 +17,7 @@ pub mod gpu;
 pub mod inputs;
 pub mod layout;
 pub mod loading;
+pub mod memory;
 pub mod output;
 pub mod parts;
 pub mod plot;

@@ -12,16 +12,15 @@
 //!
 //! Every input is checked for: a panic; a hang (over one second); and an
 //! allocation beyond a fixed budget plus a multiple of the input's size
-//! (peak live bytes, counted by the global allocator). Each finding is
+//! (peak live bytes, counted by `lambert::memory::Counting`). Each finding is
 //! saved under the artifacts folder and the run exits with status 1.
 //!
 //! lambert-fuzz TARGET|all [--runs N] [--seconds S] [--corpus DIR]…
 //!              [--out DIR] [--artifacts DIR] [--seed N]
 
-use std::alloc::{GlobalAlloc, Layout, System};
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering::Relaxed};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::Relaxed};
 use std::sync::{Mutex, OnceLock};
 use std::time::{Duration, Instant};
 
@@ -42,68 +41,8 @@ const HARD_CAP: usize = 4 << 30;
 /// Mutants are kept below this length.
 const MAX_LEN: usize = 64 << 10;
 
-// ---- allocation accounting -------------------------------------------------
-
-struct Counting;
-
-static LIVE: AtomicUsize = AtomicUsize::new(0);
-static PEAK: AtomicUsize = AtomicUsize::new(0);
-
-fn reserve(size: usize) -> bool {
-    let live = LIVE.fetch_add(size, Relaxed) + size;
-    PEAK.fetch_max(live, Relaxed);
-    if live > HARD_CAP {
-        LIVE.fetch_sub(size, Relaxed);
-        fatal(b"an allocation beyond the 4 GiB hard cap");
-        return false;
-    }
-    true
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        if !reserve(layout.size()) {
-            return std::ptr::null_mut();
-        }
-        let p = unsafe { System.alloc(layout) };
-        if p.is_null() {
-            LIVE.fetch_sub(layout.size(), Relaxed);
-        }
-        p
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        if !reserve(layout.size()) {
-            return std::ptr::null_mut();
-        }
-        let p = unsafe { System.alloc_zeroed(layout) };
-        if p.is_null() {
-            LIVE.fetch_sub(layout.size(), Relaxed);
-        }
-        p
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) };
-        LIVE.fetch_sub(layout.size(), Relaxed);
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        let old = layout.size();
-        if new_size > old && !reserve(new_size - old) {
-            return std::ptr::null_mut();
-        }
-        let p = unsafe { System.realloc(ptr, layout, new_size) };
-        if p.is_null() {
-            if new_size > old {
-                LIVE.fetch_sub(new_size - old, Relaxed);
-            }
-        } else if new_size < old {
-            LIVE.fetch_sub(old - new_size, Relaxed);
-        }
-        p
-    }
-}
-
 #[global_allocator]
-static ALLOCATOR: Counting = Counting;
+static ALLOCATOR: lambert::memory::Counting = lambert::memory::Counting;
 
 // ---- the input being run, for a fatal finding -----------------------------
 
@@ -403,14 +342,13 @@ fn run_one(input: Input, data: &[u8], path: &Path) -> Outcome {
         current.clear();
         current.extend_from_slice(data);
     }
-    let base = LIVE.load(Relaxed);
-    PEAK.store(base, Relaxed);
+    let base = lambert::memory::reset_peak();
     let start = Instant::now();
     STARTED.store(now_ns(), Relaxed);
     let result = std::panic::catch_unwind(|| input.parse(data, path));
     STARTED.store(0, Relaxed);
     let elapsed = start.elapsed();
-    let allocated = PEAK.load(Relaxed).saturating_sub(base);
+    let allocated = lambert::memory::peak().saturating_sub(base);
     let budget = FIXED_BUDGET + SIZE_MULTIPLE * data.len();
     let finding = match result {
         Err(_) => Some(Finding::Panic(
@@ -649,6 +587,7 @@ fn main() {
         }
     };
     CURRENT.lock().unwrap().reserve(MAX_LEN.max(1 << 20));
+    lambert::memory::set_cap(HARD_CAP, || fatal(b"an allocation beyond the 4 GiB hard cap"));
     std::panic::set_hook(Box::new(|info| {
         if !QUIET_PANICS.load(Relaxed) {
             eprintln!("{info}");
