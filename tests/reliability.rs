@@ -273,3 +273,105 @@ fn a_full_disk_leaves_the_previous_output() {
     assert!(stdout.contains("files=out.pfm \n"), "{stdout}\n{stderr}");
     assert!(stderr.contains("out.pfm") && stderr.contains("No space left on device"), "{stderr}");
 }
+
+// ---- the GPU's limits and a lost device --------------------------------------
+
+/// A cap on what lambert requests: lavapipe then behaves as a GPU whose
+/// buffers and bindings hold 64 KiB.
+const SMALL_GPU: u64 = 1 << 16;
+
+/// A scene larger than the adapter's buffer and binding limits is an error
+/// that says what does not fit and by how much.
+#[test]
+fn a_scene_beyond_the_gpu_limits_says_what_and_by_how_much() {
+    use lambert::gpu::{AdapterRequest, Gpu, GpuRenderer};
+    let scene = common::load("bunny");
+    let bytes = scene.triangles.len() * 48;
+    let gpu = Gpu::open_limited(&AdapterRequest::default(), false, Some(SMALL_GPU))
+        .expect("a GPU adapter (lavapipe: apt-get install mesa-vulkan-drivers)");
+    assert_eq!(gpu.limits.max_buffer_size, SMALL_GPU);
+    let Err(error) = GpuRenderer::new(gpu, &scene) else {
+        panic!("the bunny fits in 64 KiB buffers");
+    };
+    assert!(matches!(error, lambert::Error::GpuLimit(_)), "{error:?}");
+    let message = error.to_string();
+    let expected = format!(
+        "the scene's triangles take {bytes} bytes, {} more than the {SMALL_GPU} bytes",
+        bytes as u64 - SMALL_GPU
+    );
+    assert!(message.contains(&expected), "{message}");
+    assert!(message.contains("max_buffer_size 65536"), "{message}");
+    // The full limits take it.
+    assert!(GpuRenderer::new(common::open_gpu(), &scene).is_ok());
+}
+
+/// Through the CLI: `--device gpu` fails with that message and writes
+/// nothing; `--device auto` renders on the CPU path with a note.
+#[test]
+fn too_large_for_the_gpu_fails_or_falls_back_to_the_cpu() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = common::asset("scenes/bunny.toml");
+    let output = dir.path().join("out.png");
+    let run = |device: &str| {
+        lambert()
+            .args(["render", s(&scene), "-o", s(&output), "--device", device])
+            .args(["--adapter", "llvmpipe", "--width", "32", "--height", "32"])
+            .env(lambert::gpu::MAX_BUFFER_ENV, SMALL_GPU.to_string())
+            .output()
+            .unwrap()
+    };
+    let out = run("gpu");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("triangles take 176448 bytes, 110912 more than"), "{stderr}");
+    assert!(!output.exists());
+    let out = run("auto");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("triangles take 176448 bytes"), "{stderr}");
+    assert!(stderr.contains("note: using the CPU path instead"), "{stderr}");
+    assert!(stderr.contains("CPU reference path"), "{stderr}");
+    assert!(output.exists());
+}
+
+/// A validation error (here: a tile buffer beyond the capped buffer size)
+/// is an error with wgpu's message, exit status 1 and no image.
+#[test]
+fn a_validation_error_is_an_error_with_the_adapters_message() {
+    let dir = tempfile::tempdir().unwrap();
+    let output = dir.path().join("out.png");
+    let out = lambert()
+        .args(["render", s(&common::asset("scenes/spheres.toml")), "-o", s(&output)])
+        .args(["--device", "gpu", "--width", "32", "--height", "32"])
+        .env(lambert::gpu::MAX_BUFFER_ENV, SMALL_GPU.to_string())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("error: GPU: ") && stderr.contains("Validation Error"), "{stderr}");
+    assert!(!output.exists());
+    assert!(temporaries(dir.path()).is_empty());
+}
+
+/// A device lost mid-work (destroyed here: what a driver reset or a
+/// removed GPU looks like to wgpu) is an error that says so, within
+/// seconds: no hang, and no image.
+#[test]
+fn a_lost_device_is_an_error_not_a_hang() {
+    use lambert::gpu::GpuRenderer;
+    let scene = common::load("spheres");
+    let mut renderer = GpuRenderer::new(common::open_gpu(), &scene).expect("scene uploads");
+    renderer.gpu().device.destroy();
+    let (sender, receiver) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let result = renderer.render(&lambert::progress::Progress::hidden());
+        let _ = sender.send(result.map(|_| ()).map_err(|e| e.to_string()));
+    });
+    let result = receiver
+        .recv_timeout(Duration::from_secs(60))
+        .expect("the render hung on a lost device");
+    let message = result.expect_err("a render on a destroyed device succeeded");
+    assert!(message.starts_with("GPU: "), "{message}");
+    assert!(message.contains("lost"), "{message}");
+    let _ = writeln_stderr(&format!("a destroyed device's render: {message}"));
+}
