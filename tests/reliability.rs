@@ -67,6 +67,8 @@ fn gltf_findings_say_what_is_wrong() {
     assert!(e.contains("names accessor 7, but the file has 2 accessors"), "{e}");
     let e = error("crash-signed-short-indices.gltf");
     assert!(e.contains("indices accessor 1 holds Scalar I16"), "{e}");
+    let e = error("crash-glb-length-below-header.glb");
+    assert!(e.contains("its GLB header declares 0 bytes"), "{e}");
     for cyclic in ["slow-node-cycle.gltf", "memory-shared-children.gltf"] {
         let e = error(cyclic);
         assert!(e.contains("is reached twice from the scene's roots"), "{e}");

@@ -61,6 +61,19 @@ pub fn load_scene(path: &Path, mode: NormalMode) -> Result<GltfScene> {
 /// and anchors its external buffers.
 pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfScene> {
     let fail = |message: String| Error::scene(path, message);
+    // The crate subtracts the 12-byte header from a GLB's declared length
+    // unchecked: an overflow panic in checked builds, a wrapped length in
+    // its message otherwise.
+    if let Some(header) = bytes.get(..12).filter(|h| h.starts_with(b"glTF")) {
+        let length = u32::from_le_bytes([header[8], header[9], header[10], header[11]]) as usize;
+        if length < 12 || length > bytes.len() {
+            return Err(fail(format!(
+                "its GLB header declares {length} bytes, but the file has {} (and a header \
+                 takes 12)",
+                bytes.len()
+            )));
+        }
+    }
     // Required extensions first: the crate's own validation would call an
     // unknown one merely invalid.
     let unchecked = gltf::Gltf::from_slice_without_validation(bytes)
