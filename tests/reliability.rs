@@ -55,9 +55,9 @@ fn fuzz_findings_are_clear_errors() {
     }
 }
 
-/// What the glTF findings are refused with: the reason, not a panic.
+/// What the glTF and part findings are refused with: the reason, not a panic.
 #[test]
-fn gltf_findings_say_what_is_wrong() {
+fn findings_say_what_is_wrong() {
     let error = |name: &str| {
         let path = fuzz_dir("regressions").join("gltf").join(name);
         let bytes = std::fs::read(&path).unwrap();
@@ -69,6 +69,9 @@ fn gltf_findings_say_what_is_wrong() {
     assert!(e.contains("indices accessor 1 holds Scalar I16"), "{e}");
     let e = error("crash-glb-length-below-header.glb");
     assert!(e.contains("its GLB header declares 0 bytes"), "{e}");
+    let path = fuzz_dir("regressions").join("part/memory-huge-band-in-a-small-file.exr");
+    let e = Input::Part.parse(&std::fs::read(&path).unwrap(), &path).unwrap_err().to_string();
+    assert!(e.contains("claims 1610612736 bytes of pixels, more than its 550 bytes"), "{e}");
     for cyclic in ["slow-node-cycle.gltf", "memory-shared-children.gltf"] {
         let e = error(cyclic);
         assert!(e.contains("is reached twice from the scene's roots"), "{e}");
