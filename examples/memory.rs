@@ -85,7 +85,9 @@ fn icosphere_scene() -> Scene {
     drop((vertices, faces));
     let mut scene = Scene::from_triangles(triangles);
     scene.camera = lambert::scene::frame_camera(&(glam::DVec3::splat(-1.0), glam::DVec3::ONE));
-    scene.lights.push(lambert::scene::default_light(&scene.camera));
+    scene
+        .lights
+        .push(lambert::scene::default_light(&scene.camera));
     scene
 }
 
@@ -163,7 +165,10 @@ fn main() -> lambert::Result<()> {
         if dragon.exists() {
             models.push(dragon.display().to_string());
         } else {
-            eprintln!("{}: not there; measuring the 5M-triangle scene only", dragon.display());
+            eprintln!(
+                "{}: not there; measuring the 5M-triangle scene only",
+                dragon.display()
+            );
         }
         models.push("icosphere9".into());
     }
@@ -174,7 +179,9 @@ fn main() -> lambert::Result<()> {
             .status()
             .map_err(|e| lambert::Error::Usage(format!("re-running for {model}: {e}")))?;
         if !status.success() {
-            return Err(lambert::Error::Usage(format!("{model}: the measurement failed")));
+            return Err(lambert::Error::Usage(format!(
+                "{model}: the measurement failed"
+            )));
         }
     }
     Ok(())

@@ -161,9 +161,11 @@ pub const MAX_BUFFER_ENV: &str = "LAMBERT_GPU_MAX_BUFFER_BYTES";
 fn max_buffer_bytes_from_env() -> Result<Option<u64>> {
     match std::env::var(MAX_BUFFER_ENV) {
         Err(_) => Ok(None),
-        Ok(v) => v.trim().parse().map(Some).map_err(|_| {
-            Error::Usage(format!("{MAX_BUFFER_ENV}={v}: expected a number of bytes"))
-        }),
+        Ok(v) => {
+            v.trim().parse().map(Some).map_err(|_| {
+                Error::Usage(format!("{MAX_BUFFER_ENV}={v}: expected a number of bytes"))
+            })
+        }
     }
 }
 
@@ -258,9 +260,11 @@ impl Gpu {
         let slot = errors.clone();
         let name = describe(&info);
         device.set_device_lost_callback(move |reason, message| {
-            slot.lock().unwrap_or_else(|e| e.into_inner()).get_or_insert(format!(
-                "the device {name} was lost ({reason:?}): {message}"
-            ));
+            slot.lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .get_or_insert(format!(
+                    "the device {name} was lost ({reason:?}): {message}"
+                ));
         });
         Ok(Gpu {
             device,

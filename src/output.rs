@@ -184,7 +184,10 @@ pub fn prepare_output(path: &Path) -> Result<()> {
     let probe = temporary_beside(&target, "probe")?;
     // Registered as a temporary, so that a signal between its creation and
     // removal does not leave it behind.
-    TEMPORARIES.lock().unwrap_or_else(|e| e.into_inner()).push(probe.clone());
+    TEMPORARIES
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .push(probe.clone());
     let created = std::fs::File::create(&probe);
     let _ = std::fs::remove_file(&probe);
     TEMPORARIES

@@ -197,7 +197,12 @@ fn check_part_header(bytes: &[u8], fail: &dyn Fn(String) -> Error) -> Result<()>
     let display = header.shared_attributes.display_window.size;
     let side = |v: usize| u32::try_from(v).unwrap_or(u32::MAX);
     crate::scene::validate_resolution(side(display.width()), side(display.height()))
-        .and_then(|_| crate::scene::validate_resolution(side(header.layer_size.width()), side(header.layer_size.height())))
+        .and_then(|_| {
+            crate::scene::validate_resolution(
+                side(header.layer_size.width()),
+                side(header.layer_size.height()),
+            )
+        })
         .map_err(|e| fail(format!("its image: {e}")))?;
     let pixel_bytes = header.layer_size.area() as u64 * header.channels.bytes_per_pixel as u64;
     if pixel_bytes > MAX_EXPANSION * bytes.len() as u64 {

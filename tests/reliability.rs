@@ -10,7 +10,9 @@ use std::time::{Duration, Instant};
 use lambert::inputs::Input;
 
 fn fuzz_dir(kind: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz").join(kind)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("fuzz")
+        .join(kind)
 }
 
 /// The files of `fuzz/<kind>/<target>/`, each with its target.
@@ -64,14 +66,23 @@ fn findings_say_what_is_wrong() {
         Input::Gltf.parse(&bytes, &path).unwrap_err().to_string()
     };
     let e = error("crash-position-accessor-out-of-range.gltf");
-    assert!(e.contains("names accessor 7, but the file has 2 accessors"), "{e}");
+    assert!(
+        e.contains("names accessor 7, but the file has 2 accessors"),
+        "{e}"
+    );
     let e = error("crash-signed-short-indices.gltf");
     assert!(e.contains("indices accessor 1 holds Scalar I16"), "{e}");
     let e = error("crash-glb-length-below-header.glb");
     assert!(e.contains("its GLB header declares 0 bytes"), "{e}");
     let path = fuzz_dir("regressions").join("part/memory-huge-band-in-a-small-file.exr");
-    let e = Input::Part.parse(&std::fs::read(&path).unwrap(), &path).unwrap_err().to_string();
-    assert!(e.contains("claims 1610612736 bytes of pixels, more than its 550 bytes"), "{e}");
+    let e = Input::Part
+        .parse(&std::fs::read(&path).unwrap(), &path)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("claims 1610612736 bytes of pixels, more than its 550 bytes"),
+        "{e}"
+    );
     for cyclic in ["slow-node-cycle.gltf", "memory-shared-children.gltf"] {
         let e = error(cyclic);
         assert!(e.contains("is reached twice from the scene's roots"), "{e}");
@@ -96,7 +107,11 @@ fn the_fuzz_corpus_parses() {
     // The TOML seeds name meshes beside them, which the harness's path
     // does not have; every other target has valid seeds.
     for input in Input::ALL.iter().filter(|i| **i != Input::Toml) {
-        assert!(loaded.get(input.name()).is_some_and(|n| *n > 0), "{}: {loaded:?}", input.name());
+        assert!(
+            loaded.get(input.name()).is_some_and(|n| *n > 0),
+            "{}: {loaded:?}",
+            input.name()
+        );
     }
 }
 
@@ -111,7 +126,10 @@ width = 16\nheight = 12\n[render]\nbackground = [0.2, 0.3, 0.5]\n\
 fn scene_file(dir: &Path, name: &str, width: u32, height: u32, background: f32) -> PathBuf {
     let path = dir.join(name);
     let text = SCENE
-        .replace("width = 16\nheight = 12", &format!("width = {width}\nheight = {height}"))
+        .replace(
+            "width = 16\nheight = 12",
+            &format!("width = {width}\nheight = {height}"),
+        )
         .replace("[0.2, 0.3, 0.5]", &format!("[{background}, 0.3, 0.5]"));
     std::fs::write(&path, text).unwrap();
     path
@@ -148,9 +166,23 @@ fn signals_during_merge_leave_the_previous_output() {
     let parts: Vec<PathBuf> = (0..2).map(|i| d.join(format!("part{i}.exr"))).collect();
     for (i, part) in parts.iter().enumerate() {
         let tile = format!("{i}/2");
-        let args = ["render", s(&scene), "-o", s(part), "--device", "cpu", "--tile", &tile, "-q"];
+        let args = [
+            "render",
+            s(&scene),
+            "-o",
+            s(part),
+            "--device",
+            "cpu",
+            "--tile",
+            &tile,
+            "-q",
+        ];
         let out = lambert().args(args).output().unwrap();
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
     }
     let output = d.join("out.pfm");
     let whole = 18 + 2048 * 2048 * 12;
@@ -169,7 +201,11 @@ fn signals_during_merge_leave_the_previous_output() {
             .status()
             .unwrap();
         let status = child.wait().unwrap();
-        assert!(temporaries(d).is_empty(), "after {delay_ms} ms: {:?}", temporaries(d));
+        assert!(
+            temporaries(d).is_empty(),
+            "after {delay_ms} ms: {:?}",
+            temporaries(d)
+        );
         let bytes = std::fs::read(&output).unwrap();
         if status.success() {
             assert_eq!(bytes.len(), whole, "after {delay_ms} ms");
@@ -213,7 +249,15 @@ fn concurrent_renders_to_one_output_leave_one_whole_image() {
             .iter()
             .map(|scene| {
                 lambert()
-                    .args(["render", s(scene), "-o", s(&output), "--device", "cpu", "-q"])
+                    .args([
+                        "render",
+                        s(scene),
+                        "-o",
+                        s(&output),
+                        "--device",
+                        "cpu",
+                        "-q",
+                    ])
                     .spawn()
                     .unwrap()
             })
@@ -223,12 +267,17 @@ fn concurrent_renders_to_one_output_leave_one_whole_image() {
         }
         let bytes = std::fs::read(&output).unwrap();
         let winner = references.iter().position(|r| *r == bytes);
-        assert!(winner.is_some(), "round {round}: the output is no writer's whole image");
+        assert!(
+            winner.is_some(),
+            "round {round}: the output is no writer's whole image"
+        );
         winners.extend(winner);
         assert!(temporaries(d).is_empty(), "{:?}", temporaries(d));
     }
     // Which writer's rename lands last is the scheduler's choice.
-    let _ = writeln_stderr(&format!("concurrent writers: images of writers {winners:?} won"));
+    let _ = writeln_stderr(&format!(
+        "concurrent writers: images of writers {winners:?} won"
+    ));
 }
 
 fn writeln_stderr(line: &str) -> std::io::Result<()> {
@@ -276,7 +325,10 @@ fn a_full_disk_leaves_the_previous_output() {
     assert!(stdout.contains("status=1\n"), "{stdout}\n{stderr}");
     assert!(stdout.contains("previous=previous\n"), "{stdout}\n{stderr}");
     assert!(stdout.contains("files=out.pfm \n"), "{stdout}\n{stderr}");
-    assert!(stderr.contains("out.pfm") && stderr.contains("No space left on device"), "{stderr}");
+    assert!(
+        stderr.contains("out.pfm") && stderr.contains("No space left on device"),
+        "{stderr}"
+    );
 }
 
 // ---- the GPU's limits and a lost device --------------------------------------
@@ -328,13 +380,19 @@ fn too_large_for_the_gpu_fails_or_falls_back_to_the_cpu() {
     let out = run("gpu");
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{stderr}");
-    assert!(stderr.contains("triangles take 176448 bytes, 110912 more than"), "{stderr}");
+    assert!(
+        stderr.contains("triangles take 176448 bytes, 110912 more than"),
+        "{stderr}"
+    );
     assert!(!output.exists());
     let out = run("auto");
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
     assert!(stderr.contains("triangles take 176448 bytes"), "{stderr}");
-    assert!(stderr.contains("note: using the CPU path instead"), "{stderr}");
+    assert!(
+        stderr.contains("note: using the CPU path instead"),
+        "{stderr}"
+    );
     assert!(stderr.contains("CPU reference path"), "{stderr}");
     assert!(output.exists());
 }
@@ -346,14 +404,22 @@ fn a_validation_error_is_an_error_with_the_adapters_message() {
     let dir = tempfile::tempdir().unwrap();
     let output = dir.path().join("out.png");
     let out = lambert()
-        .args(["render", s(&common::asset("scenes/spheres.toml")), "-o", s(&output)])
+        .args([
+            "render",
+            s(&common::asset("scenes/spheres.toml")),
+            "-o",
+            s(&output),
+        ])
         .args(["--device", "gpu", "--width", "32", "--height", "32"])
         .env(lambert::gpu::MAX_BUFFER_ENV, SMALL_GPU.to_string())
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{stderr}");
-    assert!(stderr.contains("error: GPU: ") && stderr.contains("Validation Error"), "{stderr}");
+    assert!(
+        stderr.contains("error: GPU: ") && stderr.contains("Validation Error"),
+        "{stderr}"
+    );
     assert!(!output.exists());
     assert!(temporaries(dir.path()).is_empty());
 }

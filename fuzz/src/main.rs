@@ -189,45 +189,161 @@ impl Rng {
 
 /// Numbers at the edges of what parsers handle.
 const NUMBERS: &[&str] = &[
-    "0", "-0", "1", "-1", "2", "3", "255", "256", "65535", "65536", "2147483647", "-2147483648",
-    "4294967295", "4294967296", "18446744073709551615", "1e308", "1e309", "-1e308", "1e-320",
-    "nan", "NaN", "inf", "-inf", "1.5", "0x10", "999999999999999999999", "1e18", "1e-18",
+    "0",
+    "-0",
+    "1",
+    "-1",
+    "2",
+    "3",
+    "255",
+    "256",
+    "65535",
+    "65536",
+    "2147483647",
+    "-2147483648",
+    "4294967295",
+    "4294967296",
+    "18446744073709551615",
+    "1e308",
+    "1e309",
+    "-1e308",
+    "1e-320",
+    "nan",
+    "NaN",
+    "inf",
+    "-inf",
+    "1.5",
+    "0x10",
+    "999999999999999999999",
+    "1e18",
+    "1e-18",
 ];
 
 /// Tokens of each format, for insertion.
 fn dictionary(input: Input) -> &'static [&'static str] {
     match input {
         Input::Toml => &[
-            "[camera]", "[render]", "[[spheres]]", "[[triangles]]", "[[meshes]]", "[[lights]]",
-            "position", "look_at", "up", "fov", "resolution", "spp", "seed", "shadows",
-            "background", "ambient", "intersect", "center", "radius", "albedo", "v0", "v1",
-            "v2", "path", "normals", "translate", "scale", "rotate", "kind", "direction",
-            "irradiance", "intensity", " = ", "[0, 0, 0]", "[1e30, 1, 1]", "\"\"", "true",
-            "\"smooth\"", "\"point\"", "\"directional\"", "\n",
+            "[camera]",
+            "[render]",
+            "[[spheres]]",
+            "[[triangles]]",
+            "[[meshes]]",
+            "[[lights]]",
+            "position",
+            "look_at",
+            "up",
+            "fov",
+            "resolution",
+            "spp",
+            "seed",
+            "shadows",
+            "background",
+            "ambient",
+            "intersect",
+            "center",
+            "radius",
+            "albedo",
+            "v0",
+            "v1",
+            "v2",
+            "path",
+            "normals",
+            "translate",
+            "scale",
+            "rotate",
+            "kind",
+            "direction",
+            "irradiance",
+            "intensity",
+            " = ",
+            "[0, 0, 0]",
+            "[1e30, 1, 1]",
+            "\"\"",
+            "true",
+            "\"smooth\"",
+            "\"point\"",
+            "\"directional\"",
+            "\n",
         ],
         Input::Obj => &[
-            "v ", "vn ", "vt ", "f ", "o ", "g ", "s ", "l ", "p ", "usemtl ", "mtllib ",
-            "1/1/1", "1//1", "-1", "-2", "/", "//", "\n", "\r\n", "#", "\\\n", "\u{feff}",
+            "v ", "vn ", "vt ", "f ", "o ", "g ", "s ", "l ", "p ", "usemtl ", "mtllib ", "1/1/1",
+            "1//1", "-1", "-2", "/", "//", "\n", "\r\n", "#", "\\\n", "\u{feff}",
         ],
-        Input::Mtl => &["newmtl ", "Kd ", "Ka ", "Ks ", "map_Kd ", "\n", "#", "\u{feff}"],
+        Input::Mtl => &[
+            "newmtl ", "Kd ", "Ka ", "Ks ", "map_Kd ", "\n", "#", "\u{feff}",
+        ],
         Input::Ply => &[
-            "ply\n", "format ascii 1.0\n", "format binary_little_endian 1.0\n",
-            "format binary_big_endian 1.0\n", "element vertex ", "element face ",
-            "property float x\n", "property double y\n", "property uchar z\n",
-            "property list uchar int vertex_indices\n", "property list uint uint vertex_index\n",
-            "property float nx\n", "comment ", "end_header\n", "\n", "\r\n", " ",
+            "ply\n",
+            "format ascii 1.0\n",
+            "format binary_little_endian 1.0\n",
+            "format binary_big_endian 1.0\n",
+            "element vertex ",
+            "element face ",
+            "property float x\n",
+            "property double y\n",
+            "property uchar z\n",
+            "property list uchar int vertex_indices\n",
+            "property list uint uint vertex_index\n",
+            "property float nx\n",
+            "comment ",
+            "end_header\n",
+            "\n",
+            "\r\n",
+            " ",
         ],
         Input::Gltf => &[
-            "\"asset\"", "\"version\"", "\"2.0\"", "\"scene\"", "\"scenes\"", "\"nodes\"",
-            "\"meshes\"", "\"primitives\"", "\"attributes\"", "\"POSITION\"", "\"NORMAL\"",
-            "\"indices\"", "\"accessors\"", "\"bufferViews\"", "\"buffers\"", "\"byteLength\"",
-            "\"byteOffset\"", "\"byteStride\"", "\"count\"", "\"componentType\"", "5126", "5125",
-            "5123", "5121", "\"type\"", "\"VEC3\"", "\"SCALAR\"", "\"mode\"", "\"children\"",
-            "\"matrix\"", "\"translation\"", "\"scale\"", "\"rotation\"", "\"camera\"",
-            "\"cameras\"", "\"perspective\"", "\"extensionsRequired\"", "\"KHR_lights_punctual\"",
-            "\"uri\"", "\"data:application/octet-stream;base64,\"", "\"materials\"",
-            "\"material\"", "\"baseColorFactor\"", "glTF", "JSON", "BIN\0", "[", "]", "{", "}",
-            ",", ":",
+            "\"asset\"",
+            "\"version\"",
+            "\"2.0\"",
+            "\"scene\"",
+            "\"scenes\"",
+            "\"nodes\"",
+            "\"meshes\"",
+            "\"primitives\"",
+            "\"attributes\"",
+            "\"POSITION\"",
+            "\"NORMAL\"",
+            "\"indices\"",
+            "\"accessors\"",
+            "\"bufferViews\"",
+            "\"buffers\"",
+            "\"byteLength\"",
+            "\"byteOffset\"",
+            "\"byteStride\"",
+            "\"count\"",
+            "\"componentType\"",
+            "5126",
+            "5125",
+            "5123",
+            "5121",
+            "\"type\"",
+            "\"VEC3\"",
+            "\"SCALAR\"",
+            "\"mode\"",
+            "\"children\"",
+            "\"matrix\"",
+            "\"translation\"",
+            "\"scale\"",
+            "\"rotation\"",
+            "\"camera\"",
+            "\"cameras\"",
+            "\"perspective\"",
+            "\"extensionsRequired\"",
+            "\"KHR_lights_punctual\"",
+            "\"uri\"",
+            "\"data:application/octet-stream;base64,\"",
+            "\"materials\"",
+            "\"material\"",
+            "\"baseColorFactor\"",
+            "glTF",
+            "JSON",
+            "BIN\0",
+            "[",
+            "]",
+            "{",
+            "}",
+            ",",
+            ":",
         ],
         Input::Rays | Input::Part => &[],
     }
@@ -235,8 +351,24 @@ fn dictionary(input: Input) -> &'static [&'static str] {
 
 /// Little-endian values at the edges of what binary fields hold.
 const WORDS: &[u32] = &[
-    0, 1, 2, 0x7f, 0x80, 0xff, 0x100, 0xffff, 0x10000, 0x7fff_ffff, 0x8000_0000, 0xffff_ffff,
-    0x7f80_0000, 0xff80_0000, 0x7fc0_0000, 0x3f80_0000, 0x0000_0001, 0x0080_0000,
+    0,
+    1,
+    2,
+    0x7f,
+    0x80,
+    0xff,
+    0x100,
+    0xffff,
+    0x10000,
+    0x7fff_ffff,
+    0x8000_0000,
+    0xffff_ffff,
+    0x7f80_0000,
+    0xff80_0000,
+    0x7fc0_0000,
+    0x3f80_0000,
+    0x0000_0001,
+    0x0080_0000,
 ];
 
 fn mutate(rng: &mut Rng, parent: &[u8], corpus: &[Vec<u8>], input: Input) -> Vec<u8> {
@@ -291,7 +423,11 @@ fn mutate(rng: &mut Rng, parent: &[u8], corpus: &[Vec<u8>], input: Input) -> Vec
             6 if len >= 4 => {
                 let i = rng.below(len - 3);
                 let word = WORDS[rng.below(WORDS.len())];
-                let word = if rng.below(2) == 0 { word } else { word.swap_bytes() };
+                let word = if rng.below(2) == 0 {
+                    word
+                } else {
+                    word.swap_bytes()
+                };
                 data[i..i + 4].copy_from_slice(&word.to_le_bytes());
             }
             7 if !corpus.is_empty() => {
@@ -540,7 +676,9 @@ fn fuzz(input: Input, options: &Options, coverage: &mut Coverage) -> Report {
 
 fn parse_options() -> Result<Options, String> {
     let mut args = std::env::args().skip(1);
-    let target = args.next().ok_or("usage: lambert-fuzz TARGET|all [options]")?;
+    let target = args
+        .next()
+        .ok_or("usage: lambert-fuzz TARGET|all [options]")?;
     let targets = if target == "all" {
         Input::ALL.to_vec()
     } else {
@@ -561,7 +699,10 @@ fn parse_options() -> Result<Options, String> {
     };
     while let Some(flag) = args.next() {
         let mut value = || args.next().ok_or(format!("{flag} needs a value"));
-        let number = |v: String| v.parse::<f64>().map_err(|_| format!("{flag} {v}: not a number"));
+        let number = |v: String| {
+            v.parse::<f64>()
+                .map_err(|_| format!("{flag} {v}: not a number"))
+        };
         match flag.as_str() {
             "--runs" => options.runs = Some(number(value()?)? as u64),
             "--seconds" => options.seconds = Some(number(value()?)?),
@@ -587,7 +728,9 @@ fn main() {
         }
     };
     CURRENT.lock().unwrap().reserve(MAX_LEN.max(1 << 20));
-    lambert::memory::set_cap(HARD_CAP, || fatal(b"an allocation beyond the 4 GiB hard cap"));
+    lambert::memory::set_cap(HARD_CAP, || {
+        fatal(b"an allocation beyond the 4 GiB hard cap")
+    });
     std::panic::set_hook(Box::new(|info| {
         if !QUIET_PANICS.load(Relaxed) {
             eprintln!("{info}");
@@ -606,7 +749,9 @@ fn main() {
         }
     );
     let mut findings = 0;
-    println!("target  inputs  corpus  findings  slowest_ms  peak_alloc_bytes  worst_bytes_per_input_byte");
+    println!(
+        "target  inputs  corpus  findings  slowest_ms  peak_alloc_bytes  worst_bytes_per_input_byte"
+    );
     for &input in &options.targets {
         let r = fuzz(input, &options, &mut coverage);
         findings += r.findings;

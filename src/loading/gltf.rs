@@ -312,7 +312,10 @@ fn check_buffer_files(document: &gltf::Document, base: &Path) -> std::result::Re
         let index = buffer.index();
         let file = if uri.contains(':') {
             // data: is decoded in memory; file: is a path as it stands.
-            match uri.strip_prefix("file://").or_else(|| uri.strip_prefix("file:")) {
+            match uri
+                .strip_prefix("file://")
+                .or_else(|| uri.strip_prefix("file:"))
+            {
                 Some(rest) => rest.to_string(),
                 None => continue,
             }
@@ -341,7 +344,11 @@ fn percent_decoded(uri: &str) -> Option<String> {
     let mut i = 0;
     while i < bytes.len() {
         let hex = |b: u8| (b as char).to_digit(16);
-        match (bytes[i], bytes.get(i + 1).copied().and_then(hex), bytes.get(i + 2).copied().and_then(hex)) {
+        match (
+            bytes[i],
+            bytes.get(i + 1).copied().and_then(hex),
+            bytes.get(i + 2).copied().and_then(hex),
+        ) {
             (b'%', Some(h), Some(l)) => {
                 out.push((h * 16 + l) as u8);
                 i += 3;
@@ -393,9 +400,10 @@ fn check_accessor(
     let stride = view.stride().unwrap_or(accessor.size());
     let needed = match accessor.count() {
         0 => Some(0),
-        n => (n - 1)
-            .checked_mul(stride)
-            .and_then(|b| b.checked_add(accessor.offset())?.checked_add(accessor.size())),
+        n => (n - 1).checked_mul(stride).and_then(|b| {
+            b.checked_add(accessor.offset())?
+                .checked_add(accessor.size())
+        }),
     };
     if needed.is_none_or(|n| n > view.length()) {
         return Err(format!(
