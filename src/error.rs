@@ -22,6 +22,11 @@ pub enum Error {
     },
     #[error("GPU: {0}")]
     Gpu(String),
+    /// The scene does not fit the adapter's memory or binding limits; the
+    /// message says what and by how much (`--device auto` then renders on
+    /// the CPU path).
+    #[error("GPU: {0}")]
+    GpuLimit(String),
     #[error("{0}")]
     Usage(String),
 }

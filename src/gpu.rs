@@ -154,6 +154,21 @@ fn is_llvmpipe(info: &wgpu::AdapterInfo) -> bool {
 /// bunny, two lights); a heavier scene halves it as often as it needs.
 const LLVMPIPE_SAMPLES_PER_DISPATCH: u32 = 32;
 
+/// `LAMBERT_GPU_MAX_BUFFER_BYTES`: a cap on the buffer and binding sizes
+/// lambert requests from the adapter (`Gpu::open_limited`).
+pub const MAX_BUFFER_ENV: &str = "LAMBERT_GPU_MAX_BUFFER_BYTES";
+
+fn max_buffer_bytes_from_env() -> Result<Option<u64>> {
+    match std::env::var(MAX_BUFFER_ENV) {
+        Err(_) => Ok(None),
+        Ok(v) => {
+            v.trim().parse().map(Some).map_err(|_| {
+                Error::Usage(format!("{MAX_BUFFER_ENV}={v}: expected a number of bytes"))
+            })
+        }
+    }
+}
+
 /// An open device and queue.
 pub struct Gpu {
     pub device: wgpu::Device,
@@ -168,6 +183,17 @@ impl Gpu {
     /// Vulkan/Metal/DX12 before GL. With `hardware_only`, software
     /// rasterisers such as lavapipe do not count.
     pub fn open(request: &AdapterRequest, hardware_only: bool) -> Result<Gpu> {
+        Gpu::open_limited(request, hardware_only, max_buffer_bytes_from_env()?)
+    }
+
+    /// `open`, requesting at most `max_buffer_bytes` per buffer and per
+    /// storage binding (when given) instead of all the adapter offers: what
+    /// a smaller GPU would do, for tests and for sharing a device.
+    pub fn open_limited(
+        request: &AdapterRequest,
+        hardware_only: bool,
+        max_buffer_bytes: Option<u64>,
+    ) -> Result<Gpu> {
         let adapters = enumerate_adapters(request)?;
         let filter = request.name_filter();
         let rank = |info: &wgpu::AdapterInfo| {
@@ -209,7 +235,12 @@ impl Gpu {
         let info = adapter.get_info();
         // The adapter's real limits, not wgpu's conservative defaults: large
         // scenes need big storage bindings.
-        let limits = adapter.limits();
+        let mut limits = adapter.limits();
+        if let Some(max) = max_buffer_bytes {
+            limits.max_buffer_size = limits.max_buffer_size.min(max);
+            limits.max_storage_buffer_binding_size =
+                limits.max_storage_buffer_binding_size.min(max);
+        }
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("lambert"),
             // GPU time of each dispatch, where the adapter can measure it.
@@ -224,6 +255,17 @@ impl Gpu {
         device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
             slot.lock().unwrap().get_or_insert(e.to_string());
         }));
+        // A lost device (a driver reset, a removed GPU, `destroy`) is an
+        // error with the driver's reason at the next wait, not a hang.
+        let slot = errors.clone();
+        let name = describe(&info);
+        device.set_device_lost_callback(move |reason, message| {
+            slot.lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .get_or_insert(format!(
+                    "the device {name} was lost ({reason:?}): {message}"
+                ));
+        });
         Ok(Gpu {
             device,
             queue,
@@ -296,10 +338,14 @@ impl Gpu {
     /// A storage buffer of `bytes`, which may be at most `max_bytes` long.
     fn storage_buffer(&self, label: &str, bytes: &[u8], max_bytes: u64) -> Result<wgpu::Buffer> {
         if bytes.len() as u64 > max_bytes {
-            return Err(Error::Gpu(format!(
-                "the scene's {label} take {} bytes, more than the {max_bytes} bytes {} can bind for them",
+            return Err(Error::GpuLimit(format!(
+                "the scene's {label} take {} bytes, {} more than the {max_bytes} bytes {} can \
+                 bind for them (max_buffer_size {}, max_storage_buffer_binding_size {})",
                 bytes.len(),
-                self.describe()
+                bytes.len() as u64 - max_bytes,
+                self.describe(),
+                self.limits.max_buffer_size,
+                self.limits.max_storage_buffer_binding_size
             )));
         }
         Ok(self
@@ -632,6 +678,9 @@ impl GpuRenderer {
             contents: bytemuck::bytes_of(&params),
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
+        // A scene within the binding limits may still not fit the device's
+        // memory, which wgpu reports as an out-of-memory error.
+        let memory = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let limit = gpu.binding_limit();
         let triangles =
             gpu.split_buffer("triangles", &non_empty::<Triangle>(&scene.triangles), 48)?;
@@ -661,7 +710,17 @@ impl GpuRenderer {
         ]
         .iter()
         .map(|b| b.size())
-        .sum();
+        .sum::<u64>();
+        if let Some(e) = pollster::block_on(memory.pop()) {
+            return Err(Error::GpuLimit(format!(
+                "the scene's {device_bytes} bytes of GPU data (triangles {}, BVH nodes {}, leaf \
+                 blocks {}) do not fit in the memory of {}: {e}",
+                triangles.buffer.size(),
+                nodes.buffer.size(),
+                blocks.buffer.size(),
+                gpu.describe()
+            )));
+        }
         let split_arrays = [
             ("triangles", &triangles),
             ("BVH nodes", &nodes),

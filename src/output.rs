@@ -182,14 +182,25 @@ pub fn prepare_output(path: &Path) -> Result<()> {
     let folder = folder_of(&target);
     std::fs::create_dir_all(folder).map_err(|e| Error::io(folder, e))?;
     let probe = temporary_beside(&target, "probe")?;
-    std::fs::File::create(&probe).map_err(|e| {
+    // Registered as a temporary, so that a signal between its creation and
+    // removal does not leave it behind.
+    TEMPORARIES
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .push(probe.clone());
+    let created = std::fs::File::create(&probe);
+    let _ = std::fs::remove_file(&probe);
+    TEMPORARIES
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .retain(|p| p != &probe);
+    created.map_err(|e| {
         Error::Usage(format!(
             "{}: cannot write in {}: {e}",
             path.display(),
             folder.display()
         ))
     })?;
-    let _ = std::fs::remove_file(&probe);
     Ok(())
 }
 

@@ -151,7 +151,7 @@ pub fn write_part(
 }
 
 /// A part as read back.
-struct Part {
+pub struct Part {
     path: PathBuf,
     tile: Tile,
     hash: String,
@@ -162,10 +162,65 @@ struct Part {
 }
 
 fn read_part(path: &Path) -> Result<Part> {
+    let bytes = std::fs::read(path).map_err(|e| crate::error::Error::io(path, e))?;
+    parse_part(&bytes, path)
+}
+
+/// The most a ZIP (deflate) block expands, with a margin: deflate's limit
+/// is about 1032 to 1; RLE's is 64 to 1.
+const MAX_EXPANSION: u64 = 1100;
+
+/// Checks a part's header before its pixels are decoded: the decoder
+/// allocates what the header claims, so a few corrupt bytes could otherwise
+/// ask for gigabytes. Only the compressions lambert writes parts with (and
+/// none, and RLE) are read, as their expansion is bounded.
+fn check_part_header(bytes: &[u8], fail: &dyn Fn(String) -> Error) -> Result<()> {
+    use exr::compression::Compression;
+    let meta = exr::meta::MetaData::read_from_buffered(bytes, false)
+        .map_err(|e| fail(format!("not a readable EXR part: {e}")))?;
+    let [header] = meta.headers.as_slice() else {
+        return Err(fail(format!(
+            "has {} layers; a lambert part has one",
+            meta.headers.len()
+        )));
+    };
+    if !matches!(
+        header.compression,
+        Compression::Uncompressed | Compression::RLE | Compression::ZIP1 | Compression::ZIP16
+    ) || header.deep
+    {
+        return Err(fail(format!(
+            "its pixels are {} (deep: {}); lambert parts are ZIP-compressed flat images",
+            header.compression, header.deep
+        )));
+    }
+    let display = header.shared_attributes.display_window.size;
+    let side = |v: usize| u32::try_from(v).unwrap_or(u32::MAX);
+    crate::scene::validate_resolution(side(display.width()), side(display.height()))
+        .and_then(|_| {
+            crate::scene::validate_resolution(
+                side(header.layer_size.width()),
+                side(header.layer_size.height()),
+            )
+        })
+        .map_err(|e| fail(format!("its image: {e}")))?;
+    let pixel_bytes = header.layer_size.area() as u64 * header.channels.bytes_per_pixel as u64;
+    if pixel_bytes > MAX_EXPANSION * bytes.len() as u64 {
+        return Err(fail(format!(
+            "its header claims {pixel_bytes} bytes of pixels, more than its {} bytes can hold \
+             (the file is truncated or corrupt)",
+            bytes.len()
+        )));
+    }
+    Ok(())
+}
+
+/// Decodes and checks a part file's bytes; `path` names it in errors.
+pub fn parse_part(bytes: &[u8], path: &Path) -> Result<Part> {
     use exr::meta::attribute::AttributeValue;
     use exr::prelude::*;
     let fail = |m: String| crate::error::Error::Usage(format!("{}: {m}", path.display()));
-    let bytes = std::fs::read(path).map_err(|e| crate::error::Error::io(path, e))?;
+    check_part_header(bytes, &fail)?;
     let image = read()
         .no_deep_data()
         .largest_resolution_level()

@@ -4,7 +4,7 @@
 use std::time::{Duration, Instant};
 
 use crate::cpu::{self, Precision};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::gpu::{AdapterRequest, Gpu, GpuRenderer};
 use crate::layout::{Hit, Ray};
 use crate::output::Rendered;
@@ -132,7 +132,15 @@ impl Renderer {
                 Err(e) => return Ok((Renderer::Cpu, Some(fallback_note(&e)))),
             },
         };
-        Ok((Renderer::Gpu(Box::new(GpuRenderer::new(gpu, scene)?)), None))
+        match GpuRenderer::new(gpu, scene) {
+            Ok(renderer) => Ok((Renderer::Gpu(Box::new(renderer)), None)),
+            // A scene too large for the adapter still renders with auto.
+            Err(Error::GpuLimit(e)) if choice == DeviceChoice::Auto => Ok((
+                Renderer::Cpu,
+                Some(format!("GPU: {e}\nnote: using the CPU path instead")),
+            )),
+            Err(e) => Err(e),
+        }
     }
 
     pub fn is_cpu(&self) -> bool {

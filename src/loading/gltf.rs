@@ -53,11 +53,30 @@ pub struct GltfScene {
 /// Reads `path`: geometry (smooth normals from NORMAL, or computed, with
 /// `NormalMode::Smooth`), materials, cameras and lights.
 pub fn load_scene(path: &Path, mode: NormalMode) -> Result<GltfScene> {
-    let fail = |message: String| Error::scene(path, message);
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    parse_scene(&bytes, path, mode)
+}
+
+/// `load_scene` of a file's bytes (JSON or GLB); `path` names it in errors
+/// and anchors its external buffers.
+pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfScene> {
+    let fail = |message: String| Error::scene(path, message);
+    // The crate subtracts the 12-byte header from a GLB's declared length
+    // unchecked: an overflow panic in checked builds, a wrapped length in
+    // its message otherwise.
+    if let Some(header) = bytes.get(..12).filter(|h| h.starts_with(b"glTF")) {
+        let length = u32::from_le_bytes([header[8], header[9], header[10], header[11]]) as usize;
+        if length < 12 || length > bytes.len() {
+            return Err(fail(format!(
+                "its GLB header declares {length} bytes, but the file has {} (and a header \
+                 takes 12)",
+                bytes.len()
+            )));
+        }
+    }
     // Required extensions first: the crate's own validation would call an
     // unknown one merely invalid.
-    let unchecked = gltf::Gltf::from_slice_without_validation(&bytes)
+    let unchecked = gltf::Gltf::from_slice_without_validation(bytes)
         .map_err(|e| fail(format!("not a readable glTF file: {e}")))?;
     if let Some(missing) = unchecked
         .extensions_required()
@@ -67,10 +86,28 @@ pub fn load_scene(path: &Path, mode: NormalMode) -> Result<GltfScene> {
             "the file requires the extension {missing}, which lambert does not implement"
         )));
     }
+    // gltf-json's validation reads each POSITION accessor before checking
+    // that it exists, and panics on an index past the end: check first.
+    let json = unchecked.document.as_json();
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            for (semantic, accessor) in &primitive.attributes {
+                if accessor.value() >= json.accessors.len() {
+                    return Err(fail(format!(
+                        "mesh {m} primitive {p}: attribute {semantic:?} names accessor {}, \
+                         but the file has {} accessors",
+                        accessor.value(),
+                        json.accessors.len()
+                    )));
+                }
+            }
+        }
+    }
     drop(unchecked);
     let gltf::Gltf { document, blob } =
-        gltf::Gltf::from_slice(&bytes).map_err(|e| fail(format!("invalid glTF: {e}")))?;
+        gltf::Gltf::from_slice(bytes).map_err(|e| fail(format!("invalid glTF: {e}")))?;
     let base = path.parent().unwrap_or(Path::new("."));
+    check_buffer_files(&document, base).map_err(fail)?;
     let buffers = gltf::import_buffers(&document, Some(base), blob)
         .map_err(|e| fail(format!("reading its buffers: {e}")))?;
 
@@ -88,11 +125,16 @@ pub fn load_scene(path: &Path, mode: NormalMode) -> Result<GltfScene> {
     let mut stack: Vec<(gltf::Node, DMat4)> = root.nodes().map(|n| (n, DMat4::IDENTITY)).collect();
     // Nodes in document order within each level, as the file lists them.
     stack.reverse();
-    let mut visited = 0usize;
+    // The spec's node hierarchy is a set of trees; a node reached twice (a
+    // cycle, or two parents) would otherwise be expanded exponentially.
+    let mut visited = vec![false; document.nodes().len()];
     while let Some((node, parent)) = stack.pop() {
-        visited += 1;
-        if visited > 1_000_000 {
-            return Err(fail("the node hierarchy is too deep or cyclic".into()));
+        if std::mem::replace(&mut visited[node.index()], true) {
+            return Err(fail(format!(
+                "node {} is reached twice from the scene's roots: the node hierarchy \
+                 must be a tree (no cycles, one parent per node)",
+                node.index()
+            )));
         }
         let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
         let world = parent * local;
@@ -131,15 +173,19 @@ pub fn load_scene(path: &Path, mode: NormalMode) -> Result<GltfScene> {
             let position_accessor = primitive
                 .get(&gltf::Semantic::Positions)
                 .ok_or_else(|| fail(format!("{what} has no POSITION")))?;
-            check_accessor(&position_accessor, &buffers)
+            use gltf::accessor::{DataType, Dimensions};
+            let vec3 = [DataType::F32];
+            check_accessor(&position_accessor, &buffers, Dimensions::Vec3, &vec3)
                 .map_err(|m| fail(format!("{what}: POSITION {m}")))?;
             if let Some(indices) = primitive.indices() {
-                check_accessor(&indices, &buffers)
+                let types = [DataType::U8, DataType::U16, DataType::U32];
+                check_accessor(&indices, &buffers, Dimensions::Scalar, &types)
                     .map_err(|m| fail(format!("{what}: indices {m}")))?;
             }
             let normal_accessor = primitive.get(&gltf::Semantic::Normals);
             if let Some(n) = &normal_accessor {
-                check_accessor(n, &buffers).map_err(|m| fail(format!("{what}: NORMAL {m}")))?;
+                check_accessor(n, &buffers, Dimensions::Vec3, &vec3)
+                    .map_err(|m| fail(format!("{what}: NORMAL {m}")))?;
             }
             let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
             let first = scene.mesh.positions.len() as u32;
@@ -255,10 +301,83 @@ pub fn load_scene(path: &Path, mode: NormalMode) -> Result<GltfScene> {
 
 /// An accessor's bytes lie inside its buffer view, and the view inside its
 /// buffer (the crate's reader would index past them).
+/// Checks the files that buffers name before the crate reads them: it
+/// panics on a URI whose percent-encoding is not UTF-8, and would read a
+/// device or FIFO (`/dev/zero`, an absolute path being allowed) forever.
+fn check_buffer_files(document: &gltf::Document, base: &Path) -> std::result::Result<(), String> {
+    for buffer in document.buffers() {
+        let gltf::buffer::Source::Uri(uri) = buffer.source() else {
+            continue;
+        };
+        let index = buffer.index();
+        let file = if uri.contains(':') {
+            // data: is decoded in memory; file: is a path as it stands.
+            match uri
+                .strip_prefix("file://")
+                .or_else(|| uri.strip_prefix("file:"))
+            {
+                Some(rest) => rest.to_string(),
+                None => continue,
+            }
+        } else {
+            percent_decoded(uri).ok_or_else(|| {
+                format!("buffer {index}: its uri {uri:?} is not percent-encoded UTF-8")
+            })?
+        };
+        let file = base.join(file);
+        if let Ok(meta) = std::fs::metadata(&file)
+            && !meta.is_file()
+        {
+            return Err(format!(
+                "buffer {index}: {} is not a regular file",
+                file.display()
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// `%XX` escapes decoded, or None where the result is not UTF-8.
+fn percent_decoded(uri: &str) -> Option<String> {
+    let bytes = uri.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        let hex = |b: u8| (b as char).to_digit(16);
+        match (
+            bytes[i],
+            bytes.get(i + 1).copied().and_then(hex),
+            bytes.get(i + 2).copied().and_then(hex),
+        ) {
+            (b'%', Some(h), Some(l)) => {
+                out.push((h * 16 + l) as u8);
+                i += 3;
+            }
+            (b, _, _) => {
+                out.push(b);
+                i += 1;
+            }
+        }
+    }
+    String::from_utf8(out).ok()
+}
+
+/// Checks what the crate's readers assume of an accessor: its element type
+/// (they panic on another one) and its extent within its buffer.
 fn check_accessor(
     accessor: &gltf::Accessor,
     buffers: &[gltf::buffer::Data],
+    dimensions: gltf::accessor::Dimensions,
+    types: &[gltf::accessor::DataType],
 ) -> std::result::Result<(), String> {
+    if accessor.dimensions() != dimensions || !types.contains(&accessor.data_type()) {
+        return Err(format!(
+            "accessor {} holds {:?} {:?}; the glTF spec requires {dimensions:?} of {types:?}",
+            accessor.index(),
+            accessor.dimensions(),
+            accessor.data_type()
+        ));
+    }
     if accessor.sparse().is_some() {
         return Err(format!(
             "accessor {} is sparse, which lambert does not read",
@@ -281,9 +400,10 @@ fn check_accessor(
     let stride = view.stride().unwrap_or(accessor.size());
     let needed = match accessor.count() {
         0 => Some(0),
-        n => (n - 1)
-            .checked_mul(stride)
-            .and_then(|b| b.checked_add(accessor.offset() + accessor.size())),
+        n => (n - 1).checked_mul(stride).and_then(|b| {
+            b.checked_add(accessor.offset())?
+                .checked_add(accessor.size())
+        }),
     };
     if needed.is_none_or(|n| n > view.length()) {
         return Err(format!(

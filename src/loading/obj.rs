@@ -21,7 +21,7 @@ pub fn load_obj(path: &Path, mode: NormalMode) -> Result<Mesh> {
 
 /// The materials of an OBJ's MTL files, by name, as they are named.
 #[derive(Default)]
-struct Materials {
+pub struct Materials {
     index: HashMap<String, u32>,
     albedo: Vec<[f32; 3]>,
 }
@@ -40,8 +40,13 @@ fn load_mtl(mtl: &Path, materials: &mut Materials, warnings: &mut Vec<String>) -
             return Ok(());
         }
     };
-    let text = String::from_utf8_lossy(&bytes);
-    let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
+    parse_mtl(&String::from_utf8_lossy(&bytes), mtl, materials)
+}
+
+/// Parses MTL text into `materials` (`load_mtl`'s rules); `mtl` names it
+/// in errors.
+pub fn parse_mtl(text: &str, mtl: &Path, materials: &mut Materials) -> Result<()> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut current: Option<u32> = None;
     for (index, line) in text.lines().enumerate() {
         let fail = |message: String| Error::Line {

@@ -216,6 +216,12 @@ pub fn parse_ply(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<Mesh> {
         if e == vertex {
             mesh.positions.reserve(element.count);
         }
+        // A binary element without properties takes no bytes: its count,
+        // however large, is nothing to read (looping over it could take
+        // minutes, as the byte check above cannot bound it).
+        if element.properties.is_empty() && encoding != Encoding::Ascii {
+            continue;
+        }
         for i in 0..element.count {
             reader.begin_element()?;
             let what = || format!("{} {i}", element.name);

@@ -1,0 +1,83 @@
+//! Every file format a user can feed lambert, each parsed from bytes as its
+//! loader parses it: the one list that the fuzz harness (`fuzz/`) and its
+//! regression tests (`tests/reliability.rs`) both drive, so that neither
+//! keeps its own copy of which parser reads what.
+
+use std::path::Path;
+
+use crate::error::Result;
+use crate::loading::{self, NormalMode};
+
+/// A user-facing input format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Input {
+    /// A scene file (`Scene::from_toml`).
+    Toml,
+    Obj,
+    Mtl,
+    /// PLY, ascii or binary (a `.ply.gz` is gunzipped first by flate2).
+    Ply,
+    /// glTF JSON or GLB.
+    Gltf,
+    /// A ray file of `lambert trace`.
+    Rays,
+    /// An EXR part file of `lambert merge`.
+    Part,
+}
+
+impl Input {
+    pub const ALL: [Input; 7] = [
+        Input::Toml,
+        Input::Obj,
+        Input::Mtl,
+        Input::Ply,
+        Input::Gltf,
+        Input::Rays,
+        Input::Part,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Input::Toml => "toml",
+            Input::Obj => "obj",
+            Input::Mtl => "mtl",
+            Input::Ply => "ply",
+            Input::Gltf => "gltf",
+            Input::Rays => "rays",
+            Input::Part => "part",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Input> {
+        Input::ALL.into_iter().find(|i| i.name() == name)
+    }
+
+    /// Parses `bytes` as this format; `path` names the file in errors and
+    /// anchors the files it refers to (meshes, MTL files, glTF buffers).
+    /// Model formats are parsed with both normal modes, whose code differs.
+    pub fn parse(self, bytes: &[u8], path: &Path) -> Result<()> {
+        let modes = [NormalMode::Face, NormalMode::Smooth];
+        match self {
+            Input::Toml => crate::Scene::from_toml(&String::from_utf8_lossy(bytes), path).map(drop),
+            Input::Obj => {
+                let text = String::from_utf8_lossy(bytes);
+                modes
+                    .into_iter()
+                    .try_for_each(|m| loading::parse_obj(&text, path, m).map(drop))
+            }
+            Input::Mtl => loading::obj::parse_mtl(
+                &String::from_utf8_lossy(bytes),
+                path,
+                &mut Default::default(),
+            ),
+            Input::Ply => modes
+                .into_iter()
+                .try_for_each(|m| loading::ply::parse_ply(bytes, path, m).map(drop)),
+            Input::Gltf => modes
+                .into_iter()
+                .try_for_each(|m| loading::gltf::parse_scene(bytes, path, m).map(drop)),
+            Input::Rays => crate::rays::parse_rays(bytes, path).map(drop),
+            Input::Part => crate::parts::parse_part(bytes, path).map(drop),
+        }
+    }
+}
