@@ -11,7 +11,7 @@ origins in the bounding sphere, random directions), closest hits, on the
 CPU path and on the GPU (lavapipe here: --device gpu). Times are medians
 of --runs runs after one warm-up; `lambert trace --warmup` reports its own
 trace time for the same ray file. trimesh's intersector is timed on a
-tenth of the rays (it is far slower) and scaled.
+hundredth of the rays (it is far slower) and scaled.
 """
 
 import argparse
@@ -167,7 +167,7 @@ def main():
                       f"{row['cpu']['binding_seconds'] / e:.2f}x; same primitive on {100 * prim_same:.4f}% of rays, "
                       f"max relative t difference {row['embreex']['t_rel_max']:.1e}")
             if ray_triangle is not None:
-                k = max(1, n // 10)
+                k = max(1, n // 100)
                 tri = ray_triangle.RayMeshIntersector(mesh)
                 tm = median_time(1, lambda: tri.intersects_first(o[:k], d[:k])) * n / k
                 row["trimesh"] = {"seconds": tm, "mrays": n / tm / 1e6}

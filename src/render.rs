@@ -85,16 +85,15 @@ impl Renderers {
                 if self.auto_fell_back.is_some() {
                     return Ok((&mut self.cpu, None));
                 }
-                match Gpu::open(&self.request, !named) {
-                    Ok(gpu) => {
-                        self.open_gpu(scene, gpu)?;
-                        Ok((self.gpu.as_mut().expect("opened"), None))
-                    }
-                    Err(e) => {
+                match Gpu::open(&self.request, !named).and_then(|gpu| self.open_gpu(scene, gpu)) {
+                    Ok(()) => Ok((self.gpu.as_mut().expect("opened"), None)),
+                    // No GPU, or a scene too large for it: the CPU path.
+                    Err(e @ (Error::Gpu(_) | Error::GpuLimit(_))) => {
                         let note = fallback_note(&e);
                         self.auto_fell_back = Some(note.clone());
                         Ok((&mut self.cpu, Some(note)))
                     }
+                    Err(e) => Err(e),
                 }
             }
         }

@@ -36,7 +36,7 @@ fn to_py(e: Error) -> PyErr {
             std::io::ErrorKind::PermissionDenied => PyPermissionError::new_err(message),
             _ => PyOSError::new_err(message),
         },
-        Error::Gpu(_) => PyRuntimeError::new_err(message),
+        Error::Gpu(_) | Error::GpuLimit(_) => PyRuntimeError::new_err(message),
         Error::Scene { .. } | Error::Line { .. } | Error::Usage(_) => {
             PyValueError::new_err(message)
         }
