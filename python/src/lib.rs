@@ -207,26 +207,34 @@ fn assemble(
     tmin: Bound1View<'_>,
     tmax: Bound1View<'_>,
     n: usize,
+    mut rays: Vec<Ray>,
 ) -> Result<Vec<Ray>, Error> {
     use rayon::prelude::*;
     const CHUNK: usize = 4096;
-    let mut rays: Vec<Ray> = bytemuck::zeroed_vec(n);
-    let first_bad = rays
+    rays.clear();
+    rays.reserve(n);
+    let first_bad = rays.spare_capacity_mut()[..n]
         .par_chunks_mut(CHUNK)
         .enumerate()
         .filter_map(|(c, chunk)| {
             let start = c * CHUNK;
-            for (i, ray) in (start..).zip(chunk.iter_mut()) {
-                *ray = Ray {
+            let mut bad = None;
+            for (i, slot) in (start..).zip(chunk.iter_mut()) {
+                let ray = slot.write(Ray {
                     origin: origins.row(i),
                     tmin: tmin.at(i),
                     dir: directions.row(i),
                     tmax: tmax.at(i),
-                };
+                });
+                if bad.is_none() && !rays::ray_is_valid(ray) {
+                    bad = Some(i);
+                }
             }
-            chunk.iter().position(|r| !rays::ray_is_valid(r)).map(|k| start + k)
+            bad
         })
         .min();
+    // SAFETY: every one of the n slots was written above.
+    unsafe { rays.set_len(n) };
     match first_bad {
         Some(index) => Err(Error::Usage(rays::bad_ray(&rays, index).to_string())),
         None => Ok(rays),
@@ -258,6 +266,7 @@ impl Columns {
         let (u, v) = (SharedOut::new(&mut c.u), SharedOut::new(&mut c.v));
         let normal = SharedOut::new(&mut c.normal);
         chunks(&|start, hits| {
+            rays::prefetch_hit_triangles(scene, hits);
             for (i, hit) in (start..).zip(hits) {
                 // SAFETY: each chunk's rows are written by one thread, within
                 // the n rows allocated; `c` outlives the closure.
@@ -290,13 +299,28 @@ fn each_chunk(hits: &[Hit], each: &(dyn Fn(usize, &[Hit]) + Sync)) {
 struct NativeScene {
     scene: Arc<Scene>,
     renderers: Mutex<Renderers>,
+    /// The last query's ray buffer, kept for the next (32 bytes a ray).
+    scratch: Mutex<Vec<Ray>>,
 }
 
 /// What a query's rays are: borrowed records (still to be checked), or
 /// assembled from arrays and checked.
 enum QueryRays<'a> {
     Records(&'a [Ray]),
-    Checked(Vec<Ray>),
+    /// With the scene's scratch buffer, which gets them back when done.
+    Checked(Vec<Ray>, &'a Mutex<Vec<Ray>>),
+}
+
+impl Drop for QueryRays<'_> {
+    fn drop(&mut self) {
+        if let QueryRays::Checked(rays, scratch) = self {
+            if let Ok(mut home) = scratch.try_lock() {
+                if home.capacity() < rays.capacity() {
+                    *home = std::mem::take(rays);
+                }
+            }
+        }
+    }
 }
 
 impl NativeScene {
@@ -304,6 +328,7 @@ impl NativeScene {
         NativeScene {
             scene: Arc::new(scene),
             renderers: Mutex::new(Renderers::new(AdapterRequest::default())),
+            scratch: Mutex::new(Vec::new()),
         }
     }
 
@@ -344,6 +369,7 @@ impl NativeScene {
 }
 
 fn query_rays<'a>(
+    scratch: &'a Mutex<Vec<Ray>>,
     records: Option<&'a PyReadonlyArray2<'_, f32>>,
     arrays: Option<(&Rows<'_>, &Rows<'_>, &Bound1<'_>, &Bound1<'_>)>,
 ) -> PyResult<QueryRays<'a>> {
@@ -361,8 +387,11 @@ fn query_rays<'a>(
             directions.len()
         )));
     }
-    let rays = assemble(origins.view(), directions.view(), tmin.view(), tmax.view(), n);
-    Ok(QueryRays::Checked(rays.map_err(to_py)?))
+    // The scene's buffer from an earlier query, if no other thread holds
+    // it: its pages are mapped already (fresh ones cost a fault each).
+    let buffer = scratch.try_lock().map(|mut b| std::mem::take(&mut *b)).unwrap_or_default();
+    let rays = assemble(origins.view(), directions.view(), tmin.view(), tmax.view(), n, buffer);
+    Ok(QueryRays::Checked(rays.map_err(to_py)?, scratch))
 }
 
 impl QueryRays<'_> {
@@ -373,7 +402,7 @@ impl QueryRays<'_> {
                 rays::validate_rays(r).map_err(|bad| Error::Usage(bad.to_string()))?;
                 Ok(r)
             }
-            QueryRays::Checked(r) => Ok(r),
+            QueryRays::Checked(r, _) => Ok(r),
         }
     }
 }
@@ -381,14 +410,14 @@ impl QueryRays<'_> {
 /// Parses a query's arguments: either `records` (an (N, 8) float32 view of
 /// RAY_DTYPE records) or origins, directions, tmin and tmax.
 macro_rules! with_query_rays {
-    ($origins:expr, $directions:expr, $tmin:expr, $tmax:expr, |$rays:ident| $body:expr) => {{
+    ($self:ident, $origins:expr, $directions:expr, $tmin:expr, $tmax:expr, |$rays:ident| $body:expr) => {{
         match $directions {
             None => {
                 let records: PyReadonlyArray2<f32> = $origins.extract()?;
                 if records.shape()[1] != 8 {
                     return Err(PyValueError::new_err("ray records must be (N, 8) float32"));
                 }
-                let $rays = query_rays(Some(&records), None)?;
+                let $rays = query_rays(&$self.scratch, Some(&records), None)?;
                 $body
             }
             Some(directions) => {
@@ -397,7 +426,7 @@ macro_rules! with_query_rays {
                 let n = origins.len();
                 let tmin = Bound1::extract("tmin", $tmin, n)?;
                 let tmax = Bound1::extract("tmax", $tmax, n)?;
-                let $rays = query_rays(None, Some((&origins, &directions, &tmin, &tmax)))?;
+                let $rays = query_rays(&$self.scratch, None, Some((&origins, &directions, &tmin, &tmax)))?;
                 $body
             }
         }
@@ -449,7 +478,7 @@ impl NativeScene {
         intersect: &str,
     ) -> PyResult<Bound<'py, PyDict>> {
         let (device, intersect) = (device_choice(device)?, intersect_choice(intersect)?);
-        with_query_rays!(origins, directions, tmin, tmax, |rays| {
+        with_query_rays!(self, origins, directions, tmin, tmax, |rays| {
             let scene = &self.scene;
             let (columns, note) = detached(py, || {
                 let rays = rays.checked()?;
@@ -486,7 +515,7 @@ impl NativeScene {
         intersect: &str,
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
         let (device, intersect) = (device_choice(device)?, intersect_choice(intersect)?);
-        with_query_rays!(origins, directions, tmin, tmax, |rays| {
+        with_query_rays!(self, origins, directions, tmin, tmax, |rays| {
             let (hit, note) = detached(py, || {
                 let rays = rays.checked()?;
                 let mut hit = vec![false; rays.len()];
