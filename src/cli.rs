@@ -645,7 +645,22 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
     if !args.quiet {
         eprintln!("rendering on {}", renderer.describe());
     }
+    // What the report at the end says of the geometry, before a GPU
+    // render lets the host's copy go.
+    let primitives = scene.primitive_count();
+    let bvh = &scene.bvh;
+    let bvh_report = format!(
+        "BVH: {} nodes, depth {}, SAH cost {:.1}, built in {} (part of load), {:.1} MiB on the device",
+        bvh.nodes.len(),
+        bvh.depth(),
+        bvh.sah_cost(),
+        seconds(bvh.build_time),
+        bvh.device_bytes() as f64 / (1 << 20) as f64
+    );
     let mut scene = scene;
+    if !renderer.is_cpu() {
+        scene.release_geometry();
+    }
     if let Some(budget) = args.time_budget {
         scene.spp = spp_for_budget(&mut renderer, &scene, budget, args.quiet)?;
     }
@@ -709,17 +724,9 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
             args.output.display(),
             scene.camera.width,
             scene.camera.height,
-            scene.primitive_count()
+            primitives
         );
-        let bvh = &scene.bvh;
-        eprintln!(
-            "BVH: {} nodes, depth {}, SAH cost {:.1}, built in {} (part of load), {:.1} MiB on the device",
-            bvh.nodes.len(),
-            bvh.depth(),
-            bvh.sah_cost(),
-            seconds(bvh.build_time),
-            bvh.device_bytes() as f64 / (1 << 20) as f64
-        );
+        eprintln!("{bvh_report}");
         eprintln!(
             "time: load {}, upload {}, render {}, readback {}, write {}",
             seconds(load),
@@ -776,6 +783,9 @@ fn turntable(args: &RenderArgs, frames: u32) -> Result<ExitCode> {
     }
     if !args.quiet {
         eprintln!("rendering {frames} frames on {}", renderer.describe());
+    }
+    if !renderer.is_cpu() {
+        scene.release_geometry();
     }
     let start_camera = scene.camera.clone();
     let mut total = Duration::ZERO;

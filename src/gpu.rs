@@ -508,8 +508,8 @@ pub struct GpuRenderer {
     render_pipeline: Option<wgpu::ComputePipeline>,
     scene_group: wgpu::BindGroup,
     image_group: wgpu::BindGroup,
-    /// `trace_rays` pipelines, closest hit and any hit, built on first use.
-    /// By any-hit or closest hit, then by ray/triangle test.
+    /// `trace_rays` pipelines, built on first use: by any hit or closest
+    /// hit, then by ray/triangle test.
     trace_pipelines: [[Option<wgpu::ComputePipeline>; 3]; 2],
     params: Params,
     params_buffer: wgpu::Buffer,
@@ -914,7 +914,13 @@ impl GpuRenderer {
 
     /// Points the resident scene's camera elsewhere; uploads nothing else.
     pub fn set_camera(&mut self, scene: &Scene, camera: &Camera) {
-        self.params = params_for(scene, camera);
+        // The counts are the uploaded scene's: the host's copy may have
+        // released its geometry (`Scene::release_geometry`).
+        self.params = Params {
+            num_triangles: self.params.num_triangles,
+            num_spheres: self.params.num_spheres,
+            ..params_for(scene, camera)
+        };
     }
 
     /// Renders tile by tile, reading each back before the next.

@@ -680,6 +680,16 @@ impl Scene {
         Ok(())
     }
 
+    /// Drops the triangles, their normals, the spheres and the BVH: what a
+    /// render on a GPU, which has its own copy once the scene is uploaded,
+    /// no longer needs on the host (materials, lights and the camera stay).
+    pub fn release_geometry(&mut self) {
+        self.triangles = Vec::new();
+        self.normals = Vec::new();
+        self.spheres = Vec::new();
+        self.bvh = Bvh::default();
+    }
+
     /// Rebuilds the BVH after the geometry changed.
     pub fn rebuild_bvh(&mut self) {
         self.bvh = Bvh::build(&self.triangles, &self.spheres);

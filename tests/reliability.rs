@@ -446,3 +446,43 @@ fn a_lost_device_is_an_error_not_a_hang() {
     assert!(message.contains("lost"), "{message}");
     let _ = writeln_stderr(&format!("a destroyed device's render: {message}"));
 }
+
+/// Once a scene is on the GPU, its host copy of the geometry can go (the
+/// CLI lets it go after the upload): renders from another camera, at more
+/// samples and adaptive sampling's pixel lists are the same without it.
+#[test]
+fn a_gpu_render_does_not_need_the_hosts_geometry() {
+    use lambert::render::{DeviceChoice, Renderer};
+    for name in ["bunny", "spheres", "cornell"] {
+        let mut scene = common::load(name);
+        (scene.camera.width, scene.camera.height) = (64, 48);
+        scene.spp = 2;
+        let (mut renderer, _) =
+            Renderer::open(&scene, DeviceChoice::Gpu, &Default::default()).expect("opens");
+        let (before, _) = renderer.render(&scene, false).expect("renders");
+        let pixels = [[0, 0], [scene.camera.width / 2, scene.camera.height / 2]];
+        let list = renderer.render_pixel_list(&scene, &pixels).expect("pixel list");
+        let (full_triangles, full_bvh) = (scene.triangles.len(), scene.bvh.nodes.len());
+        scene.release_geometry();
+        assert!(scene.triangles.is_empty() && scene.spheres.is_empty());
+        assert!(scene.bvh.nodes.len() < full_bvh.max(2));
+        assert!(full_triangles + full_bvh > 0);
+        let (after, _) = renderer.render(&scene, false).expect("renders without the geometry");
+        assert_eq!(before, after, "{name}");
+        assert_eq!(list, renderer.render_pixel_list(&scene, &pixels).expect("pixel list"));
+        // And from another camera, at another sample count.
+        let mut moved = scene.clone();
+        moved.camera.eye[0] += 0.5;
+        moved.spp = 3;
+        let (moved_image, _) = renderer.render(&moved, false).expect("renders");
+        let mut reference = common::load(name);
+        reference.camera = moved.camera.clone();
+        reference.spp = 3;
+        let (fresh, _) = Renderer::open(&reference, DeviceChoice::Gpu, &Default::default())
+            .expect("opens")
+            .0
+            .render(&reference, false)
+            .expect("renders");
+        assert_eq!(moved_image, fresh, "{name} from another camera");
+    }
+}
