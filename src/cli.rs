@@ -274,9 +274,14 @@ fn render_part(args: &RenderArgs, tile_text: &str) -> Result<ExitCode> {
         Renderer::Gpu(_) => "gpu",
         Renderer::Cpu => "cpu",
     };
+    // Fingerprinted before a GPU render lets the host's geometry go.
+    let hash = crate::parts::settings_hash(&scene, device);
+    let mut scene = scene;
+    if !renderer.is_cpu() {
+        scene.release_geometry();
+    }
     let start = Instant::now();
     let (rendered, _) = renderer.render_rows(&scene, rows.clone(), !args.quiet)?;
-    let hash = crate::parts::settings_hash(&scene, device);
     crate::parts::write_part(
         &args.output,
         &rendered.image,
