@@ -667,7 +667,7 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
         scene.release_geometry();
     }
     if let Some(budget) = args.time_budget {
-        scene.spp = spp_for_budget(&mut renderer, &scene, budget, args.quiet)?;
+        scene.spp = spp_for_budget(&mut renderer, &mut scene, budget, args.quiet)?;
     }
     let mut samples = scene.camera.width as f64 * scene.camera.height as f64 * scene.spp as f64;
     let (rendered, timings) = match args.target_error {
@@ -697,7 +697,7 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
                 max_spp: args.max_spp,
             };
             let start = Instant::now();
-            let (rendered, report) = render_adaptive(&mut renderer, &scene, settings)?;
+            let (rendered, report) = render_adaptive(&mut renderer, &mut scene, settings)?;
             if !args.quiet {
                 eprintln!(
                     "adaptive: {:.1} samples per pixel on average ({} samples); pixels refined per pass {:?}; {} pixels still above {target} at {} spp; expected RMSE from sampling noise {:.3e}",
@@ -757,10 +757,12 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
 
 /// Samples per pixel that fit in `budget` seconds, from a timed 1-spp pilot
 /// render (whose time counts against the budget).
-fn spp_for_budget(renderer: &mut Renderer, scene: &Scene, budget: f64, quiet: bool) -> Result<u32> {
-    let mut pilot = scene.clone();
-    pilot.spp = 1;
-    let (_, t) = renderer.render(&pilot, false)?;
+fn spp_for_budget(renderer: &mut Renderer, scene: &mut Scene, budget: f64, quiet: bool) -> Result<u32> {
+    // The pilot's one sample set on the scene itself (no copy of it).
+    let spp = std::mem::replace(&mut scene.spp, 1);
+    let pilot = renderer.render(scene, false);
+    scene.spp = spp;
+    let (_, t) = pilot?;
     let per_sample = (t.render + t.readback).as_secs_f64().max(1e-6);
     let spp = ((budget - per_sample) / per_sample)
         .floor()

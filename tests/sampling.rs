@@ -124,7 +124,7 @@ fn adaptive_sampling_beats_uniform_at_the_same_sample_count() {
     use lambert::adaptive::{AdaptiveSettings, render_adaptive};
     use lambert::render::Renderer;
     for name in ["edge_cases", "spheres"] {
-        let scene = load(name);
+        let mut scene = load(name);
         let mut reference = at_spp(&scene, 256);
         reference.seed = 777;
         let reference = cpu::render(&reference, Precision::F64, &Progress::hidden());
@@ -133,11 +133,11 @@ fn adaptive_sampling_beats_uniform_at_the_same_sample_count() {
             base_spp: 4,
             max_spp: 64,
         };
-        let (cpu_image, report) = render_adaptive(&mut Renderer::Cpu, &scene, settings).unwrap();
+        let (cpu_image, report) = render_adaptive(&mut Renderer::Cpu, &mut scene, settings).unwrap();
         let mut gpu = Renderer::Gpu(Box::new(
             lambert::gpu::GpuRenderer::new(open_gpu(), &scene).unwrap(),
         ));
-        let (gpu_image, gpu_report) = render_adaptive(&mut gpu, &scene, settings).unwrap();
+        let (gpu_image, gpu_report) = render_adaptive(&mut gpu, &mut scene, settings).unwrap();
         // Same samples on both paths: the same pixels refined, the same image.
         assert_eq!(
             report.refined_per_pass, gpu_report.refined_per_pass,
@@ -211,11 +211,11 @@ fn high_spp_renders_agree_on_both_paths_at_every_size() {
         base_spp: 4,
         max_spp: 1024,
     };
-    let (cpu_image, report) = render_adaptive(&mut Renderer::Cpu, &scene, settings).unwrap();
+    let (cpu_image, report) = render_adaptive(&mut Renderer::Cpu, &mut scene, settings).unwrap();
     let mut gpu = Renderer::Gpu(Box::new(
         lambert::gpu::GpuRenderer::new(open_gpu(), &scene).unwrap(),
     ));
-    let (gpu_image, gpu_report) = render_adaptive(&mut gpu, &scene, settings).unwrap();
+    let (gpu_image, gpu_report) = render_adaptive(&mut gpu, &mut scene, settings).unwrap();
     assert_eq!(report.refined_per_pass, gpu_report.refined_per_pass);
     assert!(report.refined_per_pass.len() >= 7, "{report:?}");
     let stats = compare(&gpu_image, &cpu_image, &Tolerance::default()).unwrap();
