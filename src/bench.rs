@@ -203,8 +203,12 @@ pub fn ladder_rows(
     for mut renderer in devices.renderers(scene, request)? {
         renderer.prepare_trace(false, scene.intersect)?;
         renderer.prepare_trace(true, scene.intersect)?;
-        let (t_primary, _) = median_time(runs, || renderer.trace(scene, &primary, false, scene.intersect))?;
-        let (t_shadow, _) = median_time(runs, || renderer.trace(scene, &shadow, true, scene.intersect))?;
+        let (t_primary, _) = median_time(runs, || {
+            renderer.trace(scene, &primary, false, scene.intersect)
+        })?;
+        let (t_shadow, _) = median_time(runs, || {
+            renderer.trace(scene, &shadow, true, scene.intersect)
+        })?;
         rows.push(LadderRow {
             model: name.to_string(),
             triangles: scene.triangles.len(),

@@ -757,7 +757,12 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
 
 /// Samples per pixel that fit in `budget` seconds, from a timed 1-spp pilot
 /// render (whose time counts against the budget).
-fn spp_for_budget(renderer: &mut Renderer, scene: &mut Scene, budget: f64, quiet: bool) -> Result<u32> {
+fn spp_for_budget(
+    renderer: &mut Renderer,
+    scene: &mut Scene,
+    budget: f64,
+    quiet: bool,
+) -> Result<u32> {
     // The pilot's one sample set on the scene itself (no copy of it).
     let spp = std::mem::replace(&mut scene.spp, 1);
     let pilot = renderer.render(scene, false);

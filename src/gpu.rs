@@ -1217,7 +1217,12 @@ impl GpuRenderer {
     /// Traces `rays` against the resident scene with the ray/triangle test
     /// `intersect`: closest hits, or with `any_hit` the first hit each ray
     /// finds. Misses come back as t = +inf, prim = NO_HIT.
-    pub fn trace_rays(&mut self, rays: &[Ray], any_hit: bool, intersect: Intersect) -> Result<Vec<Hit>> {
+    pub fn trace_rays(
+        &mut self,
+        rays: &[Ray],
+        any_hit: bool,
+        intersect: Intersect,
+    ) -> Result<Vec<Hit>> {
         self.prepare_trace(any_hit, intersect)?;
         let pipeline = self.trace_pipelines[any_hit as usize][intersect.shader_value() as usize]
             .as_ref()

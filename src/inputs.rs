@@ -36,6 +36,14 @@ impl Input {
         Input::Part,
     ];
 
+    /// The file extension of an input of this kind.
+    pub fn extension(self) -> &'static str {
+        match self {
+            Input::Part => "exr",
+            other => other.name(),
+        }
+    }
+
     pub fn name(self) -> &'static str {
         match self {
             Input::Toml => "toml",

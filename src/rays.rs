@@ -38,7 +38,8 @@ pub fn read_rays(path: &Path) -> Result<Vec<Ray>> {
             path.display()
         )));
     }
-    validate_rays(&rays).map_err(|bad| Error::Usage(format!("{}: {}", path.display(), bad.in_file())))?;
+    validate_rays(&rays)
+        .map_err(|bad| Error::Usage(format!("{}: {}", path.display(), bad.in_file())))?;
     Ok(rays)
 }
 
@@ -60,7 +61,8 @@ pub fn parse_rays(bytes: &[u8], path: &Path) -> Result<Vec<Ray>> {
     // The file is little-endian f32s in the struct's order, as every target
     // wgpu runs on is; a copy rather than a cast, as `bytes` may be unaligned.
     let rays: Vec<Ray> = bytemuck::pod_collect_to_vec(bytes);
-    validate_rays(&rays).map_err(|bad| Error::Usage(format!("{}: {}", path.display(), bad.in_file())))?;
+    validate_rays(&rays)
+        .map_err(|bad| Error::Usage(format!("{}: {}", path.display(), bad.in_file())))?;
     Ok(rays)
 }
 
@@ -123,7 +125,12 @@ pub fn bad_ray(rays: &[Ray], index: usize) -> BadRay {
 /// Whether `validate_rays` accepts `ray` (without building a message).
 #[inline]
 pub fn ray_is_valid(ray: &Ray) -> bool {
-    let finite = ray.origin.iter().chain(&ray.dir).chain([&ray.tmin]).all(|v| v.is_finite())
+    let finite = ray
+        .origin
+        .iter()
+        .chain(&ray.dir)
+        .chain([&ray.tmin])
+        .all(|v| v.is_finite())
         && (ray.tmax.is_finite() || ray.tmax == f32::INFINITY);
     let [x, y, z] = ray.dir.map(f64::from);
     let squared = x * x + y * y + z * z;
@@ -219,7 +226,9 @@ pub fn hit_normal(scene: &Scene, ray: &Ray, hit: &Hit) -> [f32; 3] {
     } else if prim < triangles.len() {
         let t = &triangles[prim];
         let v0 = Vec3::from(t.v0);
-        (Vec3::from(t.v1) - v0).cross(Vec3::from(t.v2) - v0).to_array()
+        (Vec3::from(t.v1) - v0)
+            .cross(Vec3::from(t.v2) - v0)
+            .to_array()
     } else {
         let sphere = &scene.spheres[prim - triangles.len()];
         let point = Vec3::from(ray.origin) + hit.t * Vec3::from(ray.dir);

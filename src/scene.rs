@@ -415,7 +415,13 @@ impl Scene {
         };
         let mut scene = Scene::model_bare();
         scene.camera = frame_camera(&mesh_bounds(&mesh));
-        scene.add_mesh(Path::new("arrays"), "the mesh", mesh, &Transform::IDENTITY, albedo)?;
+        scene.add_mesh(
+            Path::new("arrays"),
+            "the mesh",
+            mesh,
+            &Transform::IDENTITY,
+            albedo,
+        )?;
         scene.lights.push(default_light(&scene.camera));
         scene.rebuild_bvh();
         Ok(scene)

@@ -518,7 +518,13 @@ fn every_cpu_kernel_equals_the_portable_one() {
             let camera = lambert::rays::camera_rays(scene);
             for (rays, what) in [(query_rays(scene, 5, 5001), "random"), (camera, "camera")] {
                 for any_hit in [false, true] {
-                    let portable = trace_rays_with(scene, &rays, any_hit, scene.intersect, CpuKernel::Portable);
+                    let portable = trace_rays_with(
+                        scene,
+                        &rays,
+                        any_hit,
+                        scene.intersect,
+                        CpuKernel::Portable,
+                    );
                     let simd = trace_rays_with(scene, &rays, any_hit, scene.intersect, kernel);
                     for (i, (a, b)) in portable.iter().zip(&simd).enumerate() {
                         assert_eq!(

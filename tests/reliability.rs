@@ -461,15 +461,24 @@ fn a_gpu_render_does_not_need_the_hosts_geometry() {
             Renderer::open(&scene, DeviceChoice::Gpu, &Default::default()).expect("opens");
         let (before, _) = renderer.render(&scene, false).expect("renders");
         let pixels = [[0, 0], [scene.camera.width / 2, scene.camera.height / 2]];
-        let list = renderer.render_pixel_list(&scene, &pixels).expect("pixel list");
+        let list = renderer
+            .render_pixel_list(&scene, &pixels)
+            .expect("pixel list");
         let (full_triangles, full_bvh) = (scene.triangles.len(), scene.bvh.nodes.len());
         scene.release_geometry();
         assert!(scene.triangles.is_empty() && scene.spheres.is_empty());
         assert!(scene.bvh.nodes.len() < full_bvh.max(2));
         assert!(full_triangles + full_bvh > 0);
-        let (after, _) = renderer.render(&scene, false).expect("renders without the geometry");
+        let (after, _) = renderer
+            .render(&scene, false)
+            .expect("renders without the geometry");
         assert_eq!(before, after, "{name}");
-        assert_eq!(list, renderer.render_pixel_list(&scene, &pixels).expect("pixel list"));
+        assert_eq!(
+            list,
+            renderer
+                .render_pixel_list(&scene, &pixels)
+                .expect("pixel list")
+        );
         // And from another camera, at another sample count.
         let mut moved = scene.clone();
         moved.camera.eye[0] += 0.5;

@@ -133,7 +133,8 @@ fn adaptive_sampling_beats_uniform_at_the_same_sample_count() {
             base_spp: 4,
             max_spp: 64,
         };
-        let (cpu_image, report) = render_adaptive(&mut Renderer::Cpu, &mut scene, settings).unwrap();
+        let (cpu_image, report) =
+            render_adaptive(&mut Renderer::Cpu, &mut scene, settings).unwrap();
         let mut gpu = Renderer::Gpu(Box::new(
             lambert::gpu::GpuRenderer::new(open_gpu(), &scene).unwrap(),
         ));

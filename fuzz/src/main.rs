@@ -511,18 +511,6 @@ fn fnv(data: &[u8]) -> u64 {
     })
 }
 
-fn extension(input: Input) -> &'static str {
-    match input {
-        Input::Toml => "toml",
-        Input::Obj => "obj",
-        Input::Mtl => "mtl",
-        Input::Ply => "ply",
-        Input::Gltf => "gltf",
-        Input::Rays => "rays",
-        Input::Part => "exr",
-    }
-}
-
 struct Options {
     targets: Vec<Input>,
     runs: Option<u64>,
@@ -573,7 +561,7 @@ fn fuzz(input: Input, options: &Options, coverage: &mut Coverage) -> Report {
     let mut rng = Rng(options.seed ^ fnv(input.name().as_bytes()) | 1);
     let path = PathBuf::from(format!(
         "/nonexistent/lambert-fuzz/input.{}",
-        extension(input)
+        input.extension()
     ));
     let artifacts = options.artifacts.join(input.name());
     std::fs::create_dir_all(&artifacts).expect("creating the artifacts folder");

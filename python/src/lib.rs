@@ -17,8 +17,8 @@ use lambert::scene::{Intersect, Scene};
 use lambert::{Error, rays};
 use numpy::ndarray::{Array2, Array3, ArrayView2};
 use numpy::{
-    IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray1,
-    PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods,
+    IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2,
+    PyReadonlyArray3, PyUntypedArrayMethods,
 };
 use pyo3::exceptions::{
     PyFileNotFoundError, PyOSError, PyPermissionError, PyRuntimeError, PyValueError,
@@ -45,7 +45,10 @@ fn to_py(e: Error) -> PyErr {
 
 /// Runs `work` without the GIL; a panic (a bug) becomes a RuntimeError
 /// rather than tearing through the interpreter.
-fn detached<T: Send>(py: Python<'_>, work: impl FnOnce() -> Result<T, Error> + Send) -> PyResult<T> {
+fn detached<T: Send>(
+    py: Python<'_>,
+    work: impl FnOnce() -> Result<T, Error> + Send,
+) -> PyResult<T> {
     py.detach(|| std::panic::catch_unwind(AssertUnwindSafe(work)))
         .map_err(|panic| {
             let what = panic
@@ -253,7 +256,11 @@ struct Columns {
 impl Columns {
     /// Fills the columns from hits, chunk by chunk in parallel (on the CPU
     /// path, as each chunk is traced, while its triangles are in cache).
-    fn fill(scene: &Scene, rays: &[Ray], chunks: impl FnOnce(&(dyn Fn(usize, &[Hit]) + Sync))) -> Columns {
+    fn fill(
+        scene: &Scene,
+        rays: &[Ray],
+        chunks: impl FnOnce(&(dyn Fn(usize, &[Hit]) + Sync)),
+    ) -> Columns {
         let n = rays.len();
         let mut c = Columns {
             t: vec![0.0; n],
@@ -272,7 +279,11 @@ impl Columns {
                 // the n rows allocated; `c` outlives the closure.
                 unsafe {
                     *t.at(i) = hit.t;
-                    *prim.at(i) = if hit.prim == NO_HIT { -1 } else { hit.prim as i64 };
+                    *prim.at(i) = if hit.prim == NO_HIT {
+                        -1
+                    } else {
+                        hit.prim as i64
+                    };
                     *u.at(i) = hit.u;
                     *v.at(i) = hit.v;
                     let ng = rays::hit_normal(scene, &rays[i], hit);
@@ -362,7 +373,12 @@ impl NativeScene {
     fn warn(py: Python<'_>, note: Option<String>) -> PyResult<()> {
         if let Some(note) = note {
             let warning = py.get_type::<pyo3::exceptions::PyRuntimeWarning>();
-            PyErr::warn(py, &warning, &std::ffi::CString::new(note).unwrap_or_default(), 2)?;
+            PyErr::warn(
+                py,
+                &warning,
+                &std::ffi::CString::new(note).unwrap_or_default(),
+                2,
+            )?;
         }
         Ok(())
     }
@@ -389,8 +405,18 @@ fn query_rays<'a>(
     }
     // The scene's buffer from an earlier query, if no other thread holds
     // it: its pages are mapped already (fresh ones cost a fault each).
-    let buffer = scratch.try_lock().map(|mut b| std::mem::take(&mut *b)).unwrap_or_default();
-    let rays = assemble(origins.view(), directions.view(), tmin.view(), tmax.view(), n, buffer);
+    let buffer = scratch
+        .try_lock()
+        .map(|mut b| std::mem::take(&mut *b))
+        .unwrap_or_default();
+    let rays = assemble(
+        origins.view(),
+        directions.view(),
+        tmin.view(),
+        tmax.view(),
+        n,
+        buffer,
+    );
     Ok(QueryRays::Checked(rays.map_err(to_py)?, scratch))
 }
 
@@ -426,7 +452,11 @@ macro_rules! with_query_rays {
                 let n = origins.len();
                 let tmin = Bound1::extract("tmin", $tmin, n)?;
                 let tmax = Bound1::extract("tmax", $tmax, n)?;
-                let $rays = query_rays(&$self.scratch, None, Some((&origins, &directions, &tmin, &tmax)))?;
+                let $rays = query_rays(
+                    &$self.scratch,
+                    None,
+                    Some((&origins, &directions, &tmin, &tmax)),
+                )?;
                 $body
             }
         }
@@ -450,8 +480,18 @@ impl NativeScene {
                 faces.shape()
             )));
         }
-        let v: Vec<[f64; 3]> = vertices.as_array().rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect();
-        let f: Vec<[i64; 3]> = faces.as_array().rows().into_iter().map(|r| [r[0], r[1], r[2]]).collect();
+        let v: Vec<[f64; 3]> = vertices
+            .as_array()
+            .rows()
+            .into_iter()
+            .map(|r| [r[0], r[1], r[2]])
+            .collect();
+        let f: Vec<[i64; 3]> = faces
+            .as_array()
+            .rows()
+            .into_iter()
+            .map(|r| [r[0], r[1], r[2]])
+            .collect();
         let scene = detached(py, || Scene::from_arrays(&v, &f, albedo))?;
         Ok(NativeScene::new(scene))
     }
@@ -489,7 +529,13 @@ impl NativeScene {
                 Ok((columns, note.expect("traced")?))
             })?;
             NativeScene::warn(py, note)?;
-            let Columns { t, prim, u, v, normal } = columns;
+            let Columns {
+                t,
+                prim,
+                u,
+                v,
+                normal,
+            } = columns;
             let n = t.len();
             let normal = Array2::from_shape_vec((n, 3), normal).expect("3 per hit");
             let out = PyDict::new(py);
@@ -544,7 +590,10 @@ impl NativeScene {
     ) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<f32>>)> {
         let scene = &self.scene;
         let (origins, directions) = detached(py, || {
-            let camera = scene.camera.resized(width, height).map_err(|e| Error::Usage(format!("width/height: {e}")))?;
+            let camera = scene
+                .camera
+                .resized(width, height)
+                .map_err(|e| Error::Usage(format!("width/height: {e}")))?;
             let rays = rays::camera_rays_for(scene, &camera);
             let origins: Vec<f32> = rays.iter().flat_map(|r| r.origin).collect();
             let directions: Vec<f32> = rays.iter().flat_map(|r| r.dir).collect();
@@ -552,7 +601,10 @@ impl NativeScene {
         })?;
         let n = origins.len() / 3;
         let rows = |v: Vec<f32>| Array2::from_shape_vec((n, 3), v).expect("3 per ray");
-        Ok((rows(origins).into_pyarray(py), rows(directions).into_pyarray(py)))
+        Ok((
+            rows(origins).into_pyarray(py),
+            rows(directions).into_pyarray(py),
+        ))
     }
 
     /// A linear-RGB render, (H, W, 3) float32.
@@ -568,7 +620,10 @@ impl NativeScene {
         let device = device_choice(device)?;
         let scene = &self.scene;
         let (image, note) = detached(py, || {
-            let camera = scene.camera.resized(width, height).map_err(|e| Error::Usage(format!("width/height: {e}")))?;
+            let camera = scene
+                .camera
+                .resized(width, height)
+                .map_err(|e| Error::Usage(format!("width/height: {e}")))?;
             let spp = spp.unwrap_or(scene.spp);
             lambert::scene::validate_spp(spp).map_err(Error::Usage)?;
             // Another size or sample count is another scene to the
@@ -662,7 +717,9 @@ fn write_image(py: Python<'_>, path: PathBuf, image: PyReadonlyArray3<'_, f32>) 
     }
     let (height, width) = (u32::try_from(shape[0]), u32::try_from(shape[1]));
     let (Ok(height), Ok(width)) = (height, width) else {
-        return Err(PyValueError::new_err(format!("image of shape {shape:?} is too large")));
+        return Err(PyValueError::new_err(format!(
+            "image of shape {shape:?} is too large"
+        )));
     };
     let rgb: Vec<[f32; 3]> = image
         .as_array()

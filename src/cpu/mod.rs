@@ -418,10 +418,17 @@ pub fn trace_rays_with(
     // would cost a twentieth of the trace.
     let mut hits: Vec<layout::Hit> = Vec::with_capacity(rays.len());
     let out = SharedOut(hits.as_mut_ptr());
-    trace_rays_each(scene, rays, any_hit, intersect, cpu_kernel, &|start, chunk| {
-        // SAFETY: chunks are disjoint and within the capacity.
-        unsafe { std::ptr::copy_nonoverlapping(chunk.as_ptr(), out.at(start), chunk.len()) }
-    });
+    trace_rays_each(
+        scene,
+        rays,
+        any_hit,
+        intersect,
+        cpu_kernel,
+        &|start, chunk| {
+            // SAFETY: chunks are disjoint and within the capacity.
+            unsafe { std::ptr::copy_nonoverlapping(chunk.as_ptr(), out.at(start), chunk.len()) }
+        },
+    );
     // SAFETY: every chunk was written.
     unsafe { hits.set_len(rays.len()) };
     hits

@@ -67,7 +67,9 @@ pub fn trace_gpu(
     any_hit: bool,
 ) -> Vec<lambert::layout::Hit> {
     let mut renderer = GpuRenderer::new(open_gpu(), scene).expect("scene uploads");
-    renderer.trace_rays(rays, any_hit, scene.intersect).expect("GPU trace")
+    renderer
+        .trace_rays(rays, any_hit, scene.intersect)
+        .expect("GPU trace")
 }
 
 pub fn trace_cpu(
