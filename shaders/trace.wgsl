@@ -37,16 +37,17 @@ const INTERSECT_MOLLER_TRUMBORE: u32 = 1u;
 const INTERSECT_WATERTIGHT: u32 = 2u;
 // Unit roundoff of f32 (pbrt's MachineEpsilon), for error bounds.
 const MACHINE_EPSILON: f32 = 5.96046448e-8;
-// Traversal stack entries: bvh::STACK_SIZE. A node visit pops one entry and
-// pushes at most eight, so the stack holds at most seven per level above the
-// deepest plus that level's eight: 7·(MAX_DEPTH − 1) + 8 with MAX_DEPTH = 24.
-const STACK_SIZE: u32 = 169u;
-// Child references of a BVH node (src/layout.rs): a leaf has LEAF_BIT set,
-// its block count − 1 from bit LEAF_COUNT_SHIFT up and its first block in
-// the bits below.
-const LEAF_BIT: u32 = 0x80000000u;
-const LEAF_COUNT_SHIFT: u32 = 28u;
-const LEAF_FIRST_MASK: u32 = 0x0fffffffu;
+// Traversal stack entries: bvh::MAX_DEPTH. An entry is a node group (a
+// node and the entered children of it not visited yet), pushed when
+// traversal descends below that node: one per level at most, and the tree
+// is at most MAX_DEPTH levels deep (Bvh::from_binary checks), so it never
+// overflows.
+const MAX_DEPTH: u32 = 24u;
+// CompressedNode meta bytes (src/layout.rs): 0 for an empty slot,
+// META_INTERIOR | rank for an interior child, META_LEAF | (count − 1) << 4
+// | offset for a leaf.
+const META_INTERIOR: u32 = 0x08u;
+const META_LEAF: u32 = 0x80u;
 // Widens a box's exit distance so that rounding in the slab test cannot cull
 // a box the ray grazes: pbrt-v4's 1 + 2·gamma(3), with room for a GPU's
 // reciprocal being up to a few ULPs off (WGSL allows 2.5). The watertight
@@ -140,22 +141,22 @@ struct Hit {
     v: f32,
 }
 
-// Up to eight children (256 bytes, src/layout.rs). Their boxes one lane per
-// child, each row of eight lanes in two vec4 halves: bounds[2r + h] is half
-// h (slots 4h to 4h + 3) of row r, and row 2a holds the minima along axis a,
-// row 2a + 1 the maxima; an empty slot's box is inverted. children[h][i]:
-// slot 4h + i's node index, leaf reference (LEAF_BIT) or EMPTY_SLOT; bit s
-// of occupied is set when slot s holds a child.
-struct BvhNode {
-    bounds: array<vec4<f32>, 12>,
-    children: array<vec4<u32>, 2>,
-    occupied: u32,
-    _pad: array<u32, 7>,
-}
-
-// Child `slot`'s reference.
-fn node_child(node: BvhNode, slot: u32) -> u32 {
-    return select(node.children[1][slot & 3u], node.children[0][slot & 3u], slot < 4u);
+// One node of the compressed 8-wide BVH (80 bytes, src/layout.rs and
+// src/cwbvh.rs): child boxes quantised outwards to a byte per plane on a
+// grid of origin + q·2^(e − 127) per axis (e in byte a of exponents), whose
+// every point is an f32, so dequantising with fma is exact. Slots are in
+// octant order (ray_octant). child_meta: a byte per slot (slots 0–3 in child_meta.x,
+// low byte first): 0 empty, META_INTERIOR | rank for node child_base +
+// rank, META_LEAF | (count − 1) << 4 | offset for the leaf of count blocks
+// from block_base + offset. q[2a]: the slots' minima along axis a, q[2a +
+// 1] their maxima, bytes as in child_meta.
+struct CompressedNode {
+    origin: vec3<f32>,
+    exponents: u32,
+    child_base: u32,
+    block_base: u32,
+    child_meta: vec2<u32>,
+    q: array<vec2<u32>, 6>,
 }
 
 // Up to four primitives of a BVH leaf (src/layout.rs PrimBlock): lane i is
@@ -193,11 +194,11 @@ struct Surface {
 @group(0) @binding(3) var<storage, read> spheres: array<Sphere>;
 @group(0) @binding(4) var<storage, read> materials: array<Material>;
 @group(0) @binding(5) var<storage, read> lights: array<Light>;
-@group(0) @binding(6) var<storage, read> bvh_nodes: array<BvhNode>;
+@group(0) @binding(6) var<storage, read> bvh_nodes: array<array<vec4<u32>, 5>>; // CompressedNode
 @group(0) @binding(7) var<storage, read> bvh_blocks: array<PrimBlock>;
 @group(0) @binding(8) var<storage, read> triangles_hi: array<Triangle>;
 @group(0) @binding(9) var<storage, read> triangle_normals_hi: array<TriangleNormals>;
-@group(0) @binding(10) var<storage, read> bvh_nodes_hi: array<BvhNode>;
+@group(0) @binding(10) var<storage, read> bvh_nodes_hi: array<array<vec4<u32>, 5>>; // CompressedNode
 @group(0) @binding(11) var<storage, read> bvh_blocks_hi: array<PrimBlock>;
 // Set to 1 by an invocation whose loops the driver cut short (see
 // `loops_completed`); the host then splits the work finer or fails.
@@ -231,11 +232,30 @@ fn triangle_normals_at(i: u32) -> TriangleNormals {
     return triangle_normals_hi[i - TRIANGLES_PER_BINDING];
 }
 
-fn bvh_node_at(i: u32) -> BvhNode {
+// Nodes are stored as five vec4 words (`bvh_nodes`) and read as such: five
+// loads rather than one per field. lavapipe runs a load whose address
+// differs between invocations one invocation at a time, a loop per load
+// instruction, so fewer, wider loads made traversal 12% faster there
+// (docs/bvh.md).
+fn unpack_node(w: array<vec4<u32>, 5>) -> CompressedNode {
+    return CompressedNode(bitcast<vec3<f32>>(w[0].xyz), w[0].w, w[1].x, w[1].y, w[1].zw,
+        array<vec2<u32>, 6>(w[2].xy, w[2].zw, w[3].xy, w[3].zw, w[4].xy, w[4].zw));
+}
+
+fn bvh_node_at(i: u32) -> CompressedNode {
     if i < NODES_PER_BINDING {
-        return bvh_nodes[i];
+        return unpack_node(bvh_nodes[i]);
     }
-    return bvh_nodes_hi[i - NODES_PER_BINDING];
+    return unpack_node(bvh_nodes_hi[i - NODES_PER_BINDING]);
+}
+
+// What a node group needs of node i once it is popped: child_base,
+// block_base and child_meta (the second of its five words).
+fn node_links(i: u32) -> vec4<u32> {
+    if i < NODES_PER_BINDING {
+        return bvh_nodes[i][1];
+    }
+    return bvh_nodes_hi[i - NODES_PER_BINDING][1];
 }
 
 // Block i's lanes of coordinate a of vertex k, and its primitives: read
@@ -569,141 +589,114 @@ fn ray_slabs(ray: Ray) -> Slabs {
     );
 }
 
-// A node's eight child boxes after intersect_boxes: where the ray enters
-// each (meaningful for entered ones only; slots 4h to 4h + 3 in t[h]), and
-// bit s set where it enters box s within (tmin, tmax).
-struct BoxHits {
-    t: array<vec4<f32>, 2>,
-    entered: u32,
+// The four bytes of a word, low first: four slots of a row of eight.
+fn slot_bytes(word: u32) -> vec4<u32> {
+    return (vec4<u32>(word) >> vec4<u32>(0u, 8u, 16u, 24u)) & vec4<u32>(0xffu);
 }
 
-// Where the ray enters child `slot`'s box.
-fn box_t(boxes: BoxHits, slot: u32) -> f32 {
-    return select(boxes.t[1][slot & 3u], boxes.t[0][slot & 3u], slot < 4u);
+// Bit a set when the ray runs toward −a. A node's slots taken in the order
+// b ^ octant (b = 0, 1, …) come nearest first: slot s holds the child
+// lying most toward the corner on the +a side where bit a of s is set.
+fn ray_octant(slabs: Slabs) -> u32 {
+    return select(0u, 1u, slabs.flip.x) | select(0u, 2u, slabs.flip.y) | select(0u, 4u, slabs.flip.z);
 }
 
-// Which of the node's eight child boxes the ray enters within (tmin, tmax),
-// and where (an empty slot's inverted box is never entered unless the ray
-// has a NaN or infinite component: traversal masks empty slots), in two
-// 4-lane halves. Each plane's distance is one multiply-add. Written with
-// select on a comparison rather than WGSL's min/max, whose result for a NaN
-// operand is unspecified: a NaN comparison is false on every device, so a
-// NaN slab (from a NaN ray) is ignored the same way everywhere.
-fn intersect_boxes(ray: Ray, slabs: Slabs, node: BvhNode) -> BoxHits {
-    var boxes = BoxHits(array<vec4<f32>, 2>(), 0u);
+// Which children of `node` the ray enters within (tmin, tmax): x, its
+// interior children as bits in visit order (bit b for slot b ^ octant);
+// y, the blocks of its leaves as bits from block_base (bit i for block
+// block_base + i). The planes are dequantised exactly, then each distance
+// is one multiply-add, as for an exact box. Written with select on a
+// comparison rather than WGSL's min/max, whose result for a NaN operand is
+// unspecified: a NaN comparison is false on every device, so a NaN slab
+// (from a NaN ray) is ignored the same way everywhere. Two 4-lane halves.
+fn intersect_compressed_node(ray: Ray, slabs: Slabs, node: CompressedNode, octant: u32) -> vec2<u32> {
+    let exponents = (vec3<u32>(node.exponents) >> vec3<u32>(0u, 8u, 16u)) & vec3<u32>(0xffu);
+    let scale = bitcast<vec3<f32>>(exponents << vec3<u32>(23u));
+    var interior = 0u;
+    var blocks = 0u;
     for (var half = 0u; half < 2u; half++) {
         var t_near = vec4<f32>(ray.tmin);
         var t_far = vec4<f32>(ray.tmax);
         for (var axis = 0u; axis < 3u; axis++) {
             let flip = slabs.flip[axis];
-            let minima = node.bounds[4u * axis + half];
-            let maxima = node.bounds[4u * axis + 2u + half];
-            let near_plane = select(minima, maxima, flip);
-            let far_plane = select(maxima, minima, flip);
+            let minima = node.q[2u * axis][half];
+            let maxima = node.q[2u * axis + 1u][half];
+            let grid_scale = vec4<f32>(scale[axis]);
+            let grid_origin = vec4<f32>(node.origin[axis]);
+            let near_plane = fma(vec4<f32>(slot_bytes(select(minima, maxima, flip))), grid_scale, grid_origin);
+            let far_plane = fma(vec4<f32>(slot_bytes(select(maxima, minima, flip))), grid_scale, grid_origin);
             let near = fma(near_plane, vec4<f32>(slabs.inv_dir[axis]), vec4<f32>(slabs.near_offset[axis]));
             let far = fma(far_plane, vec4<f32>(slabs.inv_dir_far[axis]), vec4<f32>(slabs.far_offset[axis]));
             t_near = select(t_near, near, near > t_near);
             t_far = select(t_far, far, far < t_far);
         }
-        // Two comparisons side by side rather than one on a select of
-        // t_near, as on the CPU, whose critical path this is.
-        let inside = (t_near <= t_far) & (t_near < vec4<f32>(ray.tmax));
-        let bits = select(vec4<u32>(0u), vec4<u32>(1u, 2u, 4u, 8u) << vec4<u32>(4u * half), inside);
-        boxes.t[half] = t_near;
-        boxes.entered |= bits.x | bits.y | bits.z | bits.w;
+        let m = slot_bytes(node.child_meta[half]);
+        let inside = (t_near <= t_far) & (t_near < vec4<f32>(ray.tmax)) & (m != vec4<u32>(0u));
+        let leaf = (m & vec4<u32>(META_LEAF)) != vec4<u32>(0u);
+        let order = (vec4<u32>(0u, 1u, 2u, 3u) + vec4<u32>(4u * half)) ^ vec4<u32>(octant);
+        let child_bits = select(vec4<u32>(0u), vec4<u32>(1u) << order, inside & !leaf);
+        let count = ((m >> vec4<u32>(4u)) & vec4<u32>(7u)) + vec4<u32>(1u);
+        let block_bits = ((vec4<u32>(1u) << count) - vec4<u32>(1u)) << (m & vec4<u32>(0xfu));
+        let leaf_bits = select(vec4<u32>(0u), block_bits, inside & leaf);
+        interior |= child_bits.x | child_bits.y | child_bits.z | child_bits.w;
+        blocks |= leaf_bits.x | leaf_bits.y | leaf_bits.z | leaf_bits.w;
     }
-    return boxes;
+    return vec2<u32>(interior, blocks);
 }
 
-// Closest hit through the BVH, nearest child first; with `any_hit`, the
-// first hit found. A ray that misses every box of the root stops there.
-fn trace_bvh(ray_in: Ray, shear: Shear, any_hit: bool) -> Hit {
+// Closest hit through the compressed BVH, children in octant order (no
+// sorting); with `any_hit`, the first hit found. Each pass of the loop
+// tests the leaf blocks the last node visit entered, then visits one node:
+// on a GPU running invocations in lockstep (lavapipe's SIMD lanes too) an
+// invocation that has blocks to test and one that has a node to visit then
+// do both in the same pass, rather than one waiting on the other. The
+// stack holds node groups (a node and its entered interior children not
+// visited yet), pushed when traversal descends below that node: one per
+// level at most.
+fn trace_compressed(ray_in: Ray, shear: Shear, any_hit: bool) -> Hit {
     var ray = ray_in;
     var hit = miss();
     let slabs = ray_slabs(ray);
-    // Entries: a node index or leaf reference, and the distance at which the
-    // ray enters its box.
-    var stack_child: array<u32, STACK_SIZE>;
-    var stack_t: array<f32, STACK_SIZE>;
+    let octant = ray_octant(slabs);
+    var stack: array<vec2<u32>, MAX_DEPTH>;
     var sp = 0u;
-    // What is visited now: the root first.
-    var child = 0u;
+    let root = bvh_node_at(0u);
+    let entered = intersect_compressed_node(ray, slabs, root, octant);
+    var node = 0u;
+    var links = vec4<u32>(root.child_base, root.block_base, root.child_meta);
+    var interior = entered.x;
+    var blocks = entered.y;
+    var block_base = root.block_base;
     loop {
-        if (child & LEAF_BIT) != 0u {
-            let first = child & LEAF_FIRST_MASK;
-            let count = ((child & ~LEAF_BIT) >> LEAF_COUNT_SHIFT) + 1u;
-            for (var i = first; i < first + count; i++) {
-                if record_block_hits(&ray, shear, &hit, i) && any_hit {
-                    return hit;
-                }
-            }
-        } else {
-            let node = bvh_node_at(child);
-            let boxes = intersect_boxes(ray, slabs, node);
-            var entered = boxes.entered & node.occupied;
-            if entered != 0u {
-                // The lowest entered slot.
-                let first = firstTrailingBit(entered);
-                entered &= entered - 1u;
-                if entered == 0u {
-                    // One child entered: visit it, nothing to push.
-                    child = node_child(node, first);
-                    continue;
-                }
-                let second = firstTrailingBit(entered);
-                entered &= entered - 1u;
-                if entered == 0u {
-                    // Two: push the farther, visit the nearer (the second on
-                    // a tie, as the sort below orders them).
-                    let first_nearer = box_t(boxes, first) < box_t(boxes, second);
-                    let near = select(second, first, first_nearer);
-                    let far = select(first, second, first_nearer);
-                    stack_child[sp] = node_child(node, far);
-                    stack_t[sp] = box_t(boxes, far);
-                    sp += 1u;
-                    child = node_child(node, near);
-                    continue;
-                }
-                // More: push them sorted, farthest deepest, then visit the
-                // nearest at once.
-                entered |= 1u << second;
-                let base = sp;
-                stack_child[sp] = node_child(node, first);
-                stack_t[sp] = box_t(boxes, first);
-                sp += 1u;
-                while entered != 0u {
-                    let slot = firstTrailingBit(entered);
-                    entered &= entered - 1u;
-                    let t_slot = box_t(boxes, slot);
-                    var j = sp;
-                    while j > base && stack_t[j - 1u] < t_slot {
-                        stack_child[j] = stack_child[j - 1u];
-                        stack_t[j] = stack_t[j - 1u];
-                        j -= 1u;
-                    }
-                    stack_child[j] = node_child(node, slot);
-                    stack_t[j] = t_slot;
-                    sp += 1u;
-                }
-                sp -= 1u;
-                child = stack_child[sp];
-                continue;
+        while blocks != 0u {
+            let i = firstTrailingBit(blocks);
+            blocks &= blocks - 1u;
+            if record_block_hits(&ray, shear, &hit, block_base + i) && any_hit {
+                return hit;
             }
         }
-        // Then the nearest pushed entry that a hit found since has not put
-        // out of reach.
-        var found = false;
-        while sp > 0u {
-            sp -= 1u;
-            if stack_t[sp] < ray.tmax {
-                child = stack_child[sp];
-                found = true;
+        if interior == 0u {
+            if sp == 0u {
                 break;
             }
+            sp -= 1u;
+            node = stack[sp].x;
+            interior = stack[sp].y;
+            links = node_links(node);
         }
-        if !found {
-            break;
+        let slot = firstTrailingBit(interior) ^ octant;
+        interior &= interior - 1u;
+        if interior != 0u {
+            stack[sp] = vec2<u32>(node, interior);
+            sp += 1u;
         }
+        node = links.x + ((links[2u + (slot >> 2u)] >> (8u * (slot & 3u))) & 7u);
+        let next = bvh_node_at(node);
+        links = vec4<u32>(next.child_base, next.block_base, next.child_meta);
+        let hits = intersect_compressed_node(ray, slabs, next, octant);
+        interior = hits.x;
+        blocks = hits.y;
+        block_base = next.block_base;
     }
     return hit;
 }
@@ -747,7 +740,7 @@ fn trace(ray_in: Ray, any_hit: bool) -> Hit {
     shear.t_scale = scale.x;
     var hit: Hit;
     if USE_BVH {
-        hit = trace_bvh(ray, shear, any_hit);
+        hit = trace_compressed(ray, shear, any_hit);
     } else {
         hit = trace_brute_force(ray, shear, any_hit);
     }

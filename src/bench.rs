@@ -141,6 +141,10 @@ pub struct LadderRow {
     pub primary_mrays_per_s: f64,
     pub shadow_rays: usize,
     pub shadow_mrays_per_s: f64,
+    /// The same from the GPU's own timestamps (the dispatches alone, no
+    /// upload or readback), where it has them; the median run's.
+    pub primary_device_mrays_per_s: Option<f64>,
+    pub shadow_device_mrays_per_s: Option<f64>,
     pub bvh_build_seconds: f64,
     pub bvh_nodes: usize,
     pub bvh_depth: usize,
@@ -203,12 +207,21 @@ pub fn ladder_rows(
     for mut renderer in devices.renderers(scene, request)? {
         renderer.prepare_trace(false, scene.intersect)?;
         renderer.prepare_trace(true, scene.intersect)?;
-        let (t_primary, _) = median_time(runs, || {
-            renderer.trace(scene, &primary, false, scene.intersect)
-        })?;
-        let (t_shadow, _) = median_time(runs, || {
-            renderer.trace(scene, &shadow, true, scene.intersect)
-        })?;
+        let mut timed = |rays: &[Ray], any_hit: bool| {
+            let mut device = Vec::new();
+            let (wall, _) = median_time(runs, || {
+                let hits = renderer.trace(scene, rays, any_hit, scene.intersect);
+                device.extend(renderer.trace_device_time());
+                hits
+            })?;
+            // The warm-up's time left out, as the wall time leaves it.
+            let mut device = device.split_off(1.min(device.len()));
+            device.sort();
+            let mrays = |t: std::time::Duration| rays.len() as f64 / t.as_secs_f64() / 1e6;
+            Ok::<_, Error>((wall, device.get(device.len() / 2).map(|&t| mrays(t))))
+        };
+        let (t_primary, primary_device) = timed(&primary, false)?;
+        let (t_shadow, shadow_device) = timed(&shadow, true)?;
         rows.push(LadderRow {
             model: name.to_string(),
             triangles: scene.triangles.len(),
@@ -217,6 +230,8 @@ pub fn ladder_rows(
             primary_mrays_per_s: primary.len() as f64 / t_primary.as_secs_f64() / 1e6,
             shadow_rays: shadow.len(),
             shadow_mrays_per_s: shadow.len() as f64 / t_shadow.as_secs_f64() / 1e6,
+            primary_device_mrays_per_s: primary_device,
+            shadow_device_mrays_per_s: shadow_device,
             bvh_build_seconds: scene.bvh.build_time.as_secs_f64(),
             bvh_nodes: scene.bvh.nodes.len(),
             bvh_depth: scene.bvh.depth(),

@@ -70,7 +70,7 @@ impl Aabb {
         max: Vec3::NEG_INFINITY,
     };
 
-    fn grow(&mut self, other: &Aabb) {
+    pub fn grow(&mut self, other: &Aabb) {
         self.min = self.min.min(other.min);
         self.max = self.max.max(other.max);
     }

@@ -862,7 +862,12 @@ fn diff(args: &DiffArgs) -> Result<ExitCode> {
     let cpu = || cpu::render(&scene, Precision::F32, &Progress::hidden());
     let oracle = || cpu::render(&oracle_scene(&scene), Precision::F64, &Progress::hidden());
     let (a, b) = match args.compare {
-        Comparison::GpuCpu => (render_gpu(&scene, &request)?, cpu()),
+        // The CPU side traces the GPU's own BVH layout (its twin), so that
+        // the two differ only where their arithmetic does.
+        Comparison::GpuCpu => (
+            render_gpu(&scene, &request)?,
+            cpu::render_gpu_twin(&scene, &Progress::hidden()),
+        ),
         Comparison::GpuOracle => (render_gpu(&scene, &request)?, oracle()),
         Comparison::CpuOracle => (cpu(), oracle()),
     };

@@ -10,8 +10,8 @@ use wgpu::util::DeviceExt;
 use crate::cpu::f32::CameraBasis;
 use crate::error::{Error, Result};
 use crate::layout::{
-    BvhNode, Hit, LIGHT_DIRECTIONAL, LIGHT_POINT, NO_HIT, Params, PrimBlock, Ray, Sphere, Triangle,
-    TriangleNormals,
+    CompressedNode, Hit, LIGHT_DIRECTIONAL, LIGHT_POINT, NO_HIT, Params, PrimBlock, Ray, Sphere,
+    Triangle, TriangleNormals,
 };
 use crate::output::{Image, Rendered};
 use crate::progress::Progress;
@@ -531,6 +531,9 @@ pub struct GpuRenderer {
     /// their normals).
     pub split_arrays: Vec<&'static str>,
     timer: Option<Timer>,
+    /// Device time of the last `trace_rays` (its dispatches, summed), where
+    /// timestamps work.
+    trace_device_time: Option<Duration>,
     pub upload_time: Duration,
 }
 
@@ -688,8 +691,8 @@ impl GpuRenderer {
             gpu.split_buffer("normals", &non_empty::<TriangleNormals>(&scene.normals), 48)?;
         let nodes = gpu.split_buffer(
             "BVH nodes",
-            bytemuck::cast_slice(&scene.bvh.nodes),
-            std::mem::size_of::<BvhNode>() as u64,
+            &non_empty::<CompressedNode>(&crate::cwbvh::compress(&scene.bvh)),
+            std::mem::size_of::<CompressedNode>() as u64,
         )?;
         let spheres = gpu.storage_buffer("spheres", &non_empty::<Sphere>(&scene.spheres), limit)?;
         let materials = gpu.storage_buffer("materials", &non_empty(&scene.materials), limit)?;
@@ -904,6 +907,7 @@ impl GpuRenderer {
             device_bytes,
             split_arrays,
             timer,
+            trace_device_time: None,
             upload_time: start.elapsed(),
         })
     }
@@ -1227,7 +1231,9 @@ impl GpuRenderer {
         let pipeline = self.trace_pipelines[any_hit as usize][intersect.shader_value() as usize]
             .as_ref()
             .expect("prepared");
-        let hits: Vec<Hit> = self.run_list(pipeline, &self.rays_layout, 2, rays, 1 << 20, None)?;
+        let (hits, device): (Vec<Hit>, _) =
+            self.run_list(pipeline, &self.rays_layout, 2, rays, 1 << 20, None)?;
+        self.trace_device_time = device;
         if self.loops_were_cut()? {
             return Err(Error::Gpu(format!(
                 "{} cut the shader's loops short on a ray of this query (Mesa's llvmpipe \
@@ -1254,7 +1260,7 @@ impl GpuRenderer {
             let step = self.samples_per_dispatch.min(self.params.spp);
             // As many samples per dispatch as a full tile at 1 spp.
             let batch = ((TILE * TILE) / step).max(WORKGROUP * WORKGROUP) as usize;
-            let results =
+            let (results, _) =
                 self.run_list(pipeline, &self.pixels_layout, 4, pixels, batch, Some(step))?;
             if !self.loops_were_cut()? {
                 return Ok(results);
@@ -1266,7 +1272,8 @@ impl GpuRenderer {
     /// Runs a one-invocation-per-item entry point over `inputs` (bound at
     /// `binding`, outputs at `binding + 1`), `batch` items per dispatch so
     /// that no dispatch runs long; with `step`, the scene's samples that
-    /// many at a time, a dispatch each.
+    /// many at a time, a dispatch each. Also returns the dispatches' device
+    /// time, summed, where timestamps work.
     fn run_list<I: bytemuck::Pod, O: bytemuck::Pod>(
         &self,
         pipeline: &wgpu::ComputePipeline,
@@ -1275,8 +1282,9 @@ impl GpuRenderer {
         inputs: &[I],
         batch: usize,
         step: Option<u32>,
-    ) -> Result<Vec<O>> {
+    ) -> Result<(Vec<O>, Option<Duration>)> {
         const LIST_WORKGROUP: usize = 64;
+        let mut device = self.timer.as_ref().map(|_| Duration::ZERO);
         let gpu = &self.gpu;
         let batch = batch.min(inputs.len()).max(1);
         let buffer = |label, size, usage| {
@@ -1336,14 +1344,23 @@ impl GpuRenderer {
                     .write_buffer(&self.params_buffer, 0, bytemuck::bytes_of(&params));
                 let mut encoder = gpu.device.create_command_encoder(&Default::default());
                 {
-                    let mut pass = encoder.begin_compute_pass(&Default::default());
+                    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                        label: Some("list"),
+                        timestamp_writes: self.timer.as_ref().map(Timer::writes),
+                    });
                     pass.set_pipeline(pipeline);
                     pass.set_bind_group(0, &self.scene_group, &[]);
                     pass.set_bind_group(1, &group, &[]);
                     pass.dispatch_workgroups(chunk.len().div_ceil(LIST_WORKGROUP) as u32, 1, 1);
                 }
+                if let Some(timer) = &self.timer {
+                    timer.resolve(&mut encoder);
+                }
                 gpu.queue.submit([encoder.finish()]);
                 gpu.wait()?;
+                if let (Some(timer), Some(total)) = (&self.timer, &mut device) {
+                    *total += timer.read(gpu)?;
+                }
             }
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
             encoder.copy_buffer_to_buffer(&out_buffer, 0, &staging, 0, out_len);
@@ -1352,7 +1369,13 @@ impl GpuRenderer {
                 outputs.extend_from_slice(bytemuck::cast_slice::<u8, O>(bytes))
             })?;
         }
-        Ok(outputs)
+        Ok((outputs, device))
+    }
+
+    /// Device time of the last `trace_rays`, from timestamp queries (None
+    /// where the adapter has none).
+    pub fn trace_device_time(&self) -> Option<Duration> {
+        self.trace_device_time
     }
 }
 

@@ -262,3 +262,58 @@ impl BvhNode {
         self.occupied |= 1 << slot;
     }
 }
+
+/// One node of the GPU's compressed 8-wide BVH (80 bytes; `cwbvh` builds
+/// it from the wide tree, docs/bvh.md has the measurements). Child boxes are
+/// quantised to 8 bits per plane on a grid of `origin + q·2^(e − 127)` per
+/// axis, rounded outwards, so a child's box only grows; the grid is chosen
+/// so that every plane it can hold is an f32 exactly (no rounding when the
+/// shader dequantises it). `exponents` holds e for x, y and z in bytes 0 to
+/// 2. Slots are ordered by octant: slot s holds the child lying most toward
+/// the corner whose axis a is on the positive side when bit a of s is set,
+/// so a ray visits children nearest first by taking slots in the order
+/// `b ^ octant` for b = 0..8 (`ray_octant`). `child_meta` has a byte per slot
+/// (slots 0–3 in `child_meta[0]`, low byte first): 0 for an empty slot,
+/// `META_INTERIOR | rank` for interior child `child_base + rank`, and for a
+/// leaf `META_LEAF | (count − 1) << 4 | offset`, blocks `block_base +
+/// offset ..` (count of them). `q[2a]` holds the slots' quantised minima
+/// along axis a, `q[2a + 1]` their maxima, a byte per slot as in `child_meta`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct CompressedNode {
+    pub origin: [f32; 3],
+    pub exponents: u32,
+    pub child_base: u32,
+    pub block_base: u32,
+    pub child_meta: [u32; 2],
+    pub q: [[u32; 2]; 6],
+}
+
+/// `CompressedNode::child_meta` byte of an interior child (its rank below).
+pub const META_INTERIOR: u32 = 0x08;
+/// `CompressedNode::child_meta` byte of a leaf (count − 1 and offset below).
+pub const META_LEAF: u32 = 0x80;
+
+impl CompressedNode {
+    /// Slot `slot`'s byte of a row of eight (`child_meta` or a row of `q`).
+    pub fn byte(row: [u32; 2], slot: usize) -> u32 {
+        row[slot / 4] >> (8 * (slot % 4)) & 0xff
+    }
+
+    /// The scale 2^(e − 127) of axis `axis`'s grid.
+    pub fn scale(&self, axis: usize) -> f32 {
+        f32::from_bits((self.exponents >> (8 * axis) & 0xff) << 23)
+    }
+
+    /// Child `slot`'s box as the shader dequantises it: (min, max).
+    pub fn child_bounds(&self, slot: usize) -> ([f32; 3], [f32; 3]) {
+        let plane = |row: usize, axis: usize| {
+            (CompressedNode::byte(self.q[row], slot) as f32)
+                .mul_add(self.scale(axis), self.origin[axis])
+        };
+        (
+            std::array::from_fn(|a| plane(2 * a, a)),
+            std::array::from_fn(|a| plane(2 * a + 1, a)),
+        )
+    }
+}

@@ -11,6 +11,7 @@ pub mod bench;
 pub mod bvh;
 pub mod cli;
 pub mod cpu;
+pub mod cwbvh;
 pub mod diff;
 pub mod error;
 pub mod gpu;

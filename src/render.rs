@@ -146,6 +146,14 @@ impl Renderer {
         matches!(self, Renderer::Cpu)
     }
 
+    /// Device time of the last GPU `trace`, from timestamp queries.
+    pub fn trace_device_time(&self) -> Option<std::time::Duration> {
+        match self {
+            Renderer::Gpu(r) => r.trace_device_time(),
+            Renderer::Cpu => None,
+        }
+    }
+
     pub fn describe(&self) -> String {
         match self {
             Renderer::Gpu(r) => format!("GPU: {}", r.gpu().describe()),

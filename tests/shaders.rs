@@ -138,11 +138,13 @@ fn host_structs_match_wgsl_layout() {
     check_layout!(m, PrimBlock { v, prims });
     check_layout!(
         m,
-        BvhNode {
-            bounds,
-            children,
-            occupied,
-            _pad
+        CompressedNode {
+            origin,
+            exponents,
+            child_base,
+            block_base,
+            child_meta,
+            q
         }
     );
 }
@@ -173,18 +175,14 @@ fn shader_constants_match_host() {
     );
     assert_eq!(constant("FAR"), format!("Literal(F32({FAR:?}))"));
     assert_eq!(
-        constant("STACK_SIZE"),
-        format!("Literal(U32({}))", lambert::bvh::STACK_SIZE)
-    );
-    assert_eq!(constant("LEAF_BIT"), format!("Literal(U32({LEAF_BIT}))"));
-    assert_eq!(
-        constant("LEAF_COUNT_SHIFT"),
-        format!("Literal(U32({LEAF_COUNT_SHIFT}))")
+        constant("MAX_DEPTH"),
+        format!("Literal(U32({}))", lambert::bvh::MAX_DEPTH)
     );
     assert_eq!(
-        constant("LEAF_FIRST_MASK"),
-        format!("Literal(U32({LEAF_FIRST_MASK}))")
+        constant("META_INTERIOR"),
+        format!("Literal(U32({META_INTERIOR}))")
     );
+    assert_eq!(constant("META_LEAF"), format!("Literal(U32({META_LEAF}))"));
 }
 
 #[test]

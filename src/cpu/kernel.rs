@@ -7,9 +7,10 @@
 // 8-lane register, and whether the CPU can run it), and `push_sorted_zmm`
 // (the ordering of entered children in vector registers).
 
-use crate::bvh::STACK_SIZE;
+use crate::bvh::{MAX_DEPTH, STACK_SIZE};
 use crate::layout::{
-    BVH_WIDTH, BvhNode, FLAG_SMOOTH, LEAF_BIT, LIGHT_POINT, NO_HIT, PrimBlock, leaf_range,
+    BVH_WIDTH, BvhNode, CompressedNode, FLAG_SMOOTH, LEAF_BIT, LIGHT_POINT, META_LEAF, NO_HIT,
+    PrimBlock, leaf_range,
 };
 use crate::scene::{Accel, Camera, Intersect, Scene};
 
@@ -254,6 +255,10 @@ pub struct Kernel<'a> {
     /// Whether node visits take `intersect_boxes_ymm` (the CPU has 8-lane
     /// vector registers and fused multiply-adds).
     ymm_boxes: bool,
+    /// The GPU's compressed nodes of the scene's BVH: with them, `trace`
+    /// traverses as the shader does (`trace_compressed`), the twin that
+    /// GPU results are compared with.
+    pub compressed: Option<&'a [CompressedNode]>,
 }
 
 impl<'a> Kernel<'a> {
@@ -272,6 +277,7 @@ impl<'a> Kernel<'a> {
             strata_x: crate::scene::strata_columns(scene.spp),
             intersect: scene.intersect,
             ymm_boxes,
+            compressed: None,
         }
     }
 
@@ -386,6 +392,63 @@ impl<'a> Kernel<'a> {
         // SAFETY: every pass gets this traversal's own stack.
         while unsafe { self.visit::<false, false>(&mut traversal, &mut stack) } {}
         traversal.hit
+    }
+
+    /// The shader's `trace_compressed`: closest hit through the GPU's
+    /// compressed nodes (`nodes`, the scene's BVH compressed), children in
+    /// octant order, each pass the blocks of the last node visited and then
+    /// one node, a node group per stack entry; with `any_hit`, the first
+    /// hit found.
+    pub fn trace_compressed(
+        &self,
+        nodes: &[CompressedNode],
+        ray_in: Ray,
+        shear: &Shear,
+        any_hit: bool,
+    ) -> Hit {
+        let mut ray = ray_in;
+        let mut hit = miss();
+        let Some(root) = nodes.first() else {
+            return hit;
+        };
+        let blocks = &self.scene.bvh.blocks;
+        let slabs = ray_slabs(&ray);
+        let octant = ray_octant(&slabs);
+        let mut stack = [(0u32, 0u32); MAX_DEPTH];
+        let mut sp = 0;
+        let mut index = 0u32;
+        let mut node = root;
+        let (mut interior, mut leaf_blocks) = intersect_compressed_node(&ray, &slabs, root, octant);
+        let mut block_base = root.block_base;
+        loop {
+            while leaf_blocks != 0 {
+                let i = leaf_blocks.trailing_zeros();
+                leaf_blocks &= leaf_blocks - 1;
+                let block = &blocks[(block_base + i) as usize];
+                if self.record_block_hits(&mut ray, shear, &mut hit, block) && any_hit {
+                    return hit;
+                }
+            }
+            if interior == 0 {
+                if sp == 0 {
+                    break;
+                }
+                sp -= 1;
+                (index, interior) = stack[sp];
+                node = &nodes[index as usize];
+            }
+            let slot = (interior.trailing_zeros() ^ octant) as usize;
+            interior &= interior - 1;
+            if interior != 0 {
+                stack[sp] = (index, interior);
+                sp += 1;
+            }
+            index = node.child_base + (CompressedNode::byte(node.child_meta, slot) & 7);
+            node = &nodes[index as usize];
+            (interior, leaf_blocks) = intersect_compressed_node(&ray, &slabs, node, octant);
+            block_base = node.block_base;
+        }
+        hit
     }
 
     /// One pass of `trace_bvh`'s loop: visits the traversal's current node or
@@ -522,9 +585,10 @@ impl<'a> Kernel<'a> {
     #[inline(always)]
     pub fn trace(&self, ray_in: Ray, any_hit: bool) -> Hit {
         let (ray, shear) = prepare_ray(ray_in);
-        let hit = match self.scene.accel {
-            Accel::Bvh => self.trace_bvh(ray, &shear, any_hit),
-            Accel::BruteForce => self.trace_brute_force(ray, &shear, any_hit),
+        let hit = match (self.scene.accel, self.compressed) {
+            (Accel::Bvh, Some(nodes)) => self.trace_compressed(nodes, ray, &shear, any_hit),
+            (Accel::Bvh, None) => self.trace_bvh(ray, &shear, any_hit),
+            (Accel::BruteForce, _) => self.trace_brute_force(ray, &shear, any_hit),
         };
         unscale(hit, &shear)
     }
@@ -1047,6 +1111,67 @@ pub fn intersect_boxes(ray: &Ray, slabs: &Slabs, node: &BvhNode) -> BoxHits {
         t[4 * half..4 * half + 4].copy_from_slice(&t_near.to_array());
     }
     BoxHits { t, entered }
+}
+
+/// Bit a set when the ray runs toward −a, as in the shader: a compressed
+/// node's slots taken in the order b ^ octant (b = 0, 1, …) come nearest
+/// first.
+#[inline(always)]
+pub fn ray_octant(slabs: &Slabs) -> u32 {
+    slabs.flip[0] as u32 | (slabs.flip[1] as u32) << 1 | (slabs.flip[2] as u32) << 2
+}
+
+/// The four bytes of a word, low first, as numbers.
+fn slot_bytes(word: u32) -> Vec4 {
+    Vec4::from_array(std::array::from_fn(|i| (word >> (8 * i) & 0xff) as Real))
+}
+
+/// Which children of a compressed node the ray enters within (tmin, tmax),
+/// as in the shader: its interior children as bits in visit order (bit b
+/// for slot b ^ octant), and the blocks of its leaves as bits from
+/// `block_base`. The planes are dequantised (exactly), then
+/// `intersect_boxes`'s slab test.
+pub fn intersect_compressed_node(
+    ray: &Ray,
+    slabs: &Slabs,
+    node: &CompressedNode,
+    octant: u32,
+) -> (u32, u32) {
+    let (mut interior, mut blocks) = (0, 0);
+    for half in 0..2 {
+        let mut t_near = Vec4::splat(ray.tmin);
+        let mut t_far = Vec4::splat(ray.tmax);
+        for axis in 0..3 {
+            let flip = slabs.flip[axis] as usize;
+            let scale = Vec4::splat(node.scale(axis) as Real);
+            let origin = Vec4::splat(node.origin[axis] as Real);
+            let plane = |row: usize| slot_bytes(node.q[row][half]).mul_add(scale, origin);
+            let near = plane(2 * axis + flip).mul_add(
+                Vec4::splat(slabs.inv_dir[axis]),
+                Vec4::splat(slabs.near_offset[axis]),
+            );
+            let far = plane(2 * axis + 1 - flip).mul_add(
+                Vec4::splat(slabs.inv_dir_far[axis]),
+                Vec4::splat(slabs.far_offset[axis]),
+            );
+            t_near = greater_of(near, t_near);
+            t_far = lesser_of(far, t_far);
+        }
+        let inside = t_near.cmple(t_far) & t_near.cmplt(Vec4::splat(ray.tmax));
+        for lane in 0..4 {
+            let slot = 4 * half + lane;
+            let m = CompressedNode::byte(node.child_meta, slot);
+            if inside.bitmask() >> lane & 1 == 0 || m == 0 {
+                continue;
+            }
+            if m & META_LEAF == 0 {
+                interior |= 1 << (slot as u32 ^ octant);
+            } else {
+                blocks |= ((1 << ((m >> 4 & 7) + 1)) - 1) << (m & 0xf);
+            }
+        }
+    }
+    (interior, blocks)
 }
 
 fn sign_nonzero(x: Real) -> Real {

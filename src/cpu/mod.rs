@@ -308,7 +308,7 @@ pub fn render_rows(
     rows: std::ops::Range<u32>,
     progress: &Progress,
 ) -> Rendered {
-    render_rows_with(scene, precision, rows, progress, CpuKernel::active())
+    render_rows_with(scene, precision, rows, progress, CpuKernel::active(), None)
 }
 
 /// `render` with a given CPU kernel (one this CPU runs).
@@ -324,7 +324,54 @@ pub fn render_with(
         0..scene.camera.height,
         progress,
         cpu_kernel,
+        None,
     )
+}
+
+/// The GPU's twin: renders in single precision tracing the GPU's
+/// compressed BVH as the shader does (`f32::Kernel::trace_compressed`), so
+/// that a GPU/CPU difference is one of arithmetic, never of traversal
+/// order. What `lambert diff` and the tests compare the GPU with.
+pub fn render_gpu_twin(scene: &Scene, progress: &Progress) -> Rendered {
+    let nodes = crate::cwbvh::compress(&scene.bvh);
+    render_rows_with(
+        scene,
+        Precision::F32,
+        0..scene.camera.height,
+        progress,
+        CpuKernel::Portable,
+        Some(&nodes),
+    )
+}
+
+/// The GPU's twin of a ray query (as `render_gpu_twin`): the same hits as
+/// the GPU's, primitive for primitive and bit for bit, where the GPU's
+/// arithmetic is IEEE's.
+pub fn trace_rays_gpu_twin(
+    scene: &Scene,
+    rays: &[layout::Ray],
+    any_hit: bool,
+    intersect: Intersect,
+) -> Vec<layout::Hit> {
+    let nodes = crate::cwbvh::compress(&scene.bvh);
+    let mut kernel = f32::Kernel::new_for(scene, false);
+    kernel.intersect = intersect;
+    kernel.compressed = Some(&nodes);
+    rays.par_iter()
+        .map(|ray| {
+            let hit = kernel.trace(f32::Ray::from_query(ray), any_hit);
+            if hit.prim == NO_HIT {
+                layout::Hit::MISS
+            } else {
+                layout::Hit {
+                    t: hit.t,
+                    prim: hit.prim,
+                    u: hit.u,
+                    v: hit.v,
+                }
+            }
+        })
+        .collect()
 }
 
 fn render_rows_with(
@@ -333,6 +380,7 @@ fn render_rows_with(
     rows: std::ops::Range<u32>,
     progress: &Progress,
     cpu_kernel: CpuKernel,
+    compressed: Option<&[layout::CompressedNode]>,
 ) -> Rendered {
     check_runs(cpu_kernel);
     let first_row = rows.start as usize;
@@ -340,7 +388,8 @@ fn render_rows_with(
     let mut rgb = vec![[0.0; 3]; width * height];
     let mut prims = vec![0u32; width * height];
     let mut variance = vec![0.0; width * height];
-    let kernel32 = f32::Kernel::new_for(scene, cpu_kernel.ymm_boxes());
+    let mut kernel32 = f32::Kernel::new_for(scene, cpu_kernel.ymm_boxes());
+    kernel32.compressed = compressed;
     let kernel64 = f64::Kernel::new(scene);
     rgb.par_chunks_mut(width)
         .zip(prims.par_chunks_mut(width))

@@ -1,0 +1,210 @@
+//! The GPU's BVH: the wide tree (`bvh`) with each node compressed to 80
+//! bytes (`layout::CompressedNode`), after Ylitie, Karras and Laine,
+//! "Efficient Incoherent Ray Traversal on GPUs Through Compressed Wide
+//! BVHs" (HPG 2017). Node `i` here is node `i` of the wide tree, with the
+//! same children and leaves (the leaf blocks are shared, untouched): only
+//! the boxes are quantised, outwards, and the slots reordered by octant.
+//!
+//! Conservative by construction: each plane is rounded away from the box
+//! on a grid whose every point is an f32 (a multiple of a power of two with
+//! fewer than 24 significant bits), so the shader's dequantisation
+//! `fma(q, scale, origin)` is exact on every device, fused or not, and the
+//! box it gets contains the exact one. The slab test then sees a box at
+//! least as large as the wide tree's, and the watertight guarantee holds.
+
+use glam::Vec3;
+
+use crate::bvh::{Aabb, Bvh, child_aabb, occupied_slots};
+use crate::layout::{BVH_WIDTH, CompressedNode, LEAF_BIT, META_INTERIOR, META_LEAF, leaf_range};
+
+/// Grid steps per axis: planes are bytes.
+const STEPS: f64 = 255.0;
+/// Integers below this are exact in f32: a grid point `k·2^E` with
+/// |k| < 2^24 is an f32.
+const EXACT: f64 = (1u64 << 24) as f64;
+
+/// The compressed nodes of `bvh`, node for node.
+pub fn compress(bvh: &Bvh) -> Vec<CompressedNode> {
+    use rayon::prelude::*;
+    (0..bvh.nodes.len())
+        .into_par_iter()
+        .map(|i| compress_node(bvh, i))
+        .collect()
+}
+
+/// Which slot each child takes (`slot_of[c]`), children given by their
+/// centres' offsets from the node's centre: slot s wants the child lying
+/// most toward the corner that s's bits name (bit a set: +a), and the best
+/// pairs are taken first (Ylitie et al.'s greedy assignment).
+fn octant_slots(offsets: &[Vec3]) -> Vec<usize> {
+    let corner = |s: usize| {
+        Vec3::from_array(std::array::from_fn(|a| {
+            if s >> a & 1 == 1 { 1.0 } else { -1.0 }
+        }))
+    };
+    let mut pairs: Vec<(f32, usize, usize)> = offsets
+        .iter()
+        .enumerate()
+        .flat_map(|(c, d)| (0..BVH_WIDTH).map(move |s| (d.dot(corner(s)), c, s)))
+        .collect();
+    // Largest first; ties by child, then slot, so the layout is deterministic.
+    pairs.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
+    let mut slot_of = vec![usize::MAX; offsets.len()];
+    let mut taken = [false; BVH_WIDTH];
+    for (_, c, s) in pairs {
+        if slot_of[c] == usize::MAX && !taken[s] {
+            slot_of[c] = s;
+            taken[s] = true;
+        }
+    }
+    slot_of
+}
+
+/// The grid of one axis of a node whose children span [lo, hi]: (biased
+/// exponent e, origin) with scale 2^(e − 127), the origin a multiple of
+/// the scale, every plane from the origin up to 255 steps an f32, and hi
+/// within those steps.
+fn axis_grid(lo: f32, hi: f32) -> (u32, f32) {
+    let extent = (hi as f64 - lo as f64).max(0.0);
+    let mut exponent = if extent > 0.0 {
+        (extent / STEPS).log2().ceil() as i32
+    } else {
+        -126
+    };
+    exponent = exponent.max(-126);
+    loop {
+        assert!(exponent <= 127, "no grid holds [{lo}, {hi}]");
+        let scale = 2f64.powi(exponent);
+        let k = (lo as f64 / scale).floor();
+        let fits = ((hi as f64 - k * scale) / scale).ceil() <= STEPS;
+        if fits && k.abs() + STEPS < EXACT {
+            return ((exponent + 127) as u32, (k * scale) as f32);
+        }
+        exponent += 1;
+    }
+}
+
+fn compress_node(bvh: &Bvh, index: usize) -> CompressedNode {
+    let node = &bvh.nodes[index];
+    let slots: Vec<usize> = occupied_slots(node).collect();
+    let boxes: Vec<Aabb> = slots.iter().map(|&s| child_aabb(node, s)).collect();
+    let mut parent = Aabb::EMPTY;
+    for b in &boxes {
+        parent.grow(b);
+    }
+    let mut out = CompressedNode {
+        // Empty slots: inverted boxes (and meta 0, which traversal masks).
+        q: [[0xffff_ffff, 0xffff_ffff], [0, 0]]
+            .repeat(3)
+            .try_into()
+            .expect("six rows"),
+        ..CompressedNode::default()
+    };
+    if slots.is_empty() {
+        return out;
+    }
+    let mut scales = [0f64; 3];
+    for axis in 0..3 {
+        let (e, origin) = axis_grid(parent.min[axis], parent.max[axis]);
+        out.exponents |= e << (8 * axis);
+        out.origin[axis] = origin;
+        scales[axis] = 2f64.powi(e as i32 - 127);
+    }
+    let children: Vec<u32> = slots.iter().map(|&s| node.children[s]).collect();
+    let interior = || children.iter().copied().filter(|c| c & LEAF_BIT == 0);
+    let leaves = || children.iter().copied().filter(|c| c & LEAF_BIT != 0);
+    out.child_base = interior().min().unwrap_or(0);
+    out.block_base = leaves().map(|c| leaf_range(c).0).min().unwrap_or(0);
+    let centre = parent.centre();
+    let offsets: Vec<Vec3> = boxes.iter().map(|b| b.centre() - centre).collect();
+    let slot_of = octant_slots(&offsets);
+    let set_byte = |row: &mut [u32; 2], slot: usize, value: u32| {
+        let shift = 8 * (slot % 4);
+        row[slot / 4] = row[slot / 4] & !(0xff << shift) | value << shift;
+    };
+    for (c, (&child, b)) in children.iter().zip(&boxes).enumerate() {
+        let slot = slot_of[c];
+        let meta = if child & LEAF_BIT == 0 {
+            let rank = child - out.child_base;
+            assert!(
+                rank < BVH_WIDTH as u32,
+                "node {index}: interior children are not contiguous"
+            );
+            META_INTERIOR | rank
+        } else {
+            let (first, count) = leaf_range(child);
+            let offset = first - out.block_base;
+            assert!(
+                offset < 16 && count <= 8,
+                "node {index}: leaf blocks are not contiguous"
+            );
+            META_LEAF | (count - 1) << 4 | offset
+        };
+        set_byte(&mut out.child_meta, slot, meta);
+        for axis in 0..3 {
+            let origin = out.origin[axis] as f64;
+            let scale = scales[axis];
+            let lo = ((b.min[axis] as f64 - origin) / scale).floor();
+            let hi = ((b.max[axis] as f64 - origin) / scale).ceil();
+            debug_assert!((0.0..=STEPS).contains(&lo) && (0.0..=STEPS).contains(&hi));
+            set_byte(&mut out.q[2 * axis], slot, lo as u32);
+            set_byte(&mut out.q[2 * axis + 1], slot, hi as u32);
+        }
+        let (min, max) = out.child_bounds(slot);
+        for axis in 0..3 {
+            assert!(
+                min[axis] <= b.min[axis] && max[axis] >= b.max[axis],
+                "node {index} slot {slot}: the quantised box does not hold the child's"
+            );
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grids_hold_their_range_exactly() {
+        for (lo, hi) in [
+            (0.0f32, 1.0f32),
+            (-1.0, 1.0),
+            (1000.0, 1000.001),
+            (5.0, 5.0),
+            (-3e7, 4e7),
+            (1e-30, 2e-30),
+            (-1e30, 1e30),
+        ] {
+            let (e, origin) = axis_grid(lo, hi);
+            let scale = f32::from_bits(e << 23);
+            assert!(origin <= lo, "[{lo}, {hi}]: origin {origin}");
+            assert!(255f32.mul_add(scale, origin) >= hi, "[{lo}, {hi}]");
+            // Every grid point is exact: stepping up one by one in f64
+            // gives the f32 the shader computes.
+            for q in 0..=255u32 {
+                let exact = origin as f64 + q as f64 * scale as f64;
+                assert_eq!(
+                    (q as f32).mul_add(scale, origin) as f64,
+                    exact,
+                    "[{lo}, {hi}] q {q}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn octant_slots_put_children_in_their_corners() {
+        let offsets: Vec<Vec3> = (0..8)
+            .map(|s| {
+                Vec3::from_array(std::array::from_fn(|a| {
+                    if s >> a & 1 == 1 { 1.0 } else { -1.0 }
+                }))
+            })
+            .collect();
+        assert_eq!(octant_slots(&offsets), (0..8).collect::<Vec<_>>());
+        // Fewer children still take distinct slots.
+        let slots = octant_slots(&offsets[..3]);
+        assert_eq!(slots, vec![0, 1, 2]);
+    }
+}
