@@ -25,8 +25,19 @@ override ANY_HIT: bool = false;
 override TRIANGLES_PER_BINDING: u32 = 0xffffffffu;
 override NODES_PER_BINDING: u32 = 0xffffffffu;
 override BLOCKS_PER_BINDING: u32 = 0xffffffffu;
+// Read the BVH's nodes and blocks from `bvh_node_texels` and
+// `bvh_block_texels` rather than the storage buffers (gpu::BvhStorage:
+// lavapipe fetches texels with vector gathers, storage words a lane at a
+// time).
+override BVH_TEXELS: bool = false;
+// The `render` entry point's workgroup: gpu::RENDER_WORKGROUP, measured
+// (docs/bvh.md).
+override RENDER_WORKGROUP_X: u32 = 8u;
+override RENDER_WORKGROUP_Y: u32 = 8u;
 
 const NO_HIT: u32 = 0xffffffffu;
+// Texels a row of the BVH textures: 1 << TEXEL_ROW_BITS (gpu::TEXELS_PER_ROW).
+const TEXEL_ROW_BITS: u32 = 12u;
 // WGSL has no infinity literal; the largest finite f32 serves as "no hit yet".
 const FAR: f32 = 3.40282347e38;
 const LIGHT_POINT: u32 = 0u;
@@ -203,6 +214,11 @@ struct Surface {
 // Set to 1 by an invocation whose loops the driver cut short (see
 // `loops_completed`); the host then splits the work finer or fails.
 @group(0) @binding(12) var<storage, read_write> loop_status: array<atomic<u32>>;
+// With BVH_TEXELS: node i's words at texels 5i to 5i + 4, block i's at 10i
+// to 10i + 9 (v[k][a] at 10i + 3k + a, prims at 10i + 9), texel t at
+// (t mod row, t / row).
+@group(0) @binding(13) var bvh_node_texels: texture_2d<u32>;
+@group(0) @binding(14) var bvh_block_texels: texture_2d<u32>;
 // Group 1 holds what one entry point reads and writes: an image tile for
 // `render`, a batch of rays for `trace_rays`.
 @group(1) @binding(0) var out_color: texture_storage_2d<rgba32float, write>;
@@ -242,26 +258,39 @@ fn unpack_node(w: array<vec4<u32>, 5>) -> CompressedNode {
         array<vec2<u32>, 6>(w[2].xy, w[2].zw, w[3].xy, w[3].zw, w[4].xy, w[4].zw));
 }
 
-fn bvh_node_at(i: u32) -> CompressedNode {
-    if i < NODES_PER_BINDING {
-        return unpack_node(bvh_nodes[i]);
+fn texel_at(texels: texture_2d<u32>, t: u32) -> vec4<u32> {
+    let row_mask = (1u << TEXEL_ROW_BITS) - 1u;
+    return textureLoad(texels, vec2<u32>(t & row_mask, t >> TEXEL_ROW_BITS), 0);
+}
+
+// Word k (0 to 4) of node i.
+fn node_word(i: u32, k: u32) -> vec4<u32> {
+    if BVH_TEXELS {
+        return texel_at(bvh_node_texels, 5u * i + k);
     }
-    return unpack_node(bvh_nodes_hi[i - NODES_PER_BINDING]);
+    if i < NODES_PER_BINDING {
+        return bvh_nodes[i][k];
+    }
+    return bvh_nodes_hi[i - NODES_PER_BINDING][k];
+}
+
+fn bvh_node_at(i: u32) -> CompressedNode {
+    return unpack_node(array<vec4<u32>, 5>(node_word(i, 0u), node_word(i, 1u), node_word(i, 2u), node_word(i, 3u), node_word(i, 4u)));
 }
 
 // What a node group needs of node i once it is popped: child_base,
 // block_base and child_meta (the second of its five words).
 fn node_links(i: u32) -> vec4<u32> {
-    if i < NODES_PER_BINDING {
-        return bvh_nodes[i][1];
-    }
-    return bvh_nodes_hi[i - NODES_PER_BINDING][1];
+    return node_word(i, 1u);
 }
 
 // Block i's lanes of coordinate a of vertex k, and its primitives: read
 // where they lie, not as a copy of the block, which dynamic indexing by
 // the ray's axes would put in slow local memory.
 fn block_lanes(i: u32, k: u32, a: u32) -> vec4<f32> {
+    if BVH_TEXELS {
+        return bitcast<vec4<f32>>(texel_at(bvh_block_texels, 10u * i + 3u * k + a));
+    }
     if i < BLOCKS_PER_BINDING {
         return bvh_blocks[i].v[k][a];
     }
@@ -269,6 +298,9 @@ fn block_lanes(i: u32, k: u32, a: u32) -> vec4<f32> {
 }
 
 fn block_prims(i: u32) -> vec4<u32> {
+    if BVH_TEXELS {
+        return texel_at(bvh_block_texels, 10u * i + 9u);
+    }
     if i < BLOCKS_PER_BINDING {
         return bvh_blocks[i].prims;
     }
@@ -971,7 +1003,7 @@ fn pixel_mean(sums: vec4<f32>) -> vec4<f32> {
     return vec4<f32>(mean, variance);
 }
 
-@compute @workgroup_size(8, 8)
+@compute @workgroup_size(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y)
 fn render(@builtin(global_invocation_id) id: vec3<u32>) {
     let size = textureDimensions(out_color);
     let pixel = params.tile_origin + id.xy;

@@ -75,13 +75,23 @@ fn axis_grid(lo: f32, hi: f32) -> (u32, f32) {
     loop {
         assert!(exponent <= 127, "no grid holds [{lo}, {hi}]");
         let scale = 2f64.powi(exponent);
+        // lo / scale is exact (a power of two), so the origin is not above lo.
         let k = (lo as f64 / scale).floor();
-        let fits = ((hi as f64 - k * scale) / scale).ceil() <= STEPS;
-        if fits && k.abs() + STEPS < EXACT {
-            return ((exponent + 127) as u32, (k * scale) as f32);
+        if k.abs() + STEPS < EXACT {
+            let origin = (k * scale) as f32;
+            // Compared in f32, where the grid's points are exact: in f64,
+            // hi − origin may round (hi = 8e-17 against an origin of −1.3).
+            if dequantise(STEPS as u32, scale as f32, origin) >= hi {
+                return ((exponent + 127) as u32, origin);
+            }
         }
         exponent += 1;
     }
+}
+
+/// Grid point q, as the shader computes it (exactly, on this grid).
+fn dequantise(q: u32, scale: f32, origin: f32) -> f32 {
+    (q as f32).mul_add(scale, origin)
 }
 
 fn compress_node(bvh: &Bvh, index: usize) -> CompressedNode {
@@ -142,19 +152,28 @@ fn compress_node(bvh: &Bvh, index: usize) -> CompressedNode {
         };
         set_byte(&mut out.child_meta, slot, meta);
         for axis in 0..3 {
-            let origin = out.origin[axis] as f64;
-            let scale = scales[axis];
-            let lo = ((b.min[axis] as f64 - origin) / scale).floor();
-            let hi = ((b.max[axis] as f64 - origin) / scale).ceil();
-            debug_assert!((0.0..=STEPS).contains(&lo) && (0.0..=STEPS).contains(&hi));
-            set_byte(&mut out.q[2 * axis], slot, lo as u32);
-            set_byte(&mut out.q[2 * axis + 1], slot, hi as u32);
+            let (origin, scale) = (out.origin[axis], scales[axis]);
+            let estimate = |x: f32| (x as f64 - origin as f64) / scale;
+            // Rounded outwards in f64, then moved until the f32 grid point
+            // (exact) is outside the box: the f64 difference may round.
+            let mut lo = (estimate(b.min[axis]).floor().max(0.0)) as u32;
+            while lo > 0 && dequantise(lo, scale as f32, origin) > b.min[axis] {
+                lo -= 1;
+            }
+            let mut hi = (estimate(b.max[axis]).ceil().min(STEPS)) as u32;
+            while hi < STEPS as u32 && dequantise(hi, scale as f32, origin) < b.max[axis] {
+                hi += 1;
+            }
+            set_byte(&mut out.q[2 * axis], slot, lo);
+            set_byte(&mut out.q[2 * axis + 1], slot, hi);
         }
         let (min, max) = out.child_bounds(slot);
         for axis in 0..3 {
             assert!(
                 min[axis] <= b.min[axis] && max[axis] >= b.max[axis],
-                "node {index} slot {slot}: the quantised box does not hold the child's"
+                "node {index} slot {slot}: the quantised box {min:?}..{max:?} does not hold the child's {b:?} (origin {:?}, exponents {:x})",
+                out.origin,
+                out.exponents
             );
         }
     }
@@ -191,6 +210,39 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn boxes_hold_children_whose_planes_round_away_in_f64() {
+        // A child reaching 8e-17 beside one at −1.3: in f64, 8e-17 + 1.3125
+        // is 1.3125, so a plane rounded up from that difference fell short
+        // of 8e-17 (found on trimesh's torus).
+        use crate::layout::Triangle;
+        let triangle = |a: [f32; 3], b: [f32; 3], c: [f32; 3]| Triangle {
+            v0: a,
+            v1: b,
+            v2: c,
+            ..Triangle::default()
+        };
+        let mut triangles = Vec::new();
+        for i in 0..64 {
+            let y = i as f32 * 0.02;
+            triangles.push(triangle(
+                [-1.3, y, 0.0],
+                [7.960204e-17, y, 0.1],
+                [-0.7, y + 0.01, 0.3],
+            ));
+            triangles.push(triangle(
+                [1.3, y, 0.0],
+                [0.2, y, 0.1],
+                [0.7, y + 0.01, -0.3],
+            ));
+        }
+        let bvh = Bvh::build(&triangles, &[]);
+        let nodes = compress(&bvh);
+        // compress checks every child's box; and every leaf's triangles lie
+        // in their quantised box.
+        assert_eq!(nodes.len(), bvh.nodes.len());
     }
 
     #[test]

@@ -23,7 +23,10 @@ pub const SHADER_SOURCE: &str = include_str!("../shaders/trace.wgsl");
 /// Side of the square tile one dispatch renders: small enough that no
 /// dispatch runs long enough for a GPU watchdog to kill it.
 pub const TILE: u32 = 256;
-const WORKGROUP: u32 = 8;
+/// The `render` entry point's workgroup (x, y) in pixels
+/// (`RENDER_WORKGROUP_X`/`_Y` in trace.wgsl), measured on lavapipe against
+/// 16×16 and 64×1 (docs/bvh.md).
+const RENDER_WORKGROUP: [u32; 2] = [8, 8];
 
 /// Which adapter to use: `--adapter`, `--backend`, or wgpu's own
 /// `WGPU_ADAPTER_NAME` and `WGPU_BACKEND` when those are unset.
@@ -148,6 +151,36 @@ fn is_software(info: &wgpu::AdapterInfo) -> bool {
 fn is_llvmpipe(info: &wgpu::AdapterInfo) -> bool {
     info.name.to_lowercase().contains("llvmpipe") || info.driver.to_lowercase().contains("llvmpipe")
 }
+
+/// Where the shader reads the BVH's nodes and leaf blocks from
+/// (`BVH_TEXELS` in trace.wgsl).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BvhStorage {
+    /// Storage buffers, split over two bindings when large: what hardware
+    /// GPUs get.
+    Buffers,
+    /// rgba32uint textures read with `textureLoad`: what llvmpipe gets. It
+    /// fetches a texel for its 8 SIMD lanes with vector instructions, where
+    /// a storage-buffer load whose address differs between lanes is a loop
+    /// over them, a branch per word (docs/bvh.md).
+    Texels,
+}
+
+impl BvhStorage {
+    /// The storage that measured fastest on this kind of adapter.
+    pub fn for_adapter(info: &wgpu::AdapterInfo) -> BvhStorage {
+        if is_llvmpipe(info) {
+            BvhStorage::Texels
+        } else {
+            BvhStorage::Buffers
+        }
+    }
+}
+
+/// Texels in a row of a BVH texture (`TEXEL_ROW_BITS` in trace.wgsl): a
+/// power of two, so that the shader splits a texel index into (x, y) with a
+/// mask and a shift.
+pub const TEXELS_PER_ROW: u32 = 4096;
 
 /// Samples a dispatch adds to each pixel on llvmpipe: the bundled scenes'
 /// pixels ran out of loop iterations from about 192 (a 3,674-triangle
@@ -383,6 +416,76 @@ impl Gpu {
     }
 }
 
+impl Gpu {
+    /// `bytes` (whole 16-byte texels) as an rgba32uint texture of
+    /// `TEXELS_PER_ROW` texels a row, texel i at (i % row, i / row).
+    fn texel_texture(&self, label: &str, bytes: &[u8]) -> Result<wgpu::Texture> {
+        const TEXEL: usize = 16;
+        let row = TEXELS_PER_ROW as usize;
+        let texels = (bytes.len() / TEXEL).max(1);
+        let rows = texels.div_ceil(row);
+        let max = self.limits.max_texture_dimension_2d as usize;
+        if rows > max || row > max {
+            return Err(Error::GpuLimit(format!(
+                "{label}: {} bytes need a texture of {row} × {rows} texels; {} allows {max} × {max}",
+                bytes.len(),
+                self.describe()
+            )));
+        }
+        let texture = self.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width: row as u32,
+                height: rows as u32,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba32Uint,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        });
+        // Whole rows straight from `bytes`, then the last one padded.
+        let write = |y: usize, data: &[u8], height: usize| {
+            self.queue.write_texture(
+                wgpu::TexelCopyTextureInfo {
+                    texture: &texture,
+                    mip_level: 0,
+                    origin: wgpu::Origin3d {
+                        x: 0,
+                        y: y as u32,
+                        z: 0,
+                    },
+                    aspect: wgpu::TextureAspect::All,
+                },
+                data,
+                wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some((row * TEXEL) as u32),
+                    rows_per_image: Some(height as u32),
+                },
+                wgpu::Extent3d {
+                    width: row as u32,
+                    height: height as u32,
+                    depth_or_array_layers: 1,
+                },
+            )
+        };
+        let full = bytes.len() / (row * TEXEL);
+        if full > 0 {
+            write(0, &bytes[..full * row * TEXEL], full);
+        }
+        let rest = &bytes[full * row * TEXEL..];
+        if !rest.is_empty() {
+            let mut last = vec![0u8; row * TEXEL];
+            last[..rest.len()].copy_from_slice(rest);
+            write(full, &last, 1);
+        }
+        Ok(texture)
+    }
+}
+
 /// A buffer bound as a low range and, when split, a high one.
 struct SplitBuffer {
     buffer: wgpu::Buffer,
@@ -534,6 +637,8 @@ pub struct GpuRenderer {
     /// Device time of the last `trace_rays` (its dispatches, summed), where
     /// timestamps work.
     trace_device_time: Option<Duration>,
+    /// `run_list`'s input, output and readback buffers, by label.
+    list_buffers: std::cell::RefCell<std::collections::HashMap<&'static str, wgpu::Buffer>>,
     pub upload_time: Duration,
 }
 
@@ -589,6 +694,8 @@ enum BindingKind {
     Storage,
     StorageWrite,
     Image(wgpu::TextureFormat),
+    /// A read-only rgba32uint texture (`BvhStorage::Texels`).
+    Texels,
 }
 
 fn bind_group_layout(
@@ -618,6 +725,11 @@ fn bind_group_layout(
                     access: wgpu::StorageTextureAccess::WriteOnly,
                     format: *format,
                     view_dimension: wgpu::TextureViewDimension::D2,
+                },
+                BindingKind::Texels => wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Uint,
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
                 },
             },
             count: None,
@@ -658,7 +770,14 @@ fn compute_pipeline(
 impl GpuRenderer {
     /// Uploads `scene` with a shader specialised to it.
     pub fn new(gpu: Gpu, scene: &Scene) -> Result<GpuRenderer> {
-        GpuRenderer::build(gpu, scene, specialisation(scene))
+        let storage = BvhStorage::for_adapter(&gpu.info);
+        GpuRenderer::build(gpu, scene, specialisation(scene), storage)
+    }
+
+    /// `new` with the BVH in the given storage rather than the adapter's
+    /// (the tests check both on one adapter).
+    pub fn with_bvh_storage(gpu: Gpu, scene: &Scene, storage: BvhStorage) -> Result<GpuRenderer> {
+        GpuRenderer::build(gpu, scene, specialisation(scene), storage)
     }
 
     /// Uploads `scene` with the full shader: every feature compiled in, only
@@ -669,10 +788,16 @@ impl GpuRenderer {
             .into_iter()
             .filter(|(name, _)| matches!(*name, "USE_BVH" | "INTERSECT"))
             .collect();
-        GpuRenderer::build(gpu, scene, constants)
+        let storage = BvhStorage::for_adapter(&gpu.info);
+        GpuRenderer::build(gpu, scene, constants, storage)
     }
 
-    fn build(gpu: Gpu, scene: &Scene, constants: Vec<(&'static str, f64)>) -> Result<GpuRenderer> {
+    fn build(
+        gpu: Gpu,
+        scene: &Scene,
+        constants: Vec<(&'static str, f64)>,
+        storage: BvhStorage,
+    ) -> Result<GpuRenderer> {
         let start = Instant::now();
         let device = &gpu.device;
         let params = params_for(scene, &scene.camera);
@@ -689,9 +814,27 @@ impl GpuRenderer {
             gpu.split_buffer("triangles", &non_empty::<Triangle>(&scene.triangles), 48)?;
         let normals =
             gpu.split_buffer("normals", &non_empty::<TriangleNormals>(&scene.normals), 48)?;
+        let compressed = crate::cwbvh::compress(&scene.bvh);
+        let texels = storage == BvhStorage::Texels;
+        // The storage not used gets a placeholder, bound and never read.
+        let (buffer_nodes, buffer_blocks): (&[CompressedNode], &[PrimBlock]) = if texels {
+            (&[], &[])
+        } else {
+            (&compressed, &scene.bvh.blocks)
+        };
+        let (texel_nodes, texel_blocks): (&[u8], &[u8]) = if texels {
+            (
+                bytemuck::cast_slice(&compressed),
+                bytemuck::cast_slice(&scene.bvh.blocks),
+            )
+        } else {
+            (&[], &[])
+        };
+        let node_texture = gpu.texel_texture("BVH node texels", texel_nodes)?;
+        let block_texture = gpu.texel_texture("BVH leaf block texels", texel_blocks)?;
         let nodes = gpu.split_buffer(
             "BVH nodes",
-            &non_empty::<CompressedNode>(&crate::cwbvh::compress(&scene.bvh)),
+            &non_empty(buffer_nodes),
             std::mem::size_of::<CompressedNode>() as u64,
         )?;
         let spheres = gpu.storage_buffer("spheres", &non_empty::<Sphere>(&scene.spheres), limit)?;
@@ -699,9 +842,10 @@ impl GpuRenderer {
         let lights = gpu.storage_buffer("lights", &non_empty(&scene.lights), limit)?;
         let blocks = gpu.split_buffer(
             "BVH leaf blocks",
-            &non_empty::<PrimBlock>(&scene.bvh.blocks),
+            &non_empty(buffer_blocks),
             std::mem::size_of::<PrimBlock>() as u64,
         )?;
+        drop(compressed);
         let device_bytes = [
             &triangles.buffer,
             &normals.buffer,
@@ -713,7 +857,11 @@ impl GpuRenderer {
         ]
         .iter()
         .map(|b| b.size())
-        .sum::<u64>();
+        .sum::<u64>()
+            + [&node_texture, &block_texture]
+                .iter()
+                .map(|t| 16 * t.width() as u64 * t.height() as u64)
+                .sum::<u64>();
         if let Some(e) = pollster::block_on(memory.pop()) {
             return Err(Error::GpuLimit(format!(
                 "the scene's {device_bytes} bytes of GPU data (triangles {}, BVH nodes {}, leaf \
@@ -737,6 +885,9 @@ impl GpuRenderer {
         constants.push(("TRIANGLES_PER_BINDING", triangles.per_binding as f64));
         constants.push(("NODES_PER_BINDING", nodes.per_binding as f64));
         constants.push(("BLOCKS_PER_BINDING", blocks.per_binding as f64));
+        constants.push(("BVH_TEXELS", texels as u32 as f64));
+        constants.push(("RENDER_WORKGROUP_X", RENDER_WORKGROUP[0] as f64));
+        constants.push(("RENDER_WORKGROUP_Y", RENDER_WORKGROUP[1] as f64));
 
         let texture = |label, format| {
             device.create_texture(&wgpu::TextureDescriptor {
@@ -804,6 +955,8 @@ impl GpuRenderer {
                 (10, BindingKind::Storage),
                 (11, BindingKind::Storage),
                 (12, BindingKind::StorageWrite),
+                (13, BindingKind::Texels),
+                (14, BindingKind::Texels),
             ],
         );
         let image_layout = bind_group_layout(
@@ -825,6 +978,8 @@ impl GpuRenderer {
             "pixel list",
             &[(4, BindingKind::Storage), (5, BindingKind::StorageWrite)],
         );
+        let node_view = node_texture.create_view(&Default::default());
+        let block_view = block_texture.create_view(&Default::default());
         let entry = |binding, resource| wgpu::BindGroupEntry { binding, resource };
         let entries = [
             entry(0, params_buffer.as_entire_binding()),
@@ -840,6 +995,8 @@ impl GpuRenderer {
             entry(10, nodes.high_binding()),
             entry(11, blocks.high_binding()),
             entry(12, loop_status.as_entire_binding()),
+            entry(13, wgpu::BindingResource::TextureView(&node_view)),
+            entry(14, wgpu::BindingResource::TextureView(&block_view)),
         ];
         let color_view = color_texture.create_view(&Default::default());
         let prim_view = prim_texture.create_view(&Default::default());
@@ -908,6 +1065,7 @@ impl GpuRenderer {
             split_arrays,
             timer,
             trace_device_time: None,
+            list_buffers: Default::default(),
             upload_time: start.elapsed(),
         })
     }
@@ -1005,7 +1163,8 @@ impl GpuRenderer {
     pub fn tile_side(&self) -> u32 {
         let samples = self.params.spp.min(self.samples_per_dispatch);
         let side = TILE / samples.isqrt().max(1);
-        side.next_multiple_of(WORKGROUP).clamp(WORKGROUP, TILE)
+        let step = RENDER_WORKGROUP[0].max(RENDER_WORKGROUP[1]);
+        side.next_multiple_of(step).clamp(step, TILE)
     }
 
     /// Renders one tile, its samples over as many dispatches as
@@ -1080,7 +1239,8 @@ impl GpuRenderer {
             pass.set_pipeline(self.render_pipeline.as_ref().expect("prepared"));
             pass.set_bind_group(0, &self.scene_group, &[]);
             pass.set_bind_group(1, &self.image_group, &[]);
-            pass.dispatch_workgroups(width.div_ceil(WORKGROUP), height.div_ceil(WORKGROUP), 1);
+            let [wx, wy] = RENDER_WORKGROUP;
+            pass.dispatch_workgroups(width.div_ceil(wx), height.div_ceil(wy), 1);
         }
         if let Some(timer) = &self.timer {
             timer.resolve(&mut encoder);
@@ -1259,7 +1419,8 @@ impl GpuRenderer {
             let pipeline = self.pixel_list_pipeline.as_ref().expect("built");
             let step = self.samples_per_dispatch.min(self.params.spp);
             // As many samples per dispatch as a full tile at 1 spp.
-            let batch = ((TILE * TILE) / step).max(WORKGROUP * WORKGROUP) as usize;
+            let batch =
+                ((TILE * TILE) / step).max(RENDER_WORKGROUP[0] * RENDER_WORKGROUP[1]) as usize;
             let (results, _) =
                 self.run_list(pipeline, &self.pixels_layout, 4, pixels, batch, Some(step))?;
             if !self.loops_were_cut()? {
@@ -1287,23 +1448,34 @@ impl GpuRenderer {
         let mut device = self.timer.as_ref().map(|_| Duration::ZERO);
         let gpu = &self.gpu;
         let batch = batch.min(inputs.len()).max(1);
-        let buffer = |label, size, usage| {
-            gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size,
-                usage,
-                mapped_at_creation: false,
-            })
-        };
         use wgpu::BufferUsages as U;
-        let in_buffer = buffer(
-            "list input",
-            (batch * size_of::<I>()) as u64,
-            U::STORAGE | U::COPY_DST,
-        );
         let out_bytes = (batch * size_of::<O>()) as u64;
-        let out_buffer = buffer("list output", out_bytes, U::STORAGE | U::COPY_SRC);
-        let staging = buffer("list readback", out_bytes, U::COPY_DST | U::MAP_READ);
+        let mut cache = self.list_buffers.borrow_mut();
+        let [in_buffer, out_buffer, staging] = [
+            (
+                "list input",
+                (batch * size_of::<I>()) as u64,
+                U::STORAGE | U::COPY_DST,
+            ),
+            ("list output", out_bytes, U::STORAGE | U::COPY_SRC),
+            ("list readback", out_bytes, U::COPY_DST | U::MAP_READ),
+        ]
+        .map(|(label, size, usage)| {
+            // Kept between calls and grown as needed: creating them anew
+            // cost lavapipe a sixth of a million-ray query.
+            let kept = cache.get(label).filter(|b| b.size() >= size).cloned();
+            kept.unwrap_or_else(|| {
+                let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size,
+                    usage,
+                    mapped_at_creation: false,
+                });
+                cache.insert(label, buffer.clone());
+                buffer
+            })
+        });
+        drop(cache);
         let mut outputs = Vec::with_capacity(inputs.len());
         for chunk in inputs.chunks(batch) {
             let in_len = std::mem::size_of_val(chunk) as u64;

@@ -1,6 +1,7 @@
 //! The GPU's compressed BVH (src/cwbvh.rs) and its CPU twin
 //! (`cpu::trace_rays_gpu_twin`): the GPU's hits equal the twin's bit for
-//! bit, closest and any hit; quantised boxes lose no hit, at any scale or
+//! bit, closest and any hit, from storage buffers and from textures;
+//! quantised boxes lose no hit, at any scale or
 //! offset; trees as deep as the builder allows trace within the stack.
 
 mod common;
@@ -9,6 +10,7 @@ use common::*;
 use glam::{DVec3, Vec3};
 use lambert::Scene;
 use lambert::cpu;
+use lambert::gpu::{BvhStorage, GpuRenderer};
 use lambert::layout::{Hit, NO_HIT, Ray, Triangle};
 use lambert::probe::Rng;
 
@@ -57,17 +59,27 @@ fn gpu_hits_equal_the_twins_bit_for_bit() {
         let scene = load(name);
         let mut rays = lambert::rays::camera_rays(&scene);
         rays.extend(random_rays(&scene, &mut rng, 20_000));
-        for any_hit in [false, true] {
-            let gpu = trace_gpu(&scene, &rays, any_hit);
-            let twin = cpu::trace_rays_gpu_twin(&scene, &rays, any_hit, scene.intersect);
-            let hits = twin.iter().filter(|h| h.prim != NO_HIT).count();
-            println!(
-                "{name}, any hit {any_hit}: {} rays, {hits} hits, GPU vs twin (other primitive, other bits) {:?}",
-                rays.len(),
-                mismatches(&gpu, &twin)
-            );
-            assert!(hits > 0, "{name}: nothing hit");
-            assert_eq!(mismatches(&gpu, &twin), (0, 0), "{name}, any hit {any_hit}");
+        for storage in [BvhStorage::Buffers, BvhStorage::Texels] {
+            let mut renderer =
+                GpuRenderer::with_bvh_storage(open_gpu(), &scene, storage).expect("scene uploads");
+            for any_hit in [false, true] {
+                let gpu = renderer
+                    .trace_rays(&rays, any_hit, scene.intersect)
+                    .expect("GPU trace");
+                let twin = cpu::trace_rays_gpu_twin(&scene, &rays, any_hit, scene.intersect);
+                let hits = twin.iter().filter(|h| h.prim != NO_HIT).count();
+                println!(
+                    "{name}, {storage:?}, any hit {any_hit}: {} rays, {hits} hits, GPU vs twin (other primitive, other bits) {:?}",
+                    rays.len(),
+                    mismatches(&gpu, &twin)
+                );
+                assert!(hits > 0, "{name}: nothing hit");
+                assert_eq!(
+                    mismatches(&gpu, &twin),
+                    (0, 0),
+                    "{name}, {storage:?}, any hit {any_hit}"
+                );
+            }
         }
     }
 }
