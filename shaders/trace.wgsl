@@ -34,6 +34,12 @@ override BVH_TEXELS: bool = false;
 // (docs/bvh.md).
 override RENDER_WORKGROUP_X: u32 = 8u;
 override RENDER_WORKGROUP_Y: u32 = 8u;
+// Traversal stack entries per invocation: the scene's BVH depth − 1
+// (gpu.rs), the most `trace_compressed` can push (see MAX_DEPTH).
+override STACK_ENTRIES: u32 = 23u;
+// Invocations per workgroup of every entry point (RENDER_WORKGROUP_X ×
+// RENDER_WORKGROUP_Y for `render`).
+const WORKGROUP_INVOCATIONS: u32 = 64u;
 
 const NO_HIT: u32 = 0xffffffffu;
 // Texels a row of the BVH textures: 1 << TEXEL_ROW_BITS (gpu::TEXELS_PER_ROW).
@@ -48,10 +54,11 @@ const INTERSECT_MOLLER_TRUMBORE: u32 = 1u;
 const INTERSECT_WATERTIGHT: u32 = 2u;
 // Unit roundoff of f32 (pbrt's MachineEpsilon), for error bounds.
 const MACHINE_EPSILON: f32 = 5.96046448e-8;
-// Traversal stack entries: bvh::MAX_DEPTH. An entry is a node group (a
-// node and the entered children of it not visited yet), pushed when
-// traversal descends below that node: one per level at most, and the tree
-// is at most MAX_DEPTH levels deep (Bvh::from_binary checks), so it never
+// Wide levels at most: bvh::MAX_DEPTH. A traversal stack entry is a node
+// group (a node and the entered children of it not visited yet), pushed
+// when traversal descends below that node: one per level at most, so a
+// tree of depth d needs d − 1 entries (STACK_ENTRIES), and the tree is at
+// most MAX_DEPTH levels deep (Bvh::from_binary checks): the stack never
 // overflows.
 const MAX_DEPTH: u32 = 24u;
 // CompressedNode meta bytes (src/layout.rs): 0 for an empty slot,
@@ -676,6 +683,14 @@ fn intersect_compressed_node(ray: Ray, slabs: Slabs, node: CompressedNode, octan
     return vec2<u32>(interior, blocks);
 }
 
+// Each invocation's traversal stack: STACK_ENTRIES entries from
+// `stack_base` (set by the entry point) in workgroup memory. Measured on
+// lavapipe against a private array of MAX_DEPTH entries, which WGSL
+// zero-initialises for every ray: 7–12% faster (docs/bvh.md). Not
+// zero-initialised (the pipelines ask not to): only pushed entries are read.
+var<workgroup> traversal_stack: array<vec2<u32>, WORKGROUP_INVOCATIONS * STACK_ENTRIES>;
+var<private> stack_base: u32;
+
 // Closest hit through the compressed BVH, children in octant order (no
 // sorting); with `any_hit`, the first hit found. Each pass of the loop
 // tests the leaf blocks the last node visit entered, then visits one node:
@@ -690,7 +705,6 @@ fn trace_compressed(ray_in: Ray, shear: Shear, any_hit: bool) -> Hit {
     var hit = miss();
     let slabs = ray_slabs(ray);
     let octant = ray_octant(slabs);
-    var stack: array<vec2<u32>, MAX_DEPTH>;
     var sp = 0u;
     let root = bvh_node_at(0u);
     let entered = intersect_compressed_node(ray, slabs, root, octant);
@@ -712,14 +726,15 @@ fn trace_compressed(ray_in: Ray, shear: Shear, any_hit: bool) -> Hit {
                 break;
             }
             sp -= 1u;
-            node = stack[sp].x;
-            interior = stack[sp].y;
+            let group = traversal_stack[stack_base + sp];
+            node = group.x;
+            interior = group.y;
             links = node_links(node);
         }
         let slot = firstTrailingBit(interior) ^ octant;
         interior &= interior - 1u;
         if interior != 0u {
-            stack[sp] = vec2<u32>(node, interior);
+            traversal_stack[stack_base + sp] = vec2<u32>(node, interior);
             sp += 1u;
         }
         node = links.x + ((links[2u + (slot >> 2u)] >> (8u * (slot & 3u))) & 7u);
@@ -1004,7 +1019,8 @@ fn pixel_mean(sums: vec4<f32>) -> vec4<f32> {
 }
 
 @compute @workgroup_size(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y)
-fn render(@builtin(global_invocation_id) id: vec3<u32>) {
+fn render(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    stack_base = lane * STACK_ENTRIES;
     let size = textureDimensions(out_color);
     let pixel = params.tile_origin + id.xy;
     if id.x >= size.x || id.y >= size.y || pixel.x >= params.width || pixel.y >= params.height {
@@ -1028,8 +1044,9 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 
 // One ray of a `lambert trace` batch. Misses leave t = FAR, prim = NO_HIT.
-@compute @workgroup_size(64)
-fn trace_rays(@builtin(global_invocation_id) id: vec3<u32>) {
+@compute @workgroup_size(WORKGROUP_INVOCATIONS)
+fn trace_rays(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    stack_base = lane * STACK_ENTRIES;
     if id.x >= arrayLength(&rays) {
         return;
     }
@@ -1039,8 +1056,9 @@ fn trace_rays(@builtin(global_invocation_id) id: vec3<u32>) {
 
 // Adaptive sampling's later passes: `params.spp` more samples (seeded by
 // `params.seed`) for each listed pixel, in parts as `render` adds them.
-@compute @workgroup_size(64)
-fn render_pixel_list(@builtin(global_invocation_id) id: vec3<u32>) {
+@compute @workgroup_size(WORKGROUP_INVOCATIONS)
+fn render_pixel_list(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    stack_base = lane * STACK_ENTRIES;
     if id.x >= arrayLength(&pixel_list) {
         return;
     }

@@ -261,8 +261,11 @@ impl Bvh {
     }
 
     /// Wide levels from the root to the deepest leaf (1: the root's children
-    /// are all leaves).
+    /// are all leaves; 0: no primitives).
     pub fn depth(&self) -> usize {
+        if self.nodes.is_empty() {
+            return 0;
+        }
         fn depth_of(bvh: &Bvh, index: usize) -> usize {
             let node = &bvh.nodes[index];
             1 + occupied_slots(node)

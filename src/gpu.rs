@@ -27,6 +27,11 @@ pub const TILE: u32 = 256;
 /// (`RENDER_WORKGROUP_X`/`_Y` in trace.wgsl), measured on lavapipe against
 /// 16×16 and 64×1 (docs/bvh.md).
 const RENDER_WORKGROUP: [u32; 2] = [8, 8];
+/// Invocations per workgroup of every entry point (`WORKGROUP_INVOCATIONS`
+/// in trace.wgsl, which sizes the traversal stacks in workgroup memory by
+/// it).
+pub const WORKGROUP_INVOCATIONS: u32 = 64;
+const _: () = assert!(RENDER_WORKGROUP[0] * RENDER_WORKGROUP[1] == WORKGROUP_INVOCATIONS);
 
 /// Which adapter to use: `--adapter`, `--backend`, or wgpu's own
 /// `WGPU_ADAPTER_NAME` and `WGPU_BACKEND` when those are unset.
@@ -888,6 +893,9 @@ impl GpuRenderer {
         constants.push(("BVH_TEXELS", texels as u32 as f64));
         constants.push(("RENDER_WORKGROUP_X", RENDER_WORKGROUP[0] as f64));
         constants.push(("RENDER_WORKGROUP_Y", RENDER_WORKGROUP[1] as f64));
+        // A tree of depth d pushes at most d − 1 node groups.
+        let stack_entries = scene.bvh.depth().saturating_sub(1).max(1);
+        constants.push(("STACK_ENTRIES", stack_entries as f64));
 
         let texture = |label, format| {
             device.create_texture(&wgpu::TextureDescriptor {
@@ -1444,7 +1452,7 @@ impl GpuRenderer {
         batch: usize,
         step: Option<u32>,
     ) -> Result<(Vec<O>, Option<Duration>)> {
-        const LIST_WORKGROUP: usize = 64;
+        const LIST_WORKGROUP: usize = WORKGROUP_INVOCATIONS as usize;
         let mut device = self.timer.as_ref().map(|_| Duration::ZERO);
         let gpu = &self.gpu;
         let batch = batch.min(inputs.len()).max(1);

@@ -183,6 +183,10 @@ fn shader_constants_match_host() {
         format!("Literal(U32({META_INTERIOR}))")
     );
     assert_eq!(constant("META_LEAF"), format!("Literal(U32({META_LEAF}))"));
+    assert_eq!(
+        constant("WORKGROUP_INVOCATIONS"),
+        format!("Literal(U32({}))", lambert::gpu::WORKGROUP_INVOCATIONS)
+    );
 }
 
 #[test]
