@@ -285,12 +285,6 @@ fn bvh_node_at(i: u32) -> CompressedNode {
     return unpack_node(array<vec4<u32>, 5>(node_word(i, 0u), node_word(i, 1u), node_word(i, 2u), node_word(i, 3u), node_word(i, 4u)));
 }
 
-// What a node group needs of node i once it is popped: child_base,
-// block_base and child_meta (the second of its five words).
-fn node_links(i: u32) -> vec4<u32> {
-    return node_word(i, 1u);
-}
-
 // Block i's lanes of coordinate a of vertex k, and its primitives: read
 // where they lie, not as a copy of the block, which dynamic indexing by
 // the ray's axes would put in slow local memory.
@@ -641,8 +635,8 @@ fn ray_octant(slabs: Slabs) -> u32 {
 }
 
 // Which children of `node` the ray enters within (tmin, tmax): x, its
-// interior children as bits in visit order (bit b for slot b ^ octant);
-// y, the blocks of its leaves as bits from block_base (bit i for block
+// interior children as bits in visit order (bit b for slot b ^ octant),
+// and in bits 8–15 which slots hold interior children at all; y, the blocks of its leaves as bits from block_base (bit i for block
 // block_base + i). The planes are dequantised exactly, then each distance
 // is one multiply-add, as for an exact box. Written with select on a
 // comparison rather than WGSL's min/max, whose result for a NaN operand is
@@ -673,7 +667,12 @@ fn intersect_compressed_node(ray: Ray, slabs: Slabs, node: CompressedNode, octan
         let inside = (t_near <= t_far) & (t_near < vec4<f32>(ray.tmax)) & (m != vec4<u32>(0u));
         let leaf = (m & vec4<u32>(META_LEAF)) != vec4<u32>(0u);
         let order = (vec4<u32>(0u, 1u, 2u, 3u) + vec4<u32>(4u * half)) ^ vec4<u32>(octant);
-        let child_bits = select(vec4<u32>(0u), vec4<u32>(1u) << order, inside & !leaf);
+        let slots = vec4<u32>(0u, 1u, 2u, 3u) + vec4<u32>(4u * half);
+        let is_interior = (m != vec4<u32>(0u)) & !leaf;
+        // Entered interior children in visit order (bits 0–7), and every
+        // interior slot (bits 8–15), whose count below a slot is its rank.
+        let child_bits = select(vec4<u32>(0u), vec4<u32>(1u) << order, inside & !leaf)
+            | select(vec4<u32>(0u), vec4<u32>(1u) << (slots + vec4<u32>(8u)), is_interior);
         let count = ((m >> vec4<u32>(4u)) & vec4<u32>(7u)) + vec4<u32>(1u);
         let block_bits = ((vec4<u32>(1u) << count) - vec4<u32>(1u)) << (m & vec4<u32>(0xfu));
         let leaf_bits = select(vec4<u32>(0u), block_bits, inside & leaf);
@@ -696,10 +695,12 @@ var<private> stack_base: u32;
 // tests the leaf blocks the last node visit entered, then visits one node:
 // on a GPU running invocations in lockstep (lavapipe's SIMD lanes too) an
 // invocation that has blocks to test and one that has a node to visit then
-// do both in the same pass, rather than one waiting on the other. The
-// stack holds node groups (a node and its entered interior children not
-// visited yet), pushed when traversal descends below that node: one per
-// level at most.
+// do both in the same pass, rather than one waiting on the other. A node
+// group (child_base; entered interior children in visit order, and the
+// interior slots in bits 8–15) names the next nodes without reading their
+// parent again: slot s is node child_base + the interior slots below s.
+// The stack holds groups, pushed when traversal descends below a node:
+// one per level at most.
 fn trace_compressed(ray_in: Ray, shear: Shear, any_hit: bool) -> Hit {
     var ray = ray_in;
     var hit = miss();
@@ -708,9 +709,7 @@ fn trace_compressed(ray_in: Ray, shear: Shear, any_hit: bool) -> Hit {
     var sp = 0u;
     let root = bvh_node_at(0u);
     let entered = intersect_compressed_node(ray, slabs, root, octant);
-    var node = 0u;
-    var links = vec4<u32>(root.child_base, root.block_base, root.child_meta);
-    var interior = entered.x;
+    var group = vec2<u32>(root.child_base, entered.x);
     var blocks = entered.y;
     var block_base = root.block_base;
     loop {
@@ -721,27 +720,24 @@ fn trace_compressed(ray_in: Ray, shear: Shear, any_hit: bool) -> Hit {
                 return hit;
             }
         }
-        if interior == 0u {
+        if (group.y & 0xffu) == 0u {
             if sp == 0u {
                 break;
             }
             sp -= 1u;
-            let group = traversal_stack[stack_base + sp];
-            node = group.x;
-            interior = group.y;
-            links = node_links(node);
+            group = traversal_stack[stack_base + sp];
         }
-        let slot = firstTrailingBit(interior) ^ octant;
-        interior &= interior - 1u;
-        if interior != 0u {
-            traversal_stack[stack_base + sp] = vec2<u32>(node, interior);
+        let next_bit = firstTrailingBit(group.y & 0xffu);
+        let slot = next_bit ^ octant;
+        group.y &= ~(1u << next_bit);
+        if (group.y & 0xffu) != 0u {
+            traversal_stack[stack_base + sp] = group;
             sp += 1u;
         }
-        node = links.x + ((links[2u + (slot >> 2u)] >> (8u * (slot & 3u))) & 7u);
-        let next = bvh_node_at(node);
-        links = vec4<u32>(next.child_base, next.block_base, next.child_meta);
+        let below = (group.y >> 8u) & ((1u << slot) - 1u);
+        let next = bvh_node_at(group.x + countOneBits(below));
         let hits = intersect_compressed_node(ray, slabs, next, octant);
-        interior = hits.x;
+        group = vec2<u32>(next.child_base, hits.x);
         blocks = hits.y;
         block_base = next.block_base;
     }

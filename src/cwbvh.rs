@@ -1,9 +1,10 @@
 //! The GPU's BVH: the wide tree (`bvh`) with each node compressed to 80
 //! bytes (`layout::CompressedNode`), after Ylitie, Karras and Laine,
 //! "Efficient Incoherent Ray Traversal on GPUs Through Compressed Wide
-//! BVHs" (HPG 2017). Node `i` here is node `i` of the wide tree, with the
-//! same children and leaves (the leaf blocks are shared, untouched): only
-//! the boxes are quantised, outwards, and the slots reordered by octant.
+//! BVHs" (HPG 2017): the wide tree's nodes with the same children and
+//! leaves (the leaf blocks are shared, untouched), the boxes quantised
+//! outwards, the slots reordered by octant and the nodes renumbered so
+//! that siblings are consecutive.
 //!
 //! Conservative by construction: each plane is rounded away from the box
 //! on a grid whose every point is an f32 (a multiple of a power of two with
@@ -23,12 +24,40 @@ const STEPS: f64 = 255.0;
 /// |k| < 2^24 is an f32.
 const EXACT: f64 = (1u64 << 24) as f64;
 
-/// The compressed nodes of `bvh`, node for node.
+/// The compressed nodes of `bvh`, renumbered breadth first so that each
+/// node's interior children are consecutive in slot order: child slot s is
+/// node `child_base` + the number of interior slots below s, which
+/// traversal counts from a mask it carries rather than reading the node
+/// again. The root stays node 0.
 pub fn compress(bvh: &Bvh) -> Vec<CompressedNode> {
     use rayon::prelude::*;
-    (0..bvh.nodes.len())
+    if bvh.nodes.is_empty() {
+        return Vec::new();
+    }
+    let nodes: Vec<(CompressedNode, Vec<u32>)> = (0..bvh.nodes.len())
         .into_par_iter()
         .map(|i| compress_node(bvh, i))
+        .collect();
+    // order[new] = old; new_index[old] = new.
+    let mut order = vec![0usize];
+    let mut new_index = vec![0u32; nodes.len()];
+    let mut head = 0;
+    while head < order.len() {
+        for &child in &nodes[order[head]].1 {
+            new_index[child as usize] = order.len() as u32;
+            order.push(child as usize);
+        }
+        head += 1;
+    }
+    order
+        .par_iter()
+        .map(|&old| {
+            let (node, interior) = &nodes[old];
+            CompressedNode {
+                child_base: interior.first().map_or(0, |&c| new_index[c as usize]),
+                ..*node
+            }
+        })
         .collect()
 }
 
@@ -94,7 +123,9 @@ fn dequantise(q: u32, scale: f32, origin: f32) -> f32 {
     (q as f32).mul_add(scale, origin)
 }
 
-fn compress_node(bvh: &Bvh, index: usize) -> CompressedNode {
+/// Node `index` compressed but for `child_base`, and its interior
+/// children (wide tree indices) in slot order.
+fn compress_node(bvh: &Bvh, index: usize) -> (CompressedNode, Vec<u32>) {
     let node = &bvh.nodes[index];
     let slots: Vec<usize> = occupied_slots(node).collect();
     let boxes: Vec<Aabb> = slots.iter().map(|&s| child_aabb(node, s)).collect();
@@ -111,7 +142,7 @@ fn compress_node(bvh: &Bvh, index: usize) -> CompressedNode {
         ..CompressedNode::default()
     };
     if slots.is_empty() {
-        return out;
+        return (out, Vec::new());
     }
     let mut scales = [0f64; 3];
     for axis in 0..3 {
@@ -121,13 +152,19 @@ fn compress_node(bvh: &Bvh, index: usize) -> CompressedNode {
         scales[axis] = 2f64.powi(e as i32 - 127);
     }
     let children: Vec<u32> = slots.iter().map(|&s| node.children[s]).collect();
-    let interior = || children.iter().copied().filter(|c| c & LEAF_BIT == 0);
     let leaves = || children.iter().copied().filter(|c| c & LEAF_BIT != 0);
-    out.child_base = interior().min().unwrap_or(0);
     out.block_base = leaves().map(|c| leaf_range(c).0).min().unwrap_or(0);
     let centre = parent.centre();
     let offsets: Vec<Vec3> = boxes.iter().map(|b| b.centre() - centre).collect();
     let slot_of = octant_slots(&offsets);
+    // Interior children in slot order: their ranks below.
+    let mut interior: Vec<(usize, u32)> = children
+        .iter()
+        .zip(&slot_of)
+        .filter(|(c, _)| *c & LEAF_BIT == 0)
+        .map(|(&c, &slot)| (slot, c))
+        .collect();
+    interior.sort();
     let set_byte = |row: &mut [u32; 2], slot: usize, value: u32| {
         let shift = 8 * (slot % 4);
         row[slot / 4] = row[slot / 4] & !(0xff << shift) | value << shift;
@@ -135,12 +172,11 @@ fn compress_node(bvh: &Bvh, index: usize) -> CompressedNode {
     for (c, (&child, b)) in children.iter().zip(&boxes).enumerate() {
         let slot = slot_of[c];
         let meta = if child & LEAF_BIT == 0 {
-            let rank = child - out.child_base;
-            assert!(
-                rank < BVH_WIDTH as u32,
-                "node {index}: interior children are not contiguous"
-            );
-            META_INTERIOR | rank
+            let rank = interior
+                .iter()
+                .position(|&(s, _)| s == slot)
+                .expect("listed");
+            META_INTERIOR | rank as u32
         } else {
             let (first, count) = leaf_range(child);
             let offset = first - out.block_base;
@@ -177,7 +213,7 @@ fn compress_node(bvh: &Bvh, index: usize) -> CompressedNode {
             );
         }
     }
-    out
+    (out, interior.into_iter().map(|(_, c)| c).collect())
 }
 
 #[cfg(test)]

@@ -274,7 +274,8 @@ impl BvhNode {
 /// so a ray visits children nearest first by taking slots in the order
 /// `b ^ octant` for b = 0..8 (`ray_octant`). `child_meta` has a byte per slot
 /// (slots 0–3 in `child_meta[0]`, low byte first): 0 for an empty slot,
-/// `META_INTERIOR | rank` for interior child `child_base + rank`, and for a
+/// `META_INTERIOR | rank` for interior child `child_base + rank` (rank: the
+/// interior slots below it; siblings are consecutive, in slot order), and for a
 /// leaf `META_LEAF | (count − 1) << 4 | offset`, blocks `block_base +
 /// offset ..` (count of them). `q[2a]` holds the slots' quantised minima
 /// along axis a, `q[2a + 1]` their maxima, a byte per slot as in `child_meta`.

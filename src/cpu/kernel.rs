@@ -397,8 +397,8 @@ impl<'a> Kernel<'a> {
     /// The shader's `trace_compressed`: closest hit through the GPU's
     /// compressed nodes (`nodes`, the scene's BVH compressed), children in
     /// octant order, each pass the blocks of the last node visited and then
-    /// one node, a node group per stack entry; with `any_hit`, the first
-    /// hit found.
+    /// one node, a node group (child_base and its masks) per stack entry;
+    /// with `any_hit`, the first hit found.
     pub fn trace_compressed(
         &self,
         nodes: &[CompressedNode],
@@ -416,9 +416,8 @@ impl<'a> Kernel<'a> {
         let octant = ray_octant(&slabs);
         let mut stack = [(0u32, 0u32); MAX_DEPTH];
         let mut sp = 0;
-        let mut index = 0u32;
-        let mut node = root;
-        let (mut interior, mut leaf_blocks) = intersect_compressed_node(&ray, &slabs, root, octant);
+        let (entered, mut leaf_blocks) = intersect_compressed_node(&ray, &slabs, root, octant);
+        let mut group = (root.child_base, entered);
         let mut block_base = root.block_base;
         loop {
             while leaf_blocks != 0 {
@@ -429,23 +428,25 @@ impl<'a> Kernel<'a> {
                     return hit;
                 }
             }
-            if interior == 0 {
+            if group.1 & 0xff == 0 {
                 if sp == 0 {
                     break;
                 }
                 sp -= 1;
-                (index, interior) = stack[sp];
-                node = &nodes[index as usize];
+                group = stack[sp];
             }
-            let slot = (interior.trailing_zeros() ^ octant) as usize;
-            interior &= interior - 1;
-            if interior != 0 {
-                stack[sp] = (index, interior);
+            let next_bit = (group.1 & 0xff).trailing_zeros();
+            let slot = next_bit ^ octant;
+            group.1 &= !(1 << next_bit);
+            if group.1 & 0xff != 0 {
+                stack[sp] = group;
                 sp += 1;
             }
-            index = node.child_base + (CompressedNode::byte(node.child_meta, slot) & 7);
-            node = &nodes[index as usize];
-            (interior, leaf_blocks) = intersect_compressed_node(&ray, &slabs, node, octant);
+            let below = (group.1 >> 8) & ((1 << slot) - 1);
+            let node = &nodes[(group.0 + below.count_ones()) as usize];
+            let (entered, next_blocks) = intersect_compressed_node(&ray, &slabs, node, octant);
+            group = (node.child_base, entered);
+            leaf_blocks = next_blocks;
             block_base = node.block_base;
         }
         hit
@@ -1128,7 +1129,7 @@ fn slot_bytes(word: u32) -> Vec4 {
 
 /// Which children of a compressed node the ray enters within (tmin, tmax),
 /// as in the shader: its interior children as bits in visit order (bit b
-/// for slot b ^ octant), and the blocks of its leaves as bits from
+/// for slot b ^ octant) with every interior slot in bits 8–15, and the blocks of its leaves as bits from
 /// `block_base`. The planes are dequantised (exactly), then
 /// `intersect_boxes`'s slab test.
 pub fn intersect_compressed_node(
@@ -1161,6 +1162,11 @@ pub fn intersect_compressed_node(
         for lane in 0..4 {
             let slot = 4 * half + lane;
             let m = CompressedNode::byte(node.child_meta, slot);
+            // Every interior slot, entered or not, in bits 8–15: a slot's
+            // rank among its siblings is the count below it.
+            if m != 0 && m & META_LEAF == 0 {
+                interior |= 1 << (slot + 8);
+            }
             if inside.bitmask() >> lane & 1 == 0 || m == 0 {
                 continue;
             }
