@@ -1077,6 +1077,31 @@ pub struct BoxHits {
     pub entered: u32,
 }
 
+/// Where the ray enters and leaves four boxes, within (tmin, tmax), their
+/// planes given by row: `row(2a)` the minima along axis a, `row(2a + 1)`
+/// the maxima. Each plane's distance is one fused multiply-add; a NaN slab
+/// (from a NaN ray) is ignored as in the shader: `greater_of`/`lesser_of`
+/// keep the running bound when the comparison fails.
+#[inline(always)]
+fn slab_interval(ray: &Ray, slabs: &Slabs, row: impl Fn(usize) -> Vec4) -> (Vec4, Vec4) {
+    let mut t_near = Vec4::splat(ray.tmin);
+    let mut t_far = Vec4::splat(ray.tmax);
+    for axis in 0..3 {
+        let flip = slabs.flip[axis] as usize;
+        let near = row(2 * axis + flip).mul_add(
+            Vec4::splat(slabs.inv_dir[axis]),
+            Vec4::splat(slabs.near_offset[axis]),
+        );
+        let far = row(2 * axis + 1 - flip).mul_add(
+            Vec4::splat(slabs.inv_dir_far[axis]),
+            Vec4::splat(slabs.far_offset[axis]),
+        );
+        t_near = greater_of(near, t_near);
+        t_far = lesser_of(far, t_far);
+    }
+    (t_near, t_far)
+}
+
 /// Which of the node's eight child boxes the ray enters within (tmin, tmax),
 /// and where (an empty slot's inverted box is never entered unless the ray
 /// has a NaN or infinite component: traversal masks empty slots). Each
@@ -1090,21 +1115,7 @@ pub fn intersect_boxes(ray: &Ray, slabs: &Slabs, node: &BvhNode) -> BoxHits {
     let mut entered = 0;
     for half in 0..2 {
         let row = |r: usize| vec4(node.bounds[r][4 * half..4 * half + 4].try_into().unwrap());
-        let mut t_near = Vec4::splat(ray.tmin);
-        let mut t_far = Vec4::splat(ray.tmax);
-        for axis in 0..3 {
-            let flip = slabs.flip[axis] as usize;
-            let near = row(2 * axis + flip).mul_add(
-                Vec4::splat(slabs.inv_dir[axis]),
-                Vec4::splat(slabs.near_offset[axis]),
-            );
-            let far = row(2 * axis + 1 - flip).mul_add(
-                Vec4::splat(slabs.inv_dir_far[axis]),
-                Vec4::splat(slabs.far_offset[axis]),
-            );
-            t_near = greater_of(near, t_near);
-            t_far = lesser_of(far, t_far);
-        }
+        let (t_near, t_far) = slab_interval(ray, slabs, row);
         // Two comparisons side by side rather than one on a select of
         // t_near: this is the critical path of a node visit.
         let inside = t_near.cmple(t_far) & t_near.cmplt(Vec4::splat(ray.tmax));
@@ -1140,24 +1151,12 @@ pub fn intersect_compressed_node(
 ) -> (u32, u32) {
     let (mut interior, mut blocks) = (0, 0);
     for half in 0..2 {
-        let mut t_near = Vec4::splat(ray.tmin);
-        let mut t_far = Vec4::splat(ray.tmax);
-        for axis in 0..3 {
-            let flip = slabs.flip[axis] as usize;
-            let scale = Vec4::splat(node.scale(axis) as Real);
-            let origin = Vec4::splat(node.origin[axis] as Real);
-            let plane = |row: usize| slot_bytes(node.q[row][half]).mul_add(scale, origin);
-            let near = plane(2 * axis + flip).mul_add(
-                Vec4::splat(slabs.inv_dir[axis]),
-                Vec4::splat(slabs.near_offset[axis]),
-            );
-            let far = plane(2 * axis + 1 - flip).mul_add(
-                Vec4::splat(slabs.inv_dir_far[axis]),
-                Vec4::splat(slabs.far_offset[axis]),
-            );
-            t_near = greater_of(near, t_near);
-            t_far = lesser_of(far, t_far);
-        }
+        // Row r's planes, dequantised (exactly): axis r / 2.
+        let plane = |r: usize| {
+            let (scale, origin) = (node.scale(r / 2) as Real, node.origin[r / 2] as Real);
+            slot_bytes(node.q[r][half]).mul_add(Vec4::splat(scale), Vec4::splat(origin))
+        };
+        let (t_near, t_far) = slab_interval(ray, slabs, plane);
         let inside = t_near.cmple(t_far) & t_near.cmplt(Vec4::splat(ray.tmax));
         for lane in 0..4 {
             let slot = 4 * half + lane;

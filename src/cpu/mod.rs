@@ -358,19 +358,7 @@ pub fn trace_rays_gpu_twin(
     kernel.intersect = intersect;
     kernel.compressed = Some(&nodes);
     rays.par_iter()
-        .map(|ray| {
-            let hit = kernel.trace(f32::Ray::from_query(ray), any_hit);
-            if hit.prim == NO_HIT {
-                layout::Hit::MISS
-            } else {
-                layout::Hit {
-                    t: hit.t,
-                    prim: hit.prim,
-                    u: hit.u,
-                    v: hit.v,
-                }
-            }
-        })
+        .map(|ray| query_hit(kernel.trace(f32::Ray::from_query(ray), any_hit)))
         .collect()
 }
 
@@ -770,18 +758,7 @@ unsafe fn trace_chunk<const LANES: usize, const PREFETCH: bool, const VECTOR_SOR
     hits: &mut [std::mem::MaybeUninit<layout::Hit>],
     any_hit: bool,
 ) {
-    let answer = |hit: f32::Hit| {
-        if hit.prim == NO_HIT {
-            layout::Hit::MISS
-        } else {
-            layout::Hit {
-                t: hit.t,
-                prim: hit.prim,
-                u: hit.u,
-                v: hit.v,
-            }
-        }
-    };
+    let answer = query_hit;
     if rays.is_empty() {
         return;
     }
@@ -829,6 +806,21 @@ unsafe fn trace_chunk<const LANES: usize, const PREFETCH: bool, const VECTOR_SOR
                 index[k] = usize::MAX;
                 active -= 1;
             }
+        }
+    }
+}
+
+/// A ray query's answer from the kernel's hit: misses as `Hit::MISS`.
+#[inline(always)]
+fn query_hit(hit: f32::Hit) -> layout::Hit {
+    if hit.prim == NO_HIT {
+        layout::Hit::MISS
+    } else {
+        layout::Hit {
+            t: hit.t,
+            prim: hit.prim,
+            u: hit.u,
+            v: hit.v,
         }
     }
 }

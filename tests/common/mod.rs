@@ -97,3 +97,19 @@ pub fn scene_of(triangles: Vec<Triangle>, spheres: Vec<Sphere>) -> Scene {
     s.rebuild_bvh();
     s
 }
+
+/// What a signal at `delay_ms` into a run that writes `whole` bytes to an
+/// output holding "previous" may leave: the run's whole output if it
+/// finished (or if the signal came after its rename, before its exit), else
+/// "previous", never a part. Returns whether the previous output was kept.
+pub fn previous_or_whole(success: bool, bytes: &[u8], whole: usize, delay_ms: u64) -> bool {
+    if bytes == b"previous" {
+        assert!(
+            !success,
+            "after {delay_ms} ms: a finished run left the previous output"
+        );
+        return true;
+    }
+    assert_eq!(bytes.len(), whole, "after {delay_ms} ms: a partial output");
+    false
+}
