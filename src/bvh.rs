@@ -1,7 +1,8 @@
 //! Bounding volume hierarchy over all primitives (triangles and spheres):
 //! built as a binary tree with a binned surface-area heuristic, then
-//! collapsed into the 8-wide nodes that the shader and the CPU kernel
-//! traverse (one 8-lane slab test per node; docs/bvh.md has the figures).
+//! collapsed into the 8-wide nodes that the CPU kernel traverses (one
+//! 8-lane slab test per node; docs/bvh.md has the figures) and that
+//! `cwbvh` compresses for the GPU.
 //!
 //! Node layout (`layout::BvhNode`, 256 bytes): the boxes of up to eight
 //! children, one lane per child (`bounds[2a]` the minima along axis a,
@@ -15,8 +16,8 @@
 //!
 //! Node 0 is the root. A wide node holds its binary node's children, or
 //! their children where they are interior: two binary levels per wide level,
-//! so the wide tree is at most `MAX_DEPTH` levels deep and traversal fits
-//! the shader's fixed stack of `STACK_SIZE` entries.
+//! so the wide tree is at most `MAX_DEPTH` levels deep and the CPU
+//! kernel's traversal fits its fixed stack of `STACK_SIZE` entries.
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -31,7 +32,7 @@ use crate::layout::{
 pub const MAX_DEPTH: usize = 24;
 /// Binary levels at most: each wide level takes two.
 const MAX_BINARY_DEPTH: usize = 2 * MAX_DEPTH;
-/// Traversal stack entries (`STACK_SIZE` in trace.wgsl): a node visit pops
+/// The CPU kernel's traversal stack entries: a node visit pops
 /// one entry and pushes at most `BVH_WIDTH`, so the stack holds at most
 /// `BVH_WIDTH − 1` per level above plus the `BVH_WIDTH` of the deepest.
 pub const STACK_SIZE: usize = (BVH_WIDTH - 1) * MAX_DEPTH + 1;

@@ -1,5 +1,6 @@
 //! Structs shared by the host, the GPU shader (`shaders/trace.wgsl`) and the
-//! CPU reference. Each mirrors the WGSL struct of the same name byte for byte
+//! CPU reference. Each (but `BvhNode`, the CPU kernel's alone) mirrors the
+//! WGSL struct of the same name byte for byte
 //! (vec3 fields take 16 bytes with the following scalar in their padding);
 //! `tests/shaders.rs` checks sizes and offsets against naga's reflection.
 
@@ -135,8 +136,9 @@ impl Hit {
 /// Children of a BVH node at most.
 pub const BVH_WIDTH: usize = 8;
 
-/// One 8-wide BVH node (256 bytes: four cache lines); docs/bvh.md and `bvh`
-/// tell how the shader decodes it. The eight children's boxes are stored one lane per
+/// One 8-wide BVH node (256 bytes: four cache lines), as the CPU kernel
+/// reads it (the GPU reads `CompressedNode`s made from these); docs/bvh.md
+/// and `bvh` tell more. The eight children's boxes are stored one lane per
 /// child: `bounds[2a]` holds their minima along axis a, `bounds[2a + 1]` their
 /// maxima. `children[i]` is child i's reference: a node index, a leaf
 /// (`LEAF_BIT` set, see `leaf_ref`) or `EMPTY_SLOT`. Bit i of `occupied` is
