@@ -172,9 +172,18 @@ pub enum BvhStorage {
 }
 
 impl BvhStorage {
-    /// The storage that measured fastest on this kind of adapter.
-    pub fn for_adapter(info: &wgpu::AdapterInfo) -> BvhStorage {
-        if is_llvmpipe(info) {
+    /// The storage that measured fastest on this kind of adapter, where
+    /// `scene`'s BVH fits it: a tree too large for the device's textures
+    /// is read from buffers.
+    pub fn for_scene(gpu: &Gpu, scene: &Scene) -> BvhStorage {
+        let fits = |texels: usize| {
+            let max = gpu.limits.max_texture_dimension_2d as usize;
+            TEXELS_PER_ROW as usize <= max && texels.div_ceil(TEXELS_PER_ROW as usize) <= max
+        };
+        let words = |bytes: usize| bytes / 16;
+        let nodes = words(scene.bvh.nodes.len() * size_of::<CompressedNode>());
+        let blocks = words(std::mem::size_of_val(scene.bvh.blocks.as_slice()));
+        if is_llvmpipe(&gpu.info) && fits(nodes) && fits(blocks) {
             BvhStorage::Texels
         } else {
             BvhStorage::Buffers
@@ -424,9 +433,15 @@ impl Gpu {
 impl Gpu {
     /// `bytes` (whole 16-byte texels) as an rgba32uint texture of
     /// `TEXELS_PER_ROW` texels a row, texel i at (i % row, i / row).
+    /// `BvhStorage::for_scene` checks first that they fit.
     fn texel_texture(&self, label: &str, bytes: &[u8]) -> Result<wgpu::Texture> {
         const TEXEL: usize = 16;
-        let row = TEXELS_PER_ROW as usize;
+        // No bytes: the placeholder of the storage not in use, one texel.
+        let row = if bytes.is_empty() {
+            1
+        } else {
+            TEXELS_PER_ROW as usize
+        };
         let texels = (bytes.len() / TEXEL).max(1);
         let rows = texels.div_ceil(row);
         let max = self.limits.max_texture_dimension_2d as usize;
@@ -638,6 +653,8 @@ pub struct GpuRenderer {
     /// The arrays split over two bindings ("triangles" also stands for
     /// their normals).
     pub split_arrays: Vec<&'static str>,
+    /// Where the shader reads the BVH from.
+    pub bvh_storage: BvhStorage,
     timer: Option<Timer>,
     /// Device time of the last `trace_rays` (its dispatches, summed), where
     /// timestamps work.
@@ -775,7 +792,7 @@ fn compute_pipeline(
 impl GpuRenderer {
     /// Uploads `scene` with a shader specialised to it.
     pub fn new(gpu: Gpu, scene: &Scene) -> Result<GpuRenderer> {
-        let storage = BvhStorage::for_adapter(&gpu.info);
+        let storage = BvhStorage::for_scene(&gpu, scene);
         GpuRenderer::build(gpu, scene, specialisation(scene), storage)
     }
 
@@ -793,7 +810,7 @@ impl GpuRenderer {
             .into_iter()
             .filter(|(name, _)| matches!(*name, "USE_BVH" | "INTERSECT"))
             .collect();
-        let storage = BvhStorage::for_adapter(&gpu.info);
+        let storage = BvhStorage::for_scene(&gpu, scene);
         GpuRenderer::build(gpu, scene, constants, storage)
     }
 
@@ -1071,6 +1088,7 @@ impl GpuRenderer {
             samples_per_dispatch,
             device_bytes,
             split_arrays,
+            bvh_storage: storage,
             timer,
             trace_device_time: None,
             list_buffers: Default::default(),

@@ -215,3 +215,21 @@ fn trees_as_deep_as_the_builder_makes_trace_within_the_stack() {
     let twin = cpu::trace_rays_gpu_twin(&scene, &rays, false, scene.intersect);
     assert_eq!(mismatches(&gpu, &twin), (0, 0), "deep tree: GPU vs twin");
 }
+
+#[test]
+fn a_tree_too_large_for_the_devices_textures_is_read_from_buffers() {
+    let scene = load("bunny");
+    let rays = lambert::rays::camera_rays(&scene);
+    let twin = cpu::trace_rays_gpu_twin(&scene, &rays, false, scene.intersect);
+    let default = GpuRenderer::new(open_gpu(), &scene).expect("scene uploads");
+    println!("default storage on this adapter: {:?}", default.bvh_storage);
+    // Textures of fewer texels a row than TEXELS_PER_ROW hold no tree.
+    let mut gpu = open_gpu();
+    gpu.limits.max_texture_dimension_2d = lambert::gpu::TEXELS_PER_ROW / 2;
+    let mut renderer = GpuRenderer::new(gpu, &scene).expect("scene uploads");
+    assert_eq!(renderer.bvh_storage, BvhStorage::Buffers);
+    let hits = renderer
+        .trace_rays(&rays, false, scene.intersect)
+        .expect("GPU trace");
+    assert_eq!(mismatches(&hits, &twin), (0, 0));
+}
