@@ -16,7 +16,9 @@
 use glam::Vec3;
 
 use crate::bvh::{Aabb, Bvh, child_aabb, occupied_slots};
-use crate::layout::{BVH_WIDTH, CompressedNode, LEAF_BIT, META_INTERIOR, META_LEAF, leaf_range};
+use crate::layout::{
+    BVH_WIDTH, CompressedNode, LEAF_BIT, META_INTERIOR, META_LEAF, grid_point, leaf_range,
+};
 
 /// Grid steps per axis: planes are bytes.
 const STEPS: f64 = 255.0;
@@ -110,17 +112,12 @@ fn axis_grid(lo: f32, hi: f32) -> (u32, f32) {
             let origin = (k * scale) as f32;
             // Compared in f32, where the grid's points are exact: in f64,
             // hi − origin may round (hi = 8e-17 against an origin of −1.3).
-            if dequantise(STEPS as u32, scale as f32, origin) >= hi {
+            if grid_point(STEPS as u32, scale as f32, origin) >= hi {
                 return ((exponent + 127) as u32, origin);
             }
         }
         exponent += 1;
     }
-}
-
-/// Grid point q, as the shader computes it (exactly, on this grid).
-fn dequantise(q: u32, scale: f32, origin: f32) -> f32 {
-    (q as f32).mul_add(scale, origin)
 }
 
 /// Node `index` compressed but for `child_base`, and its interior
@@ -193,11 +190,11 @@ fn compress_node(bvh: &Bvh, index: usize) -> (CompressedNode, Vec<u32>) {
             // Rounded outwards in f64, then moved until the f32 grid point
             // (exact) is outside the box: the f64 difference may round.
             let mut lo = (estimate(b.min[axis]).floor().max(0.0)) as u32;
-            while lo > 0 && dequantise(lo, scale as f32, origin) > b.min[axis] {
+            while lo > 0 && grid_point(lo, scale as f32, origin) > b.min[axis] {
                 lo -= 1;
             }
             let mut hi = (estimate(b.max[axis]).ceil().min(STEPS)) as u32;
-            while hi < STEPS as u32 && dequantise(hi, scale as f32, origin) < b.max[axis] {
+            while hi < STEPS as u32 && grid_point(hi, scale as f32, origin) < b.max[axis] {
                 hi += 1;
             }
             set_byte(&mut out.q[2 * axis], slot, lo);

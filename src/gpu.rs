@@ -1418,7 +1418,7 @@ impl GpuRenderer {
             .as_ref()
             .expect("prepared");
         let (hits, device): (Vec<Hit>, _) =
-            self.run_list(pipeline, &self.rays_layout, 2, rays, 1 << 20, None)?;
+            self.run_list(pipeline, &self.rays_layout, 2, rays, 1 << 20, None, true)?;
         self.trace_device_time = device;
         if self.loops_were_cut()? {
             return Err(Error::Gpu(format!(
@@ -1447,8 +1447,15 @@ impl GpuRenderer {
             // As many samples per dispatch as a full tile at 1 spp.
             let batch =
                 ((TILE * TILE) / step).max(RENDER_WORKGROUP[0] * RENDER_WORKGROUP[1]) as usize;
-            let (results, _) =
-                self.run_list(pipeline, &self.pixels_layout, 4, pixels, batch, Some(step))?;
+            let (results, _) = self.run_list(
+                pipeline,
+                &self.pixels_layout,
+                4,
+                pixels,
+                batch,
+                Some(step),
+                false,
+            )?;
             if !self.loops_were_cut()? {
                 return Ok(results);
             }
@@ -1459,8 +1466,9 @@ impl GpuRenderer {
     /// Runs a one-invocation-per-item entry point over `inputs` (bound at
     /// `binding`, outputs at `binding + 1`), `batch` items per dispatch so
     /// that no dispatch runs long; with `step`, the scene's samples that
-    /// many at a time, a dispatch each. Also returns the dispatches' device
-    /// time, summed, where timestamps work.
+    /// many at a time, a dispatch each. With `timed`, also returns the
+    /// dispatches' device time, summed, where timestamps work (reading it
+    /// back waits on each dispatch's queries).
     fn run_list<I: bytemuck::Pod, O: bytemuck::Pod>(
         &self,
         pipeline: &wgpu::ComputePipeline,
@@ -1469,9 +1477,11 @@ impl GpuRenderer {
         inputs: &[I],
         batch: usize,
         step: Option<u32>,
+        timed: bool,
     ) -> Result<(Vec<O>, Option<Duration>)> {
         const LIST_WORKGROUP: usize = WORKGROUP_INVOCATIONS as usize;
-        let mut device = self.timer.as_ref().map(|_| Duration::ZERO);
+        let timer = self.timer.as_ref().filter(|_| timed);
+        let mut device = timer.map(|_| Duration::ZERO);
         let gpu = &self.gpu;
         let batch = batch.min(inputs.len()).max(1);
         use wgpu::BufferUsages as U;
@@ -1544,19 +1554,19 @@ impl GpuRenderer {
                 {
                     let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                         label: Some("list"),
-                        timestamp_writes: self.timer.as_ref().map(Timer::writes),
+                        timestamp_writes: timer.map(Timer::writes),
                     });
                     pass.set_pipeline(pipeline);
                     pass.set_bind_group(0, &self.scene_group, &[]);
                     pass.set_bind_group(1, &group, &[]);
                     pass.dispatch_workgroups(chunk.len().div_ceil(LIST_WORKGROUP) as u32, 1, 1);
                 }
-                if let Some(timer) = &self.timer {
+                if let Some(timer) = timer {
                     timer.resolve(&mut encoder);
                 }
                 gpu.queue.submit([encoder.finish()]);
                 gpu.wait()?;
-                if let (Some(timer), Some(total)) = (&self.timer, &mut device) {
+                if let (Some(timer), Some(total)) = (timer, &mut device) {
                     *total += timer.read(gpu)?;
                 }
             }

@@ -292,6 +292,12 @@ pub struct CompressedNode {
     pub q: [[u32; 2]; 6],
 }
 
+/// Point q of a `CompressedNode` grid, as the shader computes it: exact on
+/// the grids `cwbvh` chooses.
+pub fn grid_point(q: u32, scale: f32, origin: f32) -> f32 {
+    (q as f32).mul_add(scale, origin)
+}
+
 /// `CompressedNode::child_meta` byte of an interior child (its rank below).
 pub const META_INTERIOR: u32 = 0x08;
 /// `CompressedNode::child_meta` byte of a leaf (count − 1 and offset below).
@@ -311,8 +317,11 @@ impl CompressedNode {
     /// Child `slot`'s box as the shader dequantises it: (min, max).
     pub fn child_bounds(&self, slot: usize) -> ([f32; 3], [f32; 3]) {
         let plane = |row: usize, axis: usize| {
-            (CompressedNode::byte(self.q[row], slot) as f32)
-                .mul_add(self.scale(axis), self.origin[axis])
+            grid_point(
+                CompressedNode::byte(self.q[row], slot),
+                self.scale(axis),
+                self.origin[axis],
+            )
         };
         (
             std::array::from_fn(|a| plane(2 * a, a)),

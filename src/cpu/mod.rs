@@ -758,13 +758,12 @@ unsafe fn trace_chunk<const LANES: usize, const PREFETCH: bool, const VECTOR_SOR
     hits: &mut [std::mem::MaybeUninit<layout::Hit>],
     any_hit: bool,
 ) {
-    let answer = query_hit;
     if rays.is_empty() {
         return;
     }
     if kernel.scene.accel != Accel::Bvh {
         for (ray, out) in rays.iter().zip(hits) {
-            out.write(answer(kernel.trace(f32::Ray::from_query(ray), any_hit)));
+            out.write(query_hit(kernel.trace(f32::Ray::from_query(ray), any_hit)));
         }
         return;
     }
@@ -797,7 +796,7 @@ unsafe fn trace_chunk<const LANES: usize, const PREFETCH: bool, const VECTOR_SOR
             {
                 continue;
             }
-            hits[index[k]].write(answer(traversals[k].answer()));
+            hits[index[k]].write(query_hit(traversals[k].answer()));
             if next < rays.len() {
                 index[k] = next;
                 traversals[k] = start(&rays[next], any_hit);
