@@ -34,9 +34,12 @@ override BVH_TEXELS: bool = false;
 // (docs/bvh.md).
 override RENDER_WORKGROUP_X: u32 = 8u;
 override RENDER_WORKGROUP_Y: u32 = 8u;
-// Traversal stack entries per invocation: the scene's BVH depth − 1
-// (gpu.rs), the most `trace_compressed` can push (see MAX_DEPTH).
-override STACK_ENTRIES: u32 = 23u;
+// Traversal stack entries per invocation in workgroup memory (gpu.rs):
+// the scene's BVH depth − 1, the most `trace_compressed` can push (see
+// MAX_DEPTH), up to gpu::SHORT_STACK_ENTRIES. A deeper tree sets
+// STACK_SPILLS: the stack's oldest entries then move to `stack_spill`.
+override STACK_ENTRIES: u32 = 8u;
+override STACK_SPILLS: bool = false;
 // Invocations per workgroup of every entry point (RENDER_WORKGROUP_X ×
 // RENDER_WORKGROUP_Y for `render`).
 const WORKGROUP_INVOCATIONS: u32 = 64u;
@@ -689,6 +692,38 @@ fn intersect_compressed_node(ray: Ray, slabs: Slabs, node: CompressedNode, octan
 // zero-initialised (the pipelines ask not to): only pushed entries are read.
 var<workgroup> traversal_stack: array<vec2<u32>, WORKGROUP_INVOCATIONS * STACK_ENTRIES>;
 var<private> stack_base: u32;
+// Where the short stack's oldest entries go when it is full (STACK_SPILLS
+// only: otherwise never read, and compiled out with its branches). Entry
+// sp lives in slot sp % STACK_ENTRIES; pushing entry sp ≥ STACK_ENTRIES
+// moves entry sp − STACK_ENTRIES from that slot to stack_spill, and
+// popping entry sp brings it back, so the top STACK_ENTRIES entries are
+// always in workgroup memory.
+var<private> stack_spill: array<vec2<u32>, MAX_DEPTH>;
+
+// Pushes `group` as stack entry `sp`.
+fn push_group(sp: u32, group: vec2<u32>) {
+    var slot = sp;
+    if STACK_SPILLS {
+        slot = sp % STACK_ENTRIES;
+        if sp >= STACK_ENTRIES {
+            stack_spill[sp - STACK_ENTRIES] = traversal_stack[stack_base + slot];
+        }
+    }
+    traversal_stack[stack_base + slot] = group;
+}
+
+// Pops stack entry `sp` (the top).
+fn pop_group(sp: u32) -> vec2<u32> {
+    var slot = sp;
+    if STACK_SPILLS {
+        slot = sp % STACK_ENTRIES;
+    }
+    let group = traversal_stack[stack_base + slot];
+    if STACK_SPILLS && sp >= STACK_ENTRIES {
+        traversal_stack[stack_base + slot] = stack_spill[sp - STACK_ENTRIES];
+    }
+    return group;
+}
 
 // Closest hit through the compressed BVH, children in octant order (no
 // sorting); with `any_hit`, the first hit found. Each pass of the loop
@@ -725,13 +760,13 @@ fn trace_compressed(ray_in: Ray, shear: Shear, any_hit: bool) -> Hit {
                 break;
             }
             sp -= 1u;
-            group = traversal_stack[stack_base + sp];
+            group = pop_group(sp);
         }
         let next_bit = firstTrailingBit(group.y & 0xffu);
         let slot = next_bit ^ octant;
         group.y &= ~(1u << next_bit);
         if (group.y & 0xffu) != 0u {
-            traversal_stack[stack_base + sp] = group;
+            push_group(sp, group);
             sp += 1u;
         }
         let below = (group.y >> 8u) & ((1u << slot) - 1u);

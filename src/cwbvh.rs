@@ -20,6 +20,28 @@ use crate::layout::{
     BVH_WIDTH, CompressedNode, LEAF_BIT, META_INTERIOR, META_LEAF, grid_point, leaf_range,
 };
 
+/// Traversal stack entries per invocation that the shader keeps in
+/// workgroup memory: a handful, which Vaidyanathan, Woop and Benthin
+/// (HPG 2019) found enough for wide trees; 8 holds the whole stack of
+/// trees up to 9 levels (the dragon's). A deeper tree's oldest entries
+/// spill to private memory (the shader's `STACK_SPILLS`, measured in
+/// docs/bvh.md).
+pub const SHORT_STACK_ENTRIES: usize = 8;
+
+/// The short stack's entries for a tree of `depth` levels (which pushes at
+/// most depth − 1 node groups) where a workgroup has `workgroup_bytes` of
+/// memory, and whether its stack spills (the shader's `STACK_ENTRIES` and
+/// `STACK_SPILLS`).
+pub fn short_stack(depth: usize, workgroup_bytes: u32) -> (usize, bool) {
+    let needed = depth.saturating_sub(1).max(1);
+    let fits = workgroup_bytes as usize / (8 * crate::gpu::WORKGROUP_INVOCATIONS as usize);
+    let entries = needed.min(SHORT_STACK_ENTRIES).min(fits).max(1);
+    (entries, needed > entries)
+}
+
+/// Workgroup memory every WebGPU device offers (the twin's short stack).
+pub const MIN_WORKGROUP_BYTES: u32 = 16384;
+
 /// Grid steps per axis: planes are bytes.
 const STEPS: f64 = 255.0;
 /// Integers below this are exact in f32: a grid point `k·2^E` with

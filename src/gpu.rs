@@ -910,9 +910,12 @@ impl GpuRenderer {
         constants.push(("BVH_TEXELS", texels as u32 as f64));
         constants.push(("RENDER_WORKGROUP_X", RENDER_WORKGROUP[0] as f64));
         constants.push(("RENDER_WORKGROUP_Y", RENDER_WORKGROUP[1] as f64));
-        // A tree of depth d pushes at most d − 1 node groups.
-        let stack_entries = scene.bvh.depth().saturating_sub(1).max(1);
+        let (stack_entries, spills) = crate::cwbvh::short_stack(
+            scene.bvh.depth(),
+            gpu.limits.max_compute_workgroup_storage_size,
+        );
         constants.push(("STACK_ENTRIES", stack_entries as f64));
+        constants.push(("STACK_SPILLS", spills as u32 as f64));
 
         let texture = |label, format| {
             device.create_texture(&wgpu::TextureDescriptor {

@@ -2,7 +2,8 @@
 //! (`cpu::trace_rays_gpu_twin`): the GPU's hits equal the twin's bit for
 //! bit, closest and any hit, from storage buffers and from textures;
 //! quantised boxes lose no hit, at any scale or
-//! offset; trees as deep as the builder allows trace within the stack.
+//! offset; trees as deep as the builder allows trace within the stack, its
+//! short part spilling.
 
 mod common;
 
@@ -10,6 +11,7 @@ use common::*;
 use glam::{DVec3, Vec3};
 use lambert::Scene;
 use lambert::cpu;
+use lambert::cwbvh::{MIN_WORKGROUP_BYTES, short_stack};
 use lambert::gpu::{BvhStorage, GpuRenderer};
 use lambert::layout::{Hit, NO_HIT, Ray, Triangle};
 use lambert::probe::Rng;
@@ -210,10 +212,65 @@ fn trees_as_deep_as_the_builder_makes_trace_within_the_stack() {
             }
         })
         .collect();
+    // Deeper than the short stack holds: its oldest entries spill (on the
+    // twin too, which is checked against brute force).
+    let (entries, spills) = short_stack(depth, MIN_WORKGROUP_BYTES);
+    assert!(spills, "{depth} levels fit {entries} entries");
     assert_twin_is_exact("deep tree", &scene, &rays);
-    let gpu = trace_gpu(&scene, &rays, false);
-    let twin = cpu::trace_rays_gpu_twin(&scene, &rays, false, scene.intersect);
-    assert_eq!(mismatches(&gpu, &twin), (0, 0), "deep tree: GPU vs twin");
+    assert_short_stacks_agree("deep tree", &scene, &rays);
+}
+
+#[test]
+fn a_short_stack_that_spills_traces_as_a_whole_one() {
+    // The bunny's tree (4 levels) needs 3 entries: random rays, which
+    // push the most, through a short stack of 1 and of 2 spill often.
+    let scene = load("bunny");
+    let rays = random_rays(&scene, &mut Rng(7), 20_000);
+    assert_short_stacks_agree("bunny", &scene, &rays);
+}
+
+/// The GPU's hits through the adapter's short stack, and through one of 1
+/// and of 2 entries (the device's workgroup memory lowered), equal the
+/// twin's, closest and any hit; so do the twin's through such stacks.
+fn assert_short_stacks_agree(name: &str, scene: &Scene, rays: &[Ray]) {
+    let depth = scene.bvh.depth();
+    let nodes = lambert::cwbvh::compress(&scene.bvh);
+    for any_hit in [false, true] {
+        let twin = cpu::trace_rays_gpu_twin(scene, rays, any_hit, scene.intersect);
+        for entries in [1, 2] {
+            let mut kernel = cpu::f32::Kernel::new(scene);
+            kernel.compressed = Some(&nodes);
+            kernel.stack_entries = entries;
+            for (i, (ray, whole)) in rays.iter().zip(&twin).enumerate() {
+                let hit = kernel.trace(cpu::f32::Ray::from_query(ray), any_hit);
+                assert!(
+                    hit.prim == whole.prim && (hit.prim == NO_HIT || hit.t == whole.t),
+                    "{name}: ray {i}, twin with {entries} short-stack entries {hit:?}, whole {whole:?}"
+                );
+            }
+        }
+        for entries in [None, Some(1), Some(2)] {
+            let mut gpu = open_gpu();
+            if let Some(entries) = entries {
+                gpu.limits.max_compute_workgroup_storage_size =
+                    entries * 8 * lambert::gpu::WORKGROUP_INVOCATIONS;
+            }
+            let shape = short_stack(depth, gpu.limits.max_compute_workgroup_storage_size);
+            if entries.is_some() {
+                assert!(shape.1, "{name}: {depth} levels fit a stack of {shape:?}");
+            }
+            let hits = GpuRenderer::new(gpu, scene)
+                .expect("scene uploads")
+                .trace_rays(rays, any_hit, scene.intersect)
+                .expect("GPU trace");
+            println!("{name}: short stack {shape:?}, any hit {any_hit}: GPU vs twin");
+            assert_eq!(
+                mismatches(&hits, &twin),
+                (0, 0),
+                "{name}, short stack {shape:?}, any hit {any_hit}: GPU vs twin"
+            );
+        }
+    }
 }
 
 #[test]

@@ -259,6 +259,48 @@ pub struct Kernel<'a> {
     /// traverses as the shader does (`trace_compressed`), the twin that
     /// GPU results are compared with.
     pub compressed: Option<&'a [CompressedNode]>,
+    /// The GPU's short stack: entries `trace_compressed` keeps before the
+    /// oldest spill (`cwbvh::short_stack_entries`; `MAX_DEPTH`, none spill).
+    pub stack_entries: usize,
+}
+
+/// The shader's traversal stack of node groups: entry `sp` in slot
+/// `sp % entries` of the short stack (workgroup memory there), the entry
+/// it displaces in `spill`, so the top `entries` are always short-stack
+/// entries. Same steps as the shader's `push_group` and `pop_group`.
+struct GroupStack {
+    short: [(u32, u32); MAX_DEPTH],
+    spill: [(u32, u32); MAX_DEPTH],
+    entries: usize,
+}
+
+impl GroupStack {
+    fn new(entries: usize) -> GroupStack {
+        GroupStack {
+            short: [(0, 0); MAX_DEPTH],
+            spill: [(0, 0); MAX_DEPTH],
+            entries: entries.clamp(1, MAX_DEPTH),
+        }
+    }
+
+    /// Pushes `group` as entry `sp`.
+    fn push_group(&mut self, sp: usize, group: (u32, u32)) {
+        let slot = sp % self.entries;
+        if sp >= self.entries {
+            self.spill[sp - self.entries] = self.short[slot];
+        }
+        self.short[slot] = group;
+    }
+
+    /// Pops entry `sp` (the top).
+    fn pop_group(&mut self, sp: usize) -> (u32, u32) {
+        let slot = sp % self.entries;
+        let group = self.short[slot];
+        if sp >= self.entries {
+            self.short[slot] = self.spill[sp - self.entries];
+        }
+        group
+    }
 }
 
 impl<'a> Kernel<'a> {
@@ -278,6 +320,7 @@ impl<'a> Kernel<'a> {
             intersect: scene.intersect,
             ymm_boxes,
             compressed: None,
+            stack_entries: MAX_DEPTH,
         }
     }
 
@@ -414,7 +457,7 @@ impl<'a> Kernel<'a> {
         let blocks = &self.scene.bvh.blocks;
         let slabs = ray_slabs(&ray);
         let octant = ray_octant(&slabs);
-        let mut stack = [(0u32, 0u32); MAX_DEPTH];
+        let mut stack = GroupStack::new(self.stack_entries);
         let mut sp = 0;
         let (entered, mut leaf_blocks) = intersect_compressed_node(&ray, &slabs, root, octant);
         let mut group = (root.child_base, entered);
@@ -433,13 +476,13 @@ impl<'a> Kernel<'a> {
                     break;
                 }
                 sp -= 1;
-                group = stack[sp];
+                group = stack.pop_group(sp);
             }
             let next_bit = (group.1 & 0xff).trailing_zeros();
             let slot = next_bit ^ octant;
             group.1 &= !(1 << next_bit);
             if group.1 & 0xff != 0 {
-                stack[sp] = group;
+                stack.push_group(sp, group);
                 sp += 1;
             }
             let below = (group.1 >> 8) & ((1 << slot) - 1);

@@ -357,9 +357,16 @@ pub fn trace_rays_gpu_twin(
     let mut kernel = f32::Kernel::new_for(scene, false);
     kernel.intersect = intersect;
     kernel.compressed = Some(&nodes);
+    kernel.stack_entries = twin_stack_entries(scene);
     rays.par_iter()
         .map(|ray| query_hit(kernel.trace(f32::Ray::from_query(ray), any_hit)))
         .collect()
+}
+
+/// The twin's short stack: a WebGPU device's (the GPU's own where its
+/// workgroup memory is the minimum), spilling where the GPU's would.
+fn twin_stack_entries(scene: &Scene) -> usize {
+    crate::cwbvh::short_stack(scene.bvh.depth(), crate::cwbvh::MIN_WORKGROUP_BYTES).0
 }
 
 fn render_rows_with(
@@ -378,6 +385,7 @@ fn render_rows_with(
     let mut variance = vec![0.0; width * height];
     let mut kernel32 = f32::Kernel::new_for(scene, cpu_kernel.ymm_boxes());
     kernel32.compressed = compressed;
+    kernel32.stack_entries = twin_stack_entries(scene);
     let kernel64 = f64::Kernel::new(scene);
     rgb.par_chunks_mut(width)
         .zip(prims.par_chunks_mut(width))
