@@ -4,11 +4,13 @@
 //! each result column is a numpy array that owns the vector it was filled
 //! into (the one copy out). Tracing and rendering run with the GIL released.
 
+use std::mem::MaybeUninit;
 use std::panic::AssertUnwindSafe;
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
-use lambert::cpu::{CpuKernel, SharedOut};
+use lambert::cpu::{CpuKernel, QueryOptions, QueryRays, SharedOut, TracedChunk, trace_rays_each};
 use lambert::gpu::AdapterRequest;
 use lambert::layout::{Hit, NO_HIT, Ray};
 use lambert::output::Image;
@@ -202,45 +204,173 @@ impl Bound1View<'_> {
     }
 }
 
-/// The rays of a query, assembled and checked in parallel from the
-/// caller's arrays (one pass over them).
-fn assemble(
-    origins: RowsView<'_>,
-    directions: RowsView<'_>,
-    tmin: Bound1View<'_>,
-    tmax: Bound1View<'_>,
-    n: usize,
-    mut rays: Vec<Ray>,
-) -> Result<Vec<Ray>, Error> {
-    use rayon::prelude::*;
-    const CHUNK: usize = 4096;
-    rays.clear();
-    rays.reserve(n);
-    let first_bad = rays.spare_capacity_mut()[..n]
-        .par_chunks_mut(CHUNK)
-        .enumerate()
-        .filter_map(|(c, chunk)| {
-            let start = c * CHUNK;
-            let mut bad = None;
-            for (i, slot) in (start..).zip(chunk.iter_mut()) {
-                let ray = slot.write(Ray {
-                    origin: origins.row(i),
-                    tmin: tmin.at(i),
-                    dir: directions.row(i),
-                    tmax: tmax.at(i),
-                });
-                if bad.is_none() && !rays::ray_is_valid(ray) {
-                    bad = Some(i);
-                }
+/// A query's rays as the caller gave them: records (still to be
+/// checked), or arrays read a ray at a time.
+#[derive(Clone, Copy)]
+enum Query<'a> {
+    Records(&'a [Ray]),
+    Arrays {
+        origins: RowsView<'a>,
+        directions: RowsView<'a>,
+        tmin: Bound1View<'a>,
+        tmax: Bound1View<'a>,
+        n: usize,
+    },
+}
+
+impl Query<'_> {
+    fn len(&self) -> usize {
+        match self {
+            Query::Records(r) => r.len(),
+            Query::Arrays { n, .. } => *n,
+        }
+    }
+
+    /// Ray `i`.
+    #[inline]
+    fn ray(&self, i: usize) -> Ray {
+        match self {
+            Query::Records(r) => r[i],
+            Query::Arrays {
+                origins,
+                directions,
+                tmin,
+                tmax,
+                ..
+            } => Ray {
+                origin: origins.row(i),
+                tmin: tmin.at(i),
+                dir: directions.row(i),
+                tmax: tmax.at(i),
+            },
+        }
+    }
+
+    /// Writes rays start.. into all of `out`, checking each: per chunk,
+    /// so the usual arrays (packed float32 rows, scalar bounds) take a loop
+    /// of their own, with no choice per ray.
+    #[inline]
+    fn fill(&self, start: usize, out: &mut [MaybeUninit<Ray>], first_bad: &FirstBad) {
+        if let Query::Arrays {
+            origins: RowsView::PackedF32(o),
+            directions: RowsView::PackedF32(d),
+            tmin: Bound1View::All(tmin),
+            tmax: Bound1View::All(tmax),
+            ..
+        } = *self
+        {
+            let rows = start * 3..(start + out.len()) * 3;
+            let (o, d) = (o[rows.clone()].chunks_exact(3), d[rows].chunks_exact(3));
+            let mut valid = true;
+            for (slot, (o, d)) in out.iter_mut().zip(o.zip(d)) {
+                valid &= rays::ray_is_valid(slot.write(Ray {
+                    origin: [o[0], o[1], o[2]],
+                    tmin,
+                    dir: [d[0], d[1], d[2]],
+                    tmax,
+                }));
             }
-            bad
-        })
-        .min();
-    // SAFETY: every one of the n slots was written above.
-    unsafe { rays.set_len(n) };
-    match first_bad {
-        Some(index) => Err(Error::Usage(rays::bad_ray(&rays, index).to_string())),
-        None => Ok(rays),
+            if valid {
+                return;
+            }
+        }
+        for (i, slot) in (start..).zip(out) {
+            first_bad.check(slot.write(self.ray(i)), i);
+        }
+    }
+
+    /// The rays in one buffer (what a GPU uploads), checked: records as
+    /// they are, arrays assembled into `buffer` in one parallel pass.
+    fn gathered(&self, mut buffer: Vec<Ray>) -> Result<Gathered<'_>, Error> {
+        use rayon::prelude::*;
+        const CHUNK: usize = 4096;
+        if let Query::Records(r) = self {
+            rays::validate_rays(r).map_err(|bad| Error::Usage(bad.to_string()))?;
+            return Ok(Gathered::Records(r));
+        }
+        let n = self.len();
+        let first_bad = FirstBad::new();
+        buffer.clear();
+        buffer.reserve(n);
+        buffer.spare_capacity_mut()[..n]
+            .par_chunks_mut(CHUNK)
+            .enumerate()
+            .for_each(|(c, chunk)| self.fill(c * CHUNK, chunk, &first_bad));
+        // SAFETY: every one of the n slots was written above.
+        unsafe { buffer.set_len(n) };
+        first_bad.result(self)?;
+        Ok(Gathered::Buffer(buffer))
+    }
+}
+
+/// A query's rays in one buffer.
+enum Gathered<'a> {
+    Records(&'a [Ray]),
+    Buffer(Vec<Ray>),
+}
+
+impl std::ops::Deref for Gathered<'_> {
+    type Target = [Ray];
+    fn deref(&self) -> &[Ray] {
+        match self {
+            Gathered::Records(r) => r,
+            Gathered::Buffer(b) => b,
+        }
+    }
+}
+
+/// Where the first invalid ray of a query was seen, by index (rays are
+/// checked as they are read, by whichever thread reads them).
+struct FirstBad(AtomicUsize);
+
+impl FirstBad {
+    fn new() -> FirstBad {
+        FirstBad(AtomicUsize::new(usize::MAX))
+    }
+
+    #[inline]
+    fn check(&self, ray: &Ray, i: usize) {
+        if !rays::ray_is_valid(ray) {
+            self.0.fetch_min(i, Ordering::Relaxed);
+        }
+    }
+
+    /// The query's error, if a ray was invalid.
+    fn result(&self, query: &Query) -> Result<(), Error> {
+        match self.0.load(Ordering::Relaxed) {
+            usize::MAX => Ok(()),
+            i => Err(Error::Usage(rays::bad_ray(&query.ray(i), i).to_string())),
+        }
+    }
+}
+
+/// A vector of `n` elements that parallel chunks write, each once, before
+/// it is read (no zero fill: a recycled heap block would be filled
+/// by one thread first).
+struct Column<T> {
+    vec: Vec<T>,
+    out: SharedOut<T>,
+}
+
+impl<T> Column<T> {
+    fn new(n: usize) -> Column<T> {
+        let mut vec = Vec::with_capacity(n);
+        let out = SharedOut::new_spare(&mut vec);
+        Column { vec, out }
+    }
+
+    /// # Safety
+    /// `i` within the `n` elements, written by one thread.
+    #[inline]
+    unsafe fn set(&self, i: usize, value: T) {
+        unsafe { self.out.at(i).write(value) }
+    }
+
+    /// # Safety
+    /// Every one of the `n` elements was set.
+    unsafe fn filled(mut self, n: usize) -> Vec<T> {
+        unsafe { self.vec.set_len(n) };
+        self.vec
     }
 }
 
@@ -253,55 +383,34 @@ struct Columns {
     normal: Vec<f32>,
 }
 
-impl Columns {
-    /// Fills the columns from hits, chunk by chunk in parallel (on the CPU
-    /// path, as each chunk is traced, while its triangles are in cache).
-    fn fill(
-        scene: &Scene,
-        rays: &[Ray],
-        chunks: impl FnOnce(&(dyn Fn(usize, &[Hit]) + Sync)),
-    ) -> Columns {
-        let n = rays.len();
-        let mut c = Columns {
-            t: vec![0.0; n],
-            prim: vec![0; n],
-            u: vec![0.0; n],
-            v: vec![0.0; n],
-            normal: vec![0.0; 3 * n],
-        };
-        let (t, prim) = (SharedOut::new(&mut c.t), SharedOut::new(&mut c.prim));
-        let (u, v) = (SharedOut::new(&mut c.u), SharedOut::new(&mut c.v));
-        let normal = SharedOut::new(&mut c.normal);
-        chunks(&|start, hits| {
-            rays::prefetch_hit_triangles(scene, hits);
-            for (i, hit) in (start..).zip(hits) {
-                // SAFETY: each chunk's rows are written by one thread, within
-                // the n rows allocated; `c` outlives the closure.
-                unsafe {
-                    *t.at(i) = hit.t;
-                    *prim.at(i) = if hit.prim == NO_HIT {
-                        -1
-                    } else {
-                        hit.prim as i64
-                    };
-                    *u.at(i) = hit.u;
-                    *v.at(i) = hit.v;
-                    let ng = rays::hit_normal(scene, &rays[i], hit);
-                    std::ptr::copy_nonoverlapping(ng.as_ptr(), normal.at(3 * i), 3);
-                }
-            }
-        });
-        c
-    }
-}
-
-/// Calls `each` on `hits` in parallel chunks (as `trace_rays_each` does).
-fn each_chunk(hits: &[Hit], each: &(dyn Fn(usize, &[Hit]) + Sync)) {
+/// Hands `hits` to `each` in parallel chunks, as `trace_rays_each` does
+/// (with `normals`, each hit's normal too, its triangle fetched ahead).
+fn each_chunk(
+    scene: &Scene,
+    rays: &[Ray],
+    hits: &[Hit],
+    normals: bool,
+    each: &(dyn Fn(&TracedChunk) + Sync),
+) {
     use rayon::prelude::*;
     const CHUNK: usize = 4096;
-    hits.par_chunks(CHUNK)
-        .enumerate()
-        .for_each(|(i, chunk)| each(i * CHUNK, chunk));
+    hits.par_chunks(CHUNK).enumerate().for_each(|(i, hits)| {
+        let start = i * CHUNK;
+        let mut chunk_normals = Vec::new();
+        if normals {
+            rays::prefetch_hit_triangles(scene, hits);
+            chunk_normals.extend(
+                (start..)
+                    .zip(hits)
+                    .map(|(r, hit)| rays::hit_normal(scene, &rays[r], hit)),
+            );
+        }
+        each(&TracedChunk {
+            start,
+            hits,
+            normals: &chunk_normals,
+        });
+    });
 }
 
 /// A scene resident in memory: its BVH built once, and uploaded once to
@@ -310,28 +419,8 @@ fn each_chunk(hits: &[Hit], each: &(dyn Fn(usize, &[Hit]) + Sync)) {
 struct NativeScene {
     scene: Arc<Scene>,
     renderers: Mutex<Renderers>,
-    /// The last query's ray buffer, kept for the next (32 bytes a ray).
+    /// The last GPU query's ray buffer, kept for the next (32 bytes a ray).
     scratch: Mutex<Vec<Ray>>,
-}
-
-/// What a query's rays are: borrowed records (still to be checked), or
-/// assembled from arrays and checked.
-enum QueryRays<'a> {
-    Records(&'a [Ray]),
-    /// With the scene's scratch buffer, which gets them back when done.
-    Checked(Vec<Ray>, &'a Mutex<Vec<Ray>>),
-}
-
-impl Drop for QueryRays<'_> {
-    fn drop(&mut self) {
-        if let QueryRays::Checked(rays, scratch) = self {
-            if let Ok(mut home) = scratch.try_lock() {
-                if home.capacity() < rays.capacity() {
-                    *home = std::mem::take(rays);
-                }
-            }
-        }
-    }
 }
 
 impl NativeScene {
@@ -343,29 +432,56 @@ impl NativeScene {
         }
     }
 
-    /// Traces `rays` on `device` with the GIL released, handing the hits
-    /// to `sink` chunk by chunk. The CPU path runs without the renderers'
-    /// lock, so threads trace at once; a GPU's queue is taken in turn.
-    /// Returns the fallback note, if any.
+    /// Traces `query` on `device` (the GIL released by the caller),
+    /// handing the hits (and with `normals` their normals) to `sink` chunk
+    /// by chunk, then fails if a ray was invalid. The CPU path reads the
+    /// rays as it traces them, without the renderers' lock, so threads
+    /// trace at once; a GPU gets them in one buffer, and its queue is taken
+    /// in turn. Returns the fallback note, if any.
     fn trace_into(
         &self,
-        rays: &[Ray],
-        any_hit: bool,
+        query: Query,
+        options: QueryOptions,
         device: DeviceChoice,
-        intersect: Intersect,
-        sink: &(dyn Fn(usize, &[Hit]) + Sync),
+        sink: &(dyn Fn(&TracedChunk) + Sync),
     ) -> Result<Option<String>, Error> {
         let scene = &self.scene;
         let mut renderers = self.renderers.lock().unwrap_or_else(|e| e.into_inner());
         let (renderer, note) = renderers.get(scene, device)?;
         if renderer.is_cpu() {
             drop(renderers);
-            let kernel = CpuKernel::active();
-            lambert::cpu::trace_rays_each(scene, rays, any_hit, intersect, kernel, sink);
+            match query {
+                Query::Records(r) => {
+                    rays::validate_rays(r).map_err(|bad| Error::Usage(bad.to_string()))?;
+                    trace_rays_each(scene, QueryRays::Slice(r), options, sink);
+                }
+                Query::Arrays { n, .. } => {
+                    let first_bad = FirstBad::new();
+                    let fill = |start: usize, out: &mut [MaybeUninit<Ray>]| {
+                        query.fill(start, out, &first_bad)
+                    };
+                    trace_rays_each(scene, QueryRays::Fill(n, &fill), options, sink);
+                    first_bad.result(&query)?;
+                }
+            }
         } else {
-            let hits = renderer.trace(scene, rays, any_hit, intersect)?;
+            // The scene's buffer from an earlier query, if no other thread
+            // holds it: its pages are mapped already (fresh ones cost a
+            // fault each).
+            let buffer = self
+                .scratch
+                .try_lock()
+                .map(|mut b| std::mem::take(&mut *b))
+                .unwrap_or_default();
+            let rays = query.gathered(buffer)?;
+            let hits = renderer.trace(scene, &rays, options.any_hit, options.intersect)?;
             drop(renderers);
-            each_chunk(&hits, sink);
+            each_chunk(scene, &rays, &hits, options.normals, sink);
+            if let (Gathered::Buffer(b), Ok(mut home)) = (rays, self.scratch.try_lock()) {
+                if home.capacity() < b.capacity() {
+                    *home = b;
+                }
+            }
         }
         Ok(note)
     }
@@ -384,79 +500,44 @@ impl NativeScene {
     }
 }
 
-fn query_rays<'a>(
-    scratch: &'a Mutex<Vec<Ray>>,
-    records: Option<&'a PyReadonlyArray2<'_, f32>>,
-    arrays: Option<(&Rows<'_>, &Rows<'_>, &Bound1<'_>, &Bound1<'_>)>,
-) -> PyResult<QueryRays<'a>> {
-    if let Some(records) = records {
-        let flat = records.as_slice().map_err(|_| {
-            PyValueError::new_err("ray records must be a contiguous lambert.RAY_DTYPE array")
-        })?;
-        return Ok(QueryRays::Records(bytemuck::cast_slice(flat)));
-    }
-    let (origins, directions, tmin, tmax) = arrays.expect("records or arrays");
-    let n = origins.len();
-    if directions.len() != n {
-        return Err(PyValueError::new_err(format!(
-            "{n} origins but {} directions",
-            directions.len()
-        )));
-    }
-    // The scene's buffer from an earlier query, if no other thread holds
-    // it: its pages are mapped already (fresh ones cost a fault each).
-    let buffer = scratch
-        .try_lock()
-        .map(|mut b| std::mem::take(&mut *b))
-        .unwrap_or_default();
-    let rays = assemble(
-        origins.view(),
-        directions.view(),
-        tmin.view(),
-        tmax.view(),
-        n,
-        buffer,
-    );
-    Ok(QueryRays::Checked(rays.map_err(to_py)?, scratch))
-}
-
-impl QueryRays<'_> {
-    /// The rays, once checked as a ray file's are.
-    fn checked(&self) -> Result<&[Ray], Error> {
-        match self {
-            QueryRays::Records(r) => {
-                rays::validate_rays(r).map_err(|bad| Error::Usage(bad.to_string()))?;
-                Ok(r)
-            }
-            QueryRays::Checked(r, _) => Ok(r),
-        }
-    }
-}
-
 /// Parses a query's arguments: either `records` (an (N, 8) float32 view of
-/// RAY_DTYPE records) or origins, directions, tmin and tmax.
-macro_rules! with_query_rays {
-    ($self:ident, $origins:expr, $directions:expr, $tmin:expr, $tmax:expr, |$rays:ident| $body:expr) => {{
+/// RAY_DTYPE records) or origins, directions, tmin and tmax, and runs
+/// `$body` with `$query` the `Query`.
+macro_rules! with_query {
+    ($origins:expr, $directions:expr, $tmin:expr, $tmax:expr, |$query:ident| $body:expr) => {{
         match $directions {
             None => {
                 let records: PyReadonlyArray2<f32> = $origins.extract()?;
                 if records.shape()[1] != 8 {
                     return Err(PyValueError::new_err("ray records must be (N, 8) float32"));
                 }
-                let $rays = query_rays(&$self.scratch, Some(&records), None)?;
+                let flat = records.as_slice().map_err(|_| {
+                    PyValueError::new_err(
+                        "ray records must be a contiguous lambert.RAY_DTYPE array",
+                    )
+                })?;
+                let $query = Query::Records(bytemuck::cast_slice(flat));
                 $body
             }
             Some(directions) => {
                 let origins = Rows::extract("origins", $origins)?;
                 let directions = Rows::extract("directions", directions)?;
                 let n = origins.len();
+                if directions.len() != n {
+                    return Err(PyValueError::new_err(format!(
+                        "{n} origins but {} directions",
+                        directions.len()
+                    )));
+                }
                 let tmin = Bound1::extract("tmin", $tmin, n)?;
                 let tmax = Bound1::extract("tmax", $tmax, n)?;
-                let $rays = query_rays(
-                    &$self.scratch,
-                    None,
-                    Some((&origins, &directions, &tmin, &tmax)),
-                )?;
+                let $query = Query::Arrays {
+                    origins: origins.view(),
+                    directions: directions.view(),
+                    tmin: tmin.view(),
+                    tmax: tmax.view(),
+                    n,
+                };
                 $body
             }
         }
@@ -518,15 +599,50 @@ impl NativeScene {
         intersect: &str,
     ) -> PyResult<Bound<'py, PyDict>> {
         let (device, intersect) = (device_choice(device)?, intersect_choice(intersect)?);
-        with_query_rays!(self, origins, directions, tmin, tmax, |rays| {
-            let scene = &self.scene;
+        with_query!(origins, directions, tmin, tmax, |query| {
             let (columns, note) = detached(py, || {
-                let rays = rays.checked()?;
-                let mut note = None;
-                let columns = Columns::fill(scene, rays, |sink| {
-                    note = Some(self.trace_into(rays, false, device, intersect, sink));
-                });
-                Ok((columns, note.expect("traced")?))
+                let n = query.len();
+                let (t, prim) = (Column::new(n), Column::new(n));
+                let (u, v) = (Column::new(n), Column::new(n));
+                let normal = Column::<[f32; 3]>::new(n);
+                let options = QueryOptions {
+                    any_hit: false,
+                    intersect,
+                    cpu_kernel: CpuKernel::active(),
+                    normals: true,
+                };
+                let note = self.trace_into(query, options, device, &|chunk| {
+                    for (k, (hit, ng)) in chunk.hits.iter().zip(chunk.normals).enumerate() {
+                        let i = chunk.start + k;
+                        // SAFETY: each chunk's rows are written by one
+                        // thread, within the n rows.
+                        unsafe {
+                            t.set(i, hit.t);
+                            prim.set(
+                                i,
+                                if hit.prim == NO_HIT {
+                                    -1
+                                } else {
+                                    hit.prim as i64
+                                },
+                            );
+                            u.set(i, hit.u);
+                            v.set(i, hit.v);
+                            normal.set(i, *ng);
+                        }
+                    }
+                })?;
+                // SAFETY: the trace handed over every ray's hit and normal.
+                let columns = unsafe {
+                    Columns {
+                        t: t.filled(n),
+                        prim: prim.filled(n),
+                        u: u.filled(n),
+                        v: v.filled(n),
+                        normal: normal.filled(n).into_flattened(),
+                    }
+                };
+                Ok((columns, note))
             })?;
             NativeScene::warn(py, note)?;
             let Columns {
@@ -561,18 +677,24 @@ impl NativeScene {
         intersect: &str,
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
         let (device, intersect) = (device_choice(device)?, intersect_choice(intersect)?);
-        with_query_rays!(self, origins, directions, tmin, tmax, |rays| {
+        with_query!(origins, directions, tmin, tmax, |query| {
             let (hit, note) = detached(py, || {
-                let rays = rays.checked()?;
-                let mut hit = vec![false; rays.len()];
-                let out = SharedOut::new(&mut hit);
-                let note = self.trace_into(rays, true, device, intersect, &|start, hits| {
-                    for (i, h) in (start..).zip(hits) {
+                let n = query.len();
+                let hit = Column::new(n);
+                let options = QueryOptions {
+                    any_hit: true,
+                    intersect,
+                    cpu_kernel: CpuKernel::active(),
+                    normals: false,
+                };
+                let note = self.trace_into(query, options, device, &|chunk| {
+                    for (k, h) in chunk.hits.iter().enumerate() {
                         // SAFETY: one thread per chunk, within the rays.
-                        unsafe { *out.at(i) = h.prim != NO_HIT };
+                        unsafe { hit.set(chunk.start + k, h.prim != NO_HIT) };
                     }
                 })?;
-                Ok((hit, note))
+                // SAFETY: the trace handed over every ray's hit.
+                Ok((unsafe { hit.filled(n) }, note))
             })?;
             NativeScene::warn(py, note)?;
             Ok(hit.into_pyarray(py))

@@ -72,6 +72,27 @@ def test_bad_rays_name_the_ray_and_field(origin, direction, tmin, tmax, message,
         assert message in str(e.value)
 
 
+@pytest.mark.parametrize("device", ["cpu", "gpu"])
+def test_bad_rays_among_many_packed_float32_rays_name_the_first(device):
+    # Packed float32 rows with scalar bounds: the CPU path reads and
+    # checks them chunk by chunk as it traces; the first bad ray is named.
+    scene = lambert.Scene.from_arrays(TRIANGLE, [[0, 1, 2]])
+    n = 5000
+    o = np.tile(np.array([[0.2, 0.2, 1.0]], dtype=np.float32), (n, 1))
+    d = np.tile(np.array([[0.0, 0.0, -1.0]], dtype=np.float32), (n, 1))
+    o[4321, 0] = np.nan
+    d[3100] = 0.0
+    for query in (scene.intersect, scene.occluded):
+        with pytest.raises(ValueError) as e:
+            query(o, d, device=device)
+        assert "ray 3100: the direction (dx, dy, dz) has length 0" in str(e.value)
+    d[3100] = [0.0, 0.0, -1.0]
+    with pytest.raises(ValueError, match="ray 4321: ox is NaN"):
+        scene.intersect(o, d, device=device)
+    o[4321, 0] = 0.2
+    assert (scene.intersect(o, d, device=device)["prim_id"] == 0).all()
+
+
 def test_bad_query_arguments():
     scene = lambert.Scene.from_arrays(TRIANGLE, [[0, 1, 2]])
     o, d = np.zeros((2, 3)), np.ones((2, 3))

@@ -112,6 +112,9 @@ pub(crate) struct Traversal {
     sp: usize,
     /// What the next pass visits: the root first.
     child: u32,
+    /// The leaf block that holds `hit`'s primitive (the last block that
+    /// recorded a hit), for its geometric normal while the block is hot.
+    pub hit_block: u32,
 }
 
 impl Traversal {
@@ -125,6 +128,7 @@ impl Traversal {
             any_hit,
             sp: 0,
             child: 0,
+            hit_block: NO_HIT,
         }
     }
 
@@ -521,12 +525,16 @@ impl<'a> Kernel<'a> {
             any_hit,
             sp,
             child,
+            hit_block,
         } = traversal;
         if *child & LEAF_BIT != 0 {
             let (first, count) = leaf_range(*child);
-            for block in &bvh.blocks[first as usize..(first + count) as usize] {
-                if self.record_block_hits(ray, shear, hit, block) && *any_hit {
-                    return false;
+            for (b, block) in (first..).zip(&bvh.blocks[first as usize..(first + count) as usize]) {
+                if self.record_block_hits(ray, shear, hit, block) {
+                    *hit_block = b;
+                    if *any_hit {
+                        return false;
+                    }
                 }
             }
         } else {

@@ -465,13 +465,22 @@ pub fn trace_rays_with(
     let out = SharedOut(hits.as_mut_ptr());
     trace_rays_each(
         scene,
-        rays,
-        any_hit,
-        intersect,
-        cpu_kernel,
-        &|start, chunk| {
+        QueryRays::Slice(rays),
+        QueryOptions {
+            any_hit,
+            intersect,
+            cpu_kernel,
+            normals: false,
+        },
+        &|chunk| {
             // SAFETY: chunks are disjoint and within the capacity.
-            unsafe { std::ptr::copy_nonoverlapping(chunk.as_ptr(), out.at(start), chunk.len()) }
+            unsafe {
+                std::ptr::copy_nonoverlapping(
+                    chunk.hits.as_ptr(),
+                    out.at(chunk.start),
+                    chunk.hits.len(),
+                )
+            }
         },
     );
     // SAFETY: every chunk was written.
@@ -490,6 +499,12 @@ impl<T> SharedOut<T> {
         SharedOut(buffer.as_mut_ptr())
     }
 
+    /// Over `vec`'s spare capacity (elements written before its length
+    /// is set).
+    pub fn new_spare(vec: &mut Vec<T>) -> SharedOut<T> {
+        SharedOut(vec.as_mut_ptr())
+    }
+
     /// # Safety
     /// `start` within the buffer, its range written by one thread at a
     /// time, and the buffer alive and not otherwise borrowed meanwhile.
@@ -498,21 +513,85 @@ impl<T> SharedOut<T> {
     }
 }
 
+/// A ray query's rays: a slice, or `count` rays that `fill(start, out)`
+/// writes (rays start.. into all of `out`), assembled chunk by chunk as
+/// they are traced (the Python binding's arrays: no pass over all the rays
+/// before the trace, nor a buffer of them).
+#[derive(Clone, Copy)]
+pub enum QueryRays<'a> {
+    Slice(&'a [layout::Ray]),
+    Fill(
+        usize,
+        &'a (dyn Fn(usize, &mut [std::mem::MaybeUninit<layout::Ray>]) + Sync),
+    ),
+}
+
+impl QueryRays<'_> {
+    pub fn len(&self) -> usize {
+        match self {
+            QueryRays::Slice(rays) => rays.len(),
+            QueryRays::Fill(count, _) => *count,
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Ray `i`.
+    pub fn ray(&self, i: usize) -> layout::Ray {
+        match self {
+            QueryRays::Slice(rays) => rays[i],
+            QueryRays::Fill(_, fill) => {
+                let mut one = [std::mem::MaybeUninit::uninit()];
+                fill(i, &mut one);
+                // SAFETY: `fill` writes all of `out`.
+                unsafe { one[0].assume_init() }
+            }
+        }
+    }
+}
+
+/// How `trace_rays_each` traces.
+#[derive(Clone, Copy, Debug)]
+pub struct QueryOptions {
+    /// The first hit found rather than the closest.
+    pub any_hit: bool,
+    pub intersect: Intersect,
+    pub cpu_kernel: CpuKernel,
+    /// Each hit's geometric normal too (`rays::hit_normal`'s, bit for bit),
+    /// taken from the leaf block the kernel just read.
+    pub normals: bool,
+}
+
+/// A traced chunk of a query: its first ray's index, its rays' hits and,
+/// when asked for, their normals (else empty).
+pub struct TracedChunk<'a> {
+    pub start: usize,
+    pub hits: &'a [layout::Hit],
+    pub normals: &'a [[f32; 3]],
+}
+
 /// Traces `rays` in parallel chunks, handing each chunk's hits (with the
 /// index of its first ray) to `each` while they are hot in cache: the
 /// Python binding fills its numpy columns this way, with no hit buffer
 /// between.
 pub fn trace_rays_each(
     scene: &Scene,
-    rays: &[layout::Ray],
-    any_hit: bool,
-    intersect: Intersect,
-    cpu_kernel: CpuKernel,
+    rays: QueryRays,
+    options: QueryOptions,
     // Not generic: a generic would be compiled in the caller's crate, with
     // its codegen settings, and the kernel ran up to 40% slower there.
-    each: &(dyn Fn(usize, &[layout::Hit]) + Sync),
+    each: &(dyn Fn(&TracedChunk) + Sync),
 ) {
+    use std::mem::MaybeUninit;
     const CHUNK: usize = 1024;
+    let QueryOptions {
+        any_hit,
+        intersect,
+        cpu_kernel,
+        normals,
+    } = options;
     check_runs(cpu_kernel);
     let mut kernel = f32::Kernel::new_for(scene, cpu_kernel.ymm_boxes());
     kernel.intersect = intersect;
@@ -525,12 +604,25 @@ pub fn trace_rays_each(
         .map_or(0.0, |b| 0.01 * (b.max - b.min).length());
     // Judged once for the whole query: judged per chunk, it cost camera
     // rays through small models up to 5%.
-    let incoherent = (large || vector_sort) && !coherent(rays, nearby);
-    rays.par_chunks(CHUNK)
-        .enumerate()
-        .for_each(|(index, rays)| {
-            let mut buffer = [std::mem::MaybeUninit::<layout::Hit>::uninit(); CHUNK];
-            let hits = &mut buffer[..rays.len()];
+    let incoherent = (large || vector_sort) && !coherent(&rays, nearby);
+    (0..rays.len().div_ceil(CHUNK))
+        .into_par_iter()
+        .for_each(|index| {
+            let start = index * CHUNK;
+            let len = CHUNK.min(rays.len() - start);
+            let mut own = [MaybeUninit::<layout::Ray>::uninit(); CHUNK];
+            let chunk_rays = match rays {
+                QueryRays::Slice(all) => &all[start..start + len],
+                QueryRays::Fill(_, fill) => {
+                    fill(start, &mut own[..len]);
+                    // SAFETY: `fill` writes all of its buffer.
+                    unsafe { &*(&own[..len] as *const [_] as *const [layout::Ray]) }
+                }
+            };
+            let mut buffer = [MaybeUninit::<layout::Hit>::uninit(); CHUNK];
+            let hits = &mut buffer[..len];
+            let mut normal_buffer = [MaybeUninit::<[f32; 3]>::uninit(); CHUNK];
+            let normal_out = &mut normal_buffer[..if normals { len } else { 0 }];
             // One `with_simd` per kind of chunk, each then a function of its
             // own: in one, camera rays through small models ran 2% slower,
             // and incoherent ones gained about half as much from
@@ -545,7 +637,7 @@ pub fn trace_rays_each(
                             #[inline(always)]
                             || {
                                 trace_chunk::<{ $lanes }, $prefetch, $vector_sort>(
-                                    &kernel, rays, hits, any_hit,
+                                    &kernel, chunk_rays, hits, normal_out, any_hit,
                                 )
                             },
                         )
@@ -558,9 +650,18 @@ pub fn trace_rays_each(
                 (true, false, true) => chunk!(INTERLEAVED_RAYS, false, true),
                 _ => chunk!(INTERLEAVED_RAYS, false, false),
             }
-            // SAFETY: trace_chunk wrote every element.
-            let hits = unsafe { &*(hits as *const [_] as *const [layout::Hit]) };
-            each(index * CHUNK, hits);
+            // SAFETY: trace_chunk wrote every element of both.
+            let (hits, normals) = unsafe {
+                (
+                    &*(hits as *const [_] as *const [layout::Hit]),
+                    &*(normal_out as *const [_] as *const [[f32; 3]]),
+                )
+            };
+            each(&TracedChunk {
+                start,
+                hits,
+                normals,
+            });
         });
 }
 
@@ -737,12 +838,12 @@ pub const LARGE_BVH_BYTES: usize = 3 << 20;
 /// `nearby`) in nearly the same direction (within about 8°), as camera rays
 /// and the shadow rays of their hits do: their traversals then share the
 /// nodes they load. Looks at 256 pairs spread over the rays.
-fn coherent(rays: &[layout::Ray], nearby: f32) -> bool {
+fn coherent(rays: &QueryRays, nearby: f32) -> bool {
     const PAIRS: usize = 256;
     let step = (rays.len() / PAIRS).max(1);
     let (mut pairs, mut similar) = (0, 0);
     for i in (0..rays.len().saturating_sub(1)).step_by(step) {
-        let (a, b) = (&rays[i], &rays[i + 1]);
+        let (a, b) = (rays.ray(i), rays.ray(i + 1));
         let (da, db) = (glam::Vec3::from(a.dir), glam::Vec3::from(b.dir));
         let gap = glam::Vec3::from(a.origin) - glam::Vec3::from(b.origin);
         let cos = da.dot(db);
@@ -764,14 +865,19 @@ unsafe fn trace_chunk<const LANES: usize, const PREFETCH: bool, const VECTOR_SOR
     kernel: &f32::Kernel,
     rays: &[layout::Ray],
     hits: &mut [std::mem::MaybeUninit<layout::Hit>],
+    normals: &mut [std::mem::MaybeUninit<[f32; 3]>],
     any_hit: bool,
 ) {
     if rays.is_empty() {
         return;
     }
     if kernel.scene.accel != Accel::Bvh {
-        for (ray, out) in rays.iter().zip(hits) {
-            out.write(query_hit(kernel.trace(f32::Ray::from_query(ray), any_hit)));
+        for (i, (ray, out)) in rays.iter().zip(hits).enumerate() {
+            let hit = query_hit(kernel.trace(f32::Ray::from_query(ray), any_hit));
+            if let Some(normal) = normals.get_mut(i) {
+                normal.write(crate::rays::hit_normal(kernel.scene, ray, &hit));
+            }
+            out.write(hit);
         }
         return;
     }
@@ -804,7 +910,16 @@ unsafe fn trace_chunk<const LANES: usize, const PREFETCH: bool, const VECTOR_SOR
             {
                 continue;
             }
-            hits[index[k]].write(query_hit(traversals[k].answer()));
+            let hit = query_hit(traversals[k].answer());
+            if let Some(normal) = normals.get_mut(index[k]) {
+                normal.write(block_normal(
+                    kernel.scene,
+                    &rays[index[k]],
+                    &hit,
+                    traversals[k].hit_block,
+                ));
+            }
+            hits[index[k]].write(hit);
             if next < rays.len() {
                 index[k] = next;
                 traversals[k] = start(&rays[next], any_hit);
@@ -815,6 +930,29 @@ unsafe fn trace_chunk<const LANES: usize, const PREFETCH: bool, const VECTOR_SOR
             }
         }
     }
+}
+
+/// `rays::hit_normal`, bit for bit, from the vertices' copies in the leaf
+/// block that holds the hit (the kernel has just read it: the triangle
+/// array's record would be a miss in cache).
+#[inline(always)]
+fn block_normal(scene: &Scene, ray: &layout::Ray, hit: &layout::Hit, block: u32) -> [f32; 3] {
+    use glam::Vec3;
+    if let Some(block) = scene.bvh.blocks.get(block as usize)
+        && (hit.prim as usize) < scene.triangles.len()
+        && let Some(lane) = block.prims.iter().position(|&p| p == hit.prim)
+    {
+        let vertex = |k: usize| {
+            Vec3::new(
+                block.v[k][0][lane],
+                block.v[k][1][lane],
+                block.v[k][2][lane],
+            )
+        };
+        let v0 = vertex(0);
+        return (vertex(1) - v0).cross(vertex(2) - v0).to_array();
+    }
+    crate::rays::hit_normal(scene, ray, hit)
 }
 
 /// A ray query's answer from the kernel's hit: misses as `Hit::MISS`.
