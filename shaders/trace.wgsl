@@ -36,7 +36,7 @@ override RENDER_WORKGROUP_X: u32 = 8u;
 override RENDER_WORKGROUP_Y: u32 = 8u;
 // Traversal stack entries per invocation in workgroup memory (gpu.rs):
 // the scene's BVH depth − 1, the most `trace_compressed` can push (see
-// MAX_DEPTH), up to gpu::SHORT_STACK_ENTRIES. A deeper tree sets
+// MAX_DEPTH), up to cwbvh::SHORT_STACK_ENTRIES. A deeper tree sets
 // STACK_SPILLS: the stack's oldest entries then move to `stack_spill`.
 override STACK_ENTRIES: u32 = 8u;
 override STACK_SPILLS: bool = false;
@@ -60,9 +60,9 @@ const MACHINE_EPSILON: f32 = 5.96046448e-8;
 // Wide levels at most: bvh::MAX_DEPTH. A traversal stack entry is a node
 // group (a node and the entered children of it not visited yet), pushed
 // when traversal descends below that node: one per level at most, so a
-// tree of depth d needs d − 1 entries (STACK_ENTRIES), and the tree is at
-// most MAX_DEPTH levels deep (Bvh::from_binary checks): the stack never
-// overflows.
+// tree of depth d needs d − 1 entries, and the tree is at most MAX_DEPTH
+// levels deep (Bvh::from_binary checks): the short stack and its spill
+// (STACK_ENTRIES, stack_spill) never overflow.
 const MAX_DEPTH: u32 = 24u;
 // CompressedNode meta bytes (src/layout.rs): 0 for an empty slot,
 // META_INTERIOR | rank for an interior child, META_LEAF | (count − 1) << 4
