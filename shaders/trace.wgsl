@@ -242,6 +242,26 @@ struct Surface {
 // `render`: each tile pixel's running sums (colour, squared luminance)
 // between the dispatches that add its samples in turn.
 @group(1) @binding(6) var<storage, read_write> tile_sums: array<vec4<f32>>;
+// Shadow rays in a dispatch of their own (`render_primary`,
+// `render_shadows`, `render_shade`; gpu::ShadowDispatch): each tile
+// pixel's hit, the shadow rays to trace (compacted), how many, and
+// whether each (pixel, light) is blocked.
+struct ShadowQuery {
+    slot: u32,
+    light: u32,
+    _pad: vec2<u32>,
+    ray: Ray,
+}
+@group(1) @binding(7) var<storage, read_write> split_hits: array<Hit>;
+@group(1) @binding(8) var<storage, read_write> shadow_queue: array<ShadowQuery>;
+@group(1) @binding(9) var<storage, read_write> shadow_count: array<atomic<u32>, 1>;
+@group(1) @binding(10) var<storage, read_write> shadow_blocked: array<u32>;
+// `shade` reads shadows from shadow_blocked (at `shade_slot`) rather than
+// tracing them.
+override SHADOWS_FROM_QUEUE: bool = false;
+// `render_shade`'s pixel: bit i set when light i is blocked (at most
+// gpu::MAX_LIGHTS_APART lights).
+var<private> shade_blocked: u32;
 
 // Storage access across the split (no CPU twin: the CPU reads one array).
 fn triangle_at(i: u32) -> Triangle {
@@ -914,6 +934,51 @@ fn offset_ray_origin(p: vec3<f32>, error: vec3<f32>, n: vec3<f32>) -> vec3<f32> 
 }
 
 // Lambert: ambient·k + Σ k·E·max(0, n·l)·visible, linear RGB.
+// What light `light` gives a point (`surface`, shadow rays leaving from
+// `origin`) unless something blocks it; `lit` false when nothing.
+struct LightSample {
+    irradiance: vec3<f32>,
+    cos_theta: f32,
+    shadow_ray: Ray,
+    lit: bool,
+}
+
+fn light_sample(surface: Surface, origin: vec3<f32>, light: Light) -> LightSample {
+    var out: LightSample;
+    out.lit = false;
+    var to_light: vec3<f32>;
+    // Specialisation drops the branch of a light kind the scene lacks.
+    if HAS_POINT_LIGHTS && (!HAS_DIRECTIONAL_LIGHTS || light.kind == LIGHT_POINT) {
+        let d = light.vector - surface.position;
+        let distance_squared = dot(d, d);
+        // A light on the shaded point: no light (see the CPU twin).
+        if distance_squared == 0.0 {
+            return out;
+        }
+        to_light = d / sqrt(distance_squared);
+        out.irradiance = min(light.color / distance_squared, vec3<f32>(FAR));
+        let s = light.vector - origin;
+        let shadow_length = length(s);
+        out.shadow_ray = Ray(origin, 0.0, s / shadow_length, shadow_length);
+    } else {
+        to_light = light.vector;
+        out.irradiance = light.color;
+        out.shadow_ray = Ray(origin, 0.0, to_light, FAR);
+    }
+    out.cos_theta = dot(surface.shading_normal, to_light);
+    // Early out: no shadow ray for a light that cannot contribute (a NaN
+    // cos θ still goes on, as on the CPU).
+    out.lit = !(out.cos_theta <= 0.0 || all(out.irradiance == vec3<f32>(0.0)));
+    return out;
+}
+
+fn shadowed(ray: Ray, light: u32) -> bool {
+    if SHADOWS_FROM_QUEUE {
+        return ((shade_blocked >> light) & 1u) != 0u;
+    }
+    return trace_any(ray);
+}
+
 fn shade(ray: Ray, hit: Hit) -> vec3<f32> {
     if hit.prim == NO_HIT {
         return params.background;
@@ -922,37 +987,14 @@ fn shade(ray: Ray, hit: Hit) -> vec3<f32> {
     var color = params.ambient * surface.albedo;
     let origin = offset_ray_origin(surface.position, surface.error, surface.geometric_normal);
     for (var i = 0u; i < params.num_lights; i++) {
-        let light = lights[i];
-        var to_light: vec3<f32>;
-        var irradiance: vec3<f32>;
-        var shadow_ray: Ray;
-        // Specialisation drops the branch of a light kind the scene lacks.
-        if HAS_POINT_LIGHTS && (!HAS_DIRECTIONAL_LIGHTS || light.kind == LIGHT_POINT) {
-            let d = light.vector - surface.position;
-            let distance_squared = dot(d, d);
-            // A light on the shaded point: no light (see the CPU twin).
-            if distance_squared == 0.0 {
-                continue;
-            }
-            to_light = d / sqrt(distance_squared);
-            irradiance = min(light.color / distance_squared, vec3<f32>(FAR));
-            let s = light.vector - origin;
-            let shadow_length = length(s);
-            shadow_ray = Ray(origin, 0.0, s / shadow_length, shadow_length);
-        } else {
-            to_light = light.vector;
-            irradiance = light.color;
-            shadow_ray = Ray(origin, 0.0, to_light, FAR);
-        }
-        let cos_theta = dot(surface.shading_normal, to_light);
-        // Early out: no shadow ray for a light that cannot contribute.
-        if cos_theta <= 0.0 || all(irradiance == vec3<f32>(0.0)) {
+        let sample = light_sample(surface, origin, lights[i]);
+        if !sample.lit {
             continue;
         }
-        if HAS_SHADOWS && params.shadows != 0u && trace_any(shadow_ray) {
+        if HAS_SHADOWS && params.shadows != 0u && shadowed(sample.shadow_ray, i) {
             continue;
         }
-        color += surface.albedo * irradiance * cos_theta;
+        color += surface.albedo * sample.irradiance * sample.cos_theta;
     }
     return color;
 }
@@ -1104,4 +1146,92 @@ fn render_pixel_list(@builtin(global_invocation_id) id: vec3<u32>, @builtin(loca
         pixel_results[id.x] = result.sums;
     }
     report_cut_loops();
+}
+
+// The tile pixel of a render invocation, or none.
+fn tile_slot(id: vec3<u32>) -> u32 {
+    let size = textureDimensions(out_color);
+    let pixel = params.tile_origin + id.xy;
+    if id.x >= size.x || id.y >= size.y || pixel.x >= params.width || pixel.y >= params.height {
+        return NO_HIT;
+    }
+    return id.y * size.x + id.x;
+}
+
+// Shadow rays apart, pass 1: sample `params.sample_begin`'s primary hit,
+// and its shadow rays queued.
+@compute @workgroup_size(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y)
+fn render_primary(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    stack_base = lane * STACK_ENTRIES;
+    let slot = tile_slot(id);
+    if slot == NO_HIT {
+        return;
+    }
+    let ray = camera_ray(sample_position(params.tile_origin + id.xy, params.sample_begin));
+    let hit = trace_closest(ray);
+    split_hits[slot] = hit;
+    if hit.prim != NO_HIT && HAS_SHADOWS && params.shadows != 0u {
+        let surface = surface_at(ray, hit);
+        let origin = offset_ray_origin(surface.position, surface.error, surface.geometric_normal);
+        for (var i = 0u; i < params.num_lights; i++) {
+            let sample = light_sample(surface, origin, lights[i]);
+            shadow_blocked[slot * params.num_lights + i] = 0u;
+            if sample.lit {
+                let q = atomicAdd(&shadow_count[0], 1u);
+                shadow_queue[q] = ShadowQuery(slot, i, vec2<u32>(0u), sample.shadow_ray);
+            }
+        }
+    }
+    report_cut_loops();
+}
+
+// Pass 2: the queued shadow rays, side by side (as many invocations as
+// the tile has pixels, each taking every so many: at most as many shadow
+// rays as a `render` invocation traces).
+@compute @workgroup_size(WORKGROUP_INVOCATIONS)
+fn render_shadows(
+    @builtin(global_invocation_id) id: vec3<u32>,
+    @builtin(local_invocation_index) lane: u32,
+    @builtin(num_workgroups) groups: vec3<u32>,
+) {
+    stack_base = lane * STACK_ENTRIES;
+    let count = atomicLoad(&shadow_count[0]);
+    let stride = groups.x * WORKGROUP_INVOCATIONS;
+    for (var i = id.x; i < count; i += stride) {
+        let q = shadow_queue[i];
+        if trace_any(q.ray) {
+            shadow_blocked[q.slot * params.num_lights + q.light] = 1u;
+        }
+    }
+    report_cut_loops();
+}
+
+// Pass 3: shading from the hit and the shadows found, added to the
+// pixel's sums as `render` adds a sample.
+@compute @workgroup_size(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y)
+fn render_shade(@builtin(global_invocation_id) id: vec3<u32>) {
+    let slot = tile_slot(id);
+    if slot == NO_HIT {
+        return;
+    }
+    shade_blocked = 0u;
+    for (var i = 0u; i < params.num_lights; i++) {
+        shade_blocked |= shadow_blocked[slot * params.num_lights + i] << i;
+    }
+    let ray = camera_ray(sample_position(params.tile_origin + id.xy, params.sample_begin));
+    let hit = split_hits[slot];
+    let color = shade(ray, hit);
+    var sums = vec4<f32>(0.0);
+    if params.sample_begin > 0u {
+        sums = tile_sums[slot];
+    } else {
+        textureStore(out_prim, id.xy, vec4<u32>(hit.prim, 0u, 0u, 0u));
+    }
+    let y = dot(color, LUMINANCE);
+    sums += vec4<f32>(color, y * y);
+    if params.sample_end == params.spp {
+        textureStore(out_color, id.xy, pixel_mean(sums));
+    } else {
+        tile_sums[slot] = sums;
+    }
 }

@@ -615,6 +615,50 @@ impl Timer {
     }
 }
 
+/// Most lights a render traces the shadow rays of apart (the shader's
+/// `shade_blocked` has a bit each; the queue holds a ray for each light
+/// of each tile pixel, 48 bytes).
+pub const MAX_LIGHTS_APART: u32 = 8;
+
+/// How a render traces its shadow rays: in the `render` megakernel, each
+/// invocation after its own primary hit, or apart (`render_primary`
+/// queues them, `render_shadows` traces the queue side by side,
+/// `render_shade` shades; the same image, bit for bit). Apart measured
+/// faster on lavapipe (docs/bvh.md): the default wherever shadows are
+/// traced and there are at most `MAX_LIGHTS_APART` lights.
+/// LAMBERT_SHADOW_DISPATCH=megakernel|apart chooses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShadowDispatch {
+    Megakernel,
+    Apart,
+}
+
+impl ShadowDispatch {
+    /// Apart where it applies, unless LAMBERT_SHADOW_DISPATCH says
+    /// otherwise.
+    fn for_scene(scene: &Scene) -> Result<ShadowDispatch> {
+        let applies =
+            scene.shadows && (1..=MAX_LIGHTS_APART as usize).contains(&scene.lights.len());
+        match std::env::var("LAMBERT_SHADOW_DISPATCH").as_deref() {
+            Err(_) | Ok("apart") if applies => Ok(ShadowDispatch::Apart),
+            Err(_) | Ok("apart") | Ok("megakernel") => Ok(ShadowDispatch::Megakernel),
+            Ok(other) => Err(Error::Usage(format!(
+                "LAMBERT_SHADOW_DISPATCH={other:?}: use \"megakernel\" or \"apart\""
+            ))),
+        }
+    }
+}
+
+/// The three passes of a render with its shadow rays apart, and their
+/// buffers.
+struct SplitShadows {
+    primary: wgpu::ComputePipeline,
+    shadows: wgpu::ComputePipeline,
+    shade: wgpu::ComputePipeline,
+    group: wgpu::BindGroup,
+    count: wgpu::Buffer,
+}
+
 /// A scene resident on the device: buffers and pipeline are built once;
 /// a new camera only rewrites the uniform.
 pub struct GpuRenderer {
@@ -629,6 +673,13 @@ pub struct GpuRenderer {
     /// Built on first use, as are the trace pipelines: a ray query never
     /// compiles the render entry point, nor a render the query's.
     render_pipeline: Option<wgpu::ComputePipeline>,
+    /// The passes of a render with its shadow rays apart, built on first
+    /// use where `shadow_dispatch` asks for them.
+    split: Option<SplitShadows>,
+    /// How a render traces its shadow rays (the tests set either).
+    pub shadow_dispatch: ShadowDispatch,
+    /// Each tile pixel's running sums between dispatches (`tile_sums`).
+    tile_sums: wgpu::Buffer,
     scene_group: wgpu::BindGroup,
     image_group: wgpu::BindGroup,
     /// `trace_rays` pipelines, built on first use: by any hit or closest
@@ -1062,6 +1113,7 @@ impl GpuRenderer {
         }
         gpu.wait()?;
         let timer = Timer::new(&gpu);
+        let shadow_dispatch = ShadowDispatch::for_scene(scene)?;
         let samples_per_dispatch = if is_llvmpipe(&gpu.info) {
             LLVMPIPE_SAMPLES_PER_DISPATCH
         } else {
@@ -1076,6 +1128,9 @@ impl GpuRenderer {
             rays_layout,
             pixels_layout,
             render_pipeline: None,
+            split: None,
+            shadow_dispatch,
+            tile_sums,
             pixel_list_pipeline: None,
             scene_group,
             image_group,
@@ -1190,7 +1245,7 @@ impl GpuRenderer {
     /// per dispatch, smaller as they grow, so that a dispatch traces about
     /// as many camera rays (TILE²) at any spp.
     pub fn tile_side(&self) -> u32 {
-        let samples = self.params.spp.min(self.samples_per_dispatch);
+        let samples = self.params.spp.min(self.samples_per_dispatch());
         let side = TILE / samples.isqrt().max(1);
         let step = RENDER_WORKGROUP[0].max(RENDER_WORKGROUP[1]);
         side.next_multiple_of(step).clamp(step, TILE)
@@ -1201,7 +1256,7 @@ impl GpuRenderer {
     /// timestamps work.
     fn render_tile(&mut self, x: u32, y: u32, width: u32, height: u32) -> Result<Option<Duration>> {
         let spp = self.params.spp;
-        let step = self.samples_per_dispatch.min(spp);
+        let step = self.samples_per_dispatch().min(spp);
         let mut device_time = None;
         for begin in (0..spp).step_by(step as usize) {
             self.params.sample_begin = begin;
@@ -1213,9 +1268,18 @@ impl GpuRenderer {
         Ok(device_time)
     }
 
+    /// Samples a render dispatch adds to a pixel: one with the shadow rays
+    /// apart (each sample's passes in turn).
+    fn samples_per_dispatch(&self) -> u32 {
+        match self.shadow_dispatch {
+            ShadowDispatch::Apart => 1,
+            ShadowDispatch::Megakernel => self.samples_per_dispatch,
+        }
+    }
+
     /// Halves `samples_per_dispatch` after the driver cut loops short.
     fn fewer_samples_per_dispatch(&mut self) -> Result<()> {
-        let step = self.samples_per_dispatch.min(self.params.spp);
+        let step = self.samples_per_dispatch().min(self.params.spp);
         if step <= 1 {
             return Err(Error::Gpu(format!(
                 "{} cut the shader's loops short even at one sample per pixel per dispatch \
@@ -1260,7 +1324,22 @@ impl GpuRenderer {
         gpu.queue
             .write_buffer(&self.params_buffer, 0, bytemuck::bytes_of(&self.params));
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        {
+        let [wx, wy] = RENDER_WORKGROUP;
+        if let (ShadowDispatch::Apart, Some(split)) = (self.shadow_dispatch, &self.split) {
+            encoder.clear_buffer(&split.count, 0, None);
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("render tile, shadows apart"),
+                timestamp_writes: self.timer.as_ref().map(Timer::writes),
+            });
+            pass.set_bind_group(0, &self.scene_group, &[]);
+            pass.set_bind_group(1, &split.group, &[]);
+            pass.set_pipeline(&split.primary);
+            pass.dispatch_workgroups(width.div_ceil(wx), height.div_ceil(wy), 1);
+            pass.set_pipeline(&split.shadows);
+            pass.dispatch_workgroups((width * height).div_ceil(WORKGROUP_INVOCATIONS), 1, 1);
+            pass.set_pipeline(&split.shade);
+            pass.dispatch_workgroups(width.div_ceil(wx), height.div_ceil(wy), 1);
+        } else {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("render tile"),
                 timestamp_writes: self.timer.as_ref().map(Timer::writes),
@@ -1268,7 +1347,6 @@ impl GpuRenderer {
             pass.set_pipeline(self.render_pipeline.as_ref().expect("prepared"));
             pass.set_bind_group(0, &self.scene_group, &[]);
             pass.set_bind_group(1, &self.image_group, &[]);
-            let [wx, wy] = RENDER_WORKGROUP;
             pass.dispatch_workgroups(width.div_ceil(wx), height.div_ceil(wy), 1);
         }
         if let Some(timer) = &self.timer {
@@ -1381,11 +1459,92 @@ impl GpuRenderer {
     /// Builds the render pipeline if not built yet (so that timing a render
     /// can leave the compile out).
     pub fn prepare_render(&mut self) -> Result<()> {
-        if self.render_pipeline.is_none() {
+        if self.shadow_dispatch == ShadowDispatch::Apart {
+            if self.split.is_none() {
+                self.split = Some(self.build_split()?);
+            }
+        } else if self.render_pipeline.is_none() {
             let pipeline = self.build_pipeline("render", &self.image_layout, &self.constants)?;
             self.render_pipeline = Some(pipeline);
         }
         Ok(())
+    }
+
+    /// The passes and buffers of a render with its shadow rays apart.
+    fn build_split(&self) -> Result<SplitShadows> {
+        let device = &self.gpu.device;
+        let layout = bind_group_layout(
+            device,
+            "image tile, shadows apart",
+            &[
+                (0, BindingKind::Image(wgpu::TextureFormat::Rgba32Float)),
+                (1, BindingKind::Image(wgpu::TextureFormat::R32Uint)),
+                (6, BindingKind::StorageWrite),
+                (7, BindingKind::StorageWrite),
+                (8, BindingKind::StorageWrite),
+                (9, BindingKind::StorageWrite),
+                (10, BindingKind::StorageWrite),
+            ],
+        );
+        let pixels = (TILE * TILE) as u64;
+        let lights = (self.params.num_lights as u64).max(1);
+        let buffer = |label, size| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let hits = buffer("primary hits", pixels * std::mem::size_of::<Hit>() as u64);
+        let queue = buffer("shadow queue", pixels * lights * 48);
+        let count = buffer("shadow count", 4);
+        let blocked = buffer("shadow blocked", pixels * lights * 4);
+        let color_view = self.color_texture.create_view(&Default::default());
+        let prim_view = self.prim_texture.create_view(&Default::default());
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("image tile, shadows apart"),
+            layout: &layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(&color_view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&prim_view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 6,
+                    resource: self.tile_sums.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 7,
+                    resource: hits.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 8,
+                    resource: queue.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 9,
+                    resource: count.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 10,
+                    resource: blocked.as_entire_binding(),
+                },
+            ],
+        });
+        let mut from_queue = self.constants.clone();
+        from_queue.push(("SHADOWS_FROM_QUEUE", 1.0));
+        Ok(SplitShadows {
+            primary: self.build_pipeline("render_primary", &layout, &self.constants)?,
+            shadows: self.build_pipeline("render_shadows", &layout, &self.constants)?,
+            shade: self.build_pipeline("render_shade", &layout, &from_queue)?,
+            group,
+            count,
+        })
     }
 
     /// Builds the `trace_rays` pipeline for closest or any hit with the

@@ -307,6 +307,69 @@ impl GroupStack {
     }
 }
 
+/// What a light gives a point unless something blocks it (the shader's
+/// `LightSample`, with `lit` as the `Some`).
+pub struct LightSample {
+    pub irradiance: Vec3,
+    pub cos_theta: Real,
+    pub shadow_ray: Ray,
+}
+
+/// The shader's `light_sample`: what `light` gives the point `surface`
+/// (shadow rays leaving from `origin`), or `None` when nothing.
+#[inline(always)]
+pub fn light_sample(
+    surface: &Surface,
+    origin: Vec3,
+    light: &crate::layout::Light,
+) -> Option<LightSample> {
+    let light_vector = vec3(light.vector);
+    let (to_light, irradiance, shadow_ray) = if light.kind == LIGHT_POINT {
+        let d = light_vector - surface.position;
+        let distance_squared = d.dot(d);
+        // A point light on the shaded point lies in its tangent plane:
+        // cos θ = 0, no light (not 0/0). Close by, I/r² is held finite, so
+        // that a black albedo gives 0, not 0·∞.
+        if distance_squared == 0.0 {
+            return None;
+        }
+        let s = light_vector - origin;
+        let shadow_length = s.length();
+        (
+            d / distance_squared.sqrt(),
+            (vec3(light.color) / distance_squared).min(Vec3::splat(FAR)),
+            Ray {
+                origin,
+                tmin: 0.0,
+                dir: s / shadow_length,
+                tmax: shadow_length,
+            },
+        )
+    } else {
+        (
+            light_vector,
+            vec3(light.color),
+            Ray {
+                origin,
+                tmin: 0.0,
+                dir: light_vector,
+                tmax: FAR,
+            },
+        )
+    };
+    let cos_theta = surface.shading_normal.dot(to_light);
+    // No shadow ray for a light that cannot contribute (a NaN cos θ still
+    // goes on, as it always has).
+    if cos_theta <= 0.0 || irradiance == Vec3::ZERO {
+        return None;
+    }
+    Some(LightSample {
+        irradiance,
+        cos_theta,
+        shadow_ray,
+    })
+}
+
 impl<'a> Kernel<'a> {
     pub fn new(scene: &'a Scene) -> Kernel<'a> {
         Kernel::new_for(scene, has_ymm_boxes())
@@ -711,48 +774,13 @@ impl<'a> Kernel<'a> {
         let mut color = self.ambient * surface.albedo;
         let origin = offset_ray_origin(surface.position, surface.error, surface.geometric_normal);
         for light in &self.scene.lights {
-            let light_vector = vec3(light.vector);
-            let (to_light, irradiance, shadow_ray) = if light.kind == LIGHT_POINT {
-                let d = light_vector - surface.position;
-                let distance_squared = d.dot(d);
-                // A point light on the shaded point lies in its tangent
-                // plane: cos θ = 0, no light (not 0/0). Close by, I/r² is
-                // held finite, so that a black albedo gives 0, not 0·∞.
-                if distance_squared == 0.0 {
-                    continue;
-                }
-                let s = light_vector - origin;
-                let shadow_length = s.length();
-                (
-                    d / distance_squared.sqrt(),
-                    (vec3(light.color) / distance_squared).min(Vec3::splat(FAR)),
-                    Ray {
-                        origin,
-                        tmin: 0.0,
-                        dir: s / shadow_length,
-                        tmax: shadow_length,
-                    },
-                )
-            } else {
-                (
-                    light_vector,
-                    vec3(light.color),
-                    Ray {
-                        origin,
-                        tmin: 0.0,
-                        dir: light_vector,
-                        tmax: FAR,
-                    },
-                )
+            let Some(sample) = light_sample(&surface, origin, light) else {
+                continue;
             };
-            let cos_theta = surface.shading_normal.dot(to_light);
-            if cos_theta <= 0.0 || irradiance == Vec3::ZERO {
+            if self.scene.shadows && self.trace_any(sample.shadow_ray) {
                 continue;
             }
-            if self.scene.shadows && self.trace_any(shadow_ray) {
-                continue;
-            }
-            color += surface.albedo * irradiance * cos_theta;
+            color += surface.albedo * sample.irradiance * sample.cos_theta;
         }
         color
     }
