@@ -1158,7 +1158,7 @@ fn tile_slot(id: vec3<u32>) -> u32 {
     return id.y * size.x + id.x;
 }
 
-// Shadow rays apart, pass 1: sample `params.sample_begin`'s primary hit,
+// Shadow rays apart, pass 1: the pixel's primary hit (its one sample),
 // and its shadow rays queued.
 @compute @workgroup_size(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y)
 fn render_primary(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
@@ -1206,8 +1206,9 @@ fn render_shadows(
     report_cut_loops();
 }
 
-// Pass 3: shading from the hit and the shadows found, added to the
-// pixel's sums as `render` adds a sample.
+// Pass 3: shading from the hit and the shadows found (renders of one
+// sample per pixel: gpu::GpuRenderer::shadows_apart), written as `render`
+// writes its one sample.
 @compute @workgroup_size(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y)
 fn render_shade(@builtin(global_invocation_id) id: vec3<u32>) {
     let slot = tile_slot(id);
@@ -1221,17 +1222,7 @@ fn render_shade(@builtin(global_invocation_id) id: vec3<u32>) {
     let ray = camera_ray(sample_position(params.tile_origin + id.xy, params.sample_begin));
     let hit = split_hits[slot];
     let color = shade(ray, hit);
-    var sums = vec4<f32>(0.0);
-    if params.sample_begin > 0u {
-        sums = tile_sums[slot];
-    } else {
-        textureStore(out_prim, id.xy, vec4<u32>(hit.prim, 0u, 0u, 0u));
-    }
     let y = dot(color, LUMINANCE);
-    sums += vec4<f32>(color, y * y);
-    if params.sample_end == params.spp {
-        textureStore(out_color, id.xy, pixel_mean(sums));
-    } else {
-        tile_sums[slot] = sums;
-    }
+    textureStore(out_prim, id.xy, vec4<u32>(hit.prim, 0u, 0u, 0u));
+    textureStore(out_color, id.xy, pixel_mean(vec4<f32>(color, y * y)));
 }

@@ -625,7 +625,8 @@ pub const MAX_LIGHTS_APART: u32 = 8;
 /// queues them, `render_shadows` traces the queue side by side,
 /// `render_shade` shades; the same image, bit for bit). Apart measured
 /// faster on lavapipe (docs/bvh.md): the default wherever shadows are
-/// traced and there are at most `MAX_LIGHTS_APART` lights.
+/// traced and there are at most `MAX_LIGHTS_APART` lights, for renders
+/// at one sample per pixel (`shadows_apart`).
 /// LAMBERT_SHADOW_DISPATCH=megakernel|apart chooses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ShadowDispatch {
@@ -678,8 +679,6 @@ pub struct GpuRenderer {
     split: Option<SplitShadows>,
     /// How a render traces its shadow rays (the tests set either).
     pub shadow_dispatch: ShadowDispatch,
-    /// Each tile pixel's running sums between dispatches (`tile_sums`).
-    tile_sums: wgpu::Buffer,
     scene_group: wgpu::BindGroup,
     image_group: wgpu::BindGroup,
     /// `trace_rays` pipelines, built on first use: by any hit or closest
@@ -1130,7 +1129,6 @@ impl GpuRenderer {
             render_pipeline: None,
             split: None,
             shadow_dispatch,
-            tile_sums,
             pixel_list_pipeline: None,
             scene_group,
             image_group,
@@ -1271,10 +1269,19 @@ impl GpuRenderer {
     /// Samples a render dispatch adds to a pixel: one with the shadow rays
     /// apart (each sample's passes in turn).
     fn samples_per_dispatch(&self) -> u32 {
-        match self.shadow_dispatch {
-            ShadowDispatch::Apart => 1,
-            ShadowDispatch::Megakernel => self.samples_per_dispatch,
+        if self.shadows_apart() {
+            1
+        } else {
+            self.samples_per_dispatch
         }
+    }
+
+    /// Whether this render traces its shadow rays apart: as
+    /// `shadow_dispatch` asks, at one sample per pixel. With more, each
+    /// sample would be a dispatch of its own, waited on: the sampling
+    /// tests' high-spp renders took 152 s rather than 19.
+    pub fn shadows_apart(&self) -> bool {
+        self.shadow_dispatch == ShadowDispatch::Apart && self.params.spp == 1
     }
 
     /// Halves `samples_per_dispatch` after the driver cut loops short.
@@ -1325,7 +1332,7 @@ impl GpuRenderer {
             .write_buffer(&self.params_buffer, 0, bytemuck::bytes_of(&self.params));
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         let [wx, wy] = RENDER_WORKGROUP;
-        if let (ShadowDispatch::Apart, Some(split)) = (self.shadow_dispatch, &self.split) {
+        if let (true, Some(split)) = (self.shadows_apart(), &self.split) {
             encoder.clear_buffer(&split.count, 0, None);
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("render tile, shadows apart"),
@@ -1459,7 +1466,7 @@ impl GpuRenderer {
     /// Builds the render pipeline if not built yet (so that timing a render
     /// can leave the compile out).
     pub fn prepare_render(&mut self) -> Result<()> {
-        if self.shadow_dispatch == ShadowDispatch::Apart {
+        if self.shadows_apart() {
             if self.split.is_none() {
                 self.split = Some(self.build_split()?);
             }
@@ -1479,7 +1486,6 @@ impl GpuRenderer {
             &[
                 (0, BindingKind::Image(wgpu::TextureFormat::Rgba32Float)),
                 (1, BindingKind::Image(wgpu::TextureFormat::R32Uint)),
-                (6, BindingKind::StorageWrite),
                 (7, BindingKind::StorageWrite),
                 (8, BindingKind::StorageWrite),
                 (9, BindingKind::StorageWrite),
@@ -1513,10 +1519,6 @@ impl GpuRenderer {
                 wgpu::BindGroupEntry {
                     binding: 1,
                     resource: wgpu::BindingResource::TextureView(&prim_view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 6,
-                    resource: self.tile_sums.as_entire_binding(),
                 },
                 wgpu::BindGroupEntry {
                     binding: 7,

@@ -163,34 +163,33 @@ fn scenes_split_across_bindings_render_the_same() {
     }
 }
 
-/// Shadow rays traced apart (the default) and in the megakernel give the
-/// same image, bit for bit (colour, variance and primitive), at one
-/// sample per pixel and at several; a scene with more lights than the
-/// queue takes renders in the megakernel.
+/// Shadow rays traced apart (the default, at one sample per pixel) and in
+/// the megakernel give the same image, bit for bit (colour, variance and
+/// primitive); a render of several samples, and a scene with more lights
+/// than the queue takes, render in the megakernel.
 #[test]
 fn shadow_rays_apart_render_as_the_megakernel_does() {
     use lambert::gpu::{GpuRenderer, MAX_LIGHTS_APART, ShadowDispatch};
     let hidden = lambert::progress::Progress::hidden();
     for name in ["cornell", "spheres", "bunny", "dragon", "edge_cases"] {
-        for spp in [1, 3] {
-            let mut scene = load(name);
-            scene.spp = spp;
-            let mut renderer = GpuRenderer::new(open_gpu(), &scene).expect("scene uploads");
-            assert_eq!(renderer.shadow_dispatch, ShadowDispatch::Apart, "{name}");
-            let apart = renderer.render(&hidden).unwrap().0;
-            renderer.shadow_dispatch = ShadowDispatch::Megakernel;
-            let mega = renderer.render(&hidden).unwrap().0;
-            let bits = |r: &lambert::output::Rendered| {
-                let rgb: Vec<u32> = r.image.rgb.iter().flatten().map(|c| c.to_bits()).collect();
-                let var: Vec<u32> = r.variance.iter().map(|v| v.to_bits()).collect();
-                (rgb, var, r.prims.clone())
-            };
-            assert!(
-                bits(&apart) == bits(&mega),
-                "{name} at {spp} spp: apart differs"
-            );
-            println!("{name} at {spp} spp: shadow rays apart = megakernel, bit for bit");
-        }
+        let mut scene = load(name);
+        scene.spp = 1;
+        let mut renderer = GpuRenderer::new(open_gpu(), &scene).expect("scene uploads");
+        assert_eq!(renderer.shadow_dispatch, ShadowDispatch::Apart, "{name}");
+        assert!(renderer.shadows_apart(), "{name}");
+        let apart = renderer.render(&hidden).unwrap().0;
+        renderer.shadow_dispatch = ShadowDispatch::Megakernel;
+        let mega = renderer.render(&hidden).unwrap().0;
+        let bits = |r: &lambert::output::Rendered| {
+            let rgb: Vec<u32> = r.image.rgb.iter().flatten().map(|c| c.to_bits()).collect();
+            let var: Vec<u32> = r.variance.iter().map(|v| v.to_bits()).collect();
+            (rgb, var, r.prims.clone())
+        };
+        assert!(bits(&apart) == bits(&mega), "{name}: apart differs");
+        println!("{name}: shadow rays apart = megakernel, bit for bit");
+        scene.spp = 3;
+        let renderer = GpuRenderer::new(open_gpu(), &scene).expect("scene uploads");
+        assert!(!renderer.shadows_apart(), "{name} at 3 spp");
     }
     let lights: String = (0..=MAX_LIGHTS_APART)
         .map(|i| {
