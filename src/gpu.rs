@@ -620,6 +620,10 @@ impl Timer {
 /// of each tile pixel, 48 bytes).
 pub const MAX_LIGHTS_APART: u32 = 8;
 
+/// Bytes of the shader's `ShadowQuery` (a queued shadow ray; GPU-only,
+/// checked against naga's layout in tests/shaders.rs).
+pub const SHADOW_QUERY_BYTES: u64 = 48;
+
 /// How a render traces its shadow rays: in the `render` megakernel, each
 /// invocation after its own primary hit, or apart (`render_primary`
 /// queues them, `render_shadows` traces the queue side by side,
@@ -1503,7 +1507,7 @@ impl GpuRenderer {
             })
         };
         let hits = buffer("primary hits", pixels * std::mem::size_of::<Hit>() as u64);
-        let queue = buffer("shadow queue", pixels * lights * 48);
+        let queue = buffer("shadow queue", pixels * lights * SHADOW_QUERY_BYTES);
         let count = buffer("shadow count", 4);
         let blocked = buffer("shadow blocked", pixels * lights * 4);
         let color_view = self.color_texture.create_view(&Default::default());

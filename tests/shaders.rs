@@ -64,6 +64,11 @@ macro_rules! check_layout {
 #[test]
 fn host_structs_match_wgsl_layout() {
     let m = &module();
+    assert_eq!(
+        reflect(m, "ShadowQuery").0 as u64,
+        lambert::gpu::SHADOW_QUERY_BYTES,
+        "size of ShadowQuery"
+    );
     check_layout!(
         m,
         Params {

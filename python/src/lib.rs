@@ -1,8 +1,9 @@
 //! `lambert._lambert`: the extension module under the `lambert` Python
 //! package (python/lambert/). Arrays cross without per-ray Python work:
-//! rays are read from numpy views into one buffer (the one copy in), and
-//! each result column is a numpy array that owns the vector it was filled
-//! into (the one copy out). Tracing and rendering run with the GIL released.
+//! rays are read from numpy views as they are traced (the CPU path, chunk
+//! by chunk) or into one buffer (a GPU's upload): the one copy in; each
+//! result column is a numpy array that owns the vector it was filled into
+//! (the one copy out). Tracing and rendering run with the GIL released.
 
 use std::mem::MaybeUninit;
 use std::panic::AssertUnwindSafe;
