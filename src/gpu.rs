@@ -817,6 +817,44 @@ fn bind_group_layout(
     })
 }
 
+/// A render tile's bind group: the colour and primitive textures at
+/// bindings 0 and 1, and `buffers` at theirs.
+fn tile_bind_group(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    [color, prim]: [&wgpu::Texture; 2],
+    buffers: &[(u32, &wgpu::Buffer)],
+) -> wgpu::BindGroup {
+    let (color, prim) = (
+        color.create_view(&Default::default()),
+        prim.create_view(&Default::default()),
+    );
+    let mut entries = vec![
+        wgpu::BindGroupEntry {
+            binding: 0,
+            resource: wgpu::BindingResource::TextureView(&color),
+        },
+        wgpu::BindGroupEntry {
+            binding: 1,
+            resource: wgpu::BindingResource::TextureView(&prim),
+        },
+    ];
+    entries.extend(
+        buffers
+            .iter()
+            .map(|(binding, buffer)| wgpu::BindGroupEntry {
+                binding: *binding,
+                resource: buffer.as_entire_binding(),
+            }),
+    );
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout,
+        entries: &entries,
+    })
+}
+
 fn compute_pipeline(
     device: &wgpu::Device,
     module: &wgpu::ShaderModule,
@@ -1080,8 +1118,6 @@ impl GpuRenderer {
             entry(13, wgpu::BindingResource::TextureView(&node_view)),
             entry(14, wgpu::BindingResource::TextureView(&block_view)),
         ];
-        let color_view = color_texture.create_view(&Default::default());
-        let prim_view = prim_texture.create_view(&Default::default());
 
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let scene_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -1089,24 +1125,13 @@ impl GpuRenderer {
             layout: &scene_layout,
             entries: &entries,
         });
-        let image_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("image tile"),
-            layout: &image_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::TextureView(&color_view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::TextureView(&prim_view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 6,
-                    resource: tile_sums.as_entire_binding(),
-                },
-            ],
-        });
+        let image_group = tile_bind_group(
+            device,
+            "image tile",
+            &image_layout,
+            [&color_texture, &prim_texture],
+            &[(6, &tile_sums)],
+        );
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("trace.wgsl"),
             source: wgpu::ShaderSource::Wgsl(SHADER_SOURCE.into()),
@@ -1510,38 +1535,13 @@ impl GpuRenderer {
         let queue = buffer("shadow queue", pixels * lights * SHADOW_QUERY_BYTES);
         let count = buffer("shadow count", 4);
         let blocked = buffer("shadow blocked", pixels * lights * 4);
-        let color_view = self.color_texture.create_view(&Default::default());
-        let prim_view = self.prim_texture.create_view(&Default::default());
-        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("image tile, shadows apart"),
-            layout: &layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::TextureView(&color_view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::TextureView(&prim_view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 7,
-                    resource: hits.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 8,
-                    resource: queue.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 9,
-                    resource: count.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 10,
-                    resource: blocked.as_entire_binding(),
-                },
-            ],
-        });
+        let group = tile_bind_group(
+            device,
+            "image tile, shadows apart",
+            &layout,
+            [&self.color_texture, &self.prim_texture],
+            &[(7, &hits), (8, &queue), (9, &count), (10, &blocked)],
+        );
         let mut from_queue = self.constants.clone();
         from_queue.push(("SHADOWS_FROM_QUEUE", 1.0));
         Ok(SplitShadows {
