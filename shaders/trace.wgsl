@@ -244,8 +244,8 @@ struct Surface {
 @group(1) @binding(6) var<storage, read_write> tile_sums: array<vec4<f32>>;
 // Shadow rays in a dispatch of their own (`render_primary`,
 // `render_shadows`, `render_shade`; gpu::ShadowDispatch): each tile
-// pixel's hit, the shadow rays to trace (compacted), how many, and
-// whether each (pixel, light) is blocked.
+// pixel's hit, the shadow rays to trace (compacted), how many, and each
+// pixel's blocked lights (bit i for light i).
 struct ShadowQuery {
     slot: u32,
     light: u32,
@@ -255,11 +255,10 @@ struct ShadowQuery {
 @group(1) @binding(7) var<storage, read_write> split_hits: array<Hit>;
 @group(1) @binding(8) var<storage, read_write> shadow_queue: array<ShadowQuery>;
 @group(1) @binding(9) var<storage, read_write> shadow_count: array<atomic<u32>, 1>;
-@group(1) @binding(10) var<storage, read_write> shadow_blocked: array<u32>;
-// `shade` reads shadows from shadow_blocked (at `shade_slot`) rather than
-// tracing them.
+@group(1) @binding(10) var<storage, read_write> shadow_blocked: array<atomic<u32>>;
+// `shade` takes its shadows from `shade_blocked` rather than tracing them.
 override SHADOWS_FROM_QUEUE: bool = false;
-// `render_shade`'s pixel: bit i set when light i is blocked (at most
+// `render_shade`'s pixel's word of shadow_blocked (at most
 // gpu::MAX_LIGHTS_APART lights).
 var<private> shade_blocked: u32;
 
@@ -933,7 +932,6 @@ fn offset_ray_origin(p: vec3<f32>, error: vec3<f32>, n: vec3<f32>) -> vec3<f32> 
     return po;
 }
 
-// Lambert: ambient·k + Σ k·E·max(0, n·l)·visible, linear RGB.
 // What light `light` gives a point (`surface`, shadow rays leaving from
 // `origin`) unless something blocks it; `lit` false when nothing.
 struct LightSample {
@@ -979,6 +977,7 @@ fn shadowed(ray: Ray, light: u32) -> bool {
     return trace_any(ray);
 }
 
+// Lambert: ambient·k + Σ k·E·max(0, n·l)·visible, linear RGB.
 fn shade(ray: Ray, hit: Hit) -> vec3<f32> {
     if hit.prim == NO_HIT {
         return params.background;
@@ -1091,15 +1090,24 @@ fn pixel_mean(sums: vec4<f32>) -> vec4<f32> {
     return vec4<f32>(mean, variance);
 }
 
-@compute @workgroup_size(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y)
-fn render(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
-    stack_base = lane * STACK_ENTRIES;
+// The tile pixel of a render invocation, or none.
+fn tile_slot(id: vec3<u32>) -> u32 {
     let size = textureDimensions(out_color);
     let pixel = params.tile_origin + id.xy;
     if id.x >= size.x || id.y >= size.y || pixel.x >= params.width || pixel.y >= params.height {
+        return NO_HIT;
+    }
+    return id.y * size.x + id.x;
+}
+
+@compute @workgroup_size(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y)
+fn render(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    stack_base = lane * STACK_ENTRIES;
+    let slot = tile_slot(id);
+    if slot == NO_HIT {
         return;
     }
-    let slot = id.y * size.x + id.x;
+    let pixel = params.tile_origin + id.xy;
     var sums = vec4<f32>(0.0);
     if params.sample_begin > 0u {
         sums = tile_sums[slot];
@@ -1148,16 +1156,6 @@ fn render_pixel_list(@builtin(global_invocation_id) id: vec3<u32>, @builtin(loca
     report_cut_loops();
 }
 
-// The tile pixel of a render invocation, or none.
-fn tile_slot(id: vec3<u32>) -> u32 {
-    let size = textureDimensions(out_color);
-    let pixel = params.tile_origin + id.xy;
-    if id.x >= size.x || id.y >= size.y || pixel.x >= params.width || pixel.y >= params.height {
-        return NO_HIT;
-    }
-    return id.y * size.x + id.x;
-}
-
 // Shadow rays apart, pass 1: the pixel's primary hit (its one sample),
 // and its shadow rays queued.
 @compute @workgroup_size(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y)
@@ -1173,9 +1171,9 @@ fn render_primary(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_i
     if hit.prim != NO_HIT && HAS_SHADOWS && params.shadows != 0u {
         let surface = surface_at(ray, hit);
         let origin = offset_ray_origin(surface.position, surface.error, surface.geometric_normal);
+        atomicStore(&shadow_blocked[slot], 0u);
         for (var i = 0u; i < params.num_lights; i++) {
             let sample = light_sample(surface, origin, lights[i]);
-            shadow_blocked[slot * params.num_lights + i] = 0u;
             if sample.lit {
                 let q = atomicAdd(&shadow_count[0], 1u);
                 shadow_queue[q] = ShadowQuery(slot, i, vec2<u32>(0u), sample.shadow_ray);
@@ -1200,7 +1198,7 @@ fn render_shadows(
     for (var i = id.x; i < count; i += stride) {
         let q = shadow_queue[i];
         if trace_any(q.ray) {
-            shadow_blocked[q.slot * params.num_lights + q.light] = 1u;
+            atomicOr(&shadow_blocked[q.slot], 1u << q.light);
         }
     }
     report_cut_loops();
@@ -1215,10 +1213,7 @@ fn render_shade(@builtin(global_invocation_id) id: vec3<u32>) {
     if slot == NO_HIT {
         return;
     }
-    shade_blocked = 0u;
-    for (var i = 0u; i < params.num_lights; i++) {
-        shade_blocked |= shadow_blocked[slot * params.num_lights + i] << i;
-    }
+    shade_blocked = atomicLoad(&shadow_blocked[slot]);
     let ray = camera_ray(sample_position(params.tile_origin + id.xy, params.sample_begin));
     let hit = split_hits[slot];
     let color = shade(ray, hit);

@@ -616,8 +616,8 @@ impl Timer {
 }
 
 /// Most lights a render traces the shadow rays of apart (the shader's
-/// `shade_blocked` has a bit each; the queue holds a ray for each light
-/// of each tile pixel, 48 bytes).
+/// `shadow_blocked` has a bit of a pixel's word each; the queue holds a
+/// ray for each light of each tile pixel, `SHADOW_QUERY_BYTES`).
 pub const MAX_LIGHTS_APART: u32 = 8;
 
 /// Bytes of the shader's `ShadowQuery` (a queued shadow ray; GPU-only,
@@ -1534,7 +1534,7 @@ impl GpuRenderer {
         let hits = buffer("primary hits", pixels * std::mem::size_of::<Hit>() as u64);
         let queue = buffer("shadow queue", pixels * lights * SHADOW_QUERY_BYTES);
         let count = buffer("shadow count", 4);
-        let blocked = buffer("shadow blocked", pixels * lights * 4);
+        let blocked = buffer("shadow blocked", pixels * 4);
         let group = tile_bind_group(
             device,
             "image tile, shadows apart",

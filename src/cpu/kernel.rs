@@ -264,7 +264,7 @@ pub struct Kernel<'a> {
     /// GPU results are compared with.
     pub compressed: Option<&'a [CompressedNode]>,
     /// The GPU's short stack: entries `trace_compressed` keeps before the
-    /// oldest spill (`cwbvh::short_stack_entries`; `MAX_DEPTH`, none spill).
+    /// oldest spill (`cwbvh::short_stack`; `MAX_DEPTH`, none spill).
     pub stack_entries: usize,
 }
 
