@@ -14,6 +14,7 @@ pub mod cpu;
 pub mod cwbvh;
 pub mod diff;
 pub mod error;
+pub mod files;
 pub mod gpu;
 pub mod inputs;
 pub mod layout;

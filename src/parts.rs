@@ -162,7 +162,7 @@ pub struct Part {
 }
 
 fn read_part(path: &Path) -> Result<Part> {
-    let bytes = std::fs::read(path).map_err(|e| crate::error::Error::io(path, e))?;
+    let bytes = crate::files::read_capped(path, crate::files::MAX_MODEL_BYTES)?;
     parse_part(&bytes, path)
 }
 

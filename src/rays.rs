@@ -25,8 +25,8 @@ pub const MAX_DIRECTION: f64 = 1e18;
 /// Reads and validates a ray file: one bulk read straight into the rays.
 pub fn read_rays(path: &Path) -> Result<Vec<Ray>> {
     use std::io::Read;
-    let mut file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let length = file.metadata().map_err(|e| Error::io(path, e))?.len() as usize;
+    let (mut file, length) = crate::files::open_capped(path, crate::files::MAX_RAY_BYTES)?;
+    let length = length as usize;
     check_ray_bytes(length, path)?;
     let mut rays = vec![Ray::default(); length / RAY_BYTES];
     file.read_exact(bytemuck::cast_slice_mut(&mut rays))
@@ -208,7 +208,7 @@ pub fn write_hits(path: &Path, hits: &[Hit]) -> Result<()> {
 
 /// Reads a hit file.
 pub fn read_hits(path: &Path) -> Result<Vec<Hit>> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::files::read_capped(path, crate::files::MAX_RAY_BYTES)?;
     if !bytes.len().is_multiple_of(16) {
         return Err(Error::Usage(format!(
             "{}: {} bytes is not a whole number of 16-byte hits",

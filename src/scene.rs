@@ -268,7 +268,7 @@ impl Scene {
                     "--camera picks a glTF file's camera; a TOML scene has one camera".into(),
                 ));
             }
-            let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+            let text = crate::files::read_text_capped(path, crate::files::MAX_TEXT_BYTES)?;
             return Scene::from_toml(&text, path);
         }
         let format = loading::Format::of(path).map_err(|_| {
