@@ -212,7 +212,7 @@ fn malformed_obj_names_file_and_line() {
         ),
         (
             "v 0 0 0\nv 1 0 0\n\nf 1 2\n",
-            "m.obj:4: a face needs at least 3 vertices",
+            "m.obj: no triangles (2 points, 0 lines skipped)",
         ),
         ("v 0 0 nan\n", "m.obj:1: coordinate nan must be finite"),
         ("v 0 0 inf\n", "m.obj:1: coordinate inf must be finite"),
@@ -321,7 +321,7 @@ fn empty_scenes() {
     case.file("empty.obj", "# nothing\nv 0 0 0\n");
     case.fails(
         &format!("{CAMERA}[[mesh]]\nobj = \"empty.obj\"\n"),
-        &["the scene is empty"],
+        &["empty.obj: no triangles (1 points, 0 lines skipped)"],
     );
 }
 

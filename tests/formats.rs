@@ -146,7 +146,7 @@ fn malformed_ply_files_are_clear_errors() {
         ("short.ply", format!("{ok_header}0 0 0\n1 0 0\n").into_bytes(), "only 2 lines follow"),
         ("truncated.ply", truncated, "face 0: the file ends inside it"),
         ("claims.ply", { let mut b = binary_header(4_000_000_000).into_bytes(); b.extend([0u8; 64]); b }, "declares 4000000000 'vertex' elements"),
-        ("points.ply", b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n".to_vec(), "no faces"),
+        ("points.ply", b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n".to_vec(), "points.ply: no triangles (1 points, 0 lines skipped)"),
         ("noxyz.ply", b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n0 0\n".to_vec(), "no 'z' property"),
         ("two.ply", format!("{ok_header}0 0 0\n1 0 0\n0 1 0\n2 0 1\n").into_bytes(), "a face needs at least 3 vertices"),
         ("gz.ply.gz", b"not gzip".to_vec(), "not a readable gzip file"),
@@ -225,7 +225,10 @@ fn obj_materials_from_mtl_files() {
     assert!(reds > 0, "no pixel shows the red material");
 
     for (mtl, expected) in [
-        ("newmtl a\nKd 0.5 0.5\n", "bad.mtl:2: Kd needs 3 numbers"),
+        (
+            "newmtl a\nKd 0.5 0.5\n",
+            "bad.mtl:2: Kd needs 1 or 3 numbers (r [g b]), found 2",
+        ),
         (
             "newmtl a\nKd 0.5 x 0.5\n",
             "bad.mtl:2: Kd: 'x' is not a number",
@@ -628,5 +631,142 @@ fn a_model_file_alone_renders() {
         "eye [0, 2.5, 7]",
     ] {
         assert!(text.contains(expected), "info lacks {expected}: {text}");
+    }
+}
+
+/// OBJ's `\` line continuation (the OBJ spec): a statement across lines
+/// reads as one, and errors after it still name the right line.
+#[test]
+fn obj_line_continuation() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let text = "v 0 0 \\\n0\nv 1 0 0\r\nv 0 1 0\nv 1 1 0\nf 1 \\\r\n 2 \\ \n3\nf 2 4 3\n";
+    let mesh = load_mesh(&write(d, "c.obj", text), NormalMode::Face).unwrap();
+    assert_eq!(mesh.positions[0], DVec3::ZERO);
+    assert_eq!(mesh.positions.len(), 4);
+    assert_eq!(mesh.triangles, vec![[0, 1, 2], [1, 3, 2]]);
+    assert!(mesh.warnings.is_empty(), "{:?}", mesh.warnings);
+    let bad = write(d, "bad.obj", format!("{text}v 0 0 x\n"));
+    let message = error_of(&bad);
+    assert!(
+        message.contains("bad.obj:10: 'x' is not a number"),
+        "{message}"
+    );
+    // A continuation on the last line ends the statement there.
+    let last = write(d, "last.obj", format!("{text}f 1 2 4 \\"));
+    assert_eq!(
+        load_mesh(&last, NormalMode::Face).unwrap().triangles.len(),
+        3
+    );
+}
+
+/// Faces that other readers load with a note: fewer than 3 vertices
+/// (skipped), normals that are not defined (dropped for computed ones);
+/// one warning per kind, with the count and the first line.
+#[test]
+fn obj_short_faces_and_undefined_normals_are_warnings() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let quad = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0.5\n";
+    let short = write(d, "short.obj", format!("{quad}f 1 2\nf 1 2 3\nf 4\nf\n"));
+    let mesh = load_mesh(&short, NormalMode::Smooth).unwrap();
+    assert_eq!(mesh.triangles, vec![[0, 1, 2]]);
+    assert_eq!(
+        mesh.warnings,
+        vec![format!(
+            "{}:5: 3 faces with fewer than 3 vertices skipped (the first on this line)",
+            short.display()
+        )]
+    );
+
+    let faces = |second: &str, third: &str| {
+        format!("{quad}vn 0 0 1\nf 1//1 2//1 3//1\nf {second}\nf {third}\n")
+    };
+    let named = write(d, "named.obj", faces("2//2 4//2 3//2", "2//1 4//-3 3//1"));
+    let plain = write(d, "plain.obj", faces("2 4 3", "2 4 3"));
+    let mesh = load_mesh(&named, NormalMode::Smooth).unwrap();
+    let reference = load_mesh(&plain, NormalMode::Smooth).unwrap();
+    assert_eq!(mesh.triangles, reference.triangles);
+    assert_eq!(mesh.normals, reference.normals);
+    assert_eq!(mesh.normals.as_ref().unwrap()[0], [DVec3::Z; 3]);
+    assert!(!mesh.file_normals);
+    assert_eq!(mesh.warnings.len(), 1, "{:?}", mesh.warnings);
+    assert!(
+        mesh.warnings[0].starts_with(&format!(
+            "{}:7: 2 faces naming normals that are not defined",
+            named.display()
+        )),
+        "{:?}",
+        mesh.warnings
+    );
+    // No vn at all: the face loads, with computed normals.
+    let none = write(d, "none.obj", format!("{quad}f 1//1 2//1 3//1\n"));
+    let mesh = load_mesh(&none, NormalMode::Smooth).unwrap();
+    assert_eq!(mesh.triangles.len(), 1);
+    assert!(mesh.warnings[0].contains("none.obj:5: 1 face naming normals"));
+    // A normal index that is not a number is still an error.
+    let word = write(d, "word.obj", format!("{quad}f 1//x 2//1 3//1\n"));
+    assert!(error_of(&word).contains("word.obj:5: 'x' is not a normal index"));
+}
+
+/// MTL colours as the spec writes them: `Kd r` (g and b repeat r),
+/// `Kd xyz X [Y Z]` (CIE XYZ, converted to linear sRGB), `Kd spectral`
+/// (a warning, the default albedo); negative values stay refused.
+#[test]
+fn mtl_grey_xyz_and_spectral_colours() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write(
+        d,
+        "m.mtl",
+        "newmtl grey\nKd 0.5\nnewmtl spectral\nKd spectral green.rfl 0.8\n\
+         newmtl white\nKd xyz 0.95047 1.0 1.08883\nnewmtl red\nKd xyz 0.4124564 0.2126729 0.0193339\n\
+         newmtl greyxyz\nKd xyz 0.2\nnewmtl beyond\nKd xyz 1 0 0\n",
+    );
+    let names = ["grey", "spectral", "white", "red", "greyxyz", "beyond"];
+    let mut obj = String::from("mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\n");
+    for name in names {
+        obj += &format!("usemtl {name}\nf 1 2 3\n");
+    }
+    let mesh = load_mesh(&write(d, "m.obj", obj), NormalMode::Face).unwrap();
+    let m = &mesh.materials;
+    assert_eq!(m[0], [0.5; 3]);
+    assert_eq!(m[1], [0.8; 3]);
+    let close = |a: [f32; 3], b: [f32; 3]| (0..3).all(|i| (a[i] - b[i]).abs() < 1e-4);
+    assert!(close(m[2], [1.0; 3]), "D65 white: {:?}", m[2]);
+    assert!(close(m[3], [1.0, 0.0, 0.0]), "sRGB red: {:?}", m[3]);
+    // Y = Z = X: equal XYZ is not grey in sRGB (D65 white is not X=Y=Z).
+    assert!(m[4][0] > m[4][1] && m[4][1] > m[4][2], "{:?}", m[4]);
+    assert!(m[5][1] == 0.0 && m[5][0] > 3.0, "{:?}", m[5]);
+    let warnings = mesh.warnings.join("\n");
+    assert!(
+        warnings.contains("m.mtl:4: Kd spectral is not supported"),
+        "{warnings}"
+    );
+    assert!(warnings.contains("m.mtl:12: Kd xyz"), "{warnings}");
+    assert_eq!(mesh.warnings.len(), 2, "{warnings}");
+
+    for (mtl, expected) in [
+        (
+            "newmtl a\nKd -0.5\n",
+            "n.mtl:2: Kd: -0.5 must be finite and non-negative",
+        ),
+        (
+            "newmtl a\nKd xyz 0.5 -1\n",
+            "n.mtl:2: Kd: -1 must be finite and non-negative",
+        ),
+        (
+            "newmtl a\nKd xyz\n",
+            "n.mtl:2: Kd needs 1 or 3 numbers (r [g b]), found 0",
+        ),
+    ] {
+        write(d, "n.mtl", mtl);
+        let obj = write(
+            d,
+            "n.obj",
+            "mtllib n.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+        );
+        let message = error_of(&obj);
+        assert!(message.contains(expected), "{message}");
     }
 }

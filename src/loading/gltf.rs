@@ -53,7 +53,7 @@ pub struct GltfScene {
 /// Reads `path`: geometry (smooth normals from NORMAL, or computed, with
 /// `NormalMode::Smooth`), materials, cameras and lights.
 pub fn load_scene(path: &Path, mode: NormalMode) -> Result<GltfScene> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::files::read_capped(path, crate::files::MAX_MODEL_BYTES)?;
     parse_scene(&bytes, path, mode)
 }
 
@@ -168,6 +168,10 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
                     "{}: {what}: mode {mode_kind:?} skipped (lambert renders triangles)",
                     path.display()
                 ));
+                scene.mesh.skipped_lines += 1;
+                scene.mesh.unused_points += primitive
+                    .get(&gltf::Semantic::Positions)
+                    .map_or(0, |a| a.count());
                 continue;
             }
             let position_accessor = primitive
@@ -286,11 +290,7 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
             scene.mesh.triangles.extend(triangles);
         }
     }
-    if scene.mesh.triangles.is_empty() {
-        return Err(fail(
-            "the scene has no triangles (points or lines only, or no meshes)".into(),
-        ));
-    }
+    super::require_triangles(&scene.mesh, path)?;
     if mode == NormalMode::Smooth {
         let given = all_normals.then_some(&normals[..]);
         scene.mesh.file_normals = all_normals;
@@ -325,13 +325,9 @@ fn check_buffer_files(document: &gltf::Document, base: &Path) -> std::result::Re
             })?
         };
         let file = base.join(file);
-        if let Ok(meta) = std::fs::metadata(&file)
-            && !meta.is_file()
-        {
-            return Err(format!(
-                "buffer {index}: {} is not a regular file",
-                file.display()
-            ));
+        if file.exists() {
+            crate::files::open_capped(&file, crate::files::MAX_MODEL_BYTES)
+                .map_err(|e| format!("buffer {index}: {e}"))?;
         }
     }
     Ok(())

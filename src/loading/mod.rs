@@ -48,6 +48,29 @@ pub struct Mesh {
     pub warnings: Vec<String>,
     /// Whether `normals` are the file's own at every corner (not computed).
     pub file_normals: bool,
+    /// Vertices read but not in `positions` (a glTF file's point and line
+    /// primitives), for the message of a file without triangles.
+    pub unused_points: usize,
+    /// Line and point elements read but not rendered (OBJ `l` and `p`,
+    /// PLY edges, glTF point and line primitives), likewise.
+    pub skipped_lines: usize,
+}
+
+/// The one answer for a model without triangles, whatever its format:
+/// an error, rather than a picture of nothing or a camera framed on no
+/// bounds.
+pub fn require_triangles(mesh: &Mesh, path: &Path) -> Result<()> {
+    if mesh.triangles.is_empty() {
+        return Err(Error::scene(
+            path,
+            format!(
+                "no triangles ({} points, {} lines skipped)",
+                mesh.positions.len() + mesh.unused_points,
+                mesh.skipped_lines
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// The model formats, chosen by file extension (case-insensitive).
@@ -95,13 +118,18 @@ impl Format {
 
 /// Loads any model file: its geometry and materials (a glTF file's default
 /// scene, placed by its nodes; its cameras and lights are
-/// `gltf::load_scene`'s).
+/// `gltf::load_scene`'s). A file without triangles is an error
+/// (`require_triangles`).
 pub fn load_mesh(path: &Path, mode: NormalMode) -> Result<Mesh> {
-    match Format::of(path)? {
-        Format::Obj => load_obj(path, mode),
-        Format::Ply | Format::PlyGz => ply::load_ply(path, mode),
-        Format::Gltf | Format::Glb => Ok(gltf::load_scene(path, mode)?.mesh),
-    }
+    let mesh = match Format::of(path)? {
+        Format::Obj => load_obj(path, mode)?,
+        Format::Ply | Format::PlyGz => ply::load_ply(path, mode)?,
+        // `gltf::load_scene` requires triangles itself: a model scene
+        // reads glTF files through it alone.
+        Format::Gltf | Format::Glb => return Ok(gltf::load_scene(path, mode)?.mesh),
+    };
+    require_triangles(&mesh, path)?;
+    Ok(mesh)
 }
 
 /// Corner normals of every triangle: the given per-vertex normals where

@@ -5,6 +5,7 @@
 //! fan-triangulated as (v0,v1,v2), (v0,v2,v3), …), because primitive ids in
 //! `lambert trace` output are defined by it.
 
+use std::borrow::Cow;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -15,7 +16,7 @@ use crate::error::{Error, Result};
 
 /// Reads an OBJ file and the MTL files it names.
 pub fn load_obj(path: &Path, mode: NormalMode) -> Result<Mesh> {
-    let text = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let text = crate::files::read_capped(path, crate::files::MAX_MODEL_BYTES)?;
     parse_obj(&String::from_utf8_lossy(&text), path, mode)
 }
 
@@ -24,17 +25,47 @@ pub fn load_obj(path: &Path, mode: NormalMode) -> Result<Mesh> {
 pub struct Materials {
     index: HashMap<String, u32>,
     albedo: Vec<[f32; 3]>,
+    /// What was read but not understood, each naming its file and line.
+    warnings: Vec<String>,
+}
+
+/// The statements of OBJ or MTL text, each with the number of the line it
+/// starts on: a line ending in `\` continues on the next (the OBJ spec),
+/// joined as one line. A UTF-8 byte-order mark (some Windows exporters
+/// write one) is not part of the first statement.
+fn statements(text: &str) -> impl Iterator<Item = (usize, Cow<'_, str>)> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let mut lines = text.lines().enumerate();
+    std::iter::from_fn(move || {
+        let (index, first) = lines.next()?;
+        let mut statement = Cow::Borrowed(first);
+        while let Some(head) = statement.trim_end().strip_suffix('\\') {
+            let head = head.to_string();
+            let Some((_, next)) = lines.next() else {
+                statement = Cow::Owned(head);
+                break;
+            };
+            statement = Cow::Owned(format!("{head} {next}"));
+        }
+        Some((index + 1, statement))
+    })
 }
 
 /// Reads `mtl` (relative to the OBJ's folder) into `materials`: `newmtl
-/// NAME` and its `Kd r g b` (linear RGB); everything else is ignored. A
-/// missing file is a warning; a malformed `Kd` an error at its line.
-fn load_mtl(mtl: &Path, materials: &mut Materials, warnings: &mut Vec<String>) -> Result<()> {
-    let bytes = match std::fs::read(mtl) {
+/// NAME` and its `Kd` (`parse_mtl`); everything else is ignored. A file
+/// that cannot be read (missing, not a regular file, too large) is a
+/// warning; a malformed `Kd` an error at its line.
+fn load_mtl(mtl: &Path, materials: &mut Materials) -> Result<()> {
+    let bytes = match crate::files::read_capped(mtl, crate::files::MAX_TEXT_BYTES) {
         Ok(b) => b,
+        // Missing, a FIFO, a device, too large: the faces can still render.
         Err(e) => {
-            warnings.push(format!(
-                "{}: material library not read ({e}); its faces get the default albedo",
+            let reason = match e {
+                Error::Io { source, .. } => source.to_string(),
+                e => e.to_string(),
+            };
+            materials.warnings.push(format!(
+                "{}: material library not read ({reason}); its faces get the default albedo",
                 mtl.display()
             ));
             return Ok(());
@@ -44,14 +75,14 @@ fn load_mtl(mtl: &Path, materials: &mut Materials, warnings: &mut Vec<String>) -
 }
 
 /// Parses MTL text into `materials` (`load_mtl`'s rules); `mtl` names it
-/// in errors.
+/// in errors. `Kd r [g b]` is linear RGB (g and b repeat r if omitted, as
+/// the spec says), `Kd xyz X [Y Z]` CIE XYZ; `Kd spectral` is a warning.
 pub fn parse_mtl(text: &str, mtl: &Path, materials: &mut Materials) -> Result<()> {
-    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut current: Option<u32> = None;
-    for (index, line) in text.lines().enumerate() {
+    for (line_number, line) in statements(text) {
         let fail = |message: String| Error::Line {
             path: mtl.to_path_buf(),
-            line: index + 1,
+            line: line_number,
             message,
         };
         let line = line.split('#').next().unwrap_or("");
@@ -69,25 +100,73 @@ pub fn parse_mtl(text: &str, mtl: &Path, materials: &mut Materials) -> Result<()
             }
             Some("Kd") => {
                 let id = current.ok_or_else(|| fail("Kd before any newmtl".into()))?;
-                let mut kd = [0.0f32; 3];
-                for (i, slot) in kd.iter_mut().enumerate() {
-                    let token = tokens
-                        .next()
-                        .ok_or_else(|| fail(format!("Kd needs 3 numbers (r g b), found {i}")))?;
-                    let v: f32 = token
-                        .parse()
-                        .map_err(|_| fail(format!("Kd: '{token}' is not a number")))?;
-                    if !v.is_finite() || v < 0.0 {
-                        return Err(fail(format!("Kd: {token} must be finite and non-negative")));
-                    }
-                    *slot = v;
+                let mut tokens = tokens.peekable();
+                let space = tokens.next_if(|t| matches!(*t, "xyz" | "spectral"));
+                if space == Some("spectral") {
+                    materials.warnings.push(format!(
+                        "{}:{line_number}: Kd spectral is not supported; the material gets \
+                         the default albedo",
+                        mtl.display()
+                    ));
+                    continue;
                 }
-                materials.albedo[id as usize] = kd;
+                let kd = parse_colour(tokens).map_err(fail)?;
+                materials.albedo[id as usize] = if space == Some("xyz") {
+                    let (rgb, clamped) = xyz_to_linear_srgb(kd);
+                    if clamped {
+                        materials.warnings.push(format!(
+                            "{}:{line_number}: Kd xyz {kd:?} lies outside sRGB; its negative \
+                             components are clamped to 0",
+                            mtl.display()
+                        ));
+                    }
+                    rgb
+                } else {
+                    kd.map(|c| c as f32)
+                };
             }
             _ => {}
         }
     }
     Ok(())
+}
+
+/// `r [g b]`: one number repeated, or three; each finite and non-negative.
+fn parse_colour<'a>(tokens: impl Iterator<Item = &'a str>) -> Result<[f64; 3], String> {
+    let mut values = Vec::with_capacity(3);
+    for token in tokens.take(3) {
+        let v: f64 = token
+            .parse()
+            .map_err(|_| format!("Kd: '{token}' is not a number"))?;
+        if !v.is_finite() || v < 0.0 {
+            return Err(format!("Kd: {token} must be finite and non-negative"));
+        }
+        values.push(v);
+    }
+    match values[..] {
+        [v] => Ok([v; 3]),
+        [r, g, b] => Ok([r, g, b]),
+        _ => Err(format!(
+            "Kd needs 1 or 3 numbers (r [g b]), found {}",
+            values.len()
+        )),
+    }
+}
+
+/// CIE XYZ to linear sRGB (IEC 61966-2-1's D65 matrix), negative
+/// components clamped to 0; whether that clamped a colour outside sRGB's
+/// gamut.
+fn xyz_to_linear_srgb([x, y, z]: [f64; 3]) -> ([f32; 3], bool) {
+    let rgb = [
+        3.2404542 * x - 1.5371385 * y - 0.4985314 * z,
+        -0.9692660 * x + 1.8760108 * y + 0.0415560 * z,
+        0.0556434 * x - 0.2040259 * y + 1.0572252 * z,
+    ];
+    // The matrix's seven digits leave a primary's other components a few
+    // 1e-8 from 0: rounding, not a colour outside the gamut.
+    let rounding = 1e-5 * rgb.iter().fold(0.0f64, |m, c| m.max(c.abs()));
+    let clamped = rgb.iter().any(|&c| c < -rounding);
+    (rgb.map(|c| c.max(0.0) as f32), clamped)
 }
 
 /// The MTL files an `mtllib` statement names, relative to the OBJ's folder.
@@ -96,8 +175,38 @@ fn mtl_paths<'a>(obj: &Path, tokens: impl Iterator<Item = &'a str>) -> Vec<PathB
     tokens.map(|t| folder.join(t)).collect()
 }
 
-/// A face corner: position index and, if given, normal index.
-type Corner = (u32, Option<u32>);
+/// A face corner: position index and, if given, normal index (None
+/// inside where it names a normal that is not defined).
+type Corner = (u32, Option<Option<u32>>);
+
+/// Faces of one kind skipped or changed: how many, and the first's line.
+#[derive(Default)]
+struct Skipped {
+    count: usize,
+    first_line: usize,
+}
+
+impl Skipped {
+    fn add(&mut self, line: usize) {
+        if self.count == 0 {
+            self.first_line = line;
+        }
+        self.count += 1;
+    }
+
+    /// One warning for the kind, `what` saying what the faces were.
+    fn warn(&self, path: &Path, what: &str, warnings: &mut Vec<String>) {
+        if self.count > 0 {
+            let faces = if self.count == 1 { "face" } else { "faces" };
+            warnings.push(format!(
+                "{}:{}: {} {faces} {what} (the first on this line)",
+                path.display(),
+                self.first_line,
+                self.count
+            ));
+        }
+    }
+}
 
 /// Parses OBJ text; `path` names it in errors and anchors its `mtllib`s.
 pub fn parse_obj(text: &str, path: &Path, mode: NormalMode) -> Result<Mesh> {
@@ -109,11 +218,9 @@ pub fn parse_obj(text: &str, path: &Path, mode: NormalMode) -> Result<Mesh> {
     let mut vertex_normals: Vec<DVec3> = Vec::new();
     let mut corner_normals: Vec<[Option<u32>; 3]> = Vec::new();
     let mut corners: Vec<Corner> = Vec::new();
-    // A UTF-8 byte-order mark (some Windows exporters write one) is not
-    // part of the first statement.
-    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    for (index, line) in text.lines().enumerate() {
-        let line_number = index + 1;
+    let mut short_faces = Skipped::default();
+    let mut unknown_normals = Skipped::default();
+    for (line_number, line) in statements(text) {
         let fail = |message: String| Error::Line {
             path: path.to_path_buf(),
             line: line_number,
@@ -128,7 +235,7 @@ pub fn parse_obj(text: &str, path: &Path, mode: NormalMode) -> Result<Mesh> {
             Some("vn") => vertex_normals.push(parse_vector(&mut tokens).map_err(fail)?),
             Some("mtllib") => {
                 for mtl in mtl_paths(path, tokens) {
-                    load_mtl(&mtl, &mut materials, &mut mesh.warnings)?;
+                    load_mtl(&mtl, &mut materials)?;
                 }
             }
             Some("usemtl") => {
@@ -152,23 +259,39 @@ pub fn parse_obj(text: &str, path: &Path, mode: NormalMode) -> Result<Mesh> {
                     );
                 }
                 if corners.len() < 3 {
-                    return Err(fail(format!(
-                        "a face needs at least 3 vertices, this one has {}",
-                        corners.len()
-                    )));
+                    short_faces.add(line_number);
+                    continue;
+                }
+                if corners.iter().any(|c| c.1 == Some(None)) {
+                    unknown_normals.add(line_number);
+                    corners.iter_mut().for_each(|c| c.1 = None);
                 }
                 for k in 1..corners.len() - 1 {
                     let fan = [corners[0], corners[k], corners[k + 1]];
                     mesh.triangles.push(fan.map(|c| c.0));
-                    corner_normals.push(fan.map(|c| c.1));
+                    corner_normals.push(fan.map(|c| c.1.flatten()));
                     mesh.face_materials.push(current);
                 }
             }
-            // Names, groups, materials, texture coordinates, lines, points:
-            // nothing a Lambertian triangle renderer uses.
+            // Counted for the message of a file without triangles.
+            Some("l" | "p") => mesh.skipped_lines += 1,
+            // Names, groups, texture coordinates: nothing a Lambertian
+            // triangle renderer uses.
             _ => {}
         }
     }
+    mesh.warnings.append(&mut materials.warnings);
+    short_faces.warn(
+        path,
+        "with fewer than 3 vertices skipped",
+        &mut mesh.warnings,
+    );
+    unknown_normals.warn(
+        path,
+        "naming normals that are not defined (no such vn): those normals are dropped and \
+         computed ones used",
+        &mut mesh.warnings,
+    );
     if mode == NormalMode::Smooth {
         mesh.file_normals = !corner_normals.is_empty()
             && corner_normals.iter().all(|c| c.iter().all(Option::is_some));
@@ -199,32 +322,33 @@ fn parse_vector<'a>(tokens: &mut impl Iterator<Item = &'a str>) -> Result<DVec3,
 /// `i`, `i/t`, `i//n` or `i/t/n`, with 1-based or negative (relative) indices.
 fn parse_corner(token: &str, positions: usize, normals: usize) -> Result<Corner, String> {
     let mut parts = token.split('/');
-    let position = resolve_index(
-        parts.next().unwrap_or(""),
-        positions,
-        ("vertex", "vertices"),
-    )?;
+    let i = parse_index(parts.next().unwrap_or(""), "vertex")?;
+    let position = resolve_index(i, positions).ok_or_else(|| {
+        let defined = if positions == 1 { "vertex" } else { "vertices" };
+        format!("vertex index {i} is out of range: {positions} {defined} defined before this line")
+    })?;
     let _texture = parts.next();
+    // A normal index past the normals is a quirk, not broken geometry:
+    // the face is shaded with computed normals instead.
     let normal = match parts.next() {
-        Some(n) if !n.is_empty() => Some(resolve_index(n, normals, ("normal", "normals"))?),
+        Some(n) if !n.is_empty() => Some(resolve_index(parse_index(n, "normal")?, normals)),
         _ => None,
     };
     Ok((position, normal))
 }
 
-/// `what`: the element's name, singular and plural.
-fn resolve_index(token: &str, count: usize, (what, plural): (&str, &str)) -> Result<u32, String> {
-    let i: i64 = token
+/// `what`: the element's name.
+fn parse_index(token: &str, what: &str) -> Result<i64, String> {
+    token
         .parse()
-        .map_err(|_| format!("'{token}' is not a {what} index"))?;
+        .map_err(|_| format!("'{token}' is not a {what} index"))
+}
+
+/// A 1-based or negative index among `count` elements, 0-based; None
+/// where there is no such element.
+fn resolve_index(i: i64, count: usize) -> Option<u32> {
     let resolved = if i > 0 { i - 1 } else { count as i64 + i };
-    if i == 0 || resolved < 0 || resolved >= count as i64 {
-        let defined = if count == 1 { what } else { plural };
-        return Err(format!(
-            "{what} index {i} is out of range: {count} {defined} defined before this line"
-        ));
-    }
-    Ok(resolved as u32)
+    (i != 0 && resolved >= 0 && resolved < count as i64).then_some(resolved as u32)
 }
 
 fn smooth_normals(

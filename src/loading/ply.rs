@@ -12,7 +12,6 @@
 //! `vertex_index` list of any integer types, fan-triangulated in file order
 //! as OBJ's polygons are. Other elements and properties are ignored.
 
-use std::io::Read;
 use std::path::Path;
 
 use glam::DVec3;
@@ -99,14 +98,10 @@ impl Element {
 
 /// Reads a PLY file (gunzipped first when its name ends in `.gz`).
 pub fn load_ply(path: &Path, mode: NormalMode) -> Result<Mesh> {
-    let raw = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let raw = crate::files::read_capped(path, crate::files::MAX_MODEL_BYTES)?;
     let gzipped = path.to_string_lossy().to_lowercase().ends_with(".gz");
     let bytes = if gzipped {
-        let mut out = Vec::new();
-        flate2::read::MultiGzDecoder::new(&raw[..])
-            .read_to_end(&mut out)
-            .map_err(|e| Error::scene(path, format!("not a readable gzip file: {e}")))?;
-        out
+        crate::files::gunzip_capped(&raw, path, crate::files::MAX_MODEL_BYTES)?
     } else {
         raw
     };
@@ -153,11 +148,6 @@ pub fn parse_ply(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<Mesh> {
         }
         None => None,
     };
-    if face.is_none_or(|f| elements[f].count == 0) {
-        return Err(fail(
-            "the file has no faces (points only); lambert renders triangles".into(),
-        ));
-    }
     // Every count checked against what the rest of the file can hold,
     // before anything is allocated for it.
     match encoding {
@@ -286,6 +276,11 @@ pub fn parse_ply(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<Mesh> {
             "the face element comes before the vertex element".into(),
         ));
     }
+    mesh.skipped_lines = elements
+        .iter()
+        .filter(|e| e.name == "edge")
+        .map(|e| e.count)
+        .sum();
     if mode == NormalMode::Smooth {
         let given = has_normals.then_some(&normals[..]);
         mesh.file_normals = has_normals;
