@@ -168,6 +168,75 @@ fn malformed_ply_files_are_clear_errors() {
     }
 }
 
+/// Issue 28 item 11: a face element declared before the vertex element
+/// loads (indices are checked once every element is read); an ascii line
+/// with more values than the header declares (VCGLib writes them) reads
+/// the declared ones with one warning naming the first line; elements and
+/// properties lambert does not read are named in one warning.
+#[test]
+fn ply_faces_first_extra_values_and_unread_properties() {
+    let dir = tempfile::tempdir().unwrap();
+    let faces_first = |format: &str| {
+        format!(
+            "ply\nformat {format} 1.0\nelement face 1\nproperty list uchar int vertex_indices\n\
+             element vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n"
+        )
+    };
+    let ascii = faces_first("ascii") + "3 0 1 2\n0 0 0\n1 0 0\n0 1 0\n";
+    let mut binary = faces_first("binary_little_endian").into_bytes();
+    binary.push(3);
+    for i in [0i32, 1, 2] {
+        binary.extend(i.to_le_bytes());
+    }
+    for c in [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0] {
+        binary.extend(c.to_le_bytes());
+    }
+    for (name, bytes) in [("first.ply", ascii.into_bytes()), ("first-le.ply", binary)] {
+        let mesh = load_mesh(&write(dir.path(), name, bytes), NormalMode::Face).unwrap();
+        assert_eq!(mesh.triangles, vec![[0, 1, 2]], "{name}");
+        assert_eq!(mesh.positions[1], DVec3::X, "{name}");
+        assert!(mesh.warnings.is_empty(), "{name}: {:?}", mesh.warnings);
+    }
+    // An index past the vertices is still an error, at the face's line.
+    let beyond = faces_first("ascii") + "3 0 1 3\n0 0 0\n1 0 0\n0 1 0\n";
+    let message = error_of(&write(dir.path(), "beyond.ply", beyond));
+    assert!(
+        message.contains(
+            "beyond.ply:10: face 0: vertex index 3 is out of range: the file has 3 vertices"
+        ),
+        "{message}"
+    );
+
+    let surplus = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+                   element face 1\nproperty list uchar int vertex_indices\nend_header\n\
+                   0 0 0\n1 0 0 0.5 0.5\n0 1 0 1 1\n3 0 1 2 6 0 0 1 0 0 1\n";
+    let mesh = load_mesh(&write(dir.path(), "surplus.ply", surplus), NormalMode::Face).unwrap();
+    assert_eq!(mesh.triangles, vec![[0, 1, 2]]);
+    assert_eq!(mesh.positions[2], DVec3::Y);
+    assert_eq!(mesh.warnings.len(), 1, "{:?}", mesh.warnings);
+    let warning = &mesh.warnings[0];
+    for part in [
+        "surplus.ply:11: vertex 1: 5 values on the line, the header declares 3",
+        "ignored (on 3 lines in all)",
+    ] {
+        assert!(warning.contains(part), "lacks '{part}': {warning}");
+    }
+
+    let extra = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+                 property uchar red\nelement face 1\nproperty list uchar int vertex_indices\nproperty uchar flags\n\
+                 element edge 1\nproperty int vertex1\nproperty int vertex2\nend_header\n\
+                 0 0 0 255\n1 0 0 255\n0 1 0 255\n3 0 1 2 7\n0 1\n";
+    let mesh = load_mesh(&write(dir.path(), "extra.ply", extra), NormalMode::Face).unwrap();
+    assert_eq!(mesh.triangles, vec![[0, 1, 2]]);
+    assert_eq!(mesh.warnings.len(), 1, "{:?}", mesh.warnings);
+    assert!(
+        mesh.warnings[0].contains("extra.ply: ignored")
+            && mesh.warnings[0].contains("vertex red, face flags, element edge"),
+        "{}",
+        mesh.warnings[0]
+    );
+}
+
 #[test]
 fn obj_materials_from_mtl_files() {
     let dir = tempfile::tempdir().unwrap();
