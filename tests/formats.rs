@@ -25,6 +25,19 @@ fn write(dir: &Path, name: &str, bytes: impl AsRef<[u8]>) -> PathBuf {
     path
 }
 
+/// Asserts that `text` contains each of `parts`.
+fn assert_has(text: &str, parts: &[&str]) {
+    for part in parts {
+        assert!(text.contains(part), "lacks '{part}': {text}");
+    }
+}
+
+/// The one warning `mesh` has.
+fn only_warning(mesh: &lambert::loading::Mesh) -> &str {
+    assert_eq!(mesh.warnings.len(), 1, "{:?}", mesh.warnings);
+    &mesh.warnings[0]
+}
+
 fn error_of(path: &Path) -> String {
     match load_mesh(path, NormalMode::Face) {
         Ok(m) => panic!(
@@ -213,14 +226,13 @@ fn ply_faces_first_extra_values_and_unread_properties() {
     let mesh = load_mesh(&write(dir.path(), "surplus.ply", surplus), NormalMode::Face).unwrap();
     assert_eq!(mesh.triangles, vec![[0, 1, 2]]);
     assert_eq!(mesh.positions[2], DVec3::Y);
-    assert_eq!(mesh.warnings.len(), 1, "{:?}", mesh.warnings);
-    let warning = &mesh.warnings[0];
-    for part in [
-        "surplus.ply:11: vertex 1: 5 values on the line, the header declares 3",
-        "ignored (on 3 lines in all)",
-    ] {
-        assert!(warning.contains(part), "lacks '{part}': {warning}");
-    }
+    assert_has(
+        only_warning(&mesh),
+        &[
+            "surplus.ply:11: vertex 1: 5 values on the line, the header declares 3",
+            "ignored (on 3 lines in all)",
+        ],
+    );
 
     let extra = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
                  property uchar red\nelement face 1\nproperty list uchar int vertex_indices\nproperty uchar flags\n\
@@ -228,12 +240,9 @@ fn ply_faces_first_extra_values_and_unread_properties() {
                  0 0 0 255\n1 0 0 255\n0 1 0 255\n3 0 1 2 7\n0 1\n";
     let mesh = load_mesh(&write(dir.path(), "extra.ply", extra), NormalMode::Face).unwrap();
     assert_eq!(mesh.triangles, vec![[0, 1, 2]]);
-    assert_eq!(mesh.warnings.len(), 1, "{:?}", mesh.warnings);
-    assert!(
-        mesh.warnings[0].contains("extra.ply: ignored")
-            && mesh.warnings[0].contains("vertex red, face flags, element edge"),
-        "{}",
-        mesh.warnings[0]
+    assert_has(
+        only_warning(&mesh),
+        &["extra.ply: ignored", "vertex red, face flags, element edge"],
     );
 }
 
@@ -400,13 +409,21 @@ fn gltf_file(dir: &Path, name: &str, json: serde_json::Value) -> PathBuf {
     write(dir, name, serde_json::to_vec(&json).unwrap())
 }
 
+/// `doc` with each key of `extra` set (replacing what it had).
+fn merged(mut doc: serde_json::Value, extra: serde_json::Value) -> serde_json::Value {
+    for (k, v) in extra.as_object().unwrap() {
+        doc[k] = v.clone();
+    }
+    doc
+}
+
 fn triangle_gltf(
     buffer_uri: &str,
     byte_length: usize,
     count: usize,
     extra: serde_json::Value,
 ) -> serde_json::Value {
-    let mut doc = serde_json::json!({
+    let doc = serde_json::json!({
         "asset": {"version": "2.0"},
         "scene": 0,
         "scenes": [{"nodes": [0]}],
@@ -417,10 +434,7 @@ fn triangle_gltf(
         "accessors": [{"bufferView": 0, "componentType": 5126, "count": count, "type": "VEC3",
                        "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 0.0]}]
     });
-    for (k, v) in extra.as_object().unwrap() {
-        doc[k] = v.clone();
-    }
-    doc
+    merged(doc, extra)
 }
 
 #[test]
@@ -618,7 +632,7 @@ fn tetrahedron_gltf(extra: serde_json::Value) -> serde_json::Value {
         "data:application/octet-stream;base64,{}",
         base64_like::encode(&bytes)
     );
-    let mut doc = serde_json::json!({
+    let doc = serde_json::json!({
         "asset": {"version": "2.0"},
         "scene": 0,
         "scenes": [{"nodes": [0]}],
@@ -632,10 +646,7 @@ fn tetrahedron_gltf(extra: serde_json::Value) -> serde_json::Value {
             {"bufferView": 1, "componentType": 5123, "count": 12, "type": "SCALAR"}
         ]
     });
-    for (k, v) in extra.as_object().unwrap() {
-        doc[k] = v.clone();
-    }
-    doc
+    merged(doc, extra)
 }
 
 /// Issue 28 item 5: a mirroring node (negative determinant) flips its
@@ -710,24 +721,24 @@ fn gltf_rotations_are_normalised_with_a_warning() {
         for (p, q) in mesh.positions.iter().zip(&unit_mesh.positions) {
             assert!((*p - *q).length() < 1e-6, "{scaled:?}: {p} for {q}");
         }
-        assert_eq!(mesh.warnings.len(), 1, "{:?}", mesh.warnings);
-        let warning = &mesh.warnings[0];
-        for part in [
-            "scaled.gltf",
-            "node 0 'spun'",
-            "has length 2.0000, not 1",
-            "normalised",
-        ] {
-            assert!(warning.contains(part), "lacks '{part}': {warning}");
-        }
+        assert_has(
+            only_warning(&mesh),
+            &[
+                "scaled.gltf",
+                "node 0 'spun'",
+                "has length 2.0000, not 1",
+                "normalised",
+            ],
+        );
     }
     // A quarter turn about z takes x to y.
     let turned = load("turned.gltf", [0.0, 0.0, 2.0 * h, 2.0 * h]).unwrap();
     assert!((turned.positions[1] - DVec3::Y).length() < 1e-6);
     let message = load("zero.gltf", [0.0; 4]).unwrap_err().to_string();
-    for part in ["zero.gltf", "node 0 'spun'", "cannot be normalised"] {
-        assert!(message.contains(part), "lacks '{part}': {message}");
-    }
+    assert_has(
+        &message,
+        &["zero.gltf", "node 0 'spun'", "cannot be normalised"],
+    );
 }
 
 /// Issue 28 items 5 and 18: a negative baseColorFactor component is
@@ -757,19 +768,21 @@ fn gltf_negative_colours_are_clamped_and_emission_is_named() {
     assert_eq!(mesh.materials, vec![[0.0, 0.25, 2.0], [1.0; 3], [1.0; 3]]);
     assert_eq!(mesh.warnings.len(), 2, "{:?}", mesh.warnings);
     let clamped = &mesh.warnings[0];
-    for part in ["lit.gltf", "material paint", "-0.5", "clamped to 0"] {
-        assert!(clamped.contains(part), "lacks '{part}': {clamped}");
-    }
+    assert_has(
+        clamped,
+        &["lit.gltf", "material paint", "-0.5", "clamped to 0"],
+    );
     let emission = &mesh.warnings[1];
-    for part in [
-        "lit.gltf",
-        "emission is ignored",
-        "material lamp emissiveFactor [1.0, 0.5, 0.0]",
-        "material glow emissiveFactor",
-        "KHR_materials_emissive_strength",
-    ] {
-        assert!(emission.contains(part), "lacks '{part}': {emission}");
-    }
+    assert_has(
+        emission,
+        &[
+            "lit.gltf",
+            "emission is ignored",
+            "material lamp emissiveFactor [1.0, 0.5, 0.0]",
+            "material glow emissiveFactor",
+            "KHR_materials_emissive_strength",
+        ],
+    );
     // A material without emission or a negative colour: no warning.
     let plain = gltf_file(
         dir.path(),
@@ -792,12 +805,9 @@ fn gltf_malformed_accessors_are_errors_not_panics() {
     let d = dir.path();
     let json = |extra: serde_json::Value| tetrahedron_gltf(extra);
     let positions = |extra: serde_json::Value| {
-        let mut a = serde_json::json!({"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
-                                       "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 1.0]});
-        for (k, v) in extra.as_object().unwrap() {
-            a[k] = v.clone();
-        }
-        a
+        let accessor = serde_json::json!({"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+                                          "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 1.0]});
+        merged(accessor, extra)
     };
     let indices =
         serde_json::json!({"bufferView": 1, "componentType": 5123, "count": 12, "type": "SCALAR"});

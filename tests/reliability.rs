@@ -67,7 +67,7 @@ fn findings_say_what_is_wrong() {
     };
     let e = error("crash-position-accessor-out-of-range.gltf");
     assert!(
-        e.contains("names accessor 7, but the file has 2 accessors"),
+        e.contains("attribute POSITION names accessor 7, but the file has 2 accessors"),
         "{e}"
     );
     let e = error("crash-signed-short-indices.gltf");

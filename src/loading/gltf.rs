@@ -94,8 +94,9 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
             for (semantic, accessor) in &primitive.attributes {
                 if accessor.value() >= json.accessors.len() {
                     return Err(fail(format!(
-                        "mesh {m} primitive {p}: attribute {semantic:?} names accessor {}, \
+                        "mesh {m} primitive {p}: attribute {} names accessor {}, \
                          but the file has {} accessors",
+                        semantic.to_string(),
                         accessor.value(),
                         json.accessors.len()
                     )));
@@ -451,7 +452,7 @@ fn read_buffers(
         .buffers()
         .map(|buffer| {
             let source = match buffer.source() {
-                gltf::buffer::Source::Bin => "the GLB's binary chunk".to_string(),
+                gltf::buffer::Source::Bin => "no uri: the GLB's binary chunk".to_string(),
                 gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
                     "its data URI".to_string()
                 }

@@ -214,9 +214,9 @@ pub fn parse_ply(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<Mesh> {
     let mut values: Vec<f64> = Vec::new();
     let mut list: Vec<i64> = Vec::new();
     // Faces read before the vertices (a header may declare them first):
-    // where each was and its largest index, checked once the vertices
-    // are counted.
-    let mut unresolved: Vec<(Location, usize, i64)> = Vec::new();
+    // the largest index among them, the face and where it was, checked
+    // once the vertices are counted.
+    let mut unresolved: Option<(i64, usize, Location)> = None;
     for (e, element) in elements.iter().enumerate() {
         if e == vertex {
             mesh.positions.reserve(element.count);
@@ -280,9 +280,9 @@ pub fn parse_ply(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<Mesh> {
                 {
                     return Err(reader.error(out_of_range(&what(), *bad, count)));
                 }
-                if !read_vertices {
-                    let largest = list.iter().copied().max().unwrap_or(0);
-                    unresolved.push((reader.location(), i, largest));
+                let largest = list.iter().copied().max().unwrap_or(0);
+                if !read_vertices && unresolved.is_none_or(|(v, _, _)| largest > v) {
+                    unresolved = Some((largest, i, reader.location()));
                 }
                 for k in 1..list.len() - 1 {
                     mesh.triangles
@@ -292,7 +292,7 @@ pub fn parse_ply(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<Mesh> {
         }
     }
     let count = mesh.positions.len() as i64;
-    if let Some((at, i, bad)) = unresolved.into_iter().find(|(_, _, v)| *v >= count) {
+    if let Some((bad, i, at)) = unresolved.filter(|(v, _, _)| *v >= count) {
         return Err(reader.error_at(at, out_of_range(&format!("face {i}"), bad, count)));
     }
     mesh.warnings.extend(reader.surplus_warning());
