@@ -204,6 +204,29 @@ fn ply_faces_first_extra_values_and_unread_properties() {
     for c in [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0] {
         binary.extend(c.to_le_bytes());
     }
+    // 64-bit integers (trimesh reads them): a vertex id, skipped, and the
+    // indices.
+    let mut wide = b"ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty int64 id\n\
+                     property float x\nproperty float y\nproperty float z\n\
+                     element face 1\nproperty list uchar uint64 vertex_indices\nend_header\n"
+        .to_vec();
+    for (id, v) in [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
+        .iter()
+        .enumerate()
+    {
+        wide.extend((-(id as i64)).to_be_bytes());
+        for c in v {
+            wide.extend(c.to_be_bytes());
+        }
+    }
+    wide.push(3);
+    for i in [0u64, 1, 2] {
+        wide.extend(i.to_be_bytes());
+    }
+    let mesh = load_mesh(&write(dir.path(), "wide.ply", wide), NormalMode::Face).unwrap();
+    assert_eq!(mesh.triangles, vec![[0, 1, 2]]);
+    assert_eq!(mesh.positions[2], DVec3::Y);
+
     for (name, bytes) in [("first.ply", ascii.into_bytes()), ("first-le.ply", binary)] {
         let mesh = load_mesh(&write(dir.path(), name, bytes), NormalMode::Face).unwrap();
         assert_eq!(mesh.triangles, vec![[0, 1, 2]], "{name}");

@@ -10,7 +10,8 @@
 //! `vertex` gives `x y z` (float or double, or any other numeric type) and,
 //! when present, `nx ny nz`; `face` gives a `vertex_indices` or
 //! `vertex_index` list of any integer types, fan-triangulated in file order
-//! as OBJ's polygons are. Other elements and properties are ignored.
+//! as OBJ's polygons are, in either order of the two elements. Other
+//! elements and properties are read past, named in one warning.
 
 use std::io::Read;
 use std::path::Path;
@@ -35,6 +36,9 @@ enum Scalar {
     U16,
     I32,
     U32,
+    /// 64-bit integers: not in the original spec; trimesh reads them.
+    I64,
+    U64,
     F32,
     F64,
 }
@@ -48,6 +52,8 @@ impl Scalar {
             "ushort" | "uint16" => Scalar::U16,
             "int" | "int32" => Scalar::I32,
             "uint" | "uint32" => Scalar::U32,
+            "int64" => Scalar::I64,
+            "uint64" => Scalar::U64,
             "float" | "float32" => Scalar::F32,
             "double" | "float64" => Scalar::F64,
             _ => return None,
@@ -59,7 +65,7 @@ impl Scalar {
             Scalar::I8 | Scalar::U8 => 1,
             Scalar::I16 | Scalar::U16 => 2,
             Scalar::I32 | Scalar::U32 | Scalar::F32 => 4,
-            Scalar::F64 => 8,
+            Scalar::I64 | Scalar::U64 | Scalar::F64 => 8,
         }
     }
 
@@ -588,6 +594,8 @@ impl<'a> Reader<'a> {
             Scalar::I32 => i32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
             Scalar::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
             Scalar::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+            Scalar::I64 => i64::from_le_bytes(b) as f64,
+            Scalar::U64 => u64::from_le_bytes(b) as f64,
             Scalar::F64 => f64::from_le_bytes(b),
         })
     }
