@@ -25,6 +25,19 @@ fn write(dir: &Path, name: &str, bytes: impl AsRef<[u8]>) -> PathBuf {
     path
 }
 
+/// Asserts that `text` contains each of `parts`.
+fn assert_has(text: &str, parts: &[&str]) {
+    for part in parts {
+        assert!(text.contains(part), "lacks '{part}': {text}");
+    }
+}
+
+/// The one warning `mesh` has.
+fn only_warning(mesh: &lambert::loading::Mesh) -> &str {
+    assert_eq!(mesh.warnings.len(), 1, "{:?}", mesh.warnings);
+    &mesh.warnings[0]
+}
+
 fn error_of(path: &Path) -> String {
     match load_mesh(path, NormalMode::Face) {
         Ok(m) => panic!(
@@ -166,6 +179,94 @@ fn malformed_ply_files_are_clear_errors() {
             start.elapsed()
         );
     }
+}
+
+/// Issue 28 item 11: a face element declared before the vertex element
+/// loads (indices are checked once every element is read); an ascii line
+/// with more values than the header declares (VCGLib writes them) reads
+/// the declared ones with one warning naming the first line; elements and
+/// properties lambert does not read are named in one warning.
+#[test]
+fn ply_faces_first_extra_values_and_unread_properties() {
+    let dir = tempfile::tempdir().unwrap();
+    let faces_first = |format: &str| {
+        format!(
+            "ply\nformat {format} 1.0\nelement face 1\nproperty list uchar int vertex_indices\n\
+             element vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n"
+        )
+    };
+    let ascii = faces_first("ascii") + "3 0 1 2\n0 0 0\n1 0 0\n0 1 0\n";
+    let mut binary = faces_first("binary_little_endian").into_bytes();
+    binary.push(3);
+    for i in [0i32, 1, 2] {
+        binary.extend(i.to_le_bytes());
+    }
+    for c in [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0] {
+        binary.extend(c.to_le_bytes());
+    }
+    // 64-bit integers (trimesh reads them): a vertex id, skipped, and the
+    // indices.
+    let mut wide = b"ply\nformat binary_big_endian 1.0\nelement vertex 3\nproperty int64 id\n\
+                     property float x\nproperty float y\nproperty float z\n\
+                     element face 1\nproperty list uchar uint64 vertex_indices\nend_header\n"
+        .to_vec();
+    for (id, v) in [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
+        .iter()
+        .enumerate()
+    {
+        wide.extend((-(id as i64)).to_be_bytes());
+        for c in v {
+            wide.extend(c.to_be_bytes());
+        }
+    }
+    wide.push(3);
+    for i in [0u64, 1, 2] {
+        wide.extend(i.to_be_bytes());
+    }
+    let mesh = load_mesh(&write(dir.path(), "wide.ply", wide), NormalMode::Face).unwrap();
+    assert_eq!(mesh.triangles, vec![[0, 1, 2]]);
+    assert_eq!(mesh.positions[2], DVec3::Y);
+
+    for (name, bytes) in [("first.ply", ascii.into_bytes()), ("first-le.ply", binary)] {
+        let mesh = load_mesh(&write(dir.path(), name, bytes), NormalMode::Face).unwrap();
+        assert_eq!(mesh.triangles, vec![[0, 1, 2]], "{name}");
+        assert_eq!(mesh.positions[1], DVec3::X, "{name}");
+        assert!(mesh.warnings.is_empty(), "{name}: {:?}", mesh.warnings);
+    }
+    // An index past the vertices is still an error, at the face's line.
+    let beyond = faces_first("ascii") + "3 0 1 3\n0 0 0\n1 0 0\n0 1 0\n";
+    let message = error_of(&write(dir.path(), "beyond.ply", beyond));
+    assert!(
+        message.contains(
+            "beyond.ply:10: face 0: vertex index 3 is out of range: the file has 3 vertices"
+        ),
+        "{message}"
+    );
+
+    let surplus = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+                   element face 1\nproperty list uchar int vertex_indices\nend_header\n\
+                   0 0 0\n1 0 0 0.5 0.5\n0 1 0 1 1\n3 0 1 2 6 0 0 1 0 0 1\n";
+    let mesh = load_mesh(&write(dir.path(), "surplus.ply", surplus), NormalMode::Face).unwrap();
+    assert_eq!(mesh.triangles, vec![[0, 1, 2]]);
+    assert_eq!(mesh.positions[2], DVec3::Y);
+    assert_has(
+        only_warning(&mesh),
+        &[
+            "surplus.ply:11: vertex 1: 5 values on the line, the header declares 3",
+            "ignored (on 3 lines in all)",
+        ],
+    );
+
+    let extra = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+                 property uchar red\nelement face 1\nproperty list uchar int vertex_indices\nproperty uchar flags\n\
+                 element edge 1\nproperty int vertex1\nproperty int vertex2\nend_header\n\
+                 0 0 0 255\n1 0 0 255\n0 1 0 255\n3 0 1 2 7\n0 1\n";
+    let mesh = load_mesh(&write(dir.path(), "extra.ply", extra), NormalMode::Face).unwrap();
+    assert_eq!(mesh.triangles, vec![[0, 1, 2]]);
+    assert_has(
+        only_warning(&mesh),
+        &["extra.ply: ignored", "vertex red, face flags, element edge"],
+    );
 }
 
 #[test]
@@ -334,13 +435,21 @@ fn gltf_file(dir: &Path, name: &str, json: serde_json::Value) -> PathBuf {
     write(dir, name, serde_json::to_vec(&json).unwrap())
 }
 
+/// `doc` with each key of `extra` set (replacing what it had).
+fn merged(mut doc: serde_json::Value, extra: serde_json::Value) -> serde_json::Value {
+    for (k, v) in extra.as_object().unwrap() {
+        doc[k] = v.clone();
+    }
+    doc
+}
+
 fn triangle_gltf(
     buffer_uri: &str,
     byte_length: usize,
     count: usize,
     extra: serde_json::Value,
 ) -> serde_json::Value {
-    let mut doc = serde_json::json!({
+    let doc = serde_json::json!({
         "asset": {"version": "2.0"},
         "scene": 0,
         "scenes": [{"nodes": [0]}],
@@ -351,10 +460,7 @@ fn triangle_gltf(
         "accessors": [{"bufferView": 0, "componentType": 5126, "count": count, "type": "VEC3",
                        "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 0.0]}]
     });
-    for (k, v) in extra.as_object().unwrap() {
-        doc[k] = v.clone();
-    }
-    doc
+    merged(doc, extra)
 }
 
 #[test]
@@ -401,7 +507,7 @@ fn gltf_data_uris_external_buffers_and_malformed_files() {
                 "missing.gltf",
                 triangle_gltf("nothere.bin", 36, 3, serde_json::json!({})),
             ),
-            "reading its buffers",
+            "reading buffer 0 (\"nothere.bin\"): ",
         ),
         (
             gltf_file(
@@ -417,7 +523,7 @@ fn gltf_data_uris_external_buffers_and_malformed_files() {
                     serde_json::json!({}),
                 ),
             ),
-            "reading its buffers",
+            "buffer 0 (its data URI) holds 24 bytes, but its byteLength is 36",
         ),
         (
             gltf_file(
@@ -464,7 +570,7 @@ fn gltf_data_uris_external_buffers_and_malformed_files() {
                     serde_json::json!({"nodes": [{"mesh": 5}]}),
                 ),
             ),
-            "invalid glTF",
+            "invalid glTF: nodes[0].mesh: ",
         ),
     ];
     // What lambert's model lacks is a warning: spot lights, range,
@@ -529,7 +635,309 @@ fn gltf_data_uris_external_buffers_and_malformed_files() {
             message.contains(&*path.file_name().unwrap().to_string_lossy()),
             "{message}"
         );
+        assert!(!message.contains("invalid glTF: invalid glTF"), "{message}");
     }
+}
+
+/// A glTF of one tetrahedron (four vertices, u16 indices wound so that
+/// every face's geometric normal faces out), with `extra` merged in (its
+/// nodes, materials, …).
+fn tetrahedron_gltf(extra: serde_json::Value) -> serde_json::Value {
+    let mut bytes: Vec<u8> = [
+        0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0,
+    ]
+    .iter()
+    .flat_map(|f| f.to_le_bytes())
+    .collect();
+    bytes.extend(
+        [0u16, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3]
+            .iter()
+            .flat_map(|i| i.to_le_bytes()),
+    );
+    let uri = format!(
+        "data:application/octet-stream;base64,{}",
+        base64_like::encode(&bytes)
+    );
+    let doc = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+        "buffers": [{"uri": uri, "byteLength": 72}],
+        "bufferViews": [{"buffer": 0, "byteLength": 48}, {"buffer": 0, "byteOffset": 48, "byteLength": 24}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+             "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 1.0]},
+            {"bufferView": 1, "componentType": 5123, "count": 12, "type": "SCALAR"}
+        ]
+    });
+    merged(doc, extra)
+}
+
+/// Issue 28 item 5: a mirroring node (negative determinant) flips its
+/// triangles' winding, as the spec's clockwise front faces ask, so that
+/// geometric normals still face out; a matrix or two mirrors alike.
+#[test]
+fn gltf_mirrored_nodes_keep_their_normals_facing_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        (
+            "scale.gltf",
+            serde_json::json!([{"mesh": 0, "scale": [-1.0, 1.0, 1.0]}]),
+            true,
+        ),
+        (
+            "matrix.gltf",
+            serde_json::json!([{"mesh": 0, "matrix": [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, -2.0, 0.0, 3.0, 0.0, 0.0, 1.0]}]),
+            true,
+        ),
+        (
+            "twice.gltf",
+            serde_json::json!([{"scale": [-1.0, 1.0, 1.0], "children": [1]}, {"mesh": 0, "scale": [1.0, -1.0, 1.0]}]),
+            false,
+        ),
+    ];
+    for (name, nodes, mirrored) in cases {
+        let path = gltf_file(
+            dir.path(),
+            name,
+            tetrahedron_gltf(serde_json::json!({"nodes": nodes})),
+        );
+        let mesh = load_mesh(&path, NormalMode::Face).unwrap();
+        assert_eq!(mesh.triangles.len(), 4, "{name}");
+        let centre = mesh.positions.iter().sum::<DVec3>() / 4.0;
+        for t in &mesh.triangles {
+            let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+            let outward = (a + b + c) / 3.0 - centre;
+            assert!(
+                (b - a).cross(c - a).dot(outward) > 0.0,
+                "{name}: triangle {t:?} faces in"
+            );
+        }
+        // The first face (0, 2, 1) keeps its first corner; a mirror swaps the others.
+        let expected = if mirrored { [0, 1, 2] } else { [0, 2, 1] };
+        assert_eq!(mesh.triangles[0], expected, "{name}");
+    }
+}
+
+/// Issue 28 item 5: a rotation that is not a unit quaternion is
+/// normalised (as trimesh, Blender and three.js do) with one warning
+/// naming the node; one of length 0 is an error.
+#[test]
+fn gltf_rotations_are_normalised_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    let load = |name: &str, rotation: [f64; 4]| {
+        let nodes = serde_json::json!([{"mesh": 0, "name": "spun", "rotation": rotation}]);
+        let path = gltf_file(
+            dir.path(),
+            name,
+            tetrahedron_gltf(serde_json::json!({"nodes": nodes})),
+        );
+        Scene::load(&path).map(|_| load_mesh(&path, NormalMode::Face).unwrap())
+    };
+    for (unit, scaled) in [
+        ([0.0, 0.0, 0.0, 1.0], [0.0, 0.0, 0.0, 2.0]),
+        ([0.0, 0.0, h, h], [0.0, 0.0, 2.0 * h, 2.0 * h]),
+    ] {
+        let unit_mesh = load("unit.gltf", unit).unwrap();
+        assert!(unit_mesh.warnings.is_empty(), "{:?}", unit_mesh.warnings);
+        let mesh = load("scaled.gltf", scaled).unwrap();
+        for (p, q) in mesh.positions.iter().zip(&unit_mesh.positions) {
+            assert!((*p - *q).length() < 1e-6, "{scaled:?}: {p} for {q}");
+        }
+        assert_has(
+            only_warning(&mesh),
+            &[
+                "scaled.gltf",
+                "node 0 'spun'",
+                "has length 2.0000, not 1",
+                "normalised",
+            ],
+        );
+    }
+    // A quarter turn about z takes x to y.
+    let turned = load("turned.gltf", [0.0, 0.0, 2.0 * h, 2.0 * h]).unwrap();
+    assert!((turned.positions[1] - DVec3::Y).length() < 1e-6);
+    let message = load("zero.gltf", [0.0; 4]).unwrap_err().to_string();
+    assert_has(
+        &message,
+        &["zero.gltf", "node 0 'spun'", "cannot be normalised"],
+    );
+}
+
+/// Issue 28 items 5 and 18: a negative baseColorFactor component is
+/// clamped to 0 with a warning (it would be negative radiance); emission
+/// (emissiveFactor, KHR_materials_emissive_strength) gets one warning a
+/// file until it is rendered.
+#[test]
+fn gltf_negative_colours_are_clamped_and_emission_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let material =
+        |m: u32| serde_json::json!({"attributes": {"POSITION": 0}, "indices": 1, "material": m});
+    let path = gltf_file(
+        dir.path(),
+        "lit.gltf",
+        tetrahedron_gltf(serde_json::json!({
+            "extensionsUsed": ["KHR_materials_emissive_strength"],
+            "meshes": [{"primitives": [material(0), material(1), material(2), material(1)]}],
+            "materials": [
+                {"name": "paint", "pbrMetallicRoughness": {"baseColorFactor": [-0.5, 0.25, 2.0, 1.0]}},
+                {"name": "lamp", "emissiveFactor": [1.0, 0.5, 0.0],
+                 "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 5.0}}},
+                {"name": "glow", "emissiveFactor": [0.0, 0.0, 1.0]}
+            ]
+        })),
+    );
+    let mesh = load_mesh(&path, NormalMode::Face).unwrap();
+    assert_eq!(mesh.materials, vec![[0.0, 0.25, 2.0], [1.0; 3], [1.0; 3]]);
+    assert_eq!(mesh.warnings.len(), 2, "{:?}", mesh.warnings);
+    let clamped = &mesh.warnings[0];
+    assert_has(
+        clamped,
+        &["lit.gltf", "material paint", "-0.5", "clamped to 0"],
+    );
+    let emission = &mesh.warnings[1];
+    assert_has(
+        emission,
+        &[
+            "lit.gltf",
+            "emission is ignored",
+            "material lamp emissiveFactor [1.0, 0.5, 0.0]",
+            "material glow emissiveFactor",
+            "KHR_materials_emissive_strength",
+        ],
+    );
+    // A material without emission or a negative colour: no warning.
+    let plain = gltf_file(
+        dir.path(),
+        "plain.gltf",
+        tetrahedron_gltf(serde_json::json!({
+            "meshes": [{"primitives": [material(0)]}],
+            "materials": [{"name": "paint", "emissiveFactor": [0.0, 0.0, 0.0]}]
+        })),
+    );
+    let warnings = load_mesh(&plain, NormalMode::Face).unwrap().warnings;
+    assert!(warnings.is_empty(), "{warnings:?}");
+}
+
+/// Issue 28 item 6: accessors and buffer views the gltf crate would read
+/// past (or panic on: a byteStride below the element's size) are errors
+/// that name the file and the accessor, never a panic.
+#[test]
+fn gltf_malformed_accessors_are_errors_not_panics() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let json = |extra: serde_json::Value| tetrahedron_gltf(extra);
+    let positions = |extra: serde_json::Value| {
+        let accessor = serde_json::json!({"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+                                          "min": [0.0, 0.0, 0.0], "max": [1.0, 1.0, 1.0]});
+        merged(accessor, extra)
+    };
+    let indices =
+        serde_json::json!({"bufferView": 1, "componentType": 5123, "count": 12, "type": "SCALAR"});
+    let views = |first: serde_json::Value| serde_json::json!([first, {"buffer": 0, "byteOffset": 48, "byteLength": 24}]);
+    let cases = [
+        (
+            "stride.gltf",
+            json(
+                serde_json::json!({"bufferViews": views(serde_json::json!({"buffer": 0, "byteLength": 48, "byteStride": 8}))}),
+            ),
+            "POSITION accessor 0: its buffer view 0 has byteStride 8, less than one element (12 bytes)",
+        ),
+        (
+            "normal-stride.gltf",
+            json(serde_json::json!({
+                "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 2}, "indices": 1}]}],
+                "bufferViews": [{"buffer": 0, "byteLength": 48}, {"buffer": 0, "byteOffset": 48, "byteLength": 24},
+                                {"buffer": 0, "byteLength": 48, "byteStride": 4}],
+                "accessors": [positions(serde_json::json!({})), indices, positions(serde_json::json!({"bufferView": 2}))]
+            })),
+            "NORMAL accessor 2: its buffer view 2 has byteStride 4",
+        ),
+        (
+            "view.gltf",
+            json(
+                serde_json::json!({"bufferViews": views(serde_json::json!({"buffer": 0, "byteOffset": 40, "byteLength": 48}))}),
+            ),
+            "accessor 0: buffer view 0 ends beyond its buffer (72 bytes)",
+        ),
+        (
+            "offset.gltf",
+            json(
+                serde_json::json!({"accessors": [positions(serde_json::json!({"byteOffset": 4})), indices]}),
+            ),
+            "accessor 0 (4 elements) reaches beyond its buffer view 0 (48 bytes)",
+        ),
+        (
+            "empty.gltf",
+            json(
+                serde_json::json!({"accessors": [positions(serde_json::json!({"count": 0})), indices]}),
+            ),
+            "accessor 0 has count 0",
+        ),
+        (
+            "sparse.gltf",
+            json(
+                serde_json::json!({"accessors": [positions(serde_json::json!({"sparse": {
+                "count": 1, "indices": {"bufferView": 1, "componentType": 5123}, "values": {"bufferView": 0}}})), indices]}),
+            ),
+            "accessor 0 is sparse",
+        ),
+        (
+            "type.gltf",
+            json(
+                serde_json::json!({"accessors": [positions(serde_json::json!({"componentType": 5123})), indices]}),
+            ),
+            "POSITION accessor 0 holds Vec3 U16",
+        ),
+        (
+            "float-indices.gltf",
+            json(
+                serde_json::json!({"accessors": [positions(serde_json::json!({})),
+                {"bufferView": 1, "componentType": 5126, "count": 6, "type": "SCALAR"}]}),
+            ),
+            "indices accessor 1 holds Scalar F32",
+        ),
+        (
+            "index.gltf",
+            json(
+                serde_json::json!({"accessors": [positions(serde_json::json!({"count": 3, "max": [1.0, 1.0, 0.0]})), indices]}),
+            ),
+            "index 3 is out of range (3 vertices)",
+        ),
+    ];
+    for (name, doc, expected) in cases {
+        let path = gltf_file(d, name, doc);
+        let result = std::panic::catch_unwind(|| load_mesh(&path, NormalMode::Face));
+        let message = match result {
+            Err(_) => panic!("{name}: panicked"),
+            Ok(Ok(_)) => panic!("{name}: loaded"),
+            Ok(Err(e)) => e.to_string(),
+        };
+        assert!(message.contains(name), "{name}: {message}");
+        assert!(
+            message.contains(expected),
+            "{name}: expected '{expected}' in: {message}"
+        );
+    }
+    // A normalized flag on floats means nothing (the spec allows it on
+    // integers only): read as the floats they are.
+    let normalized = gltf_file(
+        d,
+        "normalized.gltf",
+        json(
+            serde_json::json!({"accessors": [positions(serde_json::json!({"normalized": true})), indices]}),
+        ),
+    );
+    assert_eq!(
+        load_mesh(&normalized, NormalMode::Face)
+            .unwrap()
+            .triangles
+            .len(),
+        4
+    );
 }
 
 /// Base64 for the data-URI test, written out rather than a dependency.

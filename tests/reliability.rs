@@ -67,11 +67,18 @@ fn findings_say_what_is_wrong() {
     };
     let e = error("crash-position-accessor-out-of-range.gltf");
     assert!(
-        e.contains("names accessor 7, but the file has 2 accessors"),
+        e.contains("attribute POSITION names accessor 7, but the file has 2 accessors"),
         "{e}"
     );
     let e = error("crash-signed-short-indices.gltf");
     assert!(e.contains("indices accessor 1 holds Scalar I16"), "{e}");
+    let e = error("crash-byte-stride-below-element.gltf");
+    assert!(
+        e.contains(
+            "POSITION accessor 0: its buffer view 0 has byteStride 8, less than one element"
+        ),
+        "{e}"
+    );
     let e = error("crash-glb-length-below-header.glb");
     assert!(e.contains("its GLB header declares 0 bytes"), "{e}");
     let path = fuzz_dir("regressions").join("part/memory-huge-band-in-a-small-file.exr");

@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use glam::{DMat4, DVec3};
+use glam::{DMat4, DQuat, DVec3};
 
 use super::{Mesh, NormalMode, check_coordinate, vertex_normals};
 use crate::error::{Error, Result};
@@ -94,8 +94,9 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
             for (semantic, accessor) in &primitive.attributes {
                 if accessor.value() >= json.accessors.len() {
                     return Err(fail(format!(
-                        "mesh {m} primitive {p}: attribute {semantic:?} names accessor {}, \
+                        "mesh {m} primitive {p}: attribute {} names accessor {}, \
                          but the file has {} accessors",
+                        semantic.to_string(),
                         accessor.value(),
                         json.accessors.len()
                     )));
@@ -104,12 +105,21 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
         }
     }
     drop(unchecked);
-    let gltf::Gltf { document, blob } =
-        gltf::Gltf::from_slice(bytes).map_err(|e| fail(format!("invalid glTF: {e}")))?;
+    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice(bytes).map_err(|e| match e {
+        // The crate's own text starts with "invalid glTF:" too.
+        gltf::Error::Validation(errors) => fail(format!(
+            "invalid glTF: {}",
+            errors
+                .iter()
+                .map(|(at, error)| format!("{at}: {error}"))
+                .collect::<Vec<_>>()
+                .join("; ")
+        )),
+        e => fail(format!("invalid glTF: {e}")),
+    })?;
     let base = path.parent().unwrap_or(Path::new("."));
     check_buffer_files(&document, base).map_err(fail)?;
-    let buffers = gltf::import_buffers(&document, Some(base), blob)
-        .map_err(|e| fail(format!("reading its buffers: {e}")))?;
+    let buffers = read_buffers(&document, base, blob).map_err(fail)?;
 
     let mut scene = GltfScene::default();
     let Some(root) = document
@@ -122,6 +132,7 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
     let mut all_normals = true;
     let mut default_material: Option<u32> = None;
     let mut material_ids: Vec<Option<u32>> = vec![None; document.materials().len()];
+    let mut emission = Emission::default();
     let mut stack: Vec<(gltf::Node, DMat4)> = root.nodes().map(|n| (n, DMat4::IDENTITY)).collect();
     // Nodes in document order within each level, as the file lists them.
     stack.reverse();
@@ -136,7 +147,7 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
                 node.index()
             )));
         }
-        let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
+        let local = local_transform(&node, path, &mut scene.mesh.warnings).map_err(fail)?;
         let world = parent * local;
         if !world.is_finite() {
             return Err(fail(format!(
@@ -156,6 +167,10 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
         }
         let Some(mesh) = node.mesh() else { continue };
         let normal_matrix = glam::DMat3::from_mat4(world).inverse().transpose();
+        // A mirroring transform turns counter-clockwise faces clockwise: the
+        // spec makes those the front faces, so swapping two corners keeps
+        // the geometric normals facing out.
+        let mirrored = glam::DMat3::from_mat4(world).determinant() < 0.0;
         for primitive in mesh.primitives() {
             let what = format!("mesh {} primitive {}", mesh.index(), primitive.index());
             use gltf::mesh::Mode;
@@ -229,10 +244,12 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
             }
             let corners = |i: usize| indices[i] + first;
             let mut triangles: Vec<[u32; 3]> = Vec::new();
+            let mut push =
+                |[a, b, c]: [u32; 3]| triangles.push(if mirrored { [a, c, b] } else { [a, b, c] });
             match mode_kind {
                 Mode::Triangles => {
                     for t in 0..indices.len() / 3 {
-                        triangles.push([corners(3 * t), corners(3 * t + 1), corners(3 * t + 2)]);
+                        push([corners(3 * t), corners(3 * t + 1), corners(3 * t + 2)]);
                     }
                 }
                 Mode::TriangleStrip => {
@@ -244,20 +261,21 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
                         } else {
                             [corners(t), corners(t + 2), corners(t + 1)]
                         };
-                        triangles.push(tri);
+                        push(tri);
                     }
                 }
                 _ => {
                     for t in 1..indices.len().saturating_sub(1) {
-                        triangles.push([corners(0), corners(t), corners(t + 1)]);
+                        push([corners(0), corners(t), corners(t + 1)]);
                     }
                 }
             }
             let material = primitive.material();
             let id = match material.index() {
                 Some(m) => *material_ids[m].get_or_insert_with(|| {
-                    let [r, g, b, _] = material.pbr_metallic_roughness().base_color_factor();
-                    scene.mesh.materials.push([r, g, b]);
+                    let albedo = base_colour(&material, path, &mut scene.mesh.warnings);
+                    emission.note(&material);
+                    scene.mesh.materials.push(albedo);
                     (scene.mesh.materials.len() - 1) as u32
                 }),
                 None => *default_material.get_or_insert_with(|| {
@@ -271,13 +289,10 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
                 .base_color_texture()
                 .is_some()
             {
-                let name = material.name().map_or_else(
-                    || format!("{}", material.index().unwrap_or(0)),
-                    str::to_string,
-                );
                 let warning = format!(
-                    "{}: material {name}: its baseColorTexture is ignored (textures are not supported; baseColorFactor is used)",
-                    path.display()
+                    "{}: material {}: its baseColorTexture is ignored (textures are not supported; baseColorFactor is used)",
+                    path.display(),
+                    material_name(&material)
                 );
                 if !scene.mesh.warnings.contains(&warning) {
                     scene.mesh.warnings.push(warning);
@@ -290,6 +305,10 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
             scene.mesh.triangles.extend(triangles);
         }
     }
+    scene
+        .mesh
+        .warnings
+        .extend(emission.warning(&document, path));
     super::require_triangles(&scene.mesh, path)?;
     if mode == NormalMode::Smooth {
         let given = all_normals.then_some(&normals[..]);
@@ -299,8 +318,162 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
     Ok(scene)
 }
 
-/// An accessor's bytes lie inside its buffer view, and the view inside its
-/// buffer (the crate's reader would index past them).
+/// A node's local matrix, in f64. A rotation that is not a unit quaternion
+/// is normalised, as trimesh, Blender and three.js do (the crate's matrix
+/// would scale and shear by it), with a warning when it is off by more
+/// than the rounding of a written file.
+fn local_transform(
+    node: &gltf::Node,
+    path: &Path,
+    warnings: &mut Vec<String>,
+) -> std::result::Result<DMat4, String> {
+    let (translation, rotation, scale) = match node.transform() {
+        gltf::scene::Transform::Matrix { matrix } => {
+            return Ok(DMat4::from_cols_array_2d(&matrix.map(|c| c.map(f64::from))));
+        }
+        gltf::scene::Transform::Decomposed {
+            translation,
+            rotation,
+            scale,
+        } => (translation, rotation, scale),
+    };
+    let q = DQuat::from_array(rotation.map(f64::from));
+    let length = q.length();
+    if !(length > 0.0 && length.is_finite()) {
+        return Err(format!(
+            "{}: its rotation {rotation:?} has length {length}, which cannot be normalised",
+            node_name(node)
+        ));
+    }
+    if (length - 1.0).abs() > 1e-3 {
+        warnings.push(format!(
+            "{}: {}: its rotation {rotation:?} has length {length:.4}, not 1; normalised",
+            path.display(),
+            node_name(node)
+        ));
+    }
+    Ok(DMat4::from_scale_rotation_translation(
+        DVec3::from(scale.map(f64::from)),
+        q / length,
+        DVec3::from(translation.map(f64::from)),
+    ))
+}
+
+/// `node 3 'Cube'`, or `node 3` when it has no name.
+fn node_name(node: &gltf::Node) -> String {
+    match node.name() {
+        Some(name) => format!("node {} '{name}'", node.index()),
+        None => format!("node {}", node.index()),
+    }
+}
+
+/// A material's name, else its index.
+fn material_name(material: &gltf::Material) -> String {
+    material.name().map_or_else(
+        || format!("{}", material.index().unwrap_or(0)),
+        str::to_string,
+    )
+}
+
+/// A material's albedo: its baseColorFactor's RGB. Negative components
+/// (outside the spec's [0, 1], and negative radiance in the image) are
+/// clamped to 0 with a warning, as trimesh and Blender read such files;
+/// above 1 is kept, as a TOML or MTL albedo may be.
+fn base_colour(material: &gltf::Material, path: &Path, warnings: &mut Vec<String>) -> [f32; 3] {
+    let [r, g, b, a] = material.pbr_metallic_roughness().base_color_factor();
+    let rgb = [r, g, b];
+    if rgb.iter().any(|c| *c < 0.0) {
+        warnings.push(format!(
+            "{}: material {}: baseColorFactor {:?} has a negative component, clamped to 0",
+            path.display(),
+            material_name(material),
+            [r, g, b, a]
+        ));
+    }
+    rgb.map(|c| c.max(0.0))
+}
+
+/// Emission the file's materials give, which lambert does not render yet:
+/// gathered over the materials the scene uses, for one warning a file.
+#[derive(Default)]
+struct Emission {
+    /// `'lamp' emissiveFactor [1.0, 0.5, 0.0]`, one per material.
+    ignored: Vec<String>,
+}
+
+impl Emission {
+    fn note(&mut self, material: &gltf::Material) {
+        let factor = material.emissive_factor();
+        let mut what = Vec::new();
+        if factor.iter().any(|c| *c != 0.0) {
+            what.push(format!("emissiveFactor {factor:?}"));
+        }
+        if material.emissive_texture().is_some() {
+            what.push("emissiveTexture".to_string());
+        }
+        if !what.is_empty() {
+            self.ignored.push(format!(
+                "material {} {}",
+                material_name(material),
+                what.join(" and ")
+            ));
+        }
+    }
+
+    fn warning(self, document: &gltf::Document, path: &Path) -> Option<String> {
+        let mut ignored = self.ignored;
+        // The crate drops the extension's value; the file lists it in
+        // extensionsUsed.
+        if document
+            .extensions_used()
+            .any(|e| e == "KHR_materials_emissive_strength")
+        {
+            ignored.push("KHR_materials_emissive_strength".to_string());
+        }
+        (!ignored.is_empty()).then(|| {
+            format!(
+                "{}: emission is ignored (not implemented yet; the surfaces are lit, not \
+                 glowing): {}",
+                path.display(),
+                ignored.join(", ")
+            )
+        })
+    }
+}
+
+/// The file's buffers, read as `gltf::import_buffers` reads them, with
+/// each error naming the buffer and the file it names.
+fn read_buffers(
+    document: &gltf::Document,
+    base: &Path,
+    mut blob: Option<Vec<u8>>,
+) -> std::result::Result<Vec<gltf::buffer::Data>, String> {
+    document
+        .buffers()
+        .map(|buffer| {
+            let source = match buffer.source() {
+                gltf::buffer::Source::Bin => "no uri: the GLB's binary chunk".to_string(),
+                gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
+                    "its data URI".to_string()
+                }
+                gltf::buffer::Source::Uri(uri) => format!("{uri:?}"),
+            };
+            let what = format!("buffer {} ({source})", buffer.index());
+            let data =
+                gltf::buffer::Data::from_source_and_blob(buffer.source(), Some(base), &mut blob)
+                    .map_err(|e| format!("reading {what}: {e}"))?;
+            if data.len() < buffer.length() {
+                return Err(format!(
+                    "{what} holds {} bytes, but its byteLength is {}",
+                    data.len(),
+                    buffer.length()
+                ));
+            }
+            Ok(data)
+        })
+        .collect()
+}
+
 /// Checks the files that buffers name before the crate reads them: it
 /// panics on a URI whose percent-encoding is not UTF-8, and would read a
 /// device or FIFO (`/dev/zero`, an absolute path being allowed) forever.
@@ -393,14 +566,28 @@ fn check_accessor(
             buffer.len()
         ));
     }
+    // The crate reads each element from a stride's bytes (a panic when
+    // they are fewer), and the last one at (count - 1) × stride.
     let stride = view.stride().unwrap_or(accessor.size());
-    let needed = match accessor.count() {
-        0 => Some(0),
-        n => (n - 1).checked_mul(stride).and_then(|b| {
-            b.checked_add(accessor.offset())?
-                .checked_add(accessor.size())
-        }),
+    if stride < accessor.size() {
+        return Err(format!(
+            "accessor {}: its buffer view {} has byteStride {stride}, less than one element \
+             ({} bytes)",
+            accessor.index(),
+            view.index(),
+            accessor.size()
+        ));
+    }
+    let Some(last) = accessor.count().checked_sub(1) else {
+        return Err(format!(
+            "accessor {} has count 0 (the glTF spec requires at least 1)",
+            accessor.index()
+        ));
     };
+    let needed = last.checked_mul(stride).and_then(|b| {
+        b.checked_add(accessor.offset())?
+            .checked_add(accessor.size())
+    });
     if needed.is_none_or(|n| n > view.length()) {
         return Err(format!(
             "accessor {} ({} elements) reaches beyond its buffer view {} ({} bytes)",

@@ -10,7 +10,8 @@
 //! `vertex` gives `x y z` (float or double, or any other numeric type) and,
 //! when present, `nx ny nz`; `face` gives a `vertex_indices` or
 //! `vertex_index` list of any integer types, fan-triangulated in file order
-//! as OBJ's polygons are. Other elements and properties are ignored.
+//! as OBJ's polygons are, in either order of the two elements. Other
+//! elements and properties are read past, named in one warning.
 
 use std::path::Path;
 
@@ -34,6 +35,9 @@ enum Scalar {
     U16,
     I32,
     U32,
+    /// 64-bit integers: not in the original spec; trimesh reads them.
+    I64,
+    U64,
     F32,
     F64,
 }
@@ -47,6 +51,8 @@ impl Scalar {
             "ushort" | "uint16" => Scalar::U16,
             "int" | "int32" => Scalar::I32,
             "uint" | "uint32" => Scalar::U32,
+            "int64" => Scalar::I64,
+            "uint64" => Scalar::U64,
             "float" | "float32" => Scalar::F32,
             "double" | "float64" => Scalar::F64,
             _ => return None,
@@ -58,7 +64,7 @@ impl Scalar {
             Scalar::I8 | Scalar::U8 => 1,
             Scalar::I16 | Scalar::U16 => 2,
             Scalar::I32 | Scalar::U32 | Scalar::F32 => 4,
-            Scalar::F64 => 8,
+            Scalar::I64 | Scalar::U64 | Scalar::F64 => 8,
         }
     }
 
@@ -194,6 +200,7 @@ pub fn parse_ply(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<Mesh> {
         path,
         tokens: Vec::new(),
         token: 0,
+        surplus: None,
     };
     let mut mesh = Mesh::default();
     let mut normals: Vec<DVec3> = Vec::new();
@@ -202,6 +209,10 @@ pub fn parse_ply(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<Mesh> {
     let xyz = ["x", "y", "z"].map(|n| elements[vertex].property(n).unwrap());
     let mut values: Vec<f64> = Vec::new();
     let mut list: Vec<i64> = Vec::new();
+    // Faces read before the vertices (a header may declare them first):
+    // the largest index among them, the face and where it was, checked
+    // once the vertices are counted.
+    let mut unresolved: Option<(i64, usize, Location)> = None;
     for (e, element) in elements.iter().enumerate() {
         if e == vertex {
             mesh.positions.reserve(element.count);
@@ -237,7 +248,7 @@ pub fn parse_ply(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<Mesh> {
                     }
                 }
             }
-            reader.end_element(&what)?;
+            reader.end_element(&what);
             if e == vertex {
                 let mut p = [0.0; 3];
                 for (axis, &slot) in xyz.iter().enumerate() {
@@ -258,11 +269,16 @@ pub fn parse_ply(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<Mesh> {
                     )));
                 }
                 let count = mesh.positions.len() as i64;
-                if let Some(bad) = list.iter().find(|&&v| v < 0 || v >= count) {
-                    return Err(reader.error(format!(
-                        "{}: vertex index {bad} is out of range: the file has {count} vertices (indices from 0)",
-                        what()
-                    )));
+                let read_vertices = e > vertex;
+                if let Some(bad) = list
+                    .iter()
+                    .find(|&&v| v < 0 || (read_vertices && v >= count))
+                {
+                    return Err(reader.error(out_of_range(&what(), *bad, count)));
+                }
+                let largest = list.iter().copied().max().unwrap_or(0);
+                if !read_vertices && unresolved.is_none_or(|(v, _, _)| largest > v) {
+                    unresolved = Some((largest, i, reader.location()));
                 }
                 for k in 1..list.len() - 1 {
                     mesh.triangles
@@ -271,22 +287,66 @@ pub fn parse_ply(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<Mesh> {
             }
         }
     }
-    if face.is_some_and(|f| f < vertex) {
-        return Err(fail(
-            "the face element comes before the vertex element".into(),
-        ));
+    let count = mesh.positions.len() as i64;
+    if let Some((bad, i, at)) = unresolved.filter(|(v, _, _)| *v >= count) {
+        return Err(reader.error_at(at, out_of_range(&format!("face {i}"), bad, count)));
     }
     mesh.skipped_lines = elements
         .iter()
         .filter(|e| e.name == "edge")
         .map(|e| e.count)
         .sum();
+    mesh.warnings.extend(reader.surplus_warning());
+    mesh.warnings.extend(ignored(&elements, vertex, face, path));
     if mode == NormalMode::Smooth {
         let given = has_normals.then_some(&normals[..]);
         mesh.file_normals = has_normals;
         mesh.normals = Some(vertex_normals(&mesh, given));
     }
     Ok(mesh)
+}
+
+fn out_of_range(what: &str, index: i64, count: i64) -> String {
+    format!(
+        "{what}: vertex index {index} is out of range: the file has {count} vertices (indices from 0)"
+    )
+}
+
+/// One warning naming the elements and properties the file has that
+/// lambert does not read (colours, texture coordinates, edges, …).
+fn ignored(
+    elements: &[Element],
+    vertex: usize,
+    face: Option<usize>,
+    path: &Path,
+) -> Option<String> {
+    let mut skipped = Vec::new();
+    for (e, element) in elements.iter().enumerate() {
+        let used: &[&str] = if e == vertex {
+            &["x", "y", "z", "nx", "ny", "nz"]
+        } else if Some(e) == face {
+            &["vertex_indices", "vertex_index"]
+        } else {
+            skipped.push(format!("element {}", element.name));
+            continue;
+        };
+        let names: Vec<&str> = element
+            .properties
+            .iter()
+            .map(|p| p.name.as_str())
+            .filter(|name| !used.contains(name))
+            .collect();
+        if !names.is_empty() {
+            skipped.push(format!("{} {}", element.name, names.join(" ")));
+        }
+    }
+    (!skipped.is_empty()).then(|| {
+        format!(
+            "{}: ignored (lambert reads vertex x y z nx ny nz and face vertex_indices): {}",
+            path.display(),
+            skipped.join(", ")
+        )
+    })
 }
 
 type Header<'a> = (Encoding, Vec<Element>, &'a [u8], usize);
@@ -397,21 +457,56 @@ struct Reader<'a> {
     path: &'a Path,
     tokens: Vec<&'a str>,
     token: usize,
+    /// Ascii: lines with more values than the header declares, the first
+    /// one's location and message, and how many there were.
+    surplus: Option<(Location, String, usize)>,
+}
+
+/// Where an element was read: its line (ascii) and byte of the body.
+#[derive(Clone, Copy, Debug)]
+struct Location {
+    line: usize,
+    at: usize,
 }
 
 impl<'a> Reader<'a> {
+    fn location(&self) -> Location {
+        Location {
+            line: self.line,
+            at: self.at,
+        }
+    }
+
     fn error(&self, message: String) -> Error {
+        self.error_at(self.location(), message)
+    }
+
+    fn error_at(&self, location: Location, message: String) -> Error {
         match self.encoding {
             Encoding::Ascii => Error::Line {
                 path: self.path.to_path_buf(),
-                line: self.line,
+                line: location.line,
                 message,
             },
             _ => Error::scene(
                 self.path,
-                format!("byte {} of the body: {message}", self.at),
+                format!("byte {} of the body: {message}", location.at),
             ),
         }
+    }
+
+    /// The warning for lines with more values than declared, if any.
+    fn surplus_warning(&self) -> Option<String> {
+        let (location, message, lines) = self.surplus.as_ref()?;
+        let also = match lines {
+            1 => String::new(),
+            n => format!(" (on {n} lines in all)"),
+        };
+        Some(format!(
+            "{}:{}: {message}; the extra values are ignored{also}",
+            self.path.display(),
+            location.line
+        ))
     }
 
     /// Ascii: takes the next non-blank line's tokens.
@@ -441,16 +536,23 @@ impl<'a> Reader<'a> {
         }
     }
 
-    fn end_element(&self, what: &dyn Fn() -> String) -> Result<()> {
+    /// Ascii: values past the declared ones are ignored (VCGLib writes
+    /// such lines), with one warning for the file.
+    fn end_element(&mut self, what: &dyn Fn() -> String) {
         if self.encoding == Encoding::Ascii && self.token != self.tokens.len() {
-            return Err(self.error(format!(
-                "{}: {} values on the line, the header declares {}",
-                what(),
-                self.tokens.len(),
-                self.token
-            )));
+            match &mut self.surplus {
+                Some((_, _, lines)) => *lines += 1,
+                None => {
+                    let message = format!(
+                        "{}: {} values on the line, the header declares {}",
+                        what(),
+                        self.tokens.len(),
+                        self.token
+                    );
+                    self.surplus = Some((self.location(), message, 1));
+                }
+            }
         }
-        Ok(())
     }
 
     fn scalar(&mut self, kind: Scalar, what: &dyn Fn() -> String) -> Result<f64> {
@@ -487,6 +589,8 @@ impl<'a> Reader<'a> {
             Scalar::I32 => i32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
             Scalar::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
             Scalar::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+            Scalar::I64 => i64::from_le_bytes(b) as f64,
+            Scalar::U64 => u64::from_le_bytes(b) as f64,
             Scalar::F64 => f64::from_le_bytes(b),
         })
     }
