@@ -17,10 +17,10 @@ use crate::loading::{self, NormalMode};
 /// fourth powers of lengths and would overflow.
 pub const MAX_COORDINATE: f64 = 1e9;
 
-/// Largest sphere radius. A sphere's hit distance errs by about 1.4e-8 ×
-/// its radius (f32 rounding of |o − c|² − r²): measured from five units
-/// off the surface, radius 1e6 gives 5.374 for 5.360 (0.26%), 1e8 gives
-/// 5.75, and at 5e8 the camera ray reports the far side.
+/// Largest sphere radius. The hit distance no longer errs with the radius
+/// (`intersect_sphere` keeps |o − c|² − r² exact to a few ulps of itself:
+/// five units off a sphere of this radius, t is right to 1e-7), but f32
+/// holds points on a larger sphere's surface no closer than 1/16 unit.
 pub const MAX_SPHERE_RADIUS: f64 = 1e6;
 /// Largest image side, in pixels.
 pub const MAX_SIDE: u32 = 65_536;
@@ -481,7 +481,7 @@ impl Scene {
             {
                 return Err(fail(format!(
                     "{field}.radius = {} must be positive and at most {MAX_SPHERE_RADIUS:e} \
-                     (a larger sphere's f32 hit distances err by more than 1% five units from it; \
+                     (f32 places a larger sphere's surface points more than 1/16 unit apart; \
                      model a ground plane with triangles)",
                     entry.radius
                 )));
