@@ -379,7 +379,7 @@ impl<'a> Kernel<'a> {
     /// SIMD kernels' tests compare each against the portable one.
     pub fn new_for(scene: &'a Scene, ymm_boxes: bool) -> Kernel<'a> {
         Kernel {
-            camera: CameraBasis::new(&scene.camera),
+            camera: CameraBasis::new(&scene.local_camera(&scene.camera)),
             scene,
             background: vec3(scene.background),
             ambient: vec3(scene.ambient),
