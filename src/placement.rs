@@ -217,7 +217,7 @@ impl Placement {
         let last = (local.length() + 2.0 * self.radius) / dir.length();
         if last > f32::MAX as f64 && self.radius > 0.0 {
             return Some(RayProblem::BeyondT(format!(
-                "the scene lies up to t = {last:e} along it, beyond f32's largest t \
+                "the scene lies up to t = {last:.3e} along it, beyond f32's largest t \
                  ({:e}): a hit there is reported as a miss",
                 f32::MAX
             )));
