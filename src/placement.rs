@@ -10,7 +10,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::layout::{Hit, NO_HIT, Ray};
-use crate::scene::Scene;
+use crate::scene::{Camera, MAX_LOCAL_COORDINATE, Scene, vector_text};
 
 /// A scene is centred on its bounds only when their centre is more than
 /// this many times their diagonal from the origin: nearer, f32 already
@@ -51,6 +51,28 @@ pub struct Placement {
 }
 
 impl Scene {
+    /// `camera` relative to the scene's offset (in f64): what the kernels'
+    /// camera basis is built from.
+    pub fn local_camera(&self, camera: &Camera) -> Camera {
+        let local = |p: [f64; 3]| (DVec3::from(p) - self.offset).to_array();
+        Camera {
+            eye: local(camera.eye),
+            look_at: local(camera.look_at),
+            ..camera.clone()
+        }
+    }
+
+    /// The camera's eye and look_at within MAX_LOCAL_COORDINATE of the
+    /// offset, as the geometry is.
+    pub(crate) fn check_camera_placement(&self) -> Result<(), String> {
+        for (name, world) in [("eye", self.camera.eye), ("look_at", self.camera.look_at)] {
+            checked_local(&format!("camera.{name}"), DVec3::from(world), self.offset)?;
+        }
+        Ok(())
+    }
+
+    /// Its offset, and the radius of its geometry about it (from the
+    /// BVH's bounds).
     pub fn placement(&self) -> Placement {
         let radius = self.bvh.bounds().map_or(0.0, |b| {
             b.min.as_dvec3().abs().max(b.max.as_dvec3().abs()).length()
@@ -210,7 +232,7 @@ impl Placement {
                      there, more than {ORIGIN_PRECISION:e} of the scene's size or distance \
                      ({scale:.3}): its hits are no more precise than its origin (give \
                      origins in f64, as the Python package takes them)",
-                    crate::scene::vector_text(origin)
+                    vector_text(origin)
                 )));
             }
         }
@@ -289,4 +311,19 @@ fn f32_ray(origin: DVec3, dir: DVec3, tmin: f64, tmax: f64) -> Ray {
         dir: dir.as_vec3().to_array(),
         tmax: tmax as f32,
     }
+}
+
+/// `world` − `offset`, unless beyond MAX_LOCAL_COORDINATE on an axis.
+pub(crate) fn checked_local(field: &str, world: DVec3, offset: DVec3) -> Result<DVec3, String> {
+    let local = world - offset;
+    if local.abs().max_element() > MAX_LOCAL_COORDINATE {
+        return Err(format!(
+            "{field} = {} is {} from the scene's centre {}: at most \
+             {MAX_LOCAL_COORDINATE:e} on each axis is supported",
+            vector_text(world),
+            vector_text(local),
+            vector_text(offset)
+        ));
+    }
+    Ok(local)
 }

@@ -12,7 +12,7 @@ use crate::layout::{
     FLAG_SMOOTH, LIGHT_DIRECTIONAL, LIGHT_POINT, Light, Material, Sphere, Triangle, TriangleNormals,
 };
 use crate::loading::{self, NormalMode};
-use crate::placement::centring_offset;
+use crate::placement::{centring_offset, checked_local};
 
 /// World coordinates beyond this magnitude are rejected: f64 itself spaces
 /// them 1/8 apart there. Geometry far from the origin is kept relative to
@@ -764,26 +764,6 @@ impl Scene {
         self.bvh = Bvh::default();
     }
 
-    /// `camera` relative to the scene's offset (in f64): what the kernels'
-    /// camera basis is built from.
-    pub fn local_camera(&self, camera: &Camera) -> Camera {
-        let local = |p: [f64; 3]| (DVec3::from(p) - self.offset).to_array();
-        Camera {
-            eye: local(camera.eye),
-            look_at: local(camera.look_at),
-            ..camera.clone()
-        }
-    }
-
-    /// The camera's eye and look_at within MAX_LOCAL_COORDINATE of the
-    /// offset, as the geometry is.
-    fn check_camera_placement(&self) -> Result<(), String> {
-        for (name, world) in [("eye", self.camera.eye), ("look_at", self.camera.look_at)] {
-            checked_local(&format!("camera.{name}"), DVec3::from(world), self.offset)?;
-        }
-        Ok(())
-    }
-
     /// Rebuilds the BVH after the geometry changed.
     pub fn rebuild_bvh(&mut self) {
         self.bvh = Bvh::build(&self.triangles, &self.spheres);
@@ -1039,21 +1019,6 @@ impl Camera {
 fn point(field: &str, v: [f64; 3], offset: DVec3) -> Result<[f32; 3], String> {
     let local = checked_local(field, DVec3::from(checked_point(field, v)?), offset)?;
     Ok(local.as_vec3().to_array())
-}
-
-/// `world` − `offset`, unless beyond MAX_LOCAL_COORDINATE on an axis.
-fn checked_local(field: &str, world: DVec3, offset: DVec3) -> Result<DVec3, String> {
-    let local = world - offset;
-    if local.abs().max_element() > MAX_LOCAL_COORDINATE {
-        return Err(format!(
-            "{field} = {} is {} from the scene's centre {}: at most {MAX_LOCAL_COORDINATE:e} \
-             on each axis is supported",
-            vector_text(world),
-            vector_text(local),
-            vector_text(offset)
-        ));
-    }
-    Ok(local)
 }
 
 fn checked_point(field: &str, v: [f64; 3]) -> Result<[f64; 3], String> {
