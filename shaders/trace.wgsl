@@ -509,12 +509,13 @@ fn intersect_triangle_block(ray: Ray, shear: Shear, block: u32) -> BlockHits {
 }
 
 // Nearest root of |o + t·d − c|² = r² inside (tmin, tmax); FAR on a miss.
-// Uses the cancellation-free form of Ray Tracing Gems ch. 7.
+// Uses the cancellation-free form of Ray Tracing Gems ch. 7, with c from
+// `sphere_gap`.
 fn intersect_sphere(ray: Ray, center: vec3<f32>, radius: f32) -> f32 {
     let oc = ray.origin - center;
     let a = dot(ray.dir, ray.dir);
     let b = dot(oc, ray.dir);
-    let c = dot(oc, oc) - radius * radius;
+    let c = sphere_gap(ray.origin, center, radius);
     let f = oc - (b / a) * ray.dir;
     let discriminant = a * (radius * radius - dot(f, f));
     if discriminant < 0.0 {
@@ -532,6 +533,52 @@ fn intersect_sphere(ray: Ray, center: vec3<f32>, radius: f32) -> f32 {
         return far;
     }
     return FAR;
+}
+
+// |o − c|² − r² with every rounding error kept and added back: near a
+// large sphere the two squares cancel in most of their digits.
+fn sphere_gap(origin: vec3<f32>, center: vec3<f32>, radius: f32) -> f32 {
+    let x = two_sum(origin.x, -center.x);
+    let y = two_sum(origin.y, -center.y);
+    let z = two_sum(origin.z, -center.z);
+    let xx = two_square(x.x);
+    let yy = two_square(y.x);
+    let zz = two_square(z.x);
+    let rr = two_square(radius);
+    let s1 = two_sum(xx.x, yy.x);
+    let s2 = two_sum(s1.x, zz.x);
+    let s3 = two_sum(s2.x, -rr.x);
+    let cross = 2.0 * (x.x * x.y + y.x * y.y + z.x * z.y);
+    return s3.x + (((s1.y + s2.y) + s3.y) + (((xx.y + yy.y) + zz.y) - rr.y) + cross);
+}
+
+// (a + b rounded, its rounding error): Knuth's TwoSum. The sum passes
+// through `opaque_one`, or the driver's optimiser, the operations not being
+// marked exact, folds (a + b) − a to b and the error to 0 (Mesa's does).
+fn two_sum(a: f32, b: f32) -> vec2<f32> {
+    let s = (a + b) * opaque_one();
+    let bb = s - a;
+    return vec2<f32>(s, (a - (s - bb)) + (b - bb));
+}
+
+// (a² rounded, its rounding error): Dekker's, every product of halves
+// exact, so the same bits whether or not a multiply-add is fused.
+fn two_square(a: f32) -> vec2<f32> {
+    let hi = high_half(a);
+    let lo = a - hi;
+    let p = a * a;
+    return vec2<f32>(p, ((hi * hi - p) + 2.0 * hi * lo) + lo * lo);
+}
+
+// 1, from a number no compiler can know: only scenes with spheres call it.
+fn opaque_one() -> f32 {
+    return f32(min(params.num_spheres, 1u));
+}
+
+// `x` with the low 12 of its 23 stored mantissa bits cleared (a split by
+// mask: no multiply for a fused multiply-add to spoil).
+fn high_half(x: f32) -> f32 {
+    return bitcast<f32>(bitcast<u32>(x) & 0xfffff000u);
 }
 
 fn sign_nonzero(x: f32) -> f32 {

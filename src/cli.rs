@@ -919,6 +919,12 @@ fn trace(args: &TraceArgs) -> Result<ExitCode> {
         None => Scene::from_objs(&args.obj)?,
     };
     args.options.apply(&mut scene)?;
+    // Where a ray's f32 numbers limit its hits (docs/accuracy.md).
+    if !args.quiet {
+        for warning in scene.placement().ray_warnings(&rays) {
+            eprintln!("warning: {warning}");
+        }
+    }
     let (mut renderer, note) = Renderer::open(&scene, args.device, &args.adapter.request())?;
     if let Some(note) = note {
         eprintln!("{note}");

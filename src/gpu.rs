@@ -716,6 +716,8 @@ pub struct GpuRenderer {
     /// `run_list`'s input, output and readback buffers, by label.
     list_buffers: std::cell::RefCell<std::collections::HashMap<&'static str, wgpu::Buffer>>,
     pub upload_time: Duration,
+    /// The resident scene's placement: `trace_rays` takes world rays.
+    pub placement: crate::placement::Placement,
 }
 
 /// Bytes per row of a texture copy: wgpu requires a multiple of 256.
@@ -727,7 +729,7 @@ pub fn padded_bytes_per_row(width: u32, bytes_per_pixel: u32) -> u32 {
 /// The uniform for `scene` seen from `camera`: the f32 reference's basis, so
 /// both paths shoot the very same rays.
 pub fn params_for(scene: &Scene, camera: &Camera) -> Params {
-    let basis = CameraBasis::new(camera);
+    let basis = CameraBasis::new(&scene.local_camera(camera));
     Params {
         eye: basis.eye.to_array(),
         width: basis.width,
@@ -1178,6 +1180,7 @@ impl GpuRenderer {
             trace_device_time: None,
             list_buffers: Default::default(),
             upload_time: start.elapsed(),
+            placement: scene.placement(),
         })
     }
 
@@ -1572,10 +1575,25 @@ impl GpuRenderer {
         Ok(())
     }
 
-    /// Traces `rays` against the resident scene with the ray/triangle test
-    /// `intersect`: closest hits, or with `any_hit` the first hit each ray
-    /// finds. Misses come back as t = +inf, prim = NO_HIT.
+    /// Traces `rays` (world coordinates, as in a ray file) against the
+    /// resident scene with the ray/triangle test `intersect`: closest hits,
+    /// or with `any_hit` the first hit each ray finds. Misses come back as
+    /// t = +inf, prim = NO_HIT.
     pub fn trace_rays(
+        &mut self,
+        rays: &[Ray],
+        any_hit: bool,
+        intersect: Intersect,
+    ) -> Result<Vec<Hit>> {
+        let local = self.placement.localize(rays);
+        let mut hits = self.trace_local_rays(&local.rays, any_hit, intersect)?;
+        local.to_world(&mut hits);
+        Ok(hits)
+    }
+
+    /// `trace_rays` for rays already in the scene's local frame
+    /// (`Placement::local_ray`), hits in that frame.
+    pub fn trace_local_rays(
         &mut self,
         rays: &[Ray],
         any_hit: bool,

@@ -22,6 +22,7 @@ pub mod loading;
 pub mod memory;
 pub mod output;
 pub mod parts;
+pub mod placement;
 pub mod plot;
 pub mod probe;
 pub mod progress;

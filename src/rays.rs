@@ -237,7 +237,9 @@ pub fn hit_normal(scene: &Scene, ray: &Ray, hit: &Hit) -> [f32; 3] {
             .to_array()
     } else {
         let sphere = &scene.spheres[prim - triangles.len()];
-        let point = Vec3::from(ray.origin) + hit.t * Vec3::from(ray.dir);
+        // `ray` is in world coordinates, the sphere relative to the offset.
+        let origin = (Vec3::from(ray.origin).as_dvec3() - scene.offset).as_vec3();
+        let point = origin + hit.t * Vec3::from(ray.dir);
         (point - Vec3::from(sphere.center)).to_array()
     }
 }
@@ -273,14 +275,15 @@ pub fn camera_rays(scene: &Scene) -> Vec<Ray> {
 /// `camera_rays` through another camera (another image size, say).
 pub fn camera_rays_for(scene: &Scene, camera: &crate::scene::Camera) -> Vec<Ray> {
     let mut kernel = cpu::f32::Kernel::new(scene);
-    kernel.camera = cpu::f32::CameraBasis::new(camera);
+    kernel.camera = cpu::f32::CameraBasis::new(&scene.local_camera(camera));
     let (width, height) = (camera.width, camera.height);
     (0..height)
         .flat_map(|y| (0..width).map(move |x| (x, y)))
         .map(|(x, y)| {
             let ray = kernel.camera_ray(x as f32 + 0.5, y as f32 + 0.5);
             Ray {
-                origin: ray.origin.to_array(),
+                // A ray file's rays are in world coordinates.
+                origin: (ray.origin.as_dvec3() + scene.offset).as_vec3().to_array(),
                 tmin: 0.0,
                 dir: ray.dir.to_array(),
                 tmax: f32::INFINITY,

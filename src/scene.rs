@@ -12,15 +12,22 @@ use crate::layout::{
     FLAG_SMOOTH, LIGHT_DIRECTIONAL, LIGHT_POINT, Light, Material, Sphere, Triangle, TriangleNormals,
 };
 use crate::loading::{self, NormalMode};
+use crate::placement::{centring_offset, checked_local};
 
-/// Coordinates beyond this magnitude are rejected: the f32 edge tests take
-/// fourth powers of lengths and would overflow.
-pub const MAX_COORDINATE: f64 = 1e9;
+/// World coordinates beyond this magnitude are rejected: f64 itself spaces
+/// them 1/8 apart there. Geometry far from the origin is kept relative to
+/// the scene's offset (`placement`), so precision does not set this limit.
+pub const MAX_COORDINATE: f64 = 1e15;
 
-/// Largest sphere radius. A sphere's hit distance errs by about 1.4e-8 ×
-/// its radius (f32 rounding of |o − c|² − r²): measured from five units
-/// off the surface, radius 1e6 gives 5.374 for 5.360 (0.26%), 1e8 gives
-/// 5.75, and at 5e8 the camera ray reports the far side.
+/// Geometry, lights and the camera beyond this distance (per axis) from
+/// the scene's offset are rejected: the f32 edge tests take fourth powers
+/// of lengths and would overflow.
+pub const MAX_LOCAL_COORDINATE: f64 = 1e9;
+
+/// Largest sphere radius. The hit distance no longer errs with the radius
+/// (`intersect_sphere` keeps |o − c|² − r² exact to a few ulps of itself:
+/// five units off a sphere of this radius, t is right to 1e-7), but f32
+/// holds points on a larger sphere's surface no closer than 1/16 unit.
 pub const MAX_SPHERE_RADIUS: f64 = 1e6;
 /// Largest image side, in pixels.
 pub const MAX_SIDE: u32 = 65_536;
@@ -197,6 +204,10 @@ pub struct Scene {
     /// What loading read but ignored or could not find (each names its
     /// file); the CLI prints them.
     pub warnings: Vec<String>,
+    /// World position (f64) of the origin of the f32 geometry, lights and
+    /// camera the kernels see: the centre of a scene far from the origin,
+    /// else zero (`placement::centring_offset`).
+    pub offset: DVec3,
 }
 
 /// `--intersect`: the ray/triangle test. See docs/accuracy.md for what each
@@ -302,6 +313,7 @@ impl Scene {
             mesh.normals = None;
         }
         let bounds = mesh_bounds(&mesh);
+        scene.offset = centring_offset(bounds.0, bounds.1);
         scene.add_mesh(path, "the model", mesh, &Transform::IDENTITY, None)?;
         let chosen = match camera {
             Some(name) => Some(
@@ -347,6 +359,7 @@ impl Scene {
             None => frame_camera(&bounds),
         };
         validate_camera(&scene.camera)
+            .and_then(|()| scene.check_camera_placement())
             .map_err(|e| Error::scene(path, format!("its camera: {e}")))?;
         for (i, light) in lights.iter().enumerate() {
             let field = format!("light {i} (KHR_lights_punctual, placed by its node)");
@@ -354,7 +367,12 @@ impl Scene {
                 loading::gltf::GltfLight::Point {
                     position,
                     intensity,
-                } => point_light(&field, position.to_array(), Rgb::PerChannel(*intensity)),
+                } => point_light(
+                    &field,
+                    position.to_array(),
+                    Rgb::PerChannel(*intensity),
+                    scene.offset,
+                ),
                 loading::gltf::GltfLight::Directional {
                     direction,
                     irradiance,
@@ -414,7 +432,12 @@ impl Scene {
             ..loading::Mesh::default()
         };
         let mut scene = Scene::model_bare();
-        scene.camera = frame_camera(&mesh_bounds(&mesh));
+        let bounds = mesh_bounds(&mesh);
+        scene.camera = frame_camera(&bounds);
+        scene.offset = centring_offset(bounds.0, bounds.1);
+        for (row, &p) in mesh.positions.iter().enumerate() {
+            checked_local(&format!("vertices row {row}"), p, scene.offset).map_err(Error::Usage)?;
+        }
         scene.add_mesh(
             Path::new("arrays"),
             "the mesh",
@@ -459,6 +482,10 @@ impl Scene {
             ..Scene::bare()
         };
 
+        // Every mesh is read before any is placed: the offset depends on
+        // the bounds of them all.
+        let mut meshes = Vec::with_capacity(file.mesh.len());
+        let mut bounds = (DVec3::INFINITY, DVec3::NEG_INFINITY);
         for (i, entry) in file.mesh.iter().enumerate() {
             let field = format!("mesh[{i}]");
             let albedo = entry
@@ -469,19 +496,32 @@ impl Scene {
             let transform = mesh_transform(&field, entry).map_err(fail)?;
             let model = base.join(&entry.file);
             let mesh = loading::load_mesh(&model, entry.normals)?;
+            for &p in &mesh.positions {
+                let q = transform.point(p);
+                bounds = (bounds.0.min(q), bounds.1.max(q));
+            }
             let what = format!("{field} ({})", entry.file.display());
+            meshes.push((what, mesh, transform, albedo));
+        }
+        for entry in &file.sphere {
+            let (center, radius) = (DVec3::from(entry.center), entry.radius.abs());
+            bounds = (bounds.0.min(center - radius), bounds.1.max(center + radius));
+        }
+        scene.offset = centring_offset(bounds.0, bounds.1);
+        for (what, mesh, transform, albedo) in meshes {
             scene.add_mesh(path, &what, mesh, &transform, albedo)?;
         }
         for (i, entry) in file.sphere.iter().enumerate() {
             let field = format!("sphere[{i}]");
-            let center = point(&format!("{field}.center"), entry.center).map_err(fail)?;
+            let center =
+                point(&format!("{field}.center"), entry.center, scene.offset).map_err(fail)?;
             if !(entry.radius.is_finite()
                 && entry.radius > 0.0
                 && entry.radius <= MAX_SPHERE_RADIUS)
             {
                 return Err(fail(format!(
                     "{field}.radius = {} must be positive and at most {MAX_SPHERE_RADIUS:e} \
-                     (a larger sphere's f32 hit distances err by more than 1% five units from it; \
+                     (f32 places a larger sphere's surface points more than 1/16 unit apart; \
                      model a ground plane with triangles)",
                     entry.radius
                 )));
@@ -499,7 +539,8 @@ impl Scene {
         }
         for (i, entry) in file.point_light.iter().enumerate() {
             let field = format!("point_light[{i}]");
-            let light = point_light(&field, entry.position, entry.intensity).map_err(fail)?;
+            let light =
+                point_light(&field, entry.position, entry.intensity, scene.offset).map_err(fail)?;
             scene.lights.push(light);
         }
         for (i, entry) in file.directional_light.iter().enumerate() {
@@ -513,6 +554,7 @@ impl Scene {
                 "the scene is empty: it needs a [[mesh]] with faces or a [[sphere]]".into(),
             ));
         }
+        scene.check_camera_placement().map_err(fail)?;
         scene.check_primitive_count(path)?;
         scene.rebuild_bvh();
         Ok(scene)
@@ -555,6 +597,7 @@ impl Scene {
             spp: 1,
             seed: 0,
             warnings: Vec::new(),
+            offset: DVec3::ZERO,
         }
     }
 
@@ -562,8 +605,16 @@ impl Scene {
     /// (`lambert trace --obj`): no lights, and a camera that nothing uses.
     pub fn from_objs(paths: &[PathBuf]) -> Result<Scene> {
         let mut scene = Scene::bare();
-        for path in paths {
-            let mesh = loading::load_mesh(path, NormalMode::Face)?;
+        let meshes = paths
+            .iter()
+            .map(|path| loading::load_mesh(path, NormalMode::Face))
+            .collect::<Result<Vec<_>>>()?;
+        let bounds = meshes.iter().map(mesh_bounds).fold(
+            (DVec3::INFINITY, DVec3::NEG_INFINITY),
+            |(lo, hi), (a, b)| (lo.min(a), hi.max(b)),
+        );
+        scene.offset = centring_offset(bounds.0, bounds.1);
+        for (path, mesh) in paths.iter().zip(meshes) {
             scene.add_mesh(path, "the mesh", mesh, &Transform::IDENTITY, None)?;
         }
         if scene.triangles.is_empty() {
@@ -623,9 +674,11 @@ impl Scene {
             Some(Some(m)) => file_materials[*m as usize],
             _ => fallback,
         };
+        let offset = self.offset;
         let to_f32 = |v: u32| -> Result<[f32; 3]> {
             let p = mesh.positions[v as usize];
             let q = transform.point(p);
+            let local = q - offset;
             if !q.is_finite() || q.abs().max_element() > MAX_COORDINATE {
                 return Err(Error::scene(
                     path,
@@ -637,7 +690,22 @@ impl Scene {
                     ),
                 ));
             }
-            Ok(q.as_vec3().to_array())
+            if local.abs().max_element() > MAX_LOCAL_COORDINATE {
+                return Err(Error::scene(
+                    path,
+                    format!(
+                        "{what}: vertex {} at {} is transformed to {}, {} from the scene's centre {}: \
+                         the scene may span at most {MAX_LOCAL_COORDINATE:e} from its centre on each axis",
+                        v + 1,
+                        vector_text(p),
+                        vector_text(q),
+                        vector_text(local),
+                        vector_text(offset)
+                    ),
+                ));
+            }
+            // Rounded once, from f64, relative to the offset.
+            Ok(local.as_vec3().to_array())
         };
         let smooth = mesh.normals.is_some();
         if smooth && self.normals.len() < self.triangles.len() {
@@ -848,11 +916,16 @@ pub fn default_light(camera: &Camera) -> Light {
         .expect("a valid camera's basis is orthonormal")
 }
 
-/// A point light at `position` of `intensity` (candela); `field` names it
-/// in errors.
-fn point_light(field: &str, position: [f64; 3], intensity: Rgb) -> Result<Light, String> {
+/// A point light at world `position` of `intensity` (candela), kept
+/// relative to the scene's `offset`; `field` names it in errors.
+fn point_light(
+    field: &str,
+    position: [f64; 3],
+    intensity: Rgb,
+    offset: DVec3,
+) -> Result<Light, String> {
     Ok(Light {
-        vector: point(&format!("{field}.position"), position)?,
+        vector: point(&format!("{field}.position"), position, offset)?,
         kind: LIGHT_POINT,
         color: colour(&format!("{field}.intensity"), intensity)?,
         _pad: 0,
@@ -940,9 +1013,12 @@ impl Camera {
     }
 }
 
-/// A position: finite and within MAX_COORDINATE, rounded to f32.
-fn point(field: &str, v: [f64; 3]) -> Result<[f32; 3], String> {
-    Ok(DVec3::from(checked_point(field, v)?).as_vec3().to_array())
+/// A world position: finite and within MAX_COORDINATE, kept relative to
+/// the scene's `offset` (within MAX_LOCAL_COORDINATE of it) and rounded to
+/// f32 from there.
+fn point(field: &str, v: [f64; 3], offset: DVec3) -> Result<[f32; 3], String> {
+    let local = checked_local(field, DVec3::from(checked_point(field, v)?), offset)?;
+    Ok(local.as_vec3().to_array())
 }
 
 fn checked_point(field: &str, v: [f64; 3]) -> Result<[f64; 3], String> {

@@ -333,3 +333,89 @@ intensity = 10.0
         assert_close(centre, [0.05, 0.0, 0.05], 1e-6, what);
     }
 }
+
+/// Issue 28 item 4: at the largest radius a scene may give a sphere
+/// (MAX_SPHERE_RADIUS), a ray five units off its surface, head-on or
+/// slanted, from outside or inside, finds the near root to 1e-5 on both
+/// paths and in the oracle. The reference solves the quadratic in f64 from
+/// the same f32 inputs (its own cancellation is 1e-16 of 1e12, 1e-4 of a
+/// gap of 1e7).
+#[test]
+fn sphere_hits_are_right_at_the_radius_limit() {
+    use lambert::layout::{Hit, Ray, Sphere};
+    let radius = lambert::scene::MAX_SPHERE_RADIUS as f32;
+    let mut rays = Vec::new();
+    let mut spheres = Vec::new();
+    // Centres on and off the f32 integer grid, so that o − c rounds too.
+    for center in [[0.0f32, 0.0, 0.0], [123.37, -2048.61, 777.123]] {
+        spheres.push(Sphere {
+            center,
+            radius,
+            ..Default::default()
+        });
+        let c = glam::Vec3::from(center);
+        for (axis, slant) in [
+            (glam::Vec3::Z, glam::Vec3::ZERO),
+            (
+                glam::Vec3::new(0.6, 0.0, 0.8),
+                glam::Vec3::new(0.0, 0.3, 0.0),
+            ),
+            (
+                glam::Vec3::new(-0.48, 0.6, -0.64),
+                glam::Vec3::new(0.1, 0.0, 0.05),
+            ),
+        ] {
+            for gap in [5.0f32, -5.0, 0.75] {
+                // Outside (gap > 0) the ray looks in; inside it looks out.
+                let origin = c + axis * (radius + gap);
+                let dir = (-axis + slant) * gap.signum();
+                rays.push((
+                    spheres.len() - 1,
+                    Ray {
+                        origin: origin.to_array(),
+                        tmin: 0.0,
+                        dir: dir.to_array(),
+                        tmax: f32::INFINITY,
+                    },
+                ));
+            }
+        }
+    }
+    for (i, sphere) in spheres.iter().enumerate() {
+        let scene = scene_of(vec![], vec![*sphere]);
+        let mine: Vec<Ray> = rays.iter().filter(|r| r.0 == i).map(|r| r.1).collect();
+        let expected: Vec<f64> = mine
+            .iter()
+            .map(|r| {
+                let o = glam::Vec3::from(r.origin).as_dvec3();
+                let d = glam::Vec3::from(r.dir).as_dvec3();
+                let oc = o - glam::Vec3::from(sphere.center).as_dvec3();
+                let r2 = (sphere.radius as f64).powi(2);
+                let (a, b, c) = (d.dot(d), oc.dot(d), oc.dot(oc) - r2);
+                let root = (b * b - a * c).sqrt();
+                // The smaller positive root.
+                let near = (-b - root) / a;
+                if near > 0.0 { near } else { (-b + root) / a }
+            })
+            .collect();
+        let oracle: Vec<f64> = lambert::cpu::trace_rays_f64(&scene, &mine, false)
+            .iter()
+            .map(|h| h.t)
+            .collect();
+        let as_f64 = |hits: Vec<Hit>| hits.iter().map(|h| h.t as f64).collect::<Vec<_>>();
+        for (what, ts) in [
+            ("oracle", oracle),
+            ("CPU", as_f64(trace_cpu(&scene, &mine, false))),
+            ("GPU", as_f64(trace_gpu(&scene, &mine, false))),
+        ] {
+            for ((t, want), ray) in ts.iter().zip(&expected).zip(&mine) {
+                let error = ((t - want) / want).abs();
+                println!("{what}: sphere {i}, {ray:?}: t {t} for {want} ({error:.1e})");
+                assert!(
+                    error <= 1e-5,
+                    "{what}: sphere {i}, {ray:?}: t {t}, expected {want} (relative error {error:.1e})"
+                );
+            }
+        }
+    }
+}

@@ -249,7 +249,7 @@ fn degenerate_inputs_build_and_trace() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(32))]
+    #![proptest_config(proptest_config(32, "bvh"))]
     #[test]
     fn random_scenes_trace_like_brute_force(
         tris in prop::collection::vec(prop::array::uniform9(-5.0f32..5.0), 1..300),

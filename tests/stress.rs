@@ -13,7 +13,7 @@ use lambert::layout::{Hit, NO_HIT, Ray, Triangle};
 use lambert::probe::{Rng, edge_aimed_rays, icosphere};
 use lambert::rays::{Agreement, ulp_distance};
 use lambert::scene::Intersect;
-use proptest::prelude::{ProptestConfig, prop, prop_assert, prop_assert_eq, prop_assume, proptest};
+use proptest::prelude::{prop, prop_assert, prop_assert_eq, prop_assume, proptest};
 
 fn triangle(v: [Vec3; 3]) -> Triangle {
     Triangle {
@@ -590,9 +590,10 @@ fn scaled_and_translated_scenes_render_the_same_image() {
 // ------------------------------------------------------------ against oracle
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(256))]
+    #![proptest_config(proptest_config(256, "stress"))]
     /// Away from edges (barycentric band 1e-4) and grazing angles, every
-    /// variant agrees with the oracle on hit or miss, and t within 1e-5.
+    /// variant agrees with the oracle on hit or miss, and t within 1e-5
+    /// relative plus what the origin's own magnitude allows (see below).
     #[test]
     fn each_variant_agrees_with_the_oracle_away_from_edges(
         v in prop::array::uniform9(-10.0f32..10.0),
@@ -624,7 +625,18 @@ proptest! {
             let h = trace_cpu(&s, &[r], false)[0];
             prop_assert_eq!(h.prim != NO_HIT, expect_hit, "{} disagrees with the oracle", intersect.name());
             if expect_hit {
-                prop_assert!(((h.t as f64 - t_plane) / t_plane).abs() < 1e-5, "{}: t {} vs {}", intersect.name(), h.t, t_plane);
+                // f32 holds a point near the origin only to about ε·|o|, so
+                // each variant's arithmetic (o − v, its products) may move
+                // the hit by a few of those along the plane's normal: t by
+                // that over cos·|d|. A hit close to an origin 20 units away
+                // (t ~ 1e-3) cannot be right to 1e-5 of t alone.
+                let near_origin = 4.0 * f32::EPSILON as f64 * o.length() / (cos * d.length());
+                let error = (h.t as f64 - t_plane).abs();
+                prop_assert!(
+                    error <= 1e-5 * t_plane + near_origin,
+                    "{}: t {} vs {} (error {:e}, allowed {:e} + {:e})",
+                    intersect.name(), h.t, t_plane, error, 1e-5 * t_plane, near_origin
+                );
             }
         }
     }

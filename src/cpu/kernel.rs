@@ -379,7 +379,7 @@ impl<'a> Kernel<'a> {
     /// SIMD kernels' tests compare each against the portable one.
     pub fn new_for(scene: &'a Scene, ymm_boxes: bool) -> Kernel<'a> {
         Kernel {
-            camera: CameraBasis::new(&scene.camera),
+            camera: CameraBasis::new(&scene.local_camera(&scene.camera)),
             scene,
             background: vec3(scene.background),
             ambient: vec3(scene.ambient),
@@ -1073,11 +1073,15 @@ pub fn intersect_triangle_block(ray: &Ray, shear: &Shear, block: &PrimBlock) -> 
 }
 
 /// Nearest root of |o + t·d − c|² = r² inside (tmin, tmax); FAR on a miss.
+/// The stable form of Ray Tracing Gems ch. 7: the discriminant from the
+/// ray's distance to the centre (|f|², not b² − ac), the near root as c/q,
+/// and c itself exactly enough (`sphere_gap`) that a ray five units from a
+/// sphere of radius 1e6 gets t to 1e-5.
 pub fn intersect_sphere(ray: &Ray, center: Vec3, radius: Real) -> Real {
     let oc = ray.origin - center;
     let a = ray.dir.dot(ray.dir);
     let b = oc.dot(ray.dir);
-    let c = oc.dot(oc) - radius * radius;
+    let c = sphere_gap(ray.origin, center, radius);
     let f = oc - (b / a) * ray.dir;
     let discriminant = a * (radius * radius - f.dot(f));
     if discriminant < 0.0 {
@@ -1256,6 +1260,46 @@ pub fn intersect_compressed_node(
         }
     }
     (interior, blocks)
+}
+
+/// |o − c|² − r², to a few units in the last place of the result rather
+/// than of |o − c|²: near a large sphere the two squares agree in most of
+/// their digits (radius 1e6, five units off: 1e12 against a gap of 1e7),
+/// so each difference, square and sum keeps its rounding error
+/// (`two_sum`, `two_square`), and the errors are added back at the end.
+fn sphere_gap(origin: Vec3, center: Vec3, radius: Real) -> Real {
+    let (x, ex) = two_sum(origin.x, -center.x);
+    let (y, ey) = two_sum(origin.y, -center.y);
+    let (z, ez) = two_sum(origin.z, -center.z);
+    let (xx, exx) = two_square(x);
+    let (yy, eyy) = two_square(y);
+    let (zz, ezz) = two_square(z);
+    let (rr, err) = two_square(radius);
+    let (s1, e1) = two_sum(xx, yy);
+    let (s2, e2) = two_sum(s1, zz);
+    let (s3, e3) = two_sum(s2, -rr);
+    // (x + ex)² = x² + 2·x·ex + ex²; ex² is below every other error here.
+    let cross = 2.0 * (x * ex + y * ey + z * ez);
+    s3 + (((e1 + e2) + e3) + (((exx + eyy) + ezz) - err) + cross)
+}
+
+/// a + b as the rounded sum and its rounding error (Knuth's TwoSum: exact
+/// without branches, whichever is larger). The shader's takes the sum
+/// through `opaque_one` (1), lest a GPU compiler fold the error to 0.
+fn two_sum(a: Real, b: Real) -> (Real, Real) {
+    let s = a + b;
+    let bb = s - a;
+    (s, (a - (s - bb)) + (b - bb))
+}
+
+/// a² as the rounded square and its rounding error (Dekker): each product
+/// of halves is exact, so a fused multiply-add, which WGSL may or may not
+/// use, gives the same bits.
+fn two_square(a: Real) -> (Real, Real) {
+    let hi = high_half(a);
+    let lo = a - hi;
+    let p = a * a;
+    (p, ((hi * hi - p) + 2.0 * hi * lo) + lo * lo)
 }
 
 fn sign_nonzero(x: Real) -> Real {

@@ -203,6 +203,15 @@ pub mod f32 {
         intersect_boxes(ray, slabs, node)
     }
 
+    /// `x` with the low 12 of its 23 stored mantissa bits cleared: a 12-bit
+    /// high half whose square and product with the rest (`x − high_half`,
+    /// 12 bits) are exact in f32 (Dekker's split, by mask rather than by
+    /// the multiply of Veltkamp's, which a fused multiply-add would spoil).
+    #[inline(always)]
+    fn high_half(x: Real) -> Real {
+        Real::from_bits(x.to_bits() & 0xffff_f000)
+    }
+
     include!("kernel.rs");
 }
 
@@ -238,6 +247,13 @@ pub mod f64 {
     /// None needed: unsafe only as its single-precision twin is.
     pub unsafe fn intersect_boxes_ymm(ray: &Ray, slabs: &Slabs, node: &BvhNode) -> BoxHits {
         intersect_boxes(ray, slabs, node)
+    }
+
+    /// `x` with the low 26 of its 52 stored mantissa bits cleared: the
+    /// oracle's twin of the f32 split (27 and 26 bits, each product exact).
+    #[inline(always)]
+    fn high_half(x: Real) -> Real {
+        Real::from_bits(x.to_bits() & !((1u64 << 26) - 1))
     }
 
     include!("kernel.rs");
@@ -358,9 +374,14 @@ pub fn trace_rays_gpu_twin(
     kernel.intersect = intersect;
     kernel.compressed = Some(&nodes);
     kernel.stack_entries = twin_stack_entries(scene);
-    rays.par_iter()
+    let local = scene.placement().localize(rays);
+    let mut hits: Vec<layout::Hit> = local
+        .rays
+        .par_iter()
         .map(|ray| query_hit(kernel.trace(f32::Ray::from_query(ray), any_hit)))
-        .collect()
+        .collect();
+    local.to_world(&mut hits);
+    hits
 }
 
 /// The twin's short stack: a WebGPU device's (the GPU's own where its
@@ -575,11 +596,33 @@ pub struct TracedChunk<'a> {
 /// Traces `rays` in parallel chunks, handing each chunk's hits (with the
 /// index of its first ray) to `each` while they are hot in cache: the
 /// Python binding fills its numpy columns this way, with no hit buffer
-/// between.
+/// between. The rays are in world coordinates (as in a ray file): each is
+/// moved into the scene's frame (`Placement::local_ray`), and its hit back.
 pub fn trace_rays_each(
     scene: &Scene,
     rays: QueryRays,
     options: QueryOptions,
+    each: &(dyn Fn(&TracedChunk) + Sync),
+) {
+    trace_rays_each_in(scene, rays, options, true, each)
+}
+
+/// `trace_rays_each` for rays already in the scene's frame (from
+/// `Placement::local_ray`, say, for rays given in f64), hits in that frame.
+pub fn trace_local_rays_each(
+    scene: &Scene,
+    rays: QueryRays,
+    options: QueryOptions,
+    each: &(dyn Fn(&TracedChunk) + Sync),
+) {
+    trace_rays_each_in(scene, rays, options, false, each)
+}
+
+fn trace_rays_each_in(
+    scene: &Scene,
+    rays: QueryRays,
+    options: QueryOptions,
+    world: bool,
     // Not generic: a generic would be compiled in the caller's crate, with
     // its codegen settings, and the kernel ran up to 40% slower there.
     each: &(dyn Fn(&TracedChunk) + Sync),
@@ -595,6 +638,7 @@ pub fn trace_rays_each(
     check_runs(cpu_kernel);
     let mut kernel = f32::Kernel::new_for(scene, cpu_kernel.ymm_boxes());
     kernel.intersect = intersect;
+    let placement = scene.placement();
     let large = scene.bvh.device_bytes() > LARGE_BVH_BYTES;
     let vector_sort = cpu_kernel.vector_sort();
     // Rays closer than this count as leaving from nearby points.
@@ -619,6 +663,11 @@ pub fn trace_rays_each(
                     unsafe { &*(&own[..len] as *const [_] as *const [layout::Ray]) }
                 }
             };
+            let mut local = [layout::Ray::default(); CHUNK];
+            let mut shifts = [0.0; CHUNK];
+            let moved =
+                world && placement.localize_into(chunk_rays, &mut local[..len], &mut shifts[..len]);
+            let chunk_rays = if moved { &local[..len] } else { chunk_rays };
             let mut buffer = [MaybeUninit::<layout::Hit>::uninit(); CHUNK];
             let hits = &mut buffer[..len];
             let mut normal_buffer = [MaybeUninit::<[f32; 3]>::uninit(); CHUNK];
@@ -653,10 +702,15 @@ pub fn trace_rays_each(
             // SAFETY: trace_chunk wrote every element of both.
             let (hits, normals) = unsafe {
                 (
-                    &*(hits as *const [_] as *const [layout::Hit]),
+                    &mut *(hits as *mut [_] as *mut [layout::Hit]),
                     &*(normal_out as *const [_] as *const [[f32; 3]]),
                 )
             };
+            if moved {
+                for (hit, &shift) in hits.iter_mut().zip(&shifts[..len]) {
+                    *hit = crate::placement::world_hit(*hit, shift);
+                }
+            }
             each(&TracedChunk {
                 start,
                 hits,
@@ -971,26 +1025,48 @@ fn query_hit(hit: f32::Hit) -> layout::Hit {
 }
 
 /// The same query in double precision: the oracle. Misses have t = +inf.
+/// The rays are in world coordinates.
 pub fn trace_rays_f64(scene: &Scene, rays: &[layout::Ray], any_hit: bool) -> Vec<f64::Hit> {
     let kernel = f64::Kernel::new(scene);
+    let placement = scene.placement();
+    let miss = f64::Hit {
+        t: ::core::primitive::f64::INFINITY,
+        prim: NO_HIT,
+        u: 0.0,
+        v: 0.0,
+    };
     rays.par_iter()
         .with_min_len(1024)
         .map(|ray| {
+            // In the scene's frame and near its geometry, as the f32 paths
+            // trace it, but in f64 throughout (`Placement::place`).
+            let ray = f64::Ray::from_query(ray);
+            let Some((origin, tmin, tmax, shift)) =
+                placement.place(ray.origin, ray.dir, ray.tmin, ray.tmax)
+            else {
+                return miss;
+            };
+            let local = f64::Ray {
+                origin,
+                tmin,
+                tmax,
+                ..ray
+            };
             // SAFETY: the active kernel runs on this CPU.
             let hit = unsafe {
                 with_simd(
                     CpuKernel::active(),
                     #[inline(always)]
-                    || kernel.trace(f64::Ray::from_query(ray), any_hit),
+                    || kernel.trace(local, any_hit),
                 )
             };
             if hit.prim == NO_HIT {
+                miss
+            } else {
                 f64::Hit {
-                    t: ::core::primitive::f64::INFINITY,
+                    t: hit.t + shift,
                     ..hit
                 }
-            } else {
-                hit
             }
         })
         .collect()

@@ -113,3 +113,47 @@ pub fn previous_or_whole(success: bool, bytes: &[u8], whole: usize, delay_ms: u6
     assert_eq!(bytes.len(), whole, "after {delay_ms} ms: a partial output");
     false
 }
+
+/// The seed CI's property tests draw their cases from.
+pub const PROPTEST_SEED: u64 = 0x1a3b_e27;
+
+/// The configuration of every property test (docs/reliability.md): by
+/// default `cases` cases drawn from PROPTEST_SEED, so that every run (CI's
+/// included) tries the same cases; proptest's PROPTEST_CASES and
+/// PROPTEST_RNG_SEED override the count and the seed. On demand,
+/// LAMBERT_PROPTEST_CASES=N runs N cases from a random seed. A failure is
+/// kept in tests/proptest-regressions/`name`.txt, which is committed and
+/// replayed first on every run after.
+pub fn proptest_config(cases: u32, name: &str) -> proptest::test_runner::Config {
+    use proptest::test_runner::{Config, FileFailurePersistence, RngAlgorithm, RngSeed};
+    // Reads proptest's own variables.
+    let base = Config::default();
+    let random = std::env::var("LAMBERT_PROPTEST_CASES").ok().map(|v| {
+        v.parse::<u32>()
+            .unwrap_or_else(|_| panic!("LAMBERT_PROPTEST_CASES = {v:?} is not a count"))
+    });
+    let cases = match random {
+        Some(n) => n,
+        None if std::env::var_os("PROPTEST_CASES").is_some() => base.cases,
+        None => cases,
+    };
+    let rng_seed = match (base.rng_seed, random) {
+        (RngSeed::Fixed(seed), _) => RngSeed::Fixed(seed),
+        (RngSeed::Random, Some(_)) => RngSeed::Random,
+        (RngSeed::Random, None) => RngSeed::Fixed(PROPTEST_SEED),
+    };
+    let path = format!(
+        "{}/tests/proptest-regressions/{name}.txt",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    Config {
+        cases,
+        rng_seed,
+        rng_algorithm: RngAlgorithm::ChaCha,
+        // proptest wants the path for the life of the process.
+        failure_persistence: Some(Box::new(FileFailurePersistence::Direct(Box::leak(
+            path.into_boxed_str(),
+        )))),
+        ..base
+    }
+}

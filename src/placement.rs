@@ -1,0 +1,329 @@
+//! Geometry far from the origin (docs/accuracy.md, "Far from the origin").
+//! A scene keeps its geometry in f32 relative to its offset, an f64 point
+//! (world = offset + local), and each ray's origin is brought near the
+//! geometry in f64 before it becomes f32: the kernels then see small
+//! numbers wherever the scene and its rays are.
+
+use std::borrow::Cow;
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use crate::layout::{Hit, NO_HIT, Ray};
+use crate::scene::{Camera, MAX_LOCAL_COORDINATE, Scene, vector_text};
+
+/// A scene is centred on its bounds only when their centre is more than
+/// this many times their diagonal from the origin: nearer, f32 already
+/// holds the geometry to 1e-6 of its size, and the scene's numbers (so its
+/// images, bit for bit) stay as they were.
+pub const CENTRE_RATIO: f64 = 8.0;
+
+/// A ray starting farther from the scene's local origin than this many
+/// times the geometry's radius starts, in f32, where it enters the sphere
+/// of twice that radius: f32 holds an origin to about 6e-8 of its
+/// distance, which is then at most a few radii.
+pub const FAR_RATIO: f64 = 8.0;
+
+/// How finely an f32 ray origin must be held, relative to the larger of
+/// the scene's size and the ray's distance from it, for a ray query's hits
+/// to be as precise as its geometry: coarser, `ray_problem` warns.
+pub const ORIGIN_PRECISION: f64 = 1e-5;
+
+/// The offset a geometry with world bounds `lo`..`hi` is kept relative to:
+/// the centre of the bounds where it is far (CENTRE_RATIO), else zero.
+pub fn centring_offset(lo: DVec3, hi: DVec3) -> DVec3 {
+    let centre = 0.5 * (lo + hi);
+    if centre.is_finite() && centre.length() > CENTRE_RATIO * (hi - lo).length() {
+        centre
+    } else {
+        DVec3::ZERO
+    }
+}
+
+/// Where a scene's geometry sits: what turns world rays into the scene's
+/// local f32 rays, and local hits back.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Placement {
+    /// World position of the scene's local origin.
+    pub offset: DVec3,
+    /// Radius, about the local origin, of a sphere holding all geometry.
+    pub radius: f64,
+}
+
+impl Scene {
+    /// `camera` relative to the scene's offset (in f64): what the kernels'
+    /// camera basis is built from.
+    pub fn local_camera(&self, camera: &Camera) -> Camera {
+        let local = |p: [f64; 3]| (DVec3::from(p) - self.offset).to_array();
+        Camera {
+            eye: local(camera.eye),
+            look_at: local(camera.look_at),
+            ..camera.clone()
+        }
+    }
+
+    /// The camera's eye and look_at within MAX_LOCAL_COORDINATE of the
+    /// offset, as the geometry is.
+    pub(crate) fn check_camera_placement(&self) -> Result<(), String> {
+        for (name, world) in [("eye", self.camera.eye), ("look_at", self.camera.look_at)] {
+            checked_local(&format!("camera.{name}"), DVec3::from(world), self.offset)?;
+        }
+        Ok(())
+    }
+
+    /// Its offset, and the radius of its geometry about it (from the
+    /// BVH's bounds).
+    pub fn placement(&self) -> Placement {
+        let radius = self.bvh.bounds().map_or(0.0, |b| {
+            b.min.as_dvec3().abs().max(b.max.as_dvec3().abs()).length()
+        });
+        Placement {
+            offset: self.offset,
+            radius,
+        }
+    }
+}
+
+/// A ray query's rays in the scene's local frame, and how far along its
+/// ray each origin was moved (`Placement::localize`).
+pub struct LocalRays<'a> {
+    pub rays: Cow<'a, [Ray]>,
+    /// Per ray; empty where no origin moved.
+    pub shifts: Vec<f64>,
+}
+
+impl LocalRays<'_> {
+    /// The hits of `rays` on the rays as given: each t plus its shift.
+    pub fn to_world(&self, hits: &mut [Hit]) {
+        if !self.shifts.is_empty() {
+            hits.par_iter_mut()
+                .zip(&self.shifts)
+                .for_each(|(hit, &shift)| *hit = world_hit(*hit, shift));
+        }
+    }
+}
+
+/// A local hit on a ray whose origin was moved `shift` along it, on the
+/// ray as given: t + shift, in f64 then rounded once. A t beyond f32's
+/// range is a miss (`Placement::ray_problem` warns of it beforehand).
+pub fn world_hit(hit: Hit, shift: f64) -> Hit {
+    if hit.prim == NO_HIT || shift == 0.0 {
+        return hit;
+    }
+    let t = (hit.t as f64 + shift) as f32;
+    if t.is_finite() {
+        Hit { t, ..hit }
+    } else {
+        Hit::MISS
+    }
+}
+
+impl Placement {
+    /// The ray from world `origin` along `dir` over (`tmin`, `tmax`), all in
+    /// f64, as the local f32 ray the kernels trace, and the distance
+    /// (in units of `dir`) its origin was moved along it: a local hit at t
+    /// is at t + shift on the ray as given (`world_hit`). A ray that cannot
+    /// reach the geometry comes back as one that hits nothing (tmin = tmax
+    /// = 0). See `place`.
+    pub fn local_ray(&self, origin: DVec3, dir: DVec3, tmin: f64, tmax: f64) -> (Ray, f64) {
+        match self.place(origin, dir, tmin, tmax) {
+            Some((o, tmin, tmax, shift)) => (f32_ray(o, dir, tmin, tmax), shift),
+            None => (f32_ray(DVec3::ZERO, dir, 0.0, 0.0), 0.0),
+        }
+    }
+
+    /// `local_ray` in f64 (the oracle's): the local origin, tmin, tmax and
+    /// the shift; None where the ray cannot reach the geometry. An origin
+    /// within FAR_RATIO radii stays where it is (shift 0); one beyond moves
+    /// to where the ray enters the sphere of twice the radius, which every
+    /// hit lies beyond.
+    pub fn place(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        tmin: f64,
+        tmax: f64,
+    ) -> Option<(DVec3, f64, f64, f64)> {
+        let o = origin - self.offset;
+        let reach = FAR_RATIO * self.radius;
+        if o.length_squared() <= reach * reach {
+            return Some((o, tmin, tmax, 0.0));
+        }
+        // The near root of |o + t·d|² = r² in the stable form (as
+        // `intersect_sphere`): o is outside, so it is c/q with q > 0 where
+        // the ray looks towards the sphere (b < 0).
+        let r = 2.0 * self.radius;
+        let (a, b) = (dir.length_squared(), o.dot(dir));
+        let off_axis = o - (b / a) * dir;
+        let discriminant = a * (r * r - off_axis.length_squared());
+        if discriminant < 0.0 || b >= 0.0 {
+            return None;
+        }
+        let entry = (o.length_squared() - r * r) / (-b + discriminant.sqrt());
+        (entry < tmax).then(|| {
+            (
+                o + entry * dir,
+                (tmin - entry).max(0.0),
+                tmax - entry,
+                entry,
+            )
+        })
+    }
+
+    /// `local_ray` for every ray of a query given in world f32 (a ray
+    /// file): the rays themselves, unchanged, where the scene is not
+    /// centred and none starts far.
+    pub fn localize<'a>(&self, rays: &'a [Ray]) -> LocalRays<'a> {
+        if self.offset == DVec3::ZERO && !rays.par_iter().any(|r| self.is_far(r)) {
+            return LocalRays {
+                rays: Cow::Borrowed(rays),
+                shifts: Vec::new(),
+            };
+        }
+        let (local, shifts): (Vec<Ray>, Vec<f64>) = rays
+            .par_iter()
+            .map(|r| {
+                let (o, d) = (world(r.origin), world(r.dir));
+                self.local_ray(o, d, r.tmin as f64, r.tmax as f64)
+            })
+            .unzip();
+        LocalRays {
+            rays: Cow::Owned(local),
+            shifts,
+        }
+    }
+
+    /// `localize` for a chunk of rays, into `local` and `shifts` (each as
+    /// long as `rays`), on this thread; false, with nothing written, where
+    /// every ray stays as it is.
+    pub fn localize_into(&self, rays: &[Ray], local: &mut [Ray], shifts: &mut [f64]) -> bool {
+        if self.offset == DVec3::ZERO && !rays.iter().any(|r| self.is_far(r)) {
+            return false;
+        }
+        for ((r, l), s) in rays.iter().zip(local).zip(shifts) {
+            (*l, *s) = self.local_ray(world(r.origin), world(r.dir), r.tmin as f64, r.tmax as f64);
+        }
+        true
+    }
+
+    /// Whether a world f32 ray's origin (the scene not being centred) is
+    /// beyond FAR_RATIO radii.
+    fn is_far(&self, r: &Ray) -> bool {
+        let reach = FAR_RATIO * self.radius;
+        let [x, y, z] = r.origin.map(f64::from);
+        x * x + y * y + z * z > reach * reach
+    }
+
+    /// What limits the precision of a query ray from `origin` along `dir`
+    /// (world, f64), if anything: an origin given in f32 (`in_f32`) more
+    /// coarsely than ORIGIN_PRECISION of the larger of the scene's size
+    /// and the ray's distance from it (a sensor a few units from a mesh
+    /// placed at 1e8, where f32 spaces values 8 apart), or hits beyond
+    /// f32's largest t (reported as misses).
+    pub fn ray_problem(&self, origin: DVec3, dir: DVec3, in_f32: bool) -> Option<RayProblem> {
+        let local = origin - self.offset;
+        if in_f32 {
+            let magnitude = origin.abs().max_element() as f32;
+            let spacing = (magnitude.next_up() - magnitude) as f64;
+            let scale = (2.0 * self.radius).max(local.length());
+            if spacing > ORIGIN_PRECISION * scale {
+                return Some(RayProblem::CoarseOrigin(format!(
+                    "its origin {} is given in f32, which spaces values {spacing} apart \
+                     there, more than {ORIGIN_PRECISION:e} of the scene's size or distance \
+                     ({scale:.3}): its hits are no more precise than its origin (give \
+                     origins in f64, as the Python package takes them)",
+                    vector_text(origin)
+                )));
+            }
+        }
+        let last = (local.length() + 2.0 * self.radius) / dir.length();
+        if last > f32::MAX as f64 && self.radius > 0.0 {
+            return Some(RayProblem::BeyondT(format!(
+                "the scene lies up to t = {last:.3e} along it, beyond f32's largest t \
+                 ({:e}): a hit there is reported as a miss",
+                f32::MAX
+            )));
+        }
+        None
+    }
+
+    /// `ray_problem` over a query given in world f32: one warning per kind
+    /// of problem, naming the first ray with it and how many have it.
+    pub fn ray_warnings(&self, rays: &[Ray]) -> Vec<String> {
+        let problems: Vec<(usize, RayProblem)> = rays
+            .par_iter()
+            .enumerate()
+            .filter_map(|(i, r)| {
+                self.ray_problem(world(r.origin), world(r.dir), true)
+                    .map(|p| (i, p))
+            })
+            .collect();
+        let mut first: Vec<(usize, RayProblem, usize)> = Vec::new();
+        for (i, problem) in problems {
+            let kind = std::mem::discriminant(&problem);
+            match first
+                .iter_mut()
+                .find(|f| std::mem::discriminant(&f.1) == kind)
+            {
+                Some(f) => f.2 += 1,
+                None => first.push((i, problem, 1)),
+            }
+        }
+        first
+            .into_iter()
+            .map(|(i, problem, count)| match count {
+                1 => format!("ray {i}: {}", problem.text()),
+                _ => format!(
+                    "ray {i} (and {} more like it): {}",
+                    count - 1,
+                    problem.text()
+                ),
+            })
+            .collect()
+    }
+}
+
+/// What `Placement::ray_problem` found, and its message.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RayProblem {
+    /// The f32 origin is coarser than the geometry's precision.
+    CoarseOrigin(String),
+    /// Hits would lie beyond f32's largest t.
+    BeyondT(String),
+}
+
+impl RayProblem {
+    pub fn text(&self) -> &str {
+        match self {
+            RayProblem::CoarseOrigin(text) | RayProblem::BeyondT(text) => text,
+        }
+    }
+}
+
+fn world(v: [f32; 3]) -> DVec3 {
+    DVec3::from(v.map(f64::from))
+}
+
+fn f32_ray(origin: DVec3, dir: DVec3, tmin: f64, tmax: f64) -> Ray {
+    Ray {
+        origin: origin.as_vec3().to_array(),
+        tmin: tmin as f32,
+        dir: dir.as_vec3().to_array(),
+        tmax: tmax as f32,
+    }
+}
+
+/// `world` − `offset`, unless beyond MAX_LOCAL_COORDINATE on an axis.
+pub(crate) fn checked_local(field: &str, world: DVec3, offset: DVec3) -> Result<DVec3, String> {
+    let local = world - offset;
+    if local.abs().max_element() > MAX_LOCAL_COORDINATE {
+        return Err(format!(
+            "{field} = {} is {} from the scene's centre {}: at most \
+             {MAX_LOCAL_COORDINATE:e} on each axis is supported",
+            vector_text(world),
+            vector_text(local),
+            vector_text(offset)
+        ));
+    }
+    Ok(local)
+}
