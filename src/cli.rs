@@ -28,6 +28,9 @@ use crate::scene::{Accel, Camera, Intersect, MAX_SPP, Scene, validate_spp};
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Print nothing but errors and results (no notes, warnings or progress).
+    #[arg(short, long, global = true)]
+    quiet: bool,
 }
 
 #[derive(Subcommand)]
@@ -163,6 +166,44 @@ impl SceneOptions {
     }
 }
 
+/// `SceneOptions`, and the light of a render.
+#[derive(Args, Clone)]
+struct RenderOptions {
+    /// Ambient light, R,G,B or one value for grey [default: a scene's
+    /// render.ambient; a model file's 0.1 when it has no lights of its
+    /// own, else 0].
+    #[arg(long, value_name = "R[,G,B]", value_parser = ambient)]
+    ambient: Option<[f32; 3]>,
+    #[command(flatten)]
+    scene: SceneOptions,
+}
+
+impl RenderOptions {
+    fn load(&self, path: &Path) -> Result<Scene> {
+        let mut scene = self.scene.load(path)?;
+        if let Some(ambient) = self.ambient {
+            scene.ambient = ambient;
+        }
+        Ok(scene)
+    }
+}
+
+/// `R,G,B` or one value for all three, each a finite number ≥ 0.
+fn ambient(text: &str) -> std::result::Result<[f32; 3], String> {
+    let values = text
+        .split(',')
+        .map(non_negative)
+        .collect::<std::result::Result<Vec<f32>, String>>()?;
+    match values[..] {
+        [v] => Ok([v; 3]),
+        [r, g, b] => Ok([r, g, b]),
+        _ => Err(format!(
+            "'{text}' is not R,G,B or one value (got {} values)",
+            values.len()
+        )),
+    }
+}
+
 /// The f64 oracle's version of `scene`: the watertight test, in double
 /// precision, is the reference every variant and device is measured against.
 pub fn oracle_scene(scene: &Scene) -> Scene {
@@ -180,7 +221,7 @@ struct RenderArgs {
     #[arg(long, value_enum, default_value_t)]
     device: DeviceChoice,
     #[command(flatten)]
-    options: SceneOptions,
+    options: RenderOptions,
     #[command(flatten)]
     adapter: AdapterArgs,
     /// Render N frames orbiting camera.look_at about camera.up; the scene
@@ -210,9 +251,6 @@ struct RenderArgs {
     /// Blender count), named as in a full run.
     #[arg(long, value_name = "A-B", requires = "turntable")]
     frames: Option<String>,
-    /// Print nothing but errors.
-    #[arg(short, long)]
-    quiet: bool,
 }
 
 /// `--frames A-B` (or `A`) of `frames`: inclusive, within 0..frames.
@@ -234,7 +272,7 @@ fn frame_range(text: &str, frames: u32) -> Result<std::ops::RangeInclusive<u32>>
 }
 
 /// `lambert render --tile I/N`: renders the part and writes it.
-fn render_part(args: &RenderArgs, tile_text: &str) -> Result<ExitCode> {
+fn render_part(args: &RenderArgs, tile_text: &str, quiet: bool) -> Result<ExitCode> {
     let tile = crate::parts::Tile::parse(tile_text)?;
     let refuse = |what: &str, why: &str| Err(Error::Usage(format!("--tile with {what}: {why}")));
     if args.target_error.is_some() {
@@ -262,12 +300,12 @@ fn render_part(args: &RenderArgs, tile_text: &str) -> Result<ExitCode> {
             args.output.display()
         )));
     }
-    check_output_path(&args.output)?;
+    check_output_path(&args.output, &[&args.scene])?;
     let scene = args.options.load(&args.scene)?;
-    print_warnings(&scene, args.quiet);
+    print_warnings(&scene, quiet);
     let rows = tile.rows(scene.camera.height)?;
     let (mut renderer, note) = Renderer::open(&scene, args.device, &args.adapter.request())?;
-    if let Some(note) = note.filter(|_| !args.quiet) {
+    if let Some(note) = note.filter(|_| !quiet) {
         eprintln!("{note}");
     }
     let device = match renderer {
@@ -281,7 +319,7 @@ fn render_part(args: &RenderArgs, tile_text: &str) -> Result<ExitCode> {
         scene.release_geometry();
     }
     let start = Instant::now();
-    let (rendered, _) = renderer.render_rows(&scene, rows.clone(), !args.quiet)?;
+    let (rendered, _) = renderer.render_rows(&scene, rows.clone(), !quiet)?;
     crate::parts::write_part(
         &args.output,
         &rendered.image,
@@ -290,7 +328,7 @@ fn render_part(args: &RenderArgs, tile_text: &str) -> Result<ExitCode> {
         rows.clone(),
         &hash,
     )?;
-    if !args.quiet {
+    if !quiet {
         eprintln!(
             "wrote {}: part {}/{} (rows {} to {} of {}×{}) on {} in {}",
             args.output.display(),
@@ -307,51 +345,64 @@ fn render_part(args: &RenderArgs, tile_text: &str) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn merge(args: &MergeArgs) -> Result<ExitCode> {
-    check_output_path(&args.output)?;
+fn merge(args: &MergeArgs, quiet: bool) -> Result<ExitCode> {
+    let parts: Vec<&Path> = args.parts.iter().map(PathBuf::as_path).collect();
+    check_output_path(&args.output, &parts)?;
     let image = crate::parts::merge(&args.parts, &args.output)?;
-    eprintln!(
-        "wrote {} ({}×{}, from {} parts)",
-        args.output.display(),
-        image.width,
-        image.height,
-        args.parts.len()
-    );
+    if !quiet {
+        eprintln!(
+            "wrote {} ({}×{}, from {} parts)",
+            args.output.display(),
+            image.width,
+            image.height,
+            args.parts.len()
+        );
+    }
     Ok(ExitCode::SUCCESS)
 }
 
-/// `frames/frame_{:04}.png` with frame 7 → `frames/frame_0007.png`.
+/// `frames/frame_{:04}.png` with frame 7 → `frames/frame_0007.png`; every
+/// placeholder is filled (`{}/f_{}.png` → `7/f_7.png`).
 pub fn frame_path(pattern: &Path, frame: u32) -> Result<PathBuf> {
     let text = pattern.to_string_lossy();
-    let open = text.find('{');
-    let close = open.and_then(|o| text[o..].find('}').map(|c| o + c));
-    let (Some(open), Some(close)) = (open, close) else {
+    let mut filled = String::new();
+    let mut rest = &text[..];
+    let mut placeholders = 0;
+    while let Some((open, close)) = rest
+        .find('{')
+        .and_then(|o| rest[o..].find('}').map(|c| (o, o + c)))
+    {
+        let width = frame_number_width(pattern, &rest[open + 1..close])?;
+        filled.push_str(&format!("{}{frame:0width$}", &rest[..open]));
+        rest = &rest[close + 1..];
+        placeholders += 1;
+    }
+    if placeholders == 0 {
         return Err(Error::Usage(format!(
             "{}: --turntable needs a frame number in the output name, as {{}} or {{:04}}",
             pattern.display()
         )));
-    };
-    let spec = &text[open + 1..close];
-    let width = match spec.strip_prefix(":0").or_else(|| spec.strip_prefix(':')) {
-        None if spec.is_empty() => 0,
+    }
+    filled.push_str(rest);
+    Ok(PathBuf::from(filled))
+}
+
+/// The digits of a frame number placeholder `{spec}`: `{}` none (as
+/// many as it takes), `{:04}` or `{:4}` four, zero-padded.
+fn frame_number_width(pattern: &Path, spec: &str) -> Result<usize> {
+    match spec.strip_prefix(":0").or_else(|| spec.strip_prefix(':')) {
+        None if spec.is_empty() => Ok(0),
         Some(w) => w.parse::<usize>().ok().filter(|&w| w <= 16).ok_or_else(|| {
             Error::Usage(format!(
                 "{}: cannot read the frame number format {{{spec}}}; use {{}} or {{:0N}} with N at most 16",
                 pattern.display()
             ))
-        })?,
-        None => {
-            return Err(Error::Usage(format!(
-                "{}: cannot read the frame number format {{{spec}}}; use {{}} or {{:04}}",
-                pattern.display()
-            )));
-        }
-    };
-    Ok(PathBuf::from(format!(
-        "{}{frame:0width$}{}",
-        &text[..open],
-        &text[close + 1..]
-    )))
+        }),
+        None => Err(Error::Usage(format!(
+            "{}: cannot read the frame number format {{{spec}}}; use {{}} or {{:04}}",
+            pattern.display()
+        ))),
+    }
 }
 
 /// The camera of frame `frame` of `frames`, orbiting look_at about up.
@@ -382,7 +433,7 @@ struct DiffArgs {
     scene: PathBuf,
     #[arg(long, value_enum, default_value = "gpu-cpu")]
     compare: Comparison,
-    /// Write a picture of the differences (PNG).
+    /// Write a picture of the differences: .png, .exr or .pfm.
     #[arg(long)]
     heatmap: Option<PathBuf>,
     /// Print the statistics as JSON.
@@ -400,7 +451,7 @@ struct DiffArgs {
     #[arg(long, default_value_t = Tolerance::default().max_prim_mismatch_fraction, value_parser = fraction)]
     max_prim_mismatch: f64,
     #[command(flatten)]
-    options: SceneOptions,
+    options: RenderOptions,
     #[command(flatten)]
     adapter: AdapterArgs,
 }
@@ -440,14 +491,16 @@ struct TraceArgs {
     json: bool,
     #[command(flatten)]
     adapter: AdapterArgs,
-    #[arg(short, long)]
-    quiet: bool,
 }
 
 #[derive(Args)]
 struct BenchArgs {
-    /// Scene files or OBJ models [default: the ladder in ../shared/models
-    /// when present, else the bundled scenes].
+    /// Scene files or OBJ models [default: the OBJ models in
+    /// ../shared/models when present, else the bundled bunny_lowres and
+    /// dragon_res4 (assets/scenes/meshes); with --time-vs-error, the
+    /// bundled scenes edge_cases, spheres and triangle_oblique. The
+    /// bundled files are looked for in the working folder, then the
+    /// executable's and those above it (a checkout's target/release)].
     inputs: Vec<PathBuf>,
     /// Measure run time against error over spp, intersection test, device
     /// and precision, and the skips (BVH, specialisation).
@@ -511,20 +564,22 @@ fn fraction(text: &str) -> std::result::Result<f64, String> {
 pub const DIFF_ERROR: u8 = 2;
 
 pub fn run() -> Result<ExitCode> {
-    match Cli::parse().command {
-        Command::Render(args) => render(&args),
-        Command::Diff(args) => diff(&args).or_else(|e| {
+    let cli = Cli::parse();
+    let quiet = cli.quiet;
+    match cli.command {
+        Command::Render(args) => render(&args, quiet),
+        Command::Diff(args) => diff(&args, quiet).or_else(|e| {
             eprintln!("error: {e}");
             Ok(ExitCode::from(DIFF_ERROR))
         }),
-        Command::Trace(args) => trace(&args),
-        Command::CameraRays(args) => camera_rays(&args),
+        Command::Trace(args) => trace(&args, quiet),
+        Command::CameraRays(args) => camera_rays(&args, quiet),
         Command::Info(args) => match &args.model {
             Some(model) => model_info(model, args.camera.as_deref()),
             None => info(&args.adapter),
         },
-        Command::Bench(args) => bench(&args),
-        Command::Merge(args) => merge(&args),
+        Command::Bench(args) => bench(&args, quiet),
+        Command::Merge(args) => merge(&args, quiet),
     }
 }
 
@@ -597,7 +652,7 @@ fn seconds(d: Duration) -> String {
     format!("{:.3} s", d.as_secs_f64())
 }
 
-fn render(args: &RenderArgs) -> Result<ExitCode> {
+fn render(args: &RenderArgs, quiet: bool) -> Result<ExitCode> {
     if let Some(target) = args.target_error {
         if !(target.is_finite() && target > 0.0) {
             return Err(Error::Usage(format!(
@@ -629,25 +684,25 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
         }
     }
     if let Some(tile) = &args.tile {
-        return render_part(args, tile);
+        return render_part(args, tile, quiet);
     }
     if let Some(frames) = args.turntable {
-        return turntable(args, frames);
+        return turntable(args, frames, quiet);
     }
     // Fail on a bad output name before spending time on the render.
-    check_output_path(&args.output)?;
+    check_output_path(&args.output, &[&args.scene])?;
     let start = Instant::now();
     let scene = args.options.load(&args.scene)?;
     let load = start.elapsed();
-    print_warnings(&scene, args.quiet);
+    print_warnings(&scene, quiet);
 
     let start = Instant::now();
     let (mut renderer, note) = Renderer::open(&scene, args.device, &args.adapter.request())?;
     let upload = start.elapsed();
-    if let Some(note) = note.filter(|_| !args.quiet) {
+    if let Some(note) = note.filter(|_| !quiet) {
         eprintln!("{note}");
     }
-    if !args.quiet {
+    if !quiet {
         eprintln!("rendering on {}", renderer.describe());
     }
     // What the report at the end says of the geometry, before a GPU
@@ -667,13 +722,13 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
         scene.release_geometry();
     }
     if let Some(budget) = args.time_budget {
-        scene.spp = spp_for_budget(&mut renderer, &mut scene, budget, args.quiet)?;
+        scene.spp = spp_for_budget(&mut renderer, &mut scene, budget, quiet)?;
     }
     let mut samples = scene.camera.width as f64 * scene.camera.height as f64 * scene.spp as f64;
     let (rendered, timings) = match args.target_error {
         None => {
-            let (rendered, timings) = renderer.render(&scene, !args.quiet)?;
-            if args.time_budget.is_some() && !args.quiet {
+            let (rendered, timings) = renderer.render(&scene, !quiet)?;
+            if args.time_budget.is_some() && !quiet {
                 let noise = (rendered.variance.iter().map(|&v| v as f64).sum::<f64>()
                     / rendered.variance.len() as f64)
                     .sqrt();
@@ -698,7 +753,7 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
             };
             let start = Instant::now();
             let (rendered, report) = render_adaptive(&mut renderer, &mut scene, settings)?;
-            if !args.quiet {
+            if !quiet {
                 eprintln!(
                     "adaptive: {:.1} samples per pixel on average ({} samples); pixels refined per pass {:?}; {} pixels still above {target} at {} spp; expected RMSE from sampling noise {:.3e}",
                     report.mean_spp,
@@ -722,7 +777,7 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
     let start = Instant::now();
     rendered.image.save(&args.output)?;
     let write = start.elapsed();
-    if !args.quiet {
+    if !quiet {
         let rays = samples;
         eprintln!(
             "wrote {} ({}×{}, {} primitives)",
@@ -778,7 +833,7 @@ fn spp_for_budget(
     Ok(spp)
 }
 
-fn turntable(args: &RenderArgs, frames: u32) -> Result<ExitCode> {
+fn turntable(args: &RenderArgs, frames: u32, quiet: bool) -> Result<ExitCode> {
     if frames == 0 {
         return Err(Error::Usage("--turntable needs at least 1 frame".into()));
     }
@@ -786,14 +841,18 @@ fn turntable(args: &RenderArgs, frames: u32) -> Result<ExitCode> {
         Some(text) => frame_range(text, frames)?,
         None => 0..=frames - 1,
     };
-    check_output_path(&frame_path(&args.output, *range.start())?)?;
+    // Every frame's name is checked before the first is rendered.
+    for frame in range.clone() {
+        crate::output::refuse_input(&frame_path(&args.output, frame)?, &[&args.scene])?;
+    }
+    check_output_path(&frame_path(&args.output, *range.start())?, &[&args.scene])?;
     let mut scene = args.options.load(&args.scene)?;
-    print_warnings(&scene, args.quiet);
+    print_warnings(&scene, quiet);
     let (mut renderer, note) = Renderer::open(&scene, args.device, &args.adapter.request())?;
-    if let Some(note) = note.filter(|_| !args.quiet) {
+    if let Some(note) = note.filter(|_| !quiet) {
         eprintln!("{note}");
     }
-    if !args.quiet {
+    if !quiet {
         eprintln!("rendering {frames} frames on {}", renderer.describe());
     }
     if !renderer.is_cpu() {
@@ -813,11 +872,11 @@ fn turntable(args: &RenderArgs, frames: u32) -> Result<ExitCode> {
             std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         }
         rendered.image.save(&path)?;
-        if !args.quiet {
+        if !quiet {
             eprintln!("frame {frame}: {} ({})", seconds(elapsed), path.display());
         }
     }
-    if !args.quiet {
+    if !quiet {
         eprintln!(
             "{rendered_frames} of {frames} frames, {} per frame on average (render and readback; the scene was uploaded once)",
             seconds(total / rendered_frames)
@@ -826,13 +885,14 @@ fn turntable(args: &RenderArgs, frames: u32) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn check_output_path(path: &Path) -> Result<()> {
+/// An image output: a known format, writable, and none of `inputs`.
+fn check_output_path(path: &Path, inputs: &[&Path]) -> Result<()> {
     let extension = path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
     match extension.as_deref() {
-        Some("png" | "exr" | "pfm") => crate::output::prepare_output(path),
+        Some("png" | "exr" | "pfm") => crate::output::prepare_output_for(path, inputs),
         _ => Err(Error::Usage(format!(
             "{}: unknown image format; use .png, .exr or .pfm",
             path.display()
@@ -846,12 +906,12 @@ pub fn render_gpu(scene: &Scene, request: &AdapterRequest) -> Result<Rendered> {
     Ok(renderer.render(&Progress::hidden())?.0)
 }
 
-fn diff(args: &DiffArgs) -> Result<ExitCode> {
+fn diff(args: &DiffArgs, quiet: bool) -> Result<ExitCode> {
     if let Some(path) = &args.heatmap {
-        check_output_path(path)?;
+        check_output_path(path, &[&args.scene])?;
     }
     let scene = args.options.load(&args.scene)?;
-    print_warnings(&scene, args.json);
+    print_warnings(&scene, quiet || args.json);
     let tolerance = Tolerance {
         abs: args.tol_abs,
         rel: args.tol_rel,
@@ -909,8 +969,14 @@ struct TraceReport {
     oracle: Option<rays::Agreement>,
 }
 
-fn trace(args: &TraceArgs) -> Result<ExitCode> {
-    crate::output::prepare_output(&args.output)?;
+fn trace(args: &TraceArgs, quiet: bool) -> Result<ExitCode> {
+    let inputs: Vec<&Path> = [&args.rays]
+        .into_iter()
+        .chain(&args.scene)
+        .chain(&args.obj)
+        .map(PathBuf::as_path)
+        .collect();
+    crate::output::prepare_output_for(&args.output, &inputs)?;
     let start = Instant::now();
     let rays = rays::read_rays(&args.rays)?;
     let read_seconds = start.elapsed().as_secs_f64();
@@ -920,7 +986,7 @@ fn trace(args: &TraceArgs) -> Result<ExitCode> {
     };
     args.options.apply(&mut scene)?;
     let (mut renderer, note) = Renderer::open(&scene, args.device, &args.adapter.request())?;
-    if let Some(note) = note {
+    if let Some(note) = note.filter(|_| !quiet) {
         eprintln!("{note}");
     }
     renderer.prepare_trace(args.any_hit, scene.intersect)?;
@@ -960,7 +1026,7 @@ fn trace(args: &TraceArgs) -> Result<ExitCode> {
             serde_json::to_string_pretty(&report).expect("report serialises")
         );
     }
-    if !args.quiet {
+    if !quiet {
         eprintln!(
             "traced {} rays ({}, {}) on {}: {} hit; {} ({:.2} Mrays/s); wrote {}; read {:.3} s, write {:.3} s",
             report.rays,
@@ -985,32 +1051,35 @@ fn trace(args: &TraceArgs) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn camera_rays(args: &CameraRaysArgs) -> Result<ExitCode> {
-    crate::output::prepare_output(&args.output)?;
+fn camera_rays(args: &CameraRaysArgs, quiet: bool) -> Result<ExitCode> {
+    crate::output::prepare_output_for(&args.output, &[&args.scene])?;
     let scene = args.view.load(&args.scene)?;
     let rays = rays::camera_rays(&scene);
     rays::write_rays(&args.output, &rays)?;
-    eprintln!(
-        "wrote {} camera rays to {}",
-        rays.len(),
-        args.output.display()
-    );
+    if !quiet {
+        eprintln!(
+            "wrote {} camera rays to {}",
+            rays.len(),
+            args.output.display()
+        );
+    }
     Ok(ExitCode::SUCCESS)
 }
 
-fn bench(args: &BenchArgs) -> Result<ExitCode> {
+fn bench(args: &BenchArgs, quiet: bool) -> Result<ExitCode> {
     if args.time_vs_error {
-        return bench_time_vs_error(args);
+        return bench_time_vs_error(args, quiet);
     }
     let inputs = if args.inputs.is_empty() {
-        let models = Path::new("../shared/models");
-        let ladder = bench::default_ladder(models);
+        let ladder = bench::default_inputs();
         if ladder.is_empty() {
-            return Err(Error::Usage(format!(
-                "lambert bench needs models to trace: name scene (.toml) or model (.obj) files, \
-                 or run it where {} holds OBJ models (it holds none)",
-                models.display()
-            )));
+            return Err(Error::Usage(
+                "lambert bench needs models to trace: name scene (.toml) or model (.obj) files; \
+                 by default it traces ../shared/models, or the bundled models of lambert's \
+                 source tree (assets/scenes/meshes), and found neither from here or from the \
+                 executable's folder"
+                    .into(),
+            ));
         }
         ladder
     } else {
@@ -1063,11 +1132,12 @@ fn check_inputs_and_outputs(inputs: &[PathBuf], args: &BenchArgs) -> Result<()> 
     if let Some(missing) = inputs.iter().find(|p| !p.exists()) {
         return Err(Error::Usage(format!("{}: no such file", missing.display())));
     }
+    let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
     if let Some(path) = &args.json {
-        crate::output::prepare_output(path)?;
+        crate::output::prepare_output_for(path, &inputs)?;
     }
     if let Some(dir) = &args.plot {
-        crate::output::prepare_output(&dir.join("time_per_ray.png"))?;
+        crate::output::prepare_output_for(&dir.join("time_per_ray.png"), &inputs)?;
     }
     Ok(())
 }
@@ -1084,21 +1154,23 @@ fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<()> {
     crate::output::write_atomically(path, text.as_bytes())
 }
 
-fn bench_time_vs_error(args: &BenchArgs) -> Result<ExitCode> {
+fn bench_time_vs_error(args: &BenchArgs, quiet: bool) -> Result<ExitCode> {
     bench::check_spp_list(&args.spp_list)?;
     let reference_spp = args
         .reference_spp
         .unwrap_or((4 * args.spp_list.iter().max().copied().unwrap_or(1)).min(MAX_SPP));
     validate_spp(reference_spp).map_err(|e| Error::Usage(format!("--reference-{e}")))?;
     let inputs: Vec<PathBuf> = if args.inputs.is_empty() {
+        let tree = bench::source_tree().unwrap_or_default();
         let defaults: Vec<PathBuf> = ["edge_cases", "spheres", "triangle_oblique"]
             .iter()
-            .map(|n| PathBuf::from(format!("assets/scenes/{n}.toml")))
+            .map(|n| tree.join(format!("assets/scenes/{n}.toml")))
             .collect();
         if !defaults.iter().all(|p| p.exists()) {
             return Err(Error::Usage(
-                "lambert bench --time-vs-error needs scenes to measure: name them, or run it \
-                 in the repository, whose assets/scenes it measures by default"
+                "lambert bench --time-vs-error needs scenes to measure: name them; by default \
+                 it measures the bundled scenes of lambert's source tree (assets/scenes), and \
+                 found none from here or from the executable's folder"
                     .into(),
             ));
         }
@@ -1113,7 +1185,9 @@ fn bench_time_vs_error(args: &BenchArgs) -> Result<ExitCode> {
         _ => match Gpu::open(&request, false) {
             Ok(_) => true,
             Err(e) if args.device == BenchDevices::Both => {
-                eprintln!("{e}\nnote: measuring the CPU paths only");
+                if !quiet {
+                    eprintln!("{e}\nnote: measuring the CPU paths only");
+                }
                 false
             }
             Err(e) => return Err(e),
@@ -1133,7 +1207,9 @@ fn bench_time_vs_error(args: &BenchArgs) -> Result<ExitCode> {
         let scene = bench::load_input(input, args.size)?;
         let name = input_name(input);
         let points = bench::time_vs_error(&name, &scene, &knobs, &request, &mut |line| {
-            eprintln!("{line}")
+            if !quiet {
+                eprintln!("{line}")
+            }
         })?;
         println!("{name}: Pareto front (fastest first)");
         let mut front: Vec<&bench::Point> = points.iter().filter(|p| p.on_pareto_front).collect();
