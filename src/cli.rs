@@ -6,18 +6,26 @@ use std::time::{Duration, Instant};
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
+mod benchmark;
+mod info;
+mod options;
+mod turntable;
+
+use options::{AdapterArgs, RenderOptions, SceneOptions, ViewOptions, fraction, non_negative};
+pub use turntable::frame_path;
+
 use crate::adaptive::{AdaptiveSettings, render_adaptive};
-use crate::bench::{self, BenchDevices};
+use crate::bench::BenchDevices;
 use crate::cpu::{self, Precision};
 use crate::diff::{self, Tolerance};
 use crate::error::{Error, Result};
-use crate::gpu::{self, AdapterRequest, Gpu, GpuRenderer};
+use crate::gpu::{AdapterRequest, Gpu, GpuRenderer};
 use crate::layout::NO_HIT;
 use crate::output::Rendered;
 use crate::progress::Progress;
 use crate::rays;
 use crate::render::{DeviceChoice, Renderer};
-use crate::scene::{Accel, Camera, Intersect, MAX_SPP, Scene, validate_spp};
+use crate::scene::{Intersect, MAX_SPP, Scene};
 
 #[derive(Parser)]
 #[command(
@@ -74,136 +82,6 @@ struct InfoArgs {
     adapter: AdapterArgs,
 }
 
-#[derive(Args, Clone)]
-struct AdapterArgs {
-    /// Adapter whose name contains this (case-insensitive); else WGPU_ADAPTER_NAME.
-    #[arg(long)]
-    adapter: Option<String>,
-    /// vulkan, metal, dx12 or gl; else WGPU_BACKEND, else all.
-    #[arg(long)]
-    backend: Option<String>,
-}
-
-impl AdapterArgs {
-    fn request(&self) -> AdapterRequest {
-        AdapterRequest {
-            name: self.adapter.clone(),
-            backend: self.backend.clone(),
-        }
-    }
-}
-
-/// Settings that override the scene file's.
-#[derive(Args, Clone)]
-struct SceneOptions {
-    #[arg(long, value_enum, default_value_t)]
-    accel: Accel,
-    /// Ray/triangle test [default: the scene's render.intersect, else watertight].
-    #[arg(long, value_enum)]
-    intersect: Option<Intersect>,
-    /// Samples per pixel [default: the scene's render.spp, else 1].
-    #[arg(long)]
-    spp: Option<u32>,
-    /// Seed of the sample jitter [default: the scene's render.seed, else 0].
-    #[arg(long)]
-    seed: Option<u32>,
-    #[command(flatten)]
-    view: ViewOptions,
-}
-
-/// The image size and a glTF file's camera.
-#[derive(Args, Clone)]
-struct ViewOptions {
-    /// Image width [default: the scene's; a model file's 1024]; with only
-    /// one of --width and --height, the other keeps the aspect ratio.
-    #[arg(long)]
-    width: Option<u32>,
-    /// Image height [default: the scene's; a model file's 768, or its
-    /// glTF camera's aspect ratio].
-    #[arg(long)]
-    height: Option<u32>,
-    /// A glTF file's camera, by name [default: its first perspective one].
-    #[arg(long)]
-    camera: Option<String>,
-}
-
-impl ViewOptions {
-    fn load(&self, path: &Path) -> Result<Scene> {
-        let mut scene = Scene::load_with_camera(path, self.camera.as_deref())?;
-        self.apply(&mut scene)?;
-        Ok(scene)
-    }
-
-    fn apply(&self, scene: &mut Scene) -> Result<()> {
-        scene.camera = scene
-            .camera
-            .resized(self.width, self.height)
-            .map_err(|e| Error::Usage(format!("--width/--height: {e}")))?;
-        Ok(())
-    }
-}
-
-impl SceneOptions {
-    fn load(&self, path: &Path) -> Result<Scene> {
-        let mut scene = Scene::load_with_camera(path, self.view.camera.as_deref())?;
-        self.apply(&mut scene)?;
-        Ok(scene)
-    }
-
-    fn apply(&self, scene: &mut Scene) -> Result<()> {
-        scene.accel = self.accel;
-        if let Some(intersect) = self.intersect {
-            scene.intersect = intersect;
-        }
-        if let Some(spp) = self.spp {
-            validate_spp(spp).map_err(|e| Error::Usage(format!("--{e}")))?;
-            scene.spp = spp;
-        }
-        if let Some(seed) = self.seed {
-            scene.seed = seed;
-        }
-        self.view.apply(scene)
-    }
-}
-
-/// `SceneOptions`, and the light of a render.
-#[derive(Args, Clone)]
-struct RenderOptions {
-    /// Ambient light, R,G,B or one value for grey [default: a scene's
-    /// render.ambient; a model file's 0.1 when it has no lights of its
-    /// own, else 0].
-    #[arg(long, value_name = "R[,G,B]", value_parser = ambient)]
-    ambient: Option<[f32; 3]>,
-    #[command(flatten)]
-    scene: SceneOptions,
-}
-
-impl RenderOptions {
-    fn load(&self, path: &Path) -> Result<Scene> {
-        let mut scene = self.scene.load(path)?;
-        if let Some(ambient) = self.ambient {
-            scene.ambient = ambient;
-        }
-        Ok(scene)
-    }
-}
-
-/// `R,G,B` or one value for all three, each a finite number ≥ 0.
-fn ambient(text: &str) -> std::result::Result<[f32; 3], String> {
-    let values = text
-        .split(',')
-        .map(non_negative)
-        .collect::<std::result::Result<Vec<f32>, String>>()?;
-    match values[..] {
-        [v] => Ok([v; 3]),
-        [r, g, b] => Ok([r, g, b]),
-        _ => Err(format!(
-            "'{text}' is not R,G,B or one value (got {} values)",
-            values.len()
-        )),
-    }
-}
-
 /// The f64 oracle's version of `scene`: the watertight test, in double
 /// precision, is the reference every variant and device is measured against.
 pub fn oracle_scene(scene: &Scene) -> Scene {
@@ -251,24 +129,6 @@ struct RenderArgs {
     /// Blender count), named as in a full run.
     #[arg(long, value_name = "A-B", requires = "turntable")]
     frames: Option<String>,
-}
-
-/// `--frames A-B` (or `A`) of `frames`: inclusive, within 0..frames.
-fn frame_range(text: &str, frames: u32) -> Result<std::ops::RangeInclusive<u32>> {
-    let usage = || {
-        Error::Usage(format!(
-            "--frames {text}: expected A-B (or A), with 0 ≤ A ≤ B < {frames}"
-        ))
-    };
-    let (a, b) = text.split_once('-').unwrap_or((text, text));
-    let (a, b): (u32, u32) = (
-        a.trim().parse().map_err(|_| usage())?,
-        b.trim().parse().map_err(|_| usage())?,
-    );
-    if a > b || b >= frames {
-        return Err(usage());
-    }
-    Ok(a..=b)
 }
 
 /// `lambert render --tile I/N`: renders the part and writes it.
@@ -359,63 +219,6 @@ fn merge(args: &MergeArgs, quiet: bool) -> Result<ExitCode> {
         );
     }
     Ok(ExitCode::SUCCESS)
-}
-
-/// `frames/frame_{:04}.png` with frame 7 → `frames/frame_0007.png`; every
-/// placeholder is filled (`{}/f_{}.png` → `7/f_7.png`).
-pub fn frame_path(pattern: &Path, frame: u32) -> Result<PathBuf> {
-    let text = pattern.to_string_lossy();
-    let mut filled = String::new();
-    let mut rest = &text[..];
-    let mut placeholders = 0;
-    while let Some((open, close)) = rest
-        .find('{')
-        .and_then(|o| rest[o..].find('}').map(|c| (o, o + c)))
-    {
-        let width = frame_number_width(pattern, &rest[open + 1..close])?;
-        filled.push_str(&format!("{}{frame:0width$}", &rest[..open]));
-        rest = &rest[close + 1..];
-        placeholders += 1;
-    }
-    if placeholders == 0 {
-        return Err(Error::Usage(format!(
-            "{}: --turntable needs a frame number in the output name, as {{}} or {{:04}}",
-            pattern.display()
-        )));
-    }
-    filled.push_str(rest);
-    Ok(PathBuf::from(filled))
-}
-
-/// The digits of a frame number placeholder `{spec}`: `{}` none (as
-/// many as it takes), `{:04}` or `{:4}` four, zero-padded.
-fn frame_number_width(pattern: &Path, spec: &str) -> Result<usize> {
-    match spec.strip_prefix(":0").or_else(|| spec.strip_prefix(':')) {
-        None if spec.is_empty() => Ok(0),
-        Some(w) => w.parse::<usize>().ok().filter(|&w| w <= 16).ok_or_else(|| {
-            Error::Usage(format!(
-                "{}: cannot read the frame number format {{{spec}}}; use {{}} or {{:0N}} with N at most 16",
-                pattern.display()
-            ))
-        }),
-        None => Err(Error::Usage(format!(
-            "{}: cannot read the frame number format {{{spec}}}; use {{}} or {{:04}}",
-            pattern.display()
-        ))),
-    }
-}
-
-/// The camera of frame `frame` of `frames`, orbiting look_at about up.
-fn orbit(camera: &Camera, frame: u32, frames: u32) -> Camera {
-    let centre = glam::DVec3::from(camera.look_at);
-    let axis = glam::DVec3::from(camera.up).normalize();
-    let angle = std::f64::consts::TAU * frame as f64 / frames as f64;
-    let eye = centre
-        + glam::DQuat::from_axis_angle(axis, angle) * (glam::DVec3::from(camera.eye) - centre);
-    Camera {
-        eye: eye.to_array(),
-        ..camera.clone()
-    }
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -543,22 +346,6 @@ struct CameraRaysArgs {
     view: ViewOptions,
 }
 
-/// A finite number ≥ 0.
-fn non_negative(text: &str) -> std::result::Result<f32, String> {
-    match text.parse::<f32>() {
-        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
-        _ => Err(format!("'{text}' is not a finite number ≥ 0")),
-    }
-}
-
-/// A number from 0 to 1.
-fn fraction(text: &str) -> std::result::Result<f64, String> {
-    match text.parse::<f64>() {
-        Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
-        _ => Err(format!("'{text}' is not a fraction from 0 to 1")),
-    }
-}
-
 /// `lambert diff`'s exit code for an error (as diff(1)): 1 means only that
 /// the images differ.
 pub const DIFF_ERROR: u8 = 2;
@@ -575,10 +362,10 @@ pub fn run() -> Result<ExitCode> {
         Command::Trace(args) => trace(&args, quiet),
         Command::CameraRays(args) => camera_rays(&args, quiet),
         Command::Info(args) => match &args.model {
-            Some(model) => model_info(model, args.camera.as_deref()),
-            None => info(&args.adapter),
+            Some(model) => info::model_info(model, args.camera.as_deref()),
+            None => info::info(&args.adapter),
         },
-        Command::Bench(args) => bench(&args, quiet),
+        Command::Bench(args) => benchmark::bench(&args, quiet),
         Command::Merge(args) => merge(&args, quiet),
     }
 }
@@ -590,62 +377,6 @@ fn print_warnings(scene: &Scene, quiet: bool) {
             eprintln!("warning: {warning}");
         }
     }
-}
-
-/// `lambert info MODEL`.
-fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> {
-    let scene = Scene::load_with_camera(path, camera)?;
-    println!("{}", path.display());
-    println!("  triangles: {}", scene.triangles.len());
-    if !scene.spheres.is_empty() {
-        println!("  spheres: {}", scene.spheres.len());
-    }
-    if let Some(b) = scene.bvh.bounds() {
-        println!(
-            "  bounds: {} to {}",
-            crate::scene::vector_text(b.min.as_dvec3()),
-            crate::scene::vector_text(b.max.as_dvec3())
-        );
-    }
-    let smooth = !scene.normals.is_empty();
-    println!(
-        "  normals: {}",
-        if smooth {
-            "smooth (the file's)"
-        } else {
-            "face"
-        }
-    );
-    println!("  materials: {}", scene.materials.len());
-    for (i, m) in scene.materials.iter().enumerate().take(32) {
-        let [r, g, b] = m.albedo;
-        println!("    {i}: albedo [{r}, {g}, {b}]");
-    }
-    let c = &scene.camera;
-    let v = |a: [f64; 3]| crate::scene::vector_text(glam::DVec3::from(a));
-    println!(
-        "  camera: eye {}, look_at {}, up {}, vfov {:.4}°, {}×{}",
-        v(c.eye),
-        v(c.look_at),
-        v(c.up),
-        c.vfov,
-        c.width,
-        c.height
-    );
-    println!("  lights: {}", scene.lights.len());
-    for light in &scene.lights {
-        let vector = crate::scene::vector_text(glam::Vec3::from(light.vector).as_dvec3());
-        let color = crate::scene::vector_text(glam::Vec3::from(light.color).as_dvec3());
-        if light.kind == crate::layout::LIGHT_POINT {
-            println!("    point at {vector}, intensity {color}");
-        } else {
-            println!("    directional towards {vector} (from the surface), irradiance {color}");
-        }
-    }
-    for warning in &scene.warnings {
-        println!("  warning: {warning}");
-    }
-    Ok(ExitCode::SUCCESS)
 }
 
 fn seconds(d: Duration) -> String {
@@ -687,7 +418,7 @@ fn render(args: &RenderArgs, quiet: bool) -> Result<ExitCode> {
         return render_part(args, tile, quiet);
     }
     if let Some(frames) = args.turntable {
-        return turntable(args, frames, quiet);
+        return turntable::turntable(args, frames, quiet);
     }
     // Fail on a bad output name before spending time on the render.
     check_output_path(&args.output, &[&args.scene])?;
@@ -831,58 +562,6 @@ fn spp_for_budget(
         eprintln!("time budget {budget} s: a 1-spp pass takes {per_sample:.3} s, so {spp} spp");
     }
     Ok(spp)
-}
-
-fn turntable(args: &RenderArgs, frames: u32, quiet: bool) -> Result<ExitCode> {
-    if frames == 0 {
-        return Err(Error::Usage("--turntable needs at least 1 frame".into()));
-    }
-    let range = match &args.frames {
-        Some(text) => frame_range(text, frames)?,
-        None => 0..=frames - 1,
-    };
-    // Every frame's name is checked before the first is rendered.
-    for frame in range.clone() {
-        crate::output::refuse_input(&frame_path(&args.output, frame)?, &[&args.scene])?;
-    }
-    check_output_path(&frame_path(&args.output, *range.start())?, &[&args.scene])?;
-    let mut scene = args.options.load(&args.scene)?;
-    print_warnings(&scene, quiet);
-    let (mut renderer, note) = Renderer::open(&scene, args.device, &args.adapter.request())?;
-    if let Some(note) = note.filter(|_| !quiet) {
-        eprintln!("{note}");
-    }
-    if !quiet {
-        eprintln!("rendering {frames} frames on {}", renderer.describe());
-    }
-    if !renderer.is_cpu() {
-        scene.release_geometry();
-    }
-    let start_camera = scene.camera.clone();
-    let mut total = Duration::ZERO;
-    let rendered_frames = range.clone().count() as u32;
-    for frame in range {
-        scene.camera = orbit(&start_camera, frame, frames);
-        let start = Instant::now();
-        let (rendered, _) = renderer.render(&scene, false)?;
-        let elapsed = start.elapsed();
-        total += elapsed;
-        let path = frame_path(&args.output, frame)?;
-        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-        }
-        rendered.image.save(&path)?;
-        if !quiet {
-            eprintln!("frame {frame}: {} ({})", seconds(elapsed), path.display());
-        }
-    }
-    if !quiet {
-        eprintln!(
-            "{rendered_frames} of {frames} frames, {} per frame on average (render and readback; the scene was uploaded once)",
-            seconds(total / rendered_frames)
-        );
-    }
-    Ok(ExitCode::SUCCESS)
 }
 
 /// An image output: a known format, writable, and none of `inputs`.
@@ -1061,261 +740,6 @@ fn camera_rays(args: &CameraRaysArgs, quiet: bool) -> Result<ExitCode> {
             "wrote {} camera rays to {}",
             rays.len(),
             args.output.display()
-        );
-    }
-    Ok(ExitCode::SUCCESS)
-}
-
-fn bench(args: &BenchArgs, quiet: bool) -> Result<ExitCode> {
-    if args.time_vs_error {
-        return bench_time_vs_error(args, quiet);
-    }
-    let inputs = if args.inputs.is_empty() {
-        let ladder = bench::default_inputs();
-        if ladder.is_empty() {
-            return Err(Error::Usage(
-                "lambert bench needs models to trace: name scene (.toml) or model (.obj) files; \
-                 by default it traces ../shared/models, or the bundled models of lambert's \
-                 source tree (assets/scenes/meshes), and found neither from here or from the \
-                 executable's folder"
-                    .into(),
-            ));
-        }
-        ladder
-    } else {
-        args.inputs.clone()
-    };
-    check_inputs_and_outputs(&inputs, args)?;
-    let request = args.adapter.request();
-    let mut rows = Vec::new();
-    println!(
-        "{:<18} {:>9} {:>11} {:>11} {:>8} {:>7} {:>6} {:>9} {:>8}  device",
-        "model", "triangles", "primary", "shadow", "build", "SAH", "depth", "memory", "B/tri"
-    );
-    println!(
-        "{:<18} {:>9} {:>11} {:>11} {:>8} {:>7} {:>6} {:>9} {:>8}",
-        "", "", "Mrays/s", "Mrays/s", "s", "", "", "MiB", ""
-    );
-    for input in &inputs {
-        let scene = bench::load_input(input, args.size)?;
-        let name = input_name(input);
-        for row in bench::ladder_rows(&name, &scene, args.device, &request, args.runs)? {
-            println!(
-                "{:<18} {:>9} {:>11.2} {:>11.2} {:>8.3} {:>7.1} {:>6} {:>9.1} {:>8.1}  {}",
-                row.model,
-                row.triangles,
-                row.primary_mrays_per_s,
-                row.shadow_mrays_per_s,
-                row.bvh_build_seconds,
-                row.sah_cost,
-                row.bvh_depth,
-                row.device_bytes as f64 / (1 << 20) as f64,
-                row.device_bytes_per_triangle,
-                row.device
-            );
-            rows.push(row);
-        }
-    }
-    if let Some(path) = &args.json {
-        write_json(path, &rows)?;
-    }
-    if let Some(dir) = &args.plot {
-        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-        crate::plot::ladder(&rows, &dir.join("time_per_ray"))?;
-    }
-    Ok(ExitCode::SUCCESS)
-}
-
-/// Before any work: every input exists, and every output (--json, --plot)
-/// can be written.
-fn check_inputs_and_outputs(inputs: &[PathBuf], args: &BenchArgs) -> Result<()> {
-    if let Some(missing) = inputs.iter().find(|p| !p.exists()) {
-        return Err(Error::Usage(format!("{}: no such file", missing.display())));
-    }
-    let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
-    if let Some(path) = &args.json {
-        crate::output::prepare_output_for(path, &inputs)?;
-    }
-    if let Some(dir) = &args.plot {
-        crate::output::prepare_output_for(&dir.join("time_per_ray.png"), &inputs)?;
-    }
-    Ok(())
-}
-
-/// A bench input's name in tables and plots: its file name without extension.
-fn input_name(path: &Path) -> String {
-    path.file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default()
-}
-
-fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<()> {
-    let text = serde_json::to_string_pretty(value).expect("bench results serialise");
-    crate::output::write_atomically(path, text.as_bytes())
-}
-
-fn bench_time_vs_error(args: &BenchArgs, quiet: bool) -> Result<ExitCode> {
-    bench::check_spp_list(&args.spp_list)?;
-    let reference_spp = args
-        .reference_spp
-        .unwrap_or((4 * args.spp_list.iter().max().copied().unwrap_or(1)).min(MAX_SPP));
-    validate_spp(reference_spp).map_err(|e| Error::Usage(format!("--reference-{e}")))?;
-    let inputs: Vec<PathBuf> = if args.inputs.is_empty() {
-        let tree = bench::source_tree().unwrap_or_default();
-        let defaults: Vec<PathBuf> = ["edge_cases", "spheres", "triangle_oblique"]
-            .iter()
-            .map(|n| tree.join(format!("assets/scenes/{n}.toml")))
-            .collect();
-        if !defaults.iter().all(|p| p.exists()) {
-            return Err(Error::Usage(
-                "lambert bench --time-vs-error needs scenes to measure: name them; by default \
-                 it measures the bundled scenes of lambert's source tree (assets/scenes), and \
-                 found none from here or from the executable's folder"
-                    .into(),
-            ));
-        }
-        defaults
-    } else {
-        args.inputs.clone()
-    };
-    check_inputs_and_outputs(&inputs, args)?;
-    let request = args.adapter.request();
-    let gpu = match args.device {
-        BenchDevices::Cpu => false,
-        _ => match Gpu::open(&request, false) {
-            Ok(_) => true,
-            Err(e) if args.device == BenchDevices::Both => {
-                if !quiet {
-                    eprintln!("{e}\nnote: measuring the CPU paths only");
-                }
-                false
-            }
-            Err(e) => return Err(e),
-        },
-    };
-    let mut spp = args.spp_list.clone();
-    spp.sort_unstable();
-    spp.dedup();
-    let knobs = bench::Knobs {
-        spp,
-        reference_spp,
-        runs: args.runs,
-        gpu,
-    };
-    let mut all = Vec::new();
-    for input in &inputs {
-        let scene = bench::load_input(input, args.size)?;
-        let name = input_name(input);
-        let points = bench::time_vs_error(&name, &scene, &knobs, &request, &mut |line| {
-            if !quiet {
-                eprintln!("{line}")
-            }
-        })?;
-        println!("{name}: Pareto front (fastest first)");
-        let mut front: Vec<&bench::Point> = points.iter().filter(|p| p.on_pareto_front).collect();
-        front.sort_by(|a, b| a.seconds.total_cmp(&b.seconds));
-        for p in front {
-            println!(
-                "  {:?} {:<16} {:<8} spp {:>6.2} {:<11} {:<11} {:>9.4} s  RMSE {:.3e}  PSNR {}  leaks {}",
-                p.path,
-                p.intersect.name(),
-                p.sampling,
-                p.mean_spp,
-                p.accel,
-                p.shader,
-                p.seconds,
-                p.rmse,
-                p.psnr_db
-                    .map_or("inf".to_string(), |v| format!("{v:.1} dB")),
-                p.leaks
-            );
-        }
-        if let Some(target) = args.target_error {
-            match bench::cheapest_within(&points, target) {
-                Some(p) => println!(
-                    "  cheapest within RMSE {target:e}: {:?} {} spp {} ({:.4} s, expected RMSE {:.3e})",
-                    p.path,
-                    p.intersect.name(),
-                    p.spp,
-                    p.seconds,
-                    p.rmse
-                ),
-                None => println!("  no measured setting reaches RMSE {target:e}"),
-            }
-        }
-        if let Some(dir) = &args.plot {
-            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-            crate::plot::time_vs_error(&points, &dir.join(format!("time_vs_error_{name}")))?;
-        }
-        all.extend(points);
-    }
-    if let Some(path) = &args.json {
-        write_json(path, &all)?;
-    }
-    Ok(ExitCode::SUCCESS)
-}
-
-fn info(args: &AdapterArgs) -> Result<ExitCode> {
-    let request = args.request();
-    let all = gpu::enumerate_adapters(&request)?;
-    let none_at_all = all.is_empty();
-    let adapters: Vec<_> = all
-        .into_iter()
-        .filter(|a| request.matches(&a.get_info()))
-        .collect();
-    let kernel = cpu::CpuKernel::active();
-    println!(
-        "CPU path: {} threads, {} kernel",
-        rayon::current_num_threads(),
-        kernel.name()
-    );
-    for other in cpu::CpuKernel::ALL {
-        if let Some(missing) = other.missing() {
-            println!(
-                "  {} kernel: not on this CPU (needs {missing})",
-                other.name()
-            );
-        } else if other > kernel {
-            println!(
-                "  {} kernel: available, not chosen (LAMBERT_CPU_KERNEL)",
-                other.name()
-            );
-        }
-    }
-    if adapters.is_empty() {
-        let wanted = request.describe_request()?;
-        let wanted = if wanted.is_empty() {
-            String::new()
-        } else {
-            format!(" {wanted}")
-        };
-        if none_at_all && request.wants_vulkan()? && cfg!(target_os = "linux") {
-            println!(
-                "no GPU adapters{wanted} (for a software one, install Mesa's lavapipe: apt-get install mesa-vulkan-drivers)"
-            );
-        } else {
-            println!("no GPU adapters{wanted}");
-        }
-    }
-    for adapter in adapters {
-        let info = adapter.get_info();
-        let limits = adapter.limits();
-        println!("adapter: {}", info.name);
-        println!(
-            "  backend: {:?}, type: {:?}",
-            info.backend, info.device_type
-        );
-        println!("  driver: {} {}", info.driver, info.driver_info);
-        println!(
-            "  limits: storage binding {} MiB, buffer {} MiB, texture 2D {} px, workgroup invocations {}",
-            limits.max_storage_buffer_binding_size >> 20,
-            limits.max_buffer_size >> 20,
-            limits.max_texture_dimension_2d,
-            limits.max_compute_invocations_per_workgroup
-        );
-        println!(
-            "  timestamp queries: {}",
-            adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY)
         );
     }
     Ok(ExitCode::SUCCESS)
