@@ -806,6 +806,8 @@ fn a_models_own_lights_get_no_ambient_and_ambient_sets_it() {
     // Behind the quad: the face the camera sees faces away from it.
     let behind = quad_gltf(&case, "behind", &[([0.0, 0.0, -2.0], 4.0)]);
     assert_eq!(centre_pixel(&case, &behind, &[]), [0.0; 3]);
+    let info = lambert(&["info", s(&behind)]);
+    assert!(String::from_utf8_lossy(&info.stdout).contains("ambient: [0.0, 0.0, 0.0]"));
     // In front, 2 away: E = 4/2² = 1 along the normal, so 0.5 × 1.
     let front = quad_gltf(&case, "front", &[([0.0, 0.0, 2.0], 4.0)]);
     for c in centre_pixel(&case, &front, &[]) {
@@ -824,6 +826,8 @@ fn a_models_own_lights_get_no_ambient_and_ambient_sets_it() {
     // No lights: the default light and the default ambient 0.1, which
     // --ambient replaces.
     let bare = quad_gltf(&case, "bare", &[]);
+    let info = lambert(&["info", s(&bare)]);
+    assert!(String::from_utf8_lossy(&info.stdout).contains("ambient: [0.1, 0.1, 0.1]"));
     let default = centre_pixel(&case, &bare, &[]);
     assert_eq!(default, centre_pixel(&case, &bare, &["--ambient", "0.1"]));
     let without = centre_pixel(&case, &bare, &["--ambient", "0"]);

@@ -59,6 +59,8 @@ pub(super) fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> 
             println!("    directional towards {vector} (from the surface), irradiance {color}");
         }
     }
+    // f32 values, printed as f32 (0.1, not 0.10000000149011612).
+    println!("  ambient: {:?}", scene.ambient);
     for warning in &scene.warnings {
         println!("  warning: {warning}");
     }
