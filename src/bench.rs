@@ -106,7 +106,7 @@ pub fn source_tree() -> Option<PathBuf> {
 }
 
 /// The bundled models the ladder falls back on (in assets/scenes/meshes).
-pub const BUNDLED_LADDER: [&str; 2] = ["bunny_lowres.obj", "dragon_res4.obj"];
+const BUNDLED_LADDER: [&str; 2] = ["bunny_lowres.obj", "dragon_res4.obj"];
 
 /// `lambert bench`'s models when none are named: the OBJ models of
 /// ../shared/models (from the working folder, else beside the source
