@@ -91,6 +91,47 @@ pub fn load_input(path: &Path, size: u32) -> Result<Scene> {
     }
 }
 
+/// The source tree's root (the folder holding assets/scenes): the working
+/// folder, else the executable's folder or one above it (target/release/
+/// in a checkout), else where this binary was built from.
+pub fn source_tree() -> Option<PathBuf> {
+    let has_assets = |dir: &Path| dir.join("assets/scenes").is_dir();
+    let exe = std::env::current_exe().ok();
+    let from_exe = exe.iter().flat_map(|e| e.ancestors().skip(1));
+    std::iter::once(Path::new("."))
+        .chain(from_exe)
+        .chain(std::iter::once(Path::new(env!("CARGO_MANIFEST_DIR"))))
+        .find(|dir| has_assets(dir))
+        .map(Path::to_path_buf)
+}
+
+/// The bundled models the ladder falls back on (in assets/scenes/meshes).
+const BUNDLED_LADDER: [&str; 2] = ["bunny_lowres.obj", "dragon_res4.obj"];
+
+/// `lambert bench`'s models when none are named: the OBJ models of
+/// ../shared/models (from the working folder, else beside the source
+/// tree), else the bundled ones of the source tree; empty where neither is
+/// found.
+pub fn default_inputs() -> Vec<PathBuf> {
+    let tree = source_tree();
+    let shared = std::iter::once(PathBuf::from("../shared/models"))
+        .chain(tree.iter().map(|t| t.join("../shared/models")));
+    for models in shared {
+        let ladder = default_ladder(&models);
+        if !ladder.is_empty() {
+            return ladder;
+        }
+    }
+    tree.map(|t| {
+        BUNDLED_LADDER
+            .iter()
+            .map(|m| t.join("assets/scenes/meshes").join(m))
+            .filter(|p| p.is_file())
+            .collect()
+    })
+    .unwrap_or_default()
+}
+
 /// The default ladder: every OBJ model in `models` (normally
 /// ../shared/models), smallest file first.
 pub fn default_ladder(models: &Path) -> Vec<PathBuf> {

@@ -6,18 +6,26 @@ use std::time::{Duration, Instant};
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
+mod benchmark;
+mod info;
+mod options;
+mod turntable;
+
+use options::{AdapterArgs, RenderOptions, SceneOptions, ViewOptions, fraction, non_negative};
+pub use turntable::frame_path;
+
 use crate::adaptive::{AdaptiveSettings, render_adaptive};
-use crate::bench::{self, BenchDevices};
+use crate::bench::BenchDevices;
 use crate::cpu::{self, Precision};
 use crate::diff::{self, Tolerance};
 use crate::error::{Error, Result};
-use crate::gpu::{self, AdapterRequest, Gpu, GpuRenderer};
+use crate::gpu::{AdapterRequest, Gpu, GpuRenderer};
 use crate::layout::NO_HIT;
 use crate::output::Rendered;
 use crate::progress::Progress;
 use crate::rays;
 use crate::render::{DeviceChoice, Renderer};
-use crate::scene::{Accel, Camera, Intersect, MAX_SPP, Scene, validate_spp};
+use crate::scene::{Intersect, MAX_SPP, Scene};
 
 #[derive(Parser)]
 #[command(
@@ -28,6 +36,9 @@ use crate::scene::{Accel, Camera, Intersect, MAX_SPP, Scene, validate_spp};
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Print nothing but errors and results (no notes, warnings or progress).
+    #[arg(short, long, global = true)]
+    quiet: bool,
 }
 
 #[derive(Subcommand)]
@@ -71,98 +82,6 @@ struct InfoArgs {
     adapter: AdapterArgs,
 }
 
-#[derive(Args, Clone)]
-struct AdapterArgs {
-    /// Adapter whose name contains this (case-insensitive); else WGPU_ADAPTER_NAME.
-    #[arg(long)]
-    adapter: Option<String>,
-    /// vulkan, metal, dx12 or gl; else WGPU_BACKEND, else all.
-    #[arg(long)]
-    backend: Option<String>,
-}
-
-impl AdapterArgs {
-    fn request(&self) -> AdapterRequest {
-        AdapterRequest {
-            name: self.adapter.clone(),
-            backend: self.backend.clone(),
-        }
-    }
-}
-
-/// Settings that override the scene file's.
-#[derive(Args, Clone)]
-struct SceneOptions {
-    #[arg(long, value_enum, default_value_t)]
-    accel: Accel,
-    /// Ray/triangle test [default: the scene's render.intersect, else watertight].
-    #[arg(long, value_enum)]
-    intersect: Option<Intersect>,
-    /// Samples per pixel [default: the scene's render.spp, else 1].
-    #[arg(long)]
-    spp: Option<u32>,
-    /// Seed of the sample jitter [default: the scene's render.seed, else 0].
-    #[arg(long)]
-    seed: Option<u32>,
-    #[command(flatten)]
-    view: ViewOptions,
-}
-
-/// The image size and a glTF file's camera.
-#[derive(Args, Clone)]
-struct ViewOptions {
-    /// Image width [default: the scene's; a model file's 1024]; with only
-    /// one of --width and --height, the other keeps the aspect ratio.
-    #[arg(long)]
-    width: Option<u32>,
-    /// Image height [default: the scene's; a model file's 768, or its
-    /// glTF camera's aspect ratio].
-    #[arg(long)]
-    height: Option<u32>,
-    /// A glTF file's camera, by name [default: its first perspective one].
-    #[arg(long)]
-    camera: Option<String>,
-}
-
-impl ViewOptions {
-    fn load(&self, path: &Path) -> Result<Scene> {
-        let mut scene = Scene::load_with_camera(path, self.camera.as_deref())?;
-        self.apply(&mut scene)?;
-        Ok(scene)
-    }
-
-    fn apply(&self, scene: &mut Scene) -> Result<()> {
-        scene.camera = scene
-            .camera
-            .resized(self.width, self.height)
-            .map_err(|e| Error::Usage(format!("--width/--height: {e}")))?;
-        Ok(())
-    }
-}
-
-impl SceneOptions {
-    fn load(&self, path: &Path) -> Result<Scene> {
-        let mut scene = Scene::load_with_camera(path, self.view.camera.as_deref())?;
-        self.apply(&mut scene)?;
-        Ok(scene)
-    }
-
-    fn apply(&self, scene: &mut Scene) -> Result<()> {
-        scene.accel = self.accel;
-        if let Some(intersect) = self.intersect {
-            scene.intersect = intersect;
-        }
-        if let Some(spp) = self.spp {
-            validate_spp(spp).map_err(|e| Error::Usage(format!("--{e}")))?;
-            scene.spp = spp;
-        }
-        if let Some(seed) = self.seed {
-            scene.seed = seed;
-        }
-        self.view.apply(scene)
-    }
-}
-
 /// The f64 oracle's version of `scene`: the watertight test, in double
 /// precision, is the reference every variant and device is measured against.
 pub fn oracle_scene(scene: &Scene) -> Scene {
@@ -180,7 +99,7 @@ struct RenderArgs {
     #[arg(long, value_enum, default_value_t)]
     device: DeviceChoice,
     #[command(flatten)]
-    options: SceneOptions,
+    options: RenderOptions,
     #[command(flatten)]
     adapter: AdapterArgs,
     /// Render N frames orbiting camera.look_at about camera.up; the scene
@@ -210,31 +129,10 @@ struct RenderArgs {
     /// Blender count), named as in a full run.
     #[arg(long, value_name = "A-B", requires = "turntable")]
     frames: Option<String>,
-    /// Print nothing but errors.
-    #[arg(short, long)]
-    quiet: bool,
-}
-
-/// `--frames A-B` (or `A`) of `frames`: inclusive, within 0..frames.
-fn frame_range(text: &str, frames: u32) -> Result<std::ops::RangeInclusive<u32>> {
-    let usage = || {
-        Error::Usage(format!(
-            "--frames {text}: expected A-B (or A), with 0 ≤ A ≤ B < {frames}"
-        ))
-    };
-    let (a, b) = text.split_once('-').unwrap_or((text, text));
-    let (a, b): (u32, u32) = (
-        a.trim().parse().map_err(|_| usage())?,
-        b.trim().parse().map_err(|_| usage())?,
-    );
-    if a > b || b >= frames {
-        return Err(usage());
-    }
-    Ok(a..=b)
 }
 
 /// `lambert render --tile I/N`: renders the part and writes it.
-fn render_part(args: &RenderArgs, tile_text: &str) -> Result<ExitCode> {
+fn render_part(args: &RenderArgs, tile_text: &str, quiet: bool) -> Result<ExitCode> {
     let tile = crate::parts::Tile::parse(tile_text)?;
     let refuse = |what: &str, why: &str| Err(Error::Usage(format!("--tile with {what}: {why}")));
     if args.target_error.is_some() {
@@ -262,12 +160,12 @@ fn render_part(args: &RenderArgs, tile_text: &str) -> Result<ExitCode> {
             args.output.display()
         )));
     }
-    check_output_path(&args.output)?;
+    check_output_path(&args.output, &[&args.scene])?;
     let scene = args.options.load(&args.scene)?;
-    print_warnings(&scene, args.quiet);
+    print_warnings(&scene, quiet);
     let rows = tile.rows(scene.camera.height)?;
     let (mut renderer, note) = Renderer::open(&scene, args.device, &args.adapter.request())?;
-    if let Some(note) = note.filter(|_| !args.quiet) {
+    if let Some(note) = note.filter(|_| !quiet) {
         eprintln!("{note}");
     }
     let device = match renderer {
@@ -281,7 +179,7 @@ fn render_part(args: &RenderArgs, tile_text: &str) -> Result<ExitCode> {
         scene.release_geometry();
     }
     let start = Instant::now();
-    let (rendered, _) = renderer.render_rows(&scene, rows.clone(), !args.quiet)?;
+    let (rendered, _) = renderer.render_rows(&scene, rows.clone(), !quiet)?;
     crate::parts::write_part(
         &args.output,
         &rendered.image,
@@ -290,7 +188,7 @@ fn render_part(args: &RenderArgs, tile_text: &str) -> Result<ExitCode> {
         rows.clone(),
         &hash,
     )?;
-    if !args.quiet {
+    if !quiet {
         eprintln!(
             "wrote {}: part {}/{} (rows {} to {} of {}×{}) on {} in {}",
             args.output.display(),
@@ -307,64 +205,20 @@ fn render_part(args: &RenderArgs, tile_text: &str) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn merge(args: &MergeArgs) -> Result<ExitCode> {
-    check_output_path(&args.output)?;
+fn merge(args: &MergeArgs, quiet: bool) -> Result<ExitCode> {
+    let parts: Vec<&Path> = args.parts.iter().map(PathBuf::as_path).collect();
+    check_output_path(&args.output, &parts)?;
     let image = crate::parts::merge(&args.parts, &args.output)?;
-    eprintln!(
-        "wrote {} ({}×{}, from {} parts)",
-        args.output.display(),
-        image.width,
-        image.height,
-        args.parts.len()
-    );
-    Ok(ExitCode::SUCCESS)
-}
-
-/// `frames/frame_{:04}.png` with frame 7 → `frames/frame_0007.png`.
-pub fn frame_path(pattern: &Path, frame: u32) -> Result<PathBuf> {
-    let text = pattern.to_string_lossy();
-    let open = text.find('{');
-    let close = open.and_then(|o| text[o..].find('}').map(|c| o + c));
-    let (Some(open), Some(close)) = (open, close) else {
-        return Err(Error::Usage(format!(
-            "{}: --turntable needs a frame number in the output name, as {{}} or {{:04}}",
-            pattern.display()
-        )));
-    };
-    let spec = &text[open + 1..close];
-    let width = match spec.strip_prefix(":0").or_else(|| spec.strip_prefix(':')) {
-        None if spec.is_empty() => 0,
-        Some(w) => w.parse::<usize>().ok().filter(|&w| w <= 16).ok_or_else(|| {
-            Error::Usage(format!(
-                "{}: cannot read the frame number format {{{spec}}}; use {{}} or {{:0N}} with N at most 16",
-                pattern.display()
-            ))
-        })?,
-        None => {
-            return Err(Error::Usage(format!(
-                "{}: cannot read the frame number format {{{spec}}}; use {{}} or {{:04}}",
-                pattern.display()
-            )));
-        }
-    };
-    Ok(PathBuf::from(format!(
-        "{}{frame:0width$}{}",
-        &text[..open],
-        &text[close + 1..]
-    )))
-}
-
-/// The camera of frame `frame` of `frames`, orbiting look_at about up.
-fn orbit(camera: &Camera, frame: u32, frames: u32) -> Camera {
-    let centre = glam::DVec3::from(camera.look_at);
-    let axis = glam::DVec3::from(camera.up).normalize();
-    let angle = std::f64::consts::TAU * frame as f64 / frames as f64;
-    let eye = centre
-        + glam::DQuat::from_axis_angle(axis, angle) * (glam::DVec3::from(camera.eye) - centre);
-    Camera {
-        eye: eye.to_array(),
-        ..camera.clone()
+    if !quiet {
+        eprintln!(
+            "wrote {} ({}×{}, from {} parts)",
+            args.output.display(),
+            image.width,
+            image.height,
+            args.parts.len()
+        );
     }
+    Ok(ExitCode::SUCCESS)
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -382,7 +236,7 @@ struct DiffArgs {
     scene: PathBuf,
     #[arg(long, value_enum, default_value = "gpu-cpu")]
     compare: Comparison,
-    /// Write a picture of the differences (PNG).
+    /// Write a picture of the differences: .png, .exr or .pfm.
     #[arg(long)]
     heatmap: Option<PathBuf>,
     /// Print the statistics as JSON.
@@ -400,7 +254,7 @@ struct DiffArgs {
     #[arg(long, default_value_t = Tolerance::default().max_prim_mismatch_fraction, value_parser = fraction)]
     max_prim_mismatch: f64,
     #[command(flatten)]
-    options: SceneOptions,
+    options: RenderOptions,
     #[command(flatten)]
     adapter: AdapterArgs,
 }
@@ -440,14 +294,16 @@ struct TraceArgs {
     json: bool,
     #[command(flatten)]
     adapter: AdapterArgs,
-    #[arg(short, long)]
-    quiet: bool,
 }
 
 #[derive(Args)]
 struct BenchArgs {
-    /// Scene files or OBJ models [default: the ladder in ../shared/models
-    /// when present, else the bundled scenes].
+    /// Scene files or OBJ models [default: the OBJ models in
+    /// ../shared/models when present, else the bundled bunny_lowres and
+    /// dragon_res4 (assets/scenes/meshes); with --time-vs-error, the
+    /// bundled scenes edge_cases, spheres and triangle_oblique. The
+    /// bundled files are looked for in the working folder, then the
+    /// executable's and those above it (a checkout's target/release)].
     inputs: Vec<PathBuf>,
     /// Measure run time against error over spp, intersection test, device
     /// and precision, and the skips (BVH, specialisation).
@@ -490,41 +346,27 @@ struct CameraRaysArgs {
     view: ViewOptions,
 }
 
-/// A finite number ≥ 0.
-fn non_negative(text: &str) -> std::result::Result<f32, String> {
-    match text.parse::<f32>() {
-        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
-        _ => Err(format!("'{text}' is not a finite number ≥ 0")),
-    }
-}
-
-/// A number from 0 to 1.
-fn fraction(text: &str) -> std::result::Result<f64, String> {
-    match text.parse::<f64>() {
-        Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
-        _ => Err(format!("'{text}' is not a fraction from 0 to 1")),
-    }
-}
-
 /// `lambert diff`'s exit code for an error (as diff(1)): 1 means only that
 /// the images differ.
 pub const DIFF_ERROR: u8 = 2;
 
 pub fn run() -> Result<ExitCode> {
-    match Cli::parse().command {
-        Command::Render(args) => render(&args),
-        Command::Diff(args) => diff(&args).or_else(|e| {
+    let cli = Cli::parse();
+    let quiet = cli.quiet;
+    match cli.command {
+        Command::Render(args) => render(&args, quiet),
+        Command::Diff(args) => diff(&args, quiet).or_else(|e| {
             eprintln!("error: {e}");
             Ok(ExitCode::from(DIFF_ERROR))
         }),
-        Command::Trace(args) => trace(&args),
-        Command::CameraRays(args) => camera_rays(&args),
+        Command::Trace(args) => trace(&args, quiet),
+        Command::CameraRays(args) => camera_rays(&args, quiet),
         Command::Info(args) => match &args.model {
-            Some(model) => model_info(model, args.camera.as_deref()),
-            None => info(&args.adapter),
+            Some(model) => info::model_info(model, args.camera.as_deref()),
+            None => info::info(&args.adapter),
         },
-        Command::Bench(args) => bench(&args),
-        Command::Merge(args) => merge(&args),
+        Command::Bench(args) => benchmark::bench(&args, quiet),
+        Command::Merge(args) => merge(&args, quiet),
     }
 }
 
@@ -537,67 +379,11 @@ fn print_warnings(scene: &Scene, quiet: bool) {
     }
 }
 
-/// `lambert info MODEL`.
-fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> {
-    let scene = Scene::load_with_camera(path, camera)?;
-    println!("{}", path.display());
-    println!("  triangles: {}", scene.triangles.len());
-    if !scene.spheres.is_empty() {
-        println!("  spheres: {}", scene.spheres.len());
-    }
-    if let Some(b) = scene.bvh.bounds() {
-        println!(
-            "  bounds: {} to {}",
-            crate::scene::vector_text(b.min.as_dvec3()),
-            crate::scene::vector_text(b.max.as_dvec3())
-        );
-    }
-    let smooth = !scene.normals.is_empty();
-    println!(
-        "  normals: {}",
-        if smooth {
-            "smooth (the file's)"
-        } else {
-            "face"
-        }
-    );
-    println!("  materials: {}", scene.materials.len());
-    for (i, m) in scene.materials.iter().enumerate().take(32) {
-        let [r, g, b] = m.albedo;
-        println!("    {i}: albedo [{r}, {g}, {b}]");
-    }
-    let c = &scene.camera;
-    let v = |a: [f64; 3]| crate::scene::vector_text(glam::DVec3::from(a));
-    println!(
-        "  camera: eye {}, look_at {}, up {}, vfov {:.4}°, {}×{}",
-        v(c.eye),
-        v(c.look_at),
-        v(c.up),
-        c.vfov,
-        c.width,
-        c.height
-    );
-    println!("  lights: {}", scene.lights.len());
-    for light in &scene.lights {
-        let vector = crate::scene::vector_text(glam::Vec3::from(light.vector).as_dvec3());
-        let color = crate::scene::vector_text(glam::Vec3::from(light.color).as_dvec3());
-        if light.kind == crate::layout::LIGHT_POINT {
-            println!("    point at {vector}, intensity {color}");
-        } else {
-            println!("    directional towards {vector} (from the surface), irradiance {color}");
-        }
-    }
-    for warning in &scene.warnings {
-        println!("  warning: {warning}");
-    }
-    Ok(ExitCode::SUCCESS)
-}
-
 fn seconds(d: Duration) -> String {
     format!("{:.3} s", d.as_secs_f64())
 }
 
-fn render(args: &RenderArgs) -> Result<ExitCode> {
+fn render(args: &RenderArgs, quiet: bool) -> Result<ExitCode> {
     if let Some(target) = args.target_error {
         if !(target.is_finite() && target > 0.0) {
             return Err(Error::Usage(format!(
@@ -629,25 +415,25 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
         }
     }
     if let Some(tile) = &args.tile {
-        return render_part(args, tile);
+        return render_part(args, tile, quiet);
     }
     if let Some(frames) = args.turntable {
-        return turntable(args, frames);
+        return turntable::turntable(args, frames, quiet);
     }
     // Fail on a bad output name before spending time on the render.
-    check_output_path(&args.output)?;
+    check_output_path(&args.output, &[&args.scene])?;
     let start = Instant::now();
     let scene = args.options.load(&args.scene)?;
     let load = start.elapsed();
-    print_warnings(&scene, args.quiet);
+    print_warnings(&scene, quiet);
 
     let start = Instant::now();
     let (mut renderer, note) = Renderer::open(&scene, args.device, &args.adapter.request())?;
     let upload = start.elapsed();
-    if let Some(note) = note.filter(|_| !args.quiet) {
+    if let Some(note) = note.filter(|_| !quiet) {
         eprintln!("{note}");
     }
-    if !args.quiet {
+    if !quiet {
         eprintln!("rendering on {}", renderer.describe());
     }
     // What the report at the end says of the geometry, before a GPU
@@ -667,13 +453,13 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
         scene.release_geometry();
     }
     if let Some(budget) = args.time_budget {
-        scene.spp = spp_for_budget(&mut renderer, &mut scene, budget, args.quiet)?;
+        scene.spp = spp_for_budget(&mut renderer, &mut scene, budget, quiet)?;
     }
     let mut samples = scene.camera.width as f64 * scene.camera.height as f64 * scene.spp as f64;
     let (rendered, timings) = match args.target_error {
         None => {
-            let (rendered, timings) = renderer.render(&scene, !args.quiet)?;
-            if args.time_budget.is_some() && !args.quiet {
+            let (rendered, timings) = renderer.render(&scene, !quiet)?;
+            if args.time_budget.is_some() && !quiet {
                 let noise = (rendered.variance.iter().map(|&v| v as f64).sum::<f64>()
                     / rendered.variance.len() as f64)
                     .sqrt();
@@ -698,7 +484,7 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
             };
             let start = Instant::now();
             let (rendered, report) = render_adaptive(&mut renderer, &mut scene, settings)?;
-            if !args.quiet {
+            if !quiet {
                 eprintln!(
                     "adaptive: {:.1} samples per pixel on average ({} samples); pixels refined per pass {:?}; {} pixels still above {target} at {} spp; expected RMSE from sampling noise {:.3e}",
                     report.mean_spp,
@@ -722,7 +508,7 @@ fn render(args: &RenderArgs) -> Result<ExitCode> {
     let start = Instant::now();
     rendered.image.save(&args.output)?;
     let write = start.elapsed();
-    if !args.quiet {
+    if !quiet {
         let rays = samples;
         eprintln!(
             "wrote {} ({}×{}, {} primitives)",
@@ -778,61 +564,14 @@ fn spp_for_budget(
     Ok(spp)
 }
 
-fn turntable(args: &RenderArgs, frames: u32) -> Result<ExitCode> {
-    if frames == 0 {
-        return Err(Error::Usage("--turntable needs at least 1 frame".into()));
-    }
-    let range = match &args.frames {
-        Some(text) => frame_range(text, frames)?,
-        None => 0..=frames - 1,
-    };
-    check_output_path(&frame_path(&args.output, *range.start())?)?;
-    let mut scene = args.options.load(&args.scene)?;
-    print_warnings(&scene, args.quiet);
-    let (mut renderer, note) = Renderer::open(&scene, args.device, &args.adapter.request())?;
-    if let Some(note) = note.filter(|_| !args.quiet) {
-        eprintln!("{note}");
-    }
-    if !args.quiet {
-        eprintln!("rendering {frames} frames on {}", renderer.describe());
-    }
-    if !renderer.is_cpu() {
-        scene.release_geometry();
-    }
-    let start_camera = scene.camera.clone();
-    let mut total = Duration::ZERO;
-    let rendered_frames = range.clone().count() as u32;
-    for frame in range {
-        scene.camera = orbit(&start_camera, frame, frames);
-        let start = Instant::now();
-        let (rendered, _) = renderer.render(&scene, false)?;
-        let elapsed = start.elapsed();
-        total += elapsed;
-        let path = frame_path(&args.output, frame)?;
-        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-        }
-        rendered.image.save(&path)?;
-        if !args.quiet {
-            eprintln!("frame {frame}: {} ({})", seconds(elapsed), path.display());
-        }
-    }
-    if !args.quiet {
-        eprintln!(
-            "{rendered_frames} of {frames} frames, {} per frame on average (render and readback; the scene was uploaded once)",
-            seconds(total / rendered_frames)
-        );
-    }
-    Ok(ExitCode::SUCCESS)
-}
-
-fn check_output_path(path: &Path) -> Result<()> {
+/// An image output: a known format, writable, and none of `inputs`.
+fn check_output_path(path: &Path, inputs: &[&Path]) -> Result<()> {
     let extension = path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
     match extension.as_deref() {
-        Some("png" | "exr" | "pfm") => crate::output::prepare_output(path),
+        Some("png" | "exr" | "pfm") => crate::output::prepare_output_for(path, inputs),
         _ => Err(Error::Usage(format!(
             "{}: unknown image format; use .png, .exr or .pfm",
             path.display()
@@ -846,12 +585,12 @@ pub fn render_gpu(scene: &Scene, request: &AdapterRequest) -> Result<Rendered> {
     Ok(renderer.render(&Progress::hidden())?.0)
 }
 
-fn diff(args: &DiffArgs) -> Result<ExitCode> {
+fn diff(args: &DiffArgs, quiet: bool) -> Result<ExitCode> {
     if let Some(path) = &args.heatmap {
-        check_output_path(path)?;
+        check_output_path(path, &[&args.scene])?;
     }
     let scene = args.options.load(&args.scene)?;
-    print_warnings(&scene, args.json);
+    print_warnings(&scene, quiet || args.json);
     let tolerance = Tolerance {
         abs: args.tol_abs,
         rel: args.tol_rel,
@@ -909,8 +648,14 @@ struct TraceReport {
     oracle: Option<rays::Agreement>,
 }
 
-fn trace(args: &TraceArgs) -> Result<ExitCode> {
-    crate::output::prepare_output(&args.output)?;
+fn trace(args: &TraceArgs, quiet: bool) -> Result<ExitCode> {
+    let inputs: Vec<&Path> = [&args.rays]
+        .into_iter()
+        .chain(&args.scene)
+        .chain(&args.obj)
+        .map(PathBuf::as_path)
+        .collect();
+    crate::output::prepare_output_for(&args.output, &inputs)?;
     let start = Instant::now();
     let rays = rays::read_rays(&args.rays)?;
     let read_seconds = start.elapsed().as_secs_f64();
@@ -926,7 +671,7 @@ fn trace(args: &TraceArgs) -> Result<ExitCode> {
         }
     }
     let (mut renderer, note) = Renderer::open(&scene, args.device, &args.adapter.request())?;
-    if let Some(note) = note {
+    if let Some(note) = note.filter(|_| !quiet) {
         eprintln!("{note}");
     }
     renderer.prepare_trace(args.any_hit, scene.intersect)?;
@@ -966,7 +711,7 @@ fn trace(args: &TraceArgs) -> Result<ExitCode> {
             serde_json::to_string_pretty(&report).expect("report serialises")
         );
     }
-    if !args.quiet {
+    if !quiet {
         eprintln!(
             "traced {} rays ({}, {}) on {}: {} hit; {} ({:.2} Mrays/s); wrote {}; read {:.3} s, write {:.3} s",
             report.rays,
@@ -991,261 +736,16 @@ fn trace(args: &TraceArgs) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn camera_rays(args: &CameraRaysArgs) -> Result<ExitCode> {
-    crate::output::prepare_output(&args.output)?;
+fn camera_rays(args: &CameraRaysArgs, quiet: bool) -> Result<ExitCode> {
+    crate::output::prepare_output_for(&args.output, &[&args.scene])?;
     let scene = args.view.load(&args.scene)?;
     let rays = rays::camera_rays(&scene);
     rays::write_rays(&args.output, &rays)?;
-    eprintln!(
-        "wrote {} camera rays to {}",
-        rays.len(),
-        args.output.display()
-    );
-    Ok(ExitCode::SUCCESS)
-}
-
-fn bench(args: &BenchArgs) -> Result<ExitCode> {
-    if args.time_vs_error {
-        return bench_time_vs_error(args);
-    }
-    let inputs = if args.inputs.is_empty() {
-        let models = Path::new("../shared/models");
-        let ladder = bench::default_ladder(models);
-        if ladder.is_empty() {
-            return Err(Error::Usage(format!(
-                "lambert bench needs models to trace: name scene (.toml) or model (.obj) files, \
-                 or run it where {} holds OBJ models (it holds none)",
-                models.display()
-            )));
-        }
-        ladder
-    } else {
-        args.inputs.clone()
-    };
-    check_inputs_and_outputs(&inputs, args)?;
-    let request = args.adapter.request();
-    let mut rows = Vec::new();
-    println!(
-        "{:<18} {:>9} {:>11} {:>11} {:>8} {:>7} {:>6} {:>9} {:>8}  device",
-        "model", "triangles", "primary", "shadow", "build", "SAH", "depth", "memory", "B/tri"
-    );
-    println!(
-        "{:<18} {:>9} {:>11} {:>11} {:>8} {:>7} {:>6} {:>9} {:>8}",
-        "", "", "Mrays/s", "Mrays/s", "s", "", "", "MiB", ""
-    );
-    for input in &inputs {
-        let scene = bench::load_input(input, args.size)?;
-        let name = input_name(input);
-        for row in bench::ladder_rows(&name, &scene, args.device, &request, args.runs)? {
-            println!(
-                "{:<18} {:>9} {:>11.2} {:>11.2} {:>8.3} {:>7.1} {:>6} {:>9.1} {:>8.1}  {}",
-                row.model,
-                row.triangles,
-                row.primary_mrays_per_s,
-                row.shadow_mrays_per_s,
-                row.bvh_build_seconds,
-                row.sah_cost,
-                row.bvh_depth,
-                row.device_bytes as f64 / (1 << 20) as f64,
-                row.device_bytes_per_triangle,
-                row.device
-            );
-            rows.push(row);
-        }
-    }
-    if let Some(path) = &args.json {
-        write_json(path, &rows)?;
-    }
-    if let Some(dir) = &args.plot {
-        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-        crate::plot::ladder(&rows, &dir.join("time_per_ray"))?;
-    }
-    Ok(ExitCode::SUCCESS)
-}
-
-/// Before any work: every input exists, and every output (--json, --plot)
-/// can be written.
-fn check_inputs_and_outputs(inputs: &[PathBuf], args: &BenchArgs) -> Result<()> {
-    if let Some(missing) = inputs.iter().find(|p| !p.exists()) {
-        return Err(Error::Usage(format!("{}: no such file", missing.display())));
-    }
-    if let Some(path) = &args.json {
-        crate::output::prepare_output(path)?;
-    }
-    if let Some(dir) = &args.plot {
-        crate::output::prepare_output(&dir.join("time_per_ray.png"))?;
-    }
-    Ok(())
-}
-
-/// A bench input's name in tables and plots: its file name without extension.
-fn input_name(path: &Path) -> String {
-    path.file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default()
-}
-
-fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<()> {
-    let text = serde_json::to_string_pretty(value).expect("bench results serialise");
-    crate::output::write_atomically(path, text.as_bytes())
-}
-
-fn bench_time_vs_error(args: &BenchArgs) -> Result<ExitCode> {
-    bench::check_spp_list(&args.spp_list)?;
-    let reference_spp = args
-        .reference_spp
-        .unwrap_or((4 * args.spp_list.iter().max().copied().unwrap_or(1)).min(MAX_SPP));
-    validate_spp(reference_spp).map_err(|e| Error::Usage(format!("--reference-{e}")))?;
-    let inputs: Vec<PathBuf> = if args.inputs.is_empty() {
-        let defaults: Vec<PathBuf> = ["edge_cases", "spheres", "triangle_oblique"]
-            .iter()
-            .map(|n| PathBuf::from(format!("assets/scenes/{n}.toml")))
-            .collect();
-        if !defaults.iter().all(|p| p.exists()) {
-            return Err(Error::Usage(
-                "lambert bench --time-vs-error needs scenes to measure: name them, or run it \
-                 in the repository, whose assets/scenes it measures by default"
-                    .into(),
-            ));
-        }
-        defaults
-    } else {
-        args.inputs.clone()
-    };
-    check_inputs_and_outputs(&inputs, args)?;
-    let request = args.adapter.request();
-    let gpu = match args.device {
-        BenchDevices::Cpu => false,
-        _ => match Gpu::open(&request, false) {
-            Ok(_) => true,
-            Err(e) if args.device == BenchDevices::Both => {
-                eprintln!("{e}\nnote: measuring the CPU paths only");
-                false
-            }
-            Err(e) => return Err(e),
-        },
-    };
-    let mut spp = args.spp_list.clone();
-    spp.sort_unstable();
-    spp.dedup();
-    let knobs = bench::Knobs {
-        spp,
-        reference_spp,
-        runs: args.runs,
-        gpu,
-    };
-    let mut all = Vec::new();
-    for input in &inputs {
-        let scene = bench::load_input(input, args.size)?;
-        let name = input_name(input);
-        let points = bench::time_vs_error(&name, &scene, &knobs, &request, &mut |line| {
-            eprintln!("{line}")
-        })?;
-        println!("{name}: Pareto front (fastest first)");
-        let mut front: Vec<&bench::Point> = points.iter().filter(|p| p.on_pareto_front).collect();
-        front.sort_by(|a, b| a.seconds.total_cmp(&b.seconds));
-        for p in front {
-            println!(
-                "  {:?} {:<16} {:<8} spp {:>6.2} {:<11} {:<11} {:>9.4} s  RMSE {:.3e}  PSNR {}  leaks {}",
-                p.path,
-                p.intersect.name(),
-                p.sampling,
-                p.mean_spp,
-                p.accel,
-                p.shader,
-                p.seconds,
-                p.rmse,
-                p.psnr_db
-                    .map_or("inf".to_string(), |v| format!("{v:.1} dB")),
-                p.leaks
-            );
-        }
-        if let Some(target) = args.target_error {
-            match bench::cheapest_within(&points, target) {
-                Some(p) => println!(
-                    "  cheapest within RMSE {target:e}: {:?} {} spp {} ({:.4} s, expected RMSE {:.3e})",
-                    p.path,
-                    p.intersect.name(),
-                    p.spp,
-                    p.seconds,
-                    p.rmse
-                ),
-                None => println!("  no measured setting reaches RMSE {target:e}"),
-            }
-        }
-        if let Some(dir) = &args.plot {
-            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-            crate::plot::time_vs_error(&points, &dir.join(format!("time_vs_error_{name}")))?;
-        }
-        all.extend(points);
-    }
-    if let Some(path) = &args.json {
-        write_json(path, &all)?;
-    }
-    Ok(ExitCode::SUCCESS)
-}
-
-fn info(args: &AdapterArgs) -> Result<ExitCode> {
-    let request = args.request();
-    let all = gpu::enumerate_adapters(&request)?;
-    let none_at_all = all.is_empty();
-    let adapters: Vec<_> = all
-        .into_iter()
-        .filter(|a| request.matches(&a.get_info()))
-        .collect();
-    let kernel = cpu::CpuKernel::active();
-    println!(
-        "CPU path: {} threads, {} kernel",
-        rayon::current_num_threads(),
-        kernel.name()
-    );
-    for other in cpu::CpuKernel::ALL {
-        if let Some(missing) = other.missing() {
-            println!(
-                "  {} kernel: not on this CPU (needs {missing})",
-                other.name()
-            );
-        } else if other > kernel {
-            println!(
-                "  {} kernel: available, not chosen (LAMBERT_CPU_KERNEL)",
-                other.name()
-            );
-        }
-    }
-    if adapters.is_empty() {
-        let wanted = request.describe_request()?;
-        let wanted = if wanted.is_empty() {
-            String::new()
-        } else {
-            format!(" {wanted}")
-        };
-        if none_at_all && request.wants_vulkan()? && cfg!(target_os = "linux") {
-            println!(
-                "no GPU adapters{wanted} (for a software one, install Mesa's lavapipe: apt-get install mesa-vulkan-drivers)"
-            );
-        } else {
-            println!("no GPU adapters{wanted}");
-        }
-    }
-    for adapter in adapters {
-        let info = adapter.get_info();
-        let limits = adapter.limits();
-        println!("adapter: {}", info.name);
-        println!(
-            "  backend: {:?}, type: {:?}",
-            info.backend, info.device_type
-        );
-        println!("  driver: {} {}", info.driver, info.driver_info);
-        println!(
-            "  limits: storage binding {} MiB, buffer {} MiB, texture 2D {} px, workgroup invocations {}",
-            limits.max_storage_buffer_binding_size >> 20,
-            limits.max_buffer_size >> 20,
-            limits.max_texture_dimension_2d,
-            limits.max_compute_invocations_per_workgroup
-        );
-        println!(
-            "  timestamp queries: {}",
-            adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY)
+    if !quiet {
+        eprintln!(
+            "wrote {} camera rays to {}",
+            rays.len(),
+            args.output.display()
         );
     }
     Ok(ExitCode::SUCCESS)

@@ -169,6 +169,14 @@ fn is_special(target: &Path) -> bool {
 /// created when missing (the one rule for every output, --plot's folder
 /// included), and must take a new file; a folder at `path` is an error.
 pub fn prepare_output(path: &Path) -> Result<()> {
+    prepare_output_for(path, &[])
+}
+
+/// `prepare_output`, refusing an output that is one of `inputs`: an output
+/// is never written over a file the command reads (a symlink or a hard
+/// link to one included).
+pub fn prepare_output_for(path: &Path, inputs: &[&Path]) -> Result<()> {
+    refuse_input(path, inputs)?;
     let target = resolve_target(path)?;
     if target.is_dir() {
         return Err(Error::Usage(format!(
@@ -202,6 +210,44 @@ pub fn prepare_output(path: &Path) -> Result<()> {
         ))
     })?;
     Ok(())
+}
+
+/// An error where the output `path` is one of `inputs`.
+pub fn refuse_input(path: &Path, inputs: &[&Path]) -> Result<()> {
+    match inputs.iter().find(|input| same_file(path, input)) {
+        Some(input) => Err(Error::Usage(format!(
+            "{}: the output is one of the inputs ({}); name another output file",
+            path.display(),
+            input.display()
+        ))),
+        None => Ok(()),
+    }
+}
+
+/// Whether `a` and `b` name one file: the same device and inode where both
+/// exist (symlinks followed, hard links seen), else the same absolute path
+/// with symlinks resolved as far as they exist.
+fn same_file(a: &Path, b: &Path) -> bool {
+    #[cfg(unix)]
+    if let (Ok(ma), Ok(mb)) = (std::fs::metadata(a), std::fs::metadata(b)) {
+        use std::os::unix::fs::MetadataExt;
+        return (ma.dev(), ma.ino()) == (mb.dev(), mb.ino());
+    }
+    match (canonical(a), canonical(b)) {
+        (Some(a), Some(b)) => a == b,
+        _ => false,
+    }
+}
+
+/// `path` made absolute, with symlinks resolved in its longest existing
+/// prefix (a file not yet written has no canonical path of its own).
+fn canonical(path: &Path) -> Option<PathBuf> {
+    let target = resolve_target(path).ok()?;
+    if let Ok(full) = std::fs::canonicalize(&target) {
+        return Some(full);
+    }
+    let folder = std::fs::canonicalize(folder_of(&target)).ok()?;
+    Some(folder.join(target.file_name()?))
 }
 
 fn temporary_beside(target: &Path, kind: &str) -> Result<PathBuf> {

@@ -380,8 +380,12 @@ impl Scene {
             };
             scene.lights.push(light.map_err(|m| Error::scene(path, m))?);
         }
+        // A file's lights are the scene's lights: the default light and
+        // ambient belong only to a model with no light of its own.
         if scene.lights.is_empty() {
             scene.lights.push(default_light(&scene.camera));
+        } else {
+            scene.ambient = [0.0; 3];
         }
         scene.check_primitive_count(path)?;
         scene.rebuild_bvh();
@@ -872,7 +876,8 @@ pub fn validate_camera(camera: &Camera) -> Result<(), String> {
 /// or --width/--height say otherwise.
 pub const DEFAULT_WIDTH: u32 = 1024;
 pub const DEFAULT_HEIGHT: u32 = 768;
-/// A model rendered alone: ambient light, so that no face is black.
+/// A model with no light of its own, rendered alone: ambient light, so
+/// that no face is black.
 pub const DEFAULT_AMBIENT: f32 = 0.1;
 /// Field of view of the camera framed on a model with none.
 pub const FRAMED_VFOV_DEG: f64 = 40.0;

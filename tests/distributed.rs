@@ -298,3 +298,54 @@ fn frame_ranges_render_only_their_frames_with_the_full_names() {
         );
     }
 }
+
+/// Issue 28 item 15: an output that is one of the parts (by name, through
+/// a symlink or a hard link, or a name the glob of a second run picks up)
+/// is refused, and nothing is written.
+#[test]
+fn merge_refuses_an_output_that_is_one_of_its_parts() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let all = d.join("part_all.exr");
+    let parts = parts_and_merge(d, scene("spheres"), 3, &["--device", "cpu"], &all);
+    let bytes: Vec<Vec<u8>> = parts.iter().map(|p| std::fs::read(p).unwrap()).collect();
+    let symlink = d.join("link.exr");
+    std::os::unix::fs::symlink(&parts[1], &symlink).unwrap();
+    let hard = d.join("hard.exr");
+    std::fs::hard_link(&parts[2], &hard).unwrap();
+    let dotted = d.join(".").join("part0.exr");
+    let [p0, p1, p2] = [&parts[0], &parts[1], &parts[2]].map(|p| s(p));
+    let merged_before = std::fs::read(&all).unwrap();
+    for (inputs, output) in [
+        (vec![p0, p1, p2], s(&parts[1])),
+        (vec![p0, p1, p2], s(&symlink)),
+        (vec![p0, p1, p2], s(&hard)),
+        (vec![p0, p1, p2], s(&dotted)),
+        // `merge part*.exr -o part_all.exr`, run a second time.
+        (vec![p0, p1, p2, s(&all)], s(&all)),
+    ] {
+        let mut args = vec!["merge"];
+        args.extend(&inputs);
+        args.extend(["-o", output]);
+        let out = lambert(&args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "-o {output}: {stderr}");
+        assert!(
+            stderr.starts_with("error: ")
+                && stderr.contains("the output is one of the inputs")
+                && stderr.contains(output),
+            "-o {output}: {stderr}"
+        );
+        for (part, before) in parts.iter().zip(&bytes) {
+            assert_eq!(&std::fs::read(part).unwrap(), before, "-o {output}");
+        }
+        assert_eq!(std::fs::read(&all).unwrap(), merged_before);
+    }
+    // A new output not among the parts is written as before.
+    let fresh = d.join("fresh.exr");
+    ok(
+        lambert(&["merge", p0, p1, p2, "-o", s(&fresh), "-q"]),
+        "fresh",
+    );
+    assert_eq!(std::fs::read(&fresh).unwrap(), merged_before);
+}

@@ -1,0 +1,199 @@
+//! `lambert bench`: the model ladder and --time-vs-error.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use super::BenchArgs;
+use crate::bench::{self, BenchDevices};
+use crate::error::{Error, Result};
+use crate::gpu::Gpu;
+use crate::scene::{MAX_SPP, validate_spp};
+
+pub(super) fn bench(args: &BenchArgs, quiet: bool) -> Result<ExitCode> {
+    if args.time_vs_error {
+        return bench_time_vs_error(args, quiet);
+    }
+    let inputs = if args.inputs.is_empty() {
+        let ladder = bench::default_inputs();
+        if ladder.is_empty() {
+            return Err(Error::Usage(
+                "lambert bench needs models to trace: name scene (.toml) or model (.obj) files; \
+                 by default it traces ../shared/models, or the bundled models of lambert's \
+                 source tree (assets/scenes/meshes), and found neither from here or from the \
+                 executable's folder"
+                    .into(),
+            ));
+        }
+        ladder
+    } else {
+        args.inputs.clone()
+    };
+    check_inputs_and_outputs(&inputs, args)?;
+    let request = args.adapter.request();
+    let mut rows = Vec::new();
+    println!(
+        "{:<18} {:>9} {:>11} {:>11} {:>8} {:>7} {:>6} {:>9} {:>8}  device",
+        "model", "triangles", "primary", "shadow", "build", "SAH", "depth", "memory", "B/tri"
+    );
+    println!(
+        "{:<18} {:>9} {:>11} {:>11} {:>8} {:>7} {:>6} {:>9} {:>8}",
+        "", "", "Mrays/s", "Mrays/s", "s", "", "", "MiB", ""
+    );
+    for input in &inputs {
+        let scene = bench::load_input(input, args.size)?;
+        let name = input_name(input);
+        for row in bench::ladder_rows(&name, &scene, args.device, &request, args.runs)? {
+            println!(
+                "{:<18} {:>9} {:>11.2} {:>11.2} {:>8.3} {:>7.1} {:>6} {:>9.1} {:>8.1}  {}",
+                row.model,
+                row.triangles,
+                row.primary_mrays_per_s,
+                row.shadow_mrays_per_s,
+                row.bvh_build_seconds,
+                row.sah_cost,
+                row.bvh_depth,
+                row.device_bytes as f64 / (1 << 20) as f64,
+                row.device_bytes_per_triangle,
+                row.device
+            );
+            rows.push(row);
+        }
+    }
+    if let Some(path) = &args.json {
+        write_json(path, &rows)?;
+    }
+    if let Some(dir) = &args.plot {
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        crate::plot::ladder(&rows, &dir.join("time_per_ray"))?;
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Before any work: every input exists, and every output (--json, --plot)
+/// can be written.
+fn check_inputs_and_outputs(inputs: &[PathBuf], args: &BenchArgs) -> Result<()> {
+    if let Some(missing) = inputs.iter().find(|p| !p.exists()) {
+        return Err(Error::Usage(format!("{}: no such file", missing.display())));
+    }
+    let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
+    if let Some(path) = &args.json {
+        crate::output::prepare_output_for(path, &inputs)?;
+    }
+    if let Some(dir) = &args.plot {
+        crate::output::prepare_output_for(&dir.join("time_per_ray.png"), &inputs)?;
+    }
+    Ok(())
+}
+
+/// A bench input's name in tables and plots: its file name without extension.
+fn input_name(path: &Path) -> String {
+    path.file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<()> {
+    let text = serde_json::to_string_pretty(value).expect("bench results serialise");
+    crate::output::write_atomically(path, text.as_bytes())
+}
+
+fn bench_time_vs_error(args: &BenchArgs, quiet: bool) -> Result<ExitCode> {
+    bench::check_spp_list(&args.spp_list)?;
+    let reference_spp = args
+        .reference_spp
+        .unwrap_or((4 * args.spp_list.iter().max().copied().unwrap_or(1)).min(MAX_SPP));
+    validate_spp(reference_spp).map_err(|e| Error::Usage(format!("--reference-{e}")))?;
+    let inputs: Vec<PathBuf> = if args.inputs.is_empty() {
+        let tree = bench::source_tree().unwrap_or_default();
+        let defaults: Vec<PathBuf> = ["edge_cases", "spheres", "triangle_oblique"]
+            .iter()
+            .map(|n| tree.join(format!("assets/scenes/{n}.toml")))
+            .collect();
+        if !defaults.iter().all(|p| p.exists()) {
+            return Err(Error::Usage(
+                "lambert bench --time-vs-error needs scenes to measure: name them; by default \
+                 it measures the bundled scenes of lambert's source tree (assets/scenes), and \
+                 found none from here or from the executable's folder"
+                    .into(),
+            ));
+        }
+        defaults
+    } else {
+        args.inputs.clone()
+    };
+    check_inputs_and_outputs(&inputs, args)?;
+    let request = args.adapter.request();
+    let gpu = match args.device {
+        BenchDevices::Cpu => false,
+        _ => match Gpu::open(&request, false) {
+            Ok(_) => true,
+            Err(e) if args.device == BenchDevices::Both => {
+                if !quiet {
+                    eprintln!("{e}\nnote: measuring the CPU paths only");
+                }
+                false
+            }
+            Err(e) => return Err(e),
+        },
+    };
+    let mut spp = args.spp_list.clone();
+    spp.sort_unstable();
+    spp.dedup();
+    let knobs = bench::Knobs {
+        spp,
+        reference_spp,
+        runs: args.runs,
+        gpu,
+    };
+    let mut all = Vec::new();
+    for input in &inputs {
+        let scene = bench::load_input(input, args.size)?;
+        let name = input_name(input);
+        let points = bench::time_vs_error(&name, &scene, &knobs, &request, &mut |line| {
+            if !quiet {
+                eprintln!("{line}")
+            }
+        })?;
+        println!("{name}: Pareto front (fastest first)");
+        let mut front: Vec<&bench::Point> = points.iter().filter(|p| p.on_pareto_front).collect();
+        front.sort_by(|a, b| a.seconds.total_cmp(&b.seconds));
+        for p in front {
+            println!(
+                "  {:?} {:<16} {:<8} spp {:>6.2} {:<11} {:<11} {:>9.4} s  RMSE {:.3e}  PSNR {}  leaks {}",
+                p.path,
+                p.intersect.name(),
+                p.sampling,
+                p.mean_spp,
+                p.accel,
+                p.shader,
+                p.seconds,
+                p.rmse,
+                p.psnr_db
+                    .map_or("inf".to_string(), |v| format!("{v:.1} dB")),
+                p.leaks
+            );
+        }
+        if let Some(target) = args.target_error {
+            match bench::cheapest_within(&points, target) {
+                Some(p) => println!(
+                    "  cheapest within RMSE {target:e}: {:?} {} spp {} ({:.4} s, expected RMSE {:.3e})",
+                    p.path,
+                    p.intersect.name(),
+                    p.spp,
+                    p.seconds,
+                    p.rmse
+                ),
+                None => println!("  no measured setting reaches RMSE {target:e}"),
+            }
+        }
+        if let Some(dir) = &args.plot {
+            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+            crate::plot::time_vs_error(&points, &dir.join(format!("time_vs_error_{name}")))?;
+        }
+        all.extend(points);
+    }
+    if let Some(path) = &args.json {
+        write_json(path, &all)?;
+    }
+    Ok(ExitCode::SUCCESS)
+}

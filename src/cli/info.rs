@@ -1,0 +1,134 @@
+//! `lambert info`: the adapters and CPU kernels, or what a model holds.
+
+use std::path::Path;
+use std::process::ExitCode;
+
+use super::AdapterArgs;
+use crate::cpu;
+use crate::error::Result;
+use crate::gpu;
+use crate::scene::Scene;
+
+/// `lambert info MODEL`.
+pub(super) fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> {
+    let scene = Scene::load_with_camera(path, camera)?;
+    println!("{}", path.display());
+    println!("  triangles: {}", scene.triangles.len());
+    if !scene.spheres.is_empty() {
+        println!("  spheres: {}", scene.spheres.len());
+    }
+    if let Some(b) = scene.bvh.bounds() {
+        println!(
+            "  bounds: {} to {}",
+            crate::scene::vector_text(b.min.as_dvec3()),
+            crate::scene::vector_text(b.max.as_dvec3())
+        );
+    }
+    let smooth = !scene.normals.is_empty();
+    println!(
+        "  normals: {}",
+        if smooth {
+            "smooth (the file's)"
+        } else {
+            "face"
+        }
+    );
+    println!("  materials: {}", scene.materials.len());
+    for (i, m) in scene.materials.iter().enumerate().take(32) {
+        let [r, g, b] = m.albedo;
+        println!("    {i}: albedo [{r}, {g}, {b}]");
+    }
+    let c = &scene.camera;
+    let v = |a: [f64; 3]| crate::scene::vector_text(glam::DVec3::from(a));
+    println!(
+        "  camera: eye {}, look_at {}, up {}, vfov {:.4}°, {}×{}",
+        v(c.eye),
+        v(c.look_at),
+        v(c.up),
+        c.vfov,
+        c.width,
+        c.height
+    );
+    println!("  lights: {}", scene.lights.len());
+    for light in &scene.lights {
+        let vector = crate::scene::vector_text(glam::Vec3::from(light.vector).as_dvec3());
+        let color = crate::scene::vector_text(glam::Vec3::from(light.color).as_dvec3());
+        if light.kind == crate::layout::LIGHT_POINT {
+            println!("    point at {vector}, intensity {color}");
+        } else {
+            println!("    directional towards {vector} (from the surface), irradiance {color}");
+        }
+    }
+    // f32 values, printed as f32 (0.1, not 0.10000000149011612).
+    println!("  ambient: {:?}", scene.ambient);
+    for warning in &scene.warnings {
+        println!("  warning: {warning}");
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+pub(super) fn info(args: &AdapterArgs) -> Result<ExitCode> {
+    let request = args.request();
+    let all = gpu::enumerate_adapters(&request)?;
+    let none_at_all = all.is_empty();
+    let adapters: Vec<_> = all
+        .into_iter()
+        .filter(|a| request.matches(&a.get_info()))
+        .collect();
+    let kernel = cpu::CpuKernel::active();
+    println!(
+        "CPU path: {} threads, {} kernel",
+        rayon::current_num_threads(),
+        kernel.name()
+    );
+    for other in cpu::CpuKernel::ALL {
+        if let Some(missing) = other.missing() {
+            println!(
+                "  {} kernel: not on this CPU (needs {missing})",
+                other.name()
+            );
+        } else if other > kernel {
+            println!(
+                "  {} kernel: available, not chosen (LAMBERT_CPU_KERNEL)",
+                other.name()
+            );
+        }
+    }
+    if adapters.is_empty() {
+        let wanted = request.describe_request()?;
+        let wanted = if wanted.is_empty() {
+            String::new()
+        } else {
+            format!(" {wanted}")
+        };
+        if none_at_all && request.wants_vulkan()? && cfg!(target_os = "linux") {
+            println!(
+                "no GPU adapters{wanted} (for a software one, install Mesa's lavapipe: apt-get install mesa-vulkan-drivers)"
+            );
+        } else {
+            println!("no GPU adapters{wanted}");
+        }
+    }
+    for adapter in adapters {
+        let info = adapter.get_info();
+        let limits = adapter.limits();
+        println!("adapter: {}", info.name);
+        println!(
+            "  backend: {:?}, type: {:?}",
+            info.backend, info.device_type
+        );
+        println!("  driver: {} {}", info.driver, info.driver_info);
+        println!(
+            "  limits: storage binding {} MiB, buffer {} MiB, texture 2D {} px, workgroup invocations {}",
+            limits.max_storage_buffer_binding_size >> 20,
+            limits.max_buffer_size >> 20,
+            limits.max_texture_dimension_2d,
+            limits.max_compute_invocations_per_workgroup
+        );
+        println!(
+            "  timestamp queries: {}",
+            adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY)
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
