@@ -665,7 +665,7 @@ fn trace(args: &TraceArgs, quiet: bool) -> Result<ExitCode> {
     };
     args.options.apply(&mut scene)?;
     // Where a ray's f32 numbers limit its hits (docs/accuracy.md).
-    if !args.quiet {
+    if !quiet {
         for warning in scene.placement().ray_warnings(&rays) {
             eprintln!("warning: {warning}");
         }
