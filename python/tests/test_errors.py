@@ -271,3 +271,23 @@ def test_lambert_trimesh_is_there_after_import_lambert_even_without_trimesh():
             print(lambert.trimesh.RayMeshIntersector.__name__)
         """)
         assert done.stdout == "RayMeshIntersector\n", (block, done.stdout + done.stderr)
+
+
+@pytest.mark.parametrize(
+    "name, text, expected",
+    [
+        ("empty.obj", "", "no triangles (0 points"),
+        ("points.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n", "no triangles (3 points"),
+        ("lines.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\nl 2 3\n", "no triangles (3 points, 2 lines skipped)"),
+        ("points.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+         "property float z\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n"
+         "0 0 0\n1 0 0\n0 1 0\n", "no triangles (3 points"),
+    ],
+)
+def test_a_model_file_without_triangles_is_a_value_error_naming_it(tmp_path, name, text, expected):
+    # The CLI's rule for every format (issue 28, item 13), through Scene.load.
+    path = tmp_path / name
+    path.write_text(text)
+    with pytest.raises(ValueError) as e:
+        lambert.Scene.load(path)
+    assert str(e.value).startswith(f"{path}: ") and expected in str(e.value), str(e.value)
