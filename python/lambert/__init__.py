@@ -15,13 +15,22 @@ normal (v1-v0)×(v2-v0). Triangles are watertight: no ray passes between
 two that share an edge. See docs/python.md.
 """
 
+import operator
 import os
 
-import numpy as np
+# Mesa's device-select Vulkan layer prints "error: XDG_RUNTIME_DIR is
+# invalid or not set" twice on a headless machine while listing adapters;
+# it only reorders them, which lambert ranks itself. Switched off as the
+# CLI does (src/main.rs), before the native module makes any wgpu
+# instance, unless the user steers it.
+if "MESA_VK_DEVICE_SELECT" not in os.environ and "NODEVICE_SELECT" not in os.environ:
+    os.environ["NODEVICE_SELECT"] = "1"
 
-from . import _lambert
+import numpy as np  # noqa: E402
 
-__all__ = ["RAY_DTYPE", "Scene", "write_image"]
+from . import _lambert  # noqa: E402
+
+__all__ = ["RAY_DTYPE", "Scene", "trimesh", "write_image"]
 
 #: The record layout of a ray file (docs/ray-query.md): little-endian
 #: float32 ox oy oz tmin dx dy dz tmax, 32 bytes a ray. An array of it goes
@@ -56,6 +65,35 @@ def _bound(name, value, n):
     if a.ndim != 1 or a.shape[0] != n:
         raise ValueError(f"{name} has shape {a.shape}; give a scalar or one value per ray ({n},)")
     return a.astype(np.float32, copy=False)
+
+
+def _count(name, value):
+    """A width, height or sample count: None, or a whole number that fits
+    (the native module says what range it takes)."""
+    if value is None:
+        return None
+    try:
+        n = operator.index(value)
+    except TypeError:
+        raise TypeError(f"{name} must be a whole number, not {type(value).__name__}") from None
+    if n < 0:
+        raise ValueError(f"{name} = {n}: must be a positive whole number")
+    if n > 0xFFFFFFFF:
+        raise ValueError(f"{name} = {n} is too large")
+    return n
+
+
+def _albedo(albedo):
+    """One colour for the whole mesh: a number (grey) or (r, g, b)."""
+    if albedo is None:
+        return None
+    a = np.asarray(albedo, dtype=np.float64)
+    if a.shape not in ((), (1,), (3,)):
+        raise ValueError(
+            f"albedo has shape {a.shape}; give one colour for the whole mesh, a number or shape (3,) "
+            "(a colour per face, shape (F, 3), is not supported)"
+        )
+    return [float(c) for c in np.broadcast_to(a, (3,))]
 
 
 def _query(origins, directions, tmin, tmax):
@@ -105,7 +143,8 @@ class Scene:
         if v.dtype.kind not in "fiu":
             raise ValueError(f"vertices must be a float array, not {v.dtype}")
         f = np.asarray(faces)
-        if f.dtype.kind not in "iu":
+        # An empty list is float64 to numpy; the no-triangles error below fits it better.
+        if f.dtype.kind not in "iu" and f.size:
             raise ValueError(f"faces must be an integer array, not {f.dtype}")
         if v.ndim != 2 or v.shape[1] != 3:
             raise ValueError(f"vertices has shape {v.shape}; it must be (V, 3)")
@@ -114,10 +153,8 @@ class Scene:
         if f.dtype == np.uint64 and f.size and f.max() > np.iinfo(np.int64).max:
             row = int(np.argmax(f.max(axis=1) > np.iinfo(np.int64).max))
             raise ValueError(f"faces row {row} = {f[row].tolist()}: index out of range")
-        if albedo is not None:
-            albedo = [float(c) for c in np.broadcast_to(np.asarray(albedo, dtype=np.float64), (3,))]
         native = _lambert.NativeScene.from_arrays(
-            v.astype(np.float64, copy=False), f.astype(np.int64, copy=False), albedo
+            v.astype(np.float64, copy=False), f.astype(np.int64, copy=False), _albedo(albedo)
         )
         return cls(native)
 
@@ -150,12 +187,12 @@ class Scene:
         """(origins, directions), each (width·height, 3) float32: the scene
         camera's rays through pixel centres, row-major from the top (unit
         directions). Give one of width and height to keep the aspect ratio."""
-        return self._native.camera_rays(width, height)
+        return self._native.camera_rays(_count("width", width), _count("height", height))
 
     def render(self, width=None, height=None, spp=1, device="auto"):
         """The image, (H, W, 3) float32 linear RGB: Lambert shading from the
         scene's lights with shadows, ``spp`` stratified samples per pixel."""
-        return self._native.render(width, height, spp, device)
+        return self._native.render(_count("width", width), _count("height", height), _count("spp", spp), device)
 
     def device(self, device="auto"):
         """What ``device`` resolves to for this scene, e.g. "GPU: llvmpipe
@@ -191,4 +228,17 @@ def write_image(path, image):
     a = np.asarray(image)
     if a.ndim != 3 or a.shape[2] != 3:
         raise ValueError(f"image has shape {a.shape}; it must be (H, W, 3)")
-    _lambert.write_image(os.fspath(path), np.ascontiguousarray(a, dtype=np.float32))
+    path = os.fspath(path)
+    # A file where a folder of the path should be: the native write would
+    # fail creating the folder, with the OS's bare "File exists".
+    folder = os.path.dirname(os.path.abspath(path))
+    while not os.path.exists(folder):
+        folder = os.path.dirname(folder)
+    if not os.path.isdir(folder):
+        raise NotADirectoryError(f"{path}: cannot write there: {folder} is not a folder")
+    _lambert.write_image(path, np.ascontiguousarray(a, dtype=np.float32))
+
+
+# After Scene: the drop-in builds on it. trimesh itself is imported only
+# where the drop-in needs it, so `import lambert` works without it.
+from . import trimesh  # noqa: E402

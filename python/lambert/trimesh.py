@@ -20,10 +20,10 @@ from . import Scene
 __all__ = ["RayMeshIntersector"]
 
 
-def _rays(ray_origins, ray_directions):
+def _rays(ray_origins, ray_directions, mesh):
     """float64 origins and unit directions, and which rays are traceable
-    (finite, with a non-zero direction); trimesh reports the others as
-    misses rather than raising."""
+    (finite, with a non-zero direction, and a mesh with triangles); trimesh
+    reports the others as misses rather than raising."""
     o = np.array(ray_origins, dtype=np.float64).reshape(-1, 3)
     d = np.array(ray_directions, dtype=np.float64).reshape(-1, 3)
     if o.shape != d.shape:
@@ -32,6 +32,8 @@ def _rays(ray_origins, ray_directions):
         length = np.linalg.norm(d, axis=1)
         d = d / length[:, None]
     ok = np.isfinite(o).all(axis=1) & np.isfinite(d).all(axis=1) & (length > 0)
+    # An empty mesh is no Scene (from_arrays refuses it): every ray misses.
+    ok &= len(mesh.faces) > 0
     return o, d, ok
 
 
@@ -54,7 +56,7 @@ class RayMeshIntersector:
 
     def intersects_first(self, ray_origins, ray_directions):
         """(n,) int: the index of the first triangle each ray hits, -1 for none."""
-        o, d, ok = _rays(ray_origins, ray_directions)
+        o, d, ok = _rays(ray_origins, ray_directions, self.mesh)
         prim = np.full(len(o), -1, dtype=np.int64)
         if ok.any():
             prim[ok] = self._scene.intersect(o[ok], d[ok], device=self.device)["prim_id"]
@@ -62,7 +64,7 @@ class RayMeshIntersector:
 
     def intersects_any(self, ray_origins, ray_directions):
         """(n,) bool: whether each ray hits the mesh."""
-        o, d, ok = _rays(ray_origins, ray_directions)
+        o, d, ok = _rays(ray_origins, ray_directions, self.mesh)
         hit = np.zeros(len(o), dtype=bool)
         if ok.any():
             hit[ok] = self._scene.occluded(o[ok], d[ok], device=self.device)
@@ -73,10 +75,10 @@ class RayMeshIntersector:
         """(index_tri, index_ray[, locations]): the triangles each ray hits
         (every hit along it with ``multiple_hits``, at most ``max_hits``),
         ordered as trimesh's: all first hits, then all second hits, and so on."""
-        o, d, ok = _rays(ray_origins, ray_directions)
-        step = max(1e-8, 1e-6 * float(self.mesh.scale))
+        o, d, ok = _rays(ray_origins, ray_directions, self.mesh)
         tris, rays, locations = [], [], []
         live = np.flatnonzero(ok)
+        step = max(1e-8, 1e-6 * float(self.mesh.scale)) if len(live) else 0.0
         tmin = np.zeros(len(live), dtype=np.float32)
         for _ in range(max_hits if multiple_hits else 1):
             if len(live) == 0:
@@ -109,4 +111,7 @@ class RayMeshIntersector:
         trimesh's own ray-parity test over this intersector."""
         from trimesh.ray.ray_util import contains_points
 
+        if len(self.mesh.faces) == 0:
+            # Nothing is inside an empty mesh (trimesh's test needs bounds).
+            return np.zeros(len(np.asarray(points, dtype=np.float64).reshape(-1, 3)), dtype=bool)
         return contains_points(self, points)

@@ -18,16 +18,19 @@ use lambert::output::Image;
 use lambert::render::{DeviceChoice, Renderer, Renderers};
 use lambert::scene::{Intersect, Scene};
 use lambert::{Error, rays};
-use numpy::ndarray::{Array2, Array3, ArrayView2};
+use numpy::ndarray::{Array2, Array3};
 use numpy::{
-    IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray1, PyReadonlyArray2,
-    PyReadonlyArray3, PyUntypedArrayMethods,
+    IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray2, PyReadonlyArray3,
+    PyUntypedArrayMethods,
 };
 use pyo3::exceptions::{
     PyFileNotFoundError, PyOSError, PyPermissionError, PyRuntimeError, PyValueError,
 };
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+
+mod arrays;
+use arrays::{Bound1, Bound1View, Rows, RowsView};
 
 /// The library's errors as the exceptions a Python user expects, with the
 /// CLI's messages.
@@ -86,125 +89,6 @@ fn intersect_choice(name: &str) -> PyResult<Intersect> {
         })
 }
 
-/// A (N, 3) float array of either width, as numpy gave it (any strides).
-enum Rows<'py> {
-    F32(PyReadonlyArray2<'py, f32>),
-    F64(PyReadonlyArray2<'py, f64>),
-}
-
-impl<'py> Rows<'py> {
-    fn extract(name: &str, value: &Bound<'py, PyAny>) -> PyResult<Rows<'py>> {
-        let rows = if let Ok(a) = value.extract::<PyReadonlyArray2<f32>>() {
-            Rows::F32(a)
-        } else if let Ok(a) = value.extract::<PyReadonlyArray2<f64>>() {
-            Rows::F64(a)
-        } else {
-            return Err(PyValueError::new_err(format!(
-                "{name} must be a (N, 3) float32 or float64 array"
-            )));
-        };
-        let shape = match &rows {
-            Rows::F32(a) => a.shape().to_vec(),
-            Rows::F64(a) => a.shape().to_vec(),
-        };
-        if shape[1] != 3 {
-            return Err(PyValueError::new_err(format!(
-                "{name} has shape {shape:?}; it must be (N, 3)"
-            )));
-        }
-        Ok(rows)
-    }
-
-    fn len(&self) -> usize {
-        match self {
-            Rows::F32(a) => a.shape()[0],
-            Rows::F64(a) => a.shape()[0],
-        }
-    }
-
-    fn view(&self) -> RowsView<'_> {
-        match self {
-            Rows::F32(a) => a
-                .as_slice()
-                .map_or_else(|_| RowsView::F32(a.as_array()), RowsView::PackedF32),
-            Rows::F64(a) => a
-                .as_slice()
-                .map_or_else(|_| RowsView::F64(a.as_array()), RowsView::PackedF64),
-        }
-    }
-}
-
-/// `Rows` as a view the tracing threads can share: packed rows (the usual
-/// case) read as slices, others through their strides.
-#[derive(Clone, Copy)]
-enum RowsView<'a> {
-    PackedF32(&'a [f32]),
-    PackedF64(&'a [f64]),
-    F32(ArrayView2<'a, f32>),
-    F64(ArrayView2<'a, f64>),
-}
-
-impl RowsView<'_> {
-    #[inline]
-    fn row(&self, i: usize) -> [f32; 3] {
-        match self {
-            RowsView::PackedF32(a) => [a[3 * i], a[3 * i + 1], a[3 * i + 2]],
-            RowsView::PackedF64(a) => [a[3 * i] as f32, a[3 * i + 1] as f32, a[3 * i + 2] as f32],
-            RowsView::F32(a) => [a[[i, 0]], a[[i, 1]], a[[i, 2]]],
-            RowsView::F64(a) => [a[[i, 0]] as f32, a[[i, 1]] as f32, a[[i, 2]] as f32],
-        }
-    }
-}
-
-/// tmin or tmax: one value for every ray, or one each.
-enum Bound1<'py> {
-    All(f32),
-    Each(PyReadonlyArray1<'py, f32>),
-}
-
-impl<'py> Bound1<'py> {
-    fn extract(name: &str, value: &Bound<'py, PyAny>, n: usize) -> PyResult<Bound1<'py>> {
-        if let Ok(a) = value.extract::<PyReadonlyArray1<f32>>() {
-            if a.len() != n {
-                return Err(PyValueError::new_err(format!(
-                    "{name} has {} values for {n} rays; give one per ray or a scalar",
-                    a.len()
-                )));
-            }
-            return Ok(Bound1::Each(a));
-        }
-        match value.extract::<f64>() {
-            Ok(v) => Ok(Bound1::All(v as f32)),
-            Err(_) => Err(PyValueError::new_err(format!(
-                "{name} must be a number or a (N,) float32 array"
-            ))),
-        }
-    }
-
-    fn view(&self) -> Bound1View<'_> {
-        match self {
-            Bound1::All(v) => Bound1View::All(*v),
-            Bound1::Each(a) => Bound1View::Each(a.as_array()),
-        }
-    }
-}
-
-#[derive(Clone, Copy)]
-enum Bound1View<'a> {
-    All(f32),
-    Each(numpy::ndarray::ArrayView1<'a, f32>),
-}
-
-impl Bound1View<'_> {
-    #[inline]
-    fn at(&self, i: usize) -> f32 {
-        match self {
-            Bound1View::All(v) => *v,
-            Bound1View::Each(a) => a[i],
-        }
-    }
-}
-
 /// A query's rays as the caller gave them: records (still to be
 /// checked), or arrays read a ray at a time.
 #[derive(Clone, Copy)]
@@ -239,7 +123,8 @@ impl Query<'_> {
                 tmax,
                 ..
             } => Ray {
-                origin: origins.row(i),
+                // The one place an origin row (read in f64) becomes f32.
+                origin: origins.row_f64(i).map(|c| c as f32),
                 tmin: tmin.at(i),
                 dir: directions.row(i),
                 tmax: tmax.at(i),
@@ -512,7 +397,11 @@ macro_rules! with_query {
                 if records.shape()[1] != 8 {
                     return Err(PyValueError::new_err("ray records must be (N, 8) float32"));
                 }
-                let flat = records.as_slice().map_err(|_| {
+                let flat = records
+                    .as_slice()
+                    .ok()
+                    .filter(|_| records.is_c_contiguous());
+                let flat = flat.ok_or_else(|| {
                     PyValueError::new_err(
                         "ray records must be a contiguous lambert.RAY_DTYPE array",
                     )
@@ -562,18 +451,14 @@ impl NativeScene {
                 faces.shape()
             )));
         }
-        let v: Vec<[f64; 3]> = vertices
-            .as_array()
-            .rows()
-            .into_iter()
-            .map(|r| [r[0], r[1], r[2]])
-            .collect();
-        let f: Vec<[i64; 3]> = faces
-            .as_array()
-            .rows()
-            .into_iter()
-            .map(|r| [r[0], r[1], r[2]])
-            .collect();
+        if faces.shape()[0] == 0 {
+            // As a model file with no triangles is refused.
+            return Err(PyValueError::new_err(format!(
+                "faces is empty: no triangles ({} points)",
+                vertices.shape()[0]
+            )));
+        }
+        let (v, f) = (arrays::rows3(&vertices), arrays::rows3(&faces));
         let scene = detached(py, || Scene::from_arrays(&v, &f, albedo))?;
         Ok(NativeScene::new(scene))
     }

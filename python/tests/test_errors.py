@@ -153,7 +153,7 @@ def test_write_image_errors_leave_the_previous_file(tmp_path):
 
 def run_isolated(code, **env):
     """Runs `code` in a fresh interpreter (so that its device state is its own)."""
-    full_env = dict(os.environ, NODEVICE_SELECT="1", **env)
+    full_env = {**os.environ, "NODEVICE_SELECT": "1", **env}
     return subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True, text=True,
                           env=full_env, timeout=300)
 
@@ -191,3 +191,103 @@ def test_auto_without_a_gpu_falls_back_to_the_cpu_with_a_warning():
     # Once per scene, as the CLI says it once per run.
     assert "warnings 1 RuntimeWarning note: using the CPU path instead" in done.stdout
     assert "device CPU" in done.stdout
+
+
+@pytest.mark.parametrize("vertices", [TRIANGLE, np.zeros((0, 3))])
+def test_a_mesh_without_faces_is_a_value_error(vertices):
+    for faces in (np.zeros((0, 3), dtype=np.int64), np.zeros((0, 3), dtype=np.uint32), np.zeros((0, 3)), []):
+        with pytest.raises(ValueError, match=rf"no triangles \({len(vertices)} points\)"):
+            lambert.Scene.from_arrays(vertices, np.asarray(faces).reshape(0, 3))
+
+
+def test_per_face_albedo_names_the_shapes_it_takes():
+    faces = [[0, 1, 2], [0, 2, 1]]
+    with pytest.raises(ValueError, match=r"albedo has shape \(2, 3\); .*shape \(3,\)"):
+        lambert.Scene.from_arrays(TRIANGLE, faces, albedo=np.full((2, 3), 0.5))
+    # One colour, as a number or (r, g, b), is the mesh's.
+    for albedo in (0.5, [0.5], (0.2, 0.3, 0.4), np.array([0.2, 0.3, 0.4], dtype=np.float32)):
+        lambert.Scene.from_arrays(TRIANGLE, faces, albedo=albedo)
+
+
+@pytest.mark.parametrize(
+    "call, message",
+    [
+        (lambda s: s.render(-1, 5), r"width = -1: must be a positive whole number"),
+        (lambda s: s.render(5, -3), r"height = -3: must be a positive whole number"),
+        (lambda s: s.render(5, 5, spp=-2), r"spp = -2: must be a positive whole number"),
+        (lambda s: s.render(2**40, 5), r"width = 1099511627776 is too large"),
+        (lambda s: s.camera_rays(-1), r"width = -1"),
+        (lambda s: s.camera_rays(height=-1), r"height = -1"),
+    ],
+)
+def test_negative_and_huge_sizes_are_value_errors_naming_the_argument(call, message):
+    scene = lambert.Scene.from_arrays(TRIANGLE, [[0, 1, 2]])
+    with pytest.raises(ValueError, match=message):
+        call(scene)
+    with pytest.raises(TypeError, match="whole number"):
+        scene.render(2.5, 5)
+
+
+def test_write_image_under_a_file_says_the_parent_is_not_a_folder(tmp_path):
+    image = np.full((2, 2, 3), 0.5, dtype=np.float32)
+    (tmp_path / "file.py").write_text("print()\n")
+    for target in (tmp_path / "file.py" / "x.png", tmp_path / "file.py" / "deeper" / "x.png"):
+        with pytest.raises(NotADirectoryError) as e:
+            lambert.write_image(target, image)
+        assert str(e.value) == f"{target}: cannot write there: {tmp_path / 'file.py'} is not a folder"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file.py"]
+    # A missing folder is made, as the CLI makes one.
+    lambert.write_image(tmp_path / "new" / "x.png", image)
+    assert (tmp_path / "new" / "x.png").is_file()
+
+
+def test_a_gpu_probe_prints_nothing_without_xdg_runtime_dir():
+    env = {k: v for k, v in os.environ.items() if k not in ("XDG_RUNTIME_DIR", "NODEVICE_SELECT")}
+    code = f"""
+        import os, lambert
+        scene = lambert.Scene.from_arrays({TRIANGLE.tolist()!r}, [[0, 1, 2]])
+        hit = scene.intersect([[0.2, 0.2, 1.0]], [[0.0, 0.0, -1.0]], device="gpu")
+        print("t", hit["t"][0], scene.device("gpu"), "NODEVICE_SELECT", os.environ.get("NODEVICE_SELECT"))
+    """
+    done = subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True, text=True,
+                          env=env, timeout=300)
+    assert "t 1.0 GPU:" in done.stdout, done.stdout + done.stderr
+    assert "NODEVICE_SELECT 1" in done.stdout
+    assert done.stderr == "", done.stderr
+    # The user's own setting stands.
+    done = run_isolated("""
+        import os, lambert
+        print("NODEVICE_SELECT", os.environ.get("NODEVICE_SELECT"))
+    """, NODEVICE_SELECT="0")
+    assert "NODEVICE_SELECT 0" in done.stdout, done.stdout + done.stderr
+
+
+def test_lambert_trimesh_is_there_after_import_lambert_even_without_trimesh():
+    for block in ("", "sys.modules['trimesh'] = None  # import trimesh raises ImportError"):
+        done = run_isolated(f"""
+            import sys
+            {block}
+            import lambert
+            print(lambert.trimesh.RayMeshIntersector.__name__)
+        """)
+        assert done.stdout == "RayMeshIntersector\n", (block, done.stdout + done.stderr)
+
+
+@pytest.mark.parametrize(
+    "name, text, expected",
+    [
+        ("empty.obj", "", "no triangles (0 points"),
+        ("points.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n", "no triangles (3 points"),
+        ("lines.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\nl 2 3\n", "no triangles (3 points, 2 lines skipped)"),
+        ("points.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+         "property float z\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n"
+         "0 0 0\n1 0 0\n0 1 0\n", "no triangles (3 points"),
+    ],
+)
+def test_a_model_file_without_triangles_is_a_value_error_naming_it(tmp_path, name, text, expected):
+    # The CLI's rule for every format (issue 28, item 13), through Scene.load.
+    path = tmp_path / name
+    path.write_text(text)
+    with pytest.raises(ValueError) as e:
+        lambert.Scene.load(path)
+    assert str(e.value).startswith(f"{path}: ") and expected in str(e.value), str(e.value)

@@ -1,6 +1,7 @@
 """One Scene, queried from two Python threads at once, with the GIL released."""
 
 import os
+import sys
 import threading
 import time
 
@@ -40,25 +41,39 @@ def test_two_threads_query_one_scene_at_once(device):
 
 
 def test_tracing_releases_the_gil():
+    # Whether another thread runs during a trace, whatever the machine's
+    # speed. With a switch interval of an hour, a thread holding the GIL
+    # keeps it until it blocks or releases it: the counter below, which
+    # sleeps between ticks and so always waits for the GIL, can only tick
+    # while this thread is inside a call that released it. Each trace is
+    # repeated until the counter has ticked during one (on a fast machine
+    # the first trace may end before the counter's sleep does).
     scene = lambert.Scene.load(os.path.join(MESHES, "dragon_res4.obj"))
-    o, d = random_rays(scene, 400000, seed=5)
-    ticks = []
+    o, d = (a.astype(np.float32) for a in random_rays(scene, 100000, seed=5))
+    ticks = [0]
     stop = threading.Event()
 
     def count():
         while not stop.is_set():
-            ticks.append(time.perf_counter())
-            time.sleep(0.001)
+            ticks[0] += 1
+            time.sleep(0.0001)
 
+    # Set before the counter starts, so that no wait for the GIL runs on
+    # the default interval (5 ms), which would force a switch.
+    interval = sys.getswitchinterval()
+    sys.setswitchinterval(3600.0)
     counter = threading.Thread(target=count)
-    start = time.perf_counter()
-    counter.start()
-    scene.intersect(o, d, device="cpu")
-    end = time.perf_counter()
-    stop.set()
-    counter.join()
-    during = [t for t in ticks if start < t < end]
-    # Python code ran while lambert traced: with the GIL held, the counter
-    # would have stood still for the whole trace.
-    assert end - start > 0.02
-    assert len(during) >= 5, (len(during), end - start)
+    try:
+        counter.start()
+        for attempt in range(200):
+            before = ticks[0]
+            scene.intersect(o, d, device="cpu")
+            if ticks[0] > before:
+                break
+        ticked = ticks[0] > before
+    finally:
+        stop.set()
+        if counter.is_alive():
+            counter.join()
+        sys.setswitchinterval(interval)
+    assert ticked, f"no other thread ran during {attempt + 1} traces: the GIL was held"

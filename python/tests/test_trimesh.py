@@ -99,3 +99,27 @@ def test_the_gpu_gives_the_cpu_hits():
     gpu = lambert.trimesh.RayMeshIntersector(mesh, device="gpu").intersects_id(o, d)
     np.testing.assert_array_equal(cpu[0], gpu[0])
     np.testing.assert_array_equal(cpu[1], gpu[1])
+
+
+@pytest.mark.parametrize("vertices", [np.zeros((0, 3)), np.eye(3)])
+@pytest.mark.parametrize("device", ["cpu", "gpu"])
+def test_an_empty_mesh_misses_every_ray_as_in_trimesh(vertices, device):
+    # trimesh's Embree intersector on a mesh without faces: every ray
+    # misses, with empty hit lists (its rtree one and contains_points fail).
+    mesh = trimesh.Trimesh(vertices=vertices, faces=np.zeros((0, 3), dtype=np.int64))
+    ours = lambert.trimesh.RayMeshIntersector(mesh, device=device)
+    o = np.array([[0.2, 0.2, 1.0], [0.0, 0.0, 5.0], [1.0, 2.0, 3.0]])
+    d = np.array([[0.0, 0.0, -1.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0]])
+    first = ours.intersects_first(o, d)
+    np.testing.assert_array_equal(first, [-1, -1, -1])
+    assert first.dtype.kind == "i"
+    hit = ours.intersects_any(o, d)
+    assert hit.dtype == bool and not hit.any() and hit.shape == (3,)
+    for multiple_hits in (True, False):
+        tri, ray, loc = ours.intersects_id(o, d, multiple_hits=multiple_hits, return_locations=True)
+        assert tri.shape == ray.shape == (0,) and tri.dtype == ray.dtype == np.int64
+        assert loc.shape == (0, 3) and loc.dtype == np.float64
+        loc, ray, tri = ours.intersects_location(o, d, multiple_hits=multiple_hits)
+        assert loc.shape == (0, 3) and ray.shape == tri.shape == (0,)
+    inside = ours.contains_points(o)
+    assert inside.dtype == bool and inside.shape == (3,) and not inside.any()

@@ -1,0 +1,155 @@
+//! Reading numpy arrays as they are laid out: any strides (C or Fortran
+//! order, transposed, reversed, sliced, broadcast), float32 or float64.
+//! Only C-ordered rows are read as one packed slice (numpy calls an array
+//! "contiguous" in either order, so contiguity alone says nothing about
+//! where row i lies); every other layout is read through its strides.
+
+use numpy::ndarray::{ArrayView1, ArrayView2};
+use numpy::{PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+
+/// A (N, 3) float array of either width, as numpy gave it (any strides).
+pub enum Rows<'py> {
+    F32(PyReadonlyArray2<'py, f32>),
+    F64(PyReadonlyArray2<'py, f64>),
+}
+
+impl<'py> Rows<'py> {
+    pub fn extract(name: &str, value: &Bound<'py, PyAny>) -> PyResult<Rows<'py>> {
+        let rows = if let Ok(a) = value.extract::<PyReadonlyArray2<f32>>() {
+            Rows::F32(a)
+        } else if let Ok(a) = value.extract::<PyReadonlyArray2<f64>>() {
+            Rows::F64(a)
+        } else {
+            return Err(PyValueError::new_err(format!(
+                "{name} must be a (N, 3) float32 or float64 array"
+            )));
+        };
+        let shape = match &rows {
+            Rows::F32(a) => a.shape().to_vec(),
+            Rows::F64(a) => a.shape().to_vec(),
+        };
+        if shape[1] != 3 {
+            return Err(PyValueError::new_err(format!(
+                "{name} has shape {shape:?}; it must be (N, 3)"
+            )));
+        }
+        Ok(rows)
+    }
+
+    pub fn len(&self) -> usize {
+        match self {
+            Rows::F32(a) => a.shape()[0],
+            Rows::F64(a) => a.shape()[0],
+        }
+    }
+
+    pub fn view(&self) -> RowsView<'_> {
+        match self {
+            Rows::F32(a) => {
+                packed(a).map_or_else(|| RowsView::F32(a.as_array()), RowsView::PackedF32)
+            }
+            Rows::F64(a) => {
+                packed(a).map_or_else(|| RowsView::F64(a.as_array()), RowsView::PackedF64)
+            }
+        }
+    }
+}
+
+/// The array's elements as one slice, row after row, if it is C-ordered.
+fn packed<'a, T: numpy::Element>(a: &'a PyReadonlyArray2<'_, T>) -> Option<&'a [T]> {
+    if a.is_c_contiguous() {
+        a.as_slice().ok()
+    } else {
+        None
+    }
+}
+
+/// `Rows` as a view the tracing threads can share: packed C-ordered rows
+/// (the usual case) read as slices, others through their strides.
+#[derive(Clone, Copy)]
+pub enum RowsView<'a> {
+    PackedF32(&'a [f32]),
+    PackedF64(&'a [f64]),
+    F32(ArrayView2<'a, f32>),
+    F64(ArrayView2<'a, f64>),
+}
+
+impl RowsView<'_> {
+    /// Row `i` as given (float32 widened exactly): an origin stays in f64
+    /// until it becomes a ray.
+    #[inline]
+    pub fn row_f64(&self, i: usize) -> [f64; 3] {
+        match self {
+            RowsView::PackedF32(a) => [a[3 * i], a[3 * i + 1], a[3 * i + 2]].map(f64::from),
+            RowsView::PackedF64(a) => [a[3 * i], a[3 * i + 1], a[3 * i + 2]],
+            RowsView::F32(a) => [a[[i, 0]], a[[i, 1]], a[[i, 2]]].map(f64::from),
+            RowsView::F64(a) => [a[[i, 0]], a[[i, 1]], a[[i, 2]]],
+        }
+    }
+
+    /// Row `i` in float32, as a ray holds it.
+    #[inline]
+    pub fn row(&self, i: usize) -> [f32; 3] {
+        self.row_f64(i).map(|c| c as f32)
+    }
+}
+
+/// tmin or tmax: one value for every ray, or one each.
+pub enum Bound1<'py> {
+    All(f32),
+    Each(PyReadonlyArray1<'py, f32>),
+}
+
+impl<'py> Bound1<'py> {
+    pub fn extract(name: &str, value: &Bound<'py, PyAny>, n: usize) -> PyResult<Bound1<'py>> {
+        if let Ok(a) = value.extract::<PyReadonlyArray1<f32>>() {
+            if a.len() != n {
+                return Err(PyValueError::new_err(format!(
+                    "{name} has {} values for {n} rays; give one per ray or a scalar",
+                    a.len()
+                )));
+            }
+            return Ok(Bound1::Each(a));
+        }
+        match value.extract::<f64>() {
+            Ok(v) => Ok(Bound1::All(v as f32)),
+            Err(_) => Err(PyValueError::new_err(format!(
+                "{name} must be a number or a (N,) float32 array"
+            ))),
+        }
+    }
+
+    pub fn view(&self) -> Bound1View<'_> {
+        match self {
+            Bound1::All(v) => Bound1View::All(*v),
+            Bound1::Each(a) => Bound1View::Each(a.as_array()),
+        }
+    }
+}
+
+#[derive(Clone, Copy)]
+pub enum Bound1View<'a> {
+    All(f32),
+    Each(ArrayView1<'a, f32>),
+}
+
+impl Bound1View<'_> {
+    #[inline]
+    pub fn at(&self, i: usize) -> f32 {
+        match self {
+            Bound1View::All(v) => *v,
+            Bound1View::Each(a) => a[i],
+        }
+    }
+}
+
+/// The rows of a (N, 3) array, by its strides.
+pub fn rows3<T: numpy::Element + Copy>(a: &PyReadonlyArray2<'_, T>) -> Vec<[T; 3]> {
+    a.as_array()
+        .rows()
+        .into_iter()
+        .map(|r| [r[0], r[1], r[2]])
+        .collect()
+}
