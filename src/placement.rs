@@ -250,12 +250,24 @@ impl Placement {
     /// `ray_problem` over a query given in world f32: one warning per kind
     /// of problem, naming the first ray with it and how many have it.
     pub fn ray_warnings(&self, rays: &[Ray]) -> Vec<String> {
-        let problems: Vec<(usize, RayProblem)> = rays
-            .par_iter()
-            .enumerate()
-            .filter_map(|(i, r)| {
-                self.ray_problem(world(r.origin), world(r.dir), true)
-                    .map(|p| (i, p))
+        self.warnings_for(rays.len(), true, |i| {
+            (world(rays[i].origin), world(rays[i].dir))
+        })
+    }
+
+    /// `ray_warnings` over `n` rays, ray i's world origin and direction
+    /// being `ray(i)` (in f64), their origins given in f32 if `in_f32`.
+    pub fn warnings_for(
+        &self,
+        n: usize,
+        in_f32: bool,
+        ray: impl Fn(usize) -> (DVec3, DVec3) + Sync,
+    ) -> Vec<String> {
+        let problems: Vec<(usize, RayProblem)> = (0..n)
+            .into_par_iter()
+            .filter_map(|i| {
+                let (origin, dir) = ray(i);
+                self.ray_problem(origin, dir, in_f32).map(|p| (i, p))
             })
             .collect();
         let mut first: Vec<(usize, RayProblem, usize)> = Vec::new();

@@ -56,7 +56,8 @@ def _floats(name, array):
 
 
 def _bound(name, value, n):
-    """tmin or tmax: a Python float, or a (N,) float32 array."""
+    """tmin or tmax: a Python float, or a (N,) float32 or float64 array
+    (float64 is kept for float64 origins, traced from f64)."""
     a = np.asarray(value)
     if a.dtype.kind not in "fiub":
         raise ValueError(f"{name} must be a number or a (N,) array, not {a.dtype}")
@@ -64,7 +65,7 @@ def _bound(name, value, n):
         return float(a)
     if a.ndim != 1 or a.shape[0] != n:
         raise ValueError(f"{name} has shape {a.shape}; give a scalar or one value per ray ({n},)")
-    return a.astype(np.float32, copy=False)
+    return a if a.dtype == np.float64 else a.astype(np.float32, copy=False)
 
 
 def _count(name, value):
@@ -166,15 +167,19 @@ class Scene:
         return cls(_lambert.NativeScene.load(os.fspath(path)))
 
     def intersect(self, origins, directions=None, tmin=0.0, tmax=np.inf, *, device="auto",
-                  intersect="watertight"):
+                  intersect="watertight", _t64=False):
         """Closest hits of rays (origins and directions (N, 3) of any float
         dtype; tmin and tmax scalars or (N,) arrays; or one array of
         RAY_DTYPE records). Returns a dict of numpy arrays: ``t`` float32
         (inf on a miss), ``prim_id`` int64 (-1 on a miss), ``u``, ``v``
         float32, ``normal`` float32 (N, 3). Hits count where
-        tmin < t < tmax."""
+        tmin < t < tmax; t is along the ray as given. float64 origins keep
+        their precision far from the origin; where float32 limits a ray's
+        hits, a RuntimeWarning names it."""
+        # _t64 (the trimesh drop-in's): t as float64, the traced t plus the
+        # origin's move in f64 unrounded, for locations as precise as the trace.
         o, d, lo, hi = _query(origins, directions, tmin, tmax)
-        return self._native.intersect(o, d, lo, hi, device, intersect)
+        return self._native.intersect(o, d, lo, hi, device, intersect, bool(_t64))
 
     def occluded(self, origins, directions=None, tmin=0.0, tmax=np.inf, *, device="auto",
                  intersect="watertight"):

@@ -79,19 +79,21 @@ class RayMeshIntersector:
         tris, rays, locations = [], [], []
         live = np.flatnonzero(ok)
         step = max(1e-8, 1e-6 * float(self.mesh.scale)) if len(live) else 0.0
-        tmin = np.zeros(len(live), dtype=np.float32)
+        # t and tmin in float64: a sensor far from the mesh has a long t
+        # that float32 would round by more than the mesh's precision.
+        tmin = np.zeros(len(live), dtype=np.float64)
         for _ in range(max_hits if multiple_hits else 1):
             if len(live) == 0:
                 break
-            hits = self._scene.intersect(o[live], d[live], tmin, device=self.device)
+            hits = self._scene.intersect(o[live], d[live], tmin, device=self.device, _t64=True)
             hit = hits["prim_id"] >= 0
             live, t = live[hit], hits["t"][hit]
             tris.append(hits["prim_id"][hit])
             rays.append(live)
-            locations.append(o[live] + d[live] * t.astype(np.float64)[:, None])
+            locations.append(o[live] + d[live] * t[:, None])
             # The next hit lies beyond this one on the same ray (hits count
             # where t > tmin), past the other triangles at this edge or vertex.
-            tmin = t + np.float32(step)
+            tmin = t + step
         index_tri = np.concatenate(tris) if tris else np.zeros(0, dtype=np.int64)
         index_ray = np.concatenate(rays) if rays else np.zeros(0, dtype=np.int64)
         if return_locations:

@@ -89,6 +89,11 @@ impl RowsView<'_> {
         }
     }
 
+    /// Whether its values are float64.
+    pub fn is_f64(&self) -> bool {
+        matches!(self, RowsView::PackedF64(_) | RowsView::F64(_))
+    }
+
     /// Row `i` in float32, as a ray holds it.
     #[inline]
     pub fn row(&self, i: usize) -> [f32; 3] {
@@ -96,51 +101,65 @@ impl RowsView<'_> {
     }
 }
 
-/// tmin or tmax: one value for every ray, or one each.
+/// tmin or tmax: one value for every ray, or one each (float32, or
+/// float64 kept in f64 for rays traced in the scene's frame).
 pub enum Bound1<'py> {
-    All(f32),
-    Each(PyReadonlyArray1<'py, f32>),
+    All(f64),
+    Each32(PyReadonlyArray1<'py, f32>),
+    Each64(PyReadonlyArray1<'py, f64>),
 }
 
 impl<'py> Bound1<'py> {
     pub fn extract(name: &str, value: &Bound<'py, PyAny>, n: usize) -> PyResult<Bound1<'py>> {
-        if let Ok(a) = value.extract::<PyReadonlyArray1<f32>>() {
-            if a.len() != n {
-                return Err(PyValueError::new_err(format!(
-                    "{name} has {} values for {n} rays; give one per ray or a scalar",
-                    a.len()
-                )));
-            }
-            return Ok(Bound1::Each(a));
+        let each = if let Ok(a) = value.extract::<PyReadonlyArray1<f32>>() {
+            Bound1::Each32(a)
+        } else if let Ok(a) = value.extract::<PyReadonlyArray1<f64>>() {
+            Bound1::Each64(a)
+        } else {
+            return match value.extract::<f64>() {
+                Ok(v) => Ok(Bound1::All(v)),
+                Err(_) => Err(PyValueError::new_err(format!(
+                    "{name} must be a number or a (N,) float32 or float64 array"
+                ))),
+            };
+        };
+        let len = match &each {
+            Bound1::Each32(a) => a.len(),
+            Bound1::Each64(a) => a.len(),
+            Bound1::All(_) => n,
+        };
+        if len != n {
+            return Err(PyValueError::new_err(format!(
+                "{name} has {len} values for {n} rays; give one per ray or a scalar"
+            )));
         }
-        match value.extract::<f64>() {
-            Ok(v) => Ok(Bound1::All(v as f32)),
-            Err(_) => Err(PyValueError::new_err(format!(
-                "{name} must be a number or a (N,) float32 array"
-            ))),
-        }
+        Ok(each)
     }
 
     pub fn view(&self) -> Bound1View<'_> {
         match self {
             Bound1::All(v) => Bound1View::All(*v),
-            Bound1::Each(a) => Bound1View::Each(a.as_array()),
+            Bound1::Each32(a) => Bound1View::Each32(a.as_array()),
+            Bound1::Each64(a) => Bound1View::Each64(a.as_array()),
         }
     }
 }
 
 #[derive(Clone, Copy)]
 pub enum Bound1View<'a> {
-    All(f32),
-    Each(ArrayView1<'a, f32>),
+    All(f64),
+    Each32(ArrayView1<'a, f32>),
+    Each64(ArrayView1<'a, f64>),
 }
 
 impl Bound1View<'_> {
+    /// Ray `i`'s value as given (float32 widened exactly).
     #[inline]
-    pub fn at(&self, i: usize) -> f32 {
+    pub fn at(&self, i: usize) -> f64 {
         match self {
             Bound1View::All(v) => *v,
-            Bound1View::Each(a) => a[i],
+            Bound1View::Each32(a) => a[i] as f64,
+            Bound1View::Each64(a) => a[i],
         }
     }
 }

@@ -8,10 +8,12 @@
 use std::mem::MaybeUninit;
 use std::panic::AssertUnwindSafe;
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
-use lambert::cpu::{CpuKernel, QueryOptions, QueryRays, SharedOut, TracedChunk, trace_rays_each};
+use lambert::cpu::{
+    CpuKernel, QueryOptions, QueryRays, SharedOut, TracedChunk, trace_local_rays_each,
+    trace_rays_each,
+};
 use lambert::gpu::AdapterRequest;
 use lambert::layout::{Hit, NO_HIT, Ray};
 use lambert::output::Image;
@@ -30,7 +32,9 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 mod arrays;
-use arrays::{Bound1, Bound1View, Rows, RowsView};
+mod query;
+use arrays::{Bound1, Rows};
+use query::{FirstBad, Gathered, Query};
 
 /// The library's errors as the exceptions a Python user expects, with the
 /// CLI's messages.
@@ -89,147 +93,6 @@ fn intersect_choice(name: &str) -> PyResult<Intersect> {
         })
 }
 
-/// A query's rays as the caller gave them: records (still to be
-/// checked), or arrays read a ray at a time.
-#[derive(Clone, Copy)]
-enum Query<'a> {
-    Records(&'a [Ray]),
-    Arrays {
-        origins: RowsView<'a>,
-        directions: RowsView<'a>,
-        tmin: Bound1View<'a>,
-        tmax: Bound1View<'a>,
-        n: usize,
-    },
-}
-
-impl Query<'_> {
-    fn len(&self) -> usize {
-        match self {
-            Query::Records(r) => r.len(),
-            Query::Arrays { n, .. } => *n,
-        }
-    }
-
-    /// Ray `i`.
-    #[inline]
-    fn ray(&self, i: usize) -> Ray {
-        match self {
-            Query::Records(r) => r[i],
-            Query::Arrays {
-                origins,
-                directions,
-                tmin,
-                tmax,
-                ..
-            } => Ray {
-                // The one place an origin row (read in f64) becomes f32.
-                origin: origins.row_f64(i).map(|c| c as f32),
-                tmin: tmin.at(i),
-                dir: directions.row(i),
-                tmax: tmax.at(i),
-            },
-        }
-    }
-
-    /// Writes rays start.. into all of `out`, checking each: per chunk,
-    /// so the usual arrays (packed float32 rows, scalar bounds) take a loop
-    /// of their own, with no choice per ray.
-    #[inline]
-    fn fill(&self, start: usize, out: &mut [MaybeUninit<Ray>], first_bad: &FirstBad) {
-        if let Query::Arrays {
-            origins: RowsView::PackedF32(o),
-            directions: RowsView::PackedF32(d),
-            tmin: Bound1View::All(tmin),
-            tmax: Bound1View::All(tmax),
-            ..
-        } = *self
-        {
-            let rows = start * 3..(start + out.len()) * 3;
-            let (o, d) = (o[rows.clone()].chunks_exact(3), d[rows].chunks_exact(3));
-            let mut valid = true;
-            for (slot, (o, d)) in out.iter_mut().zip(o.zip(d)) {
-                valid &= rays::ray_is_valid(slot.write(Ray {
-                    origin: [o[0], o[1], o[2]],
-                    tmin,
-                    dir: [d[0], d[1], d[2]],
-                    tmax,
-                }));
-            }
-            if valid {
-                return;
-            }
-        }
-        for (i, slot) in (start..).zip(out) {
-            first_bad.check(slot.write(self.ray(i)), i);
-        }
-    }
-
-    /// The rays in one buffer (what a GPU uploads), checked: records as
-    /// they are, arrays assembled into `buffer` in one parallel pass.
-    fn gathered(&self, mut buffer: Vec<Ray>) -> Result<Gathered<'_>, Error> {
-        use rayon::prelude::*;
-        const CHUNK: usize = 4096;
-        if let Query::Records(r) = self {
-            rays::validate_rays(r).map_err(|bad| Error::Usage(bad.to_string()))?;
-            return Ok(Gathered::Records(r));
-        }
-        let n = self.len();
-        let first_bad = FirstBad::new();
-        buffer.clear();
-        buffer.reserve(n);
-        buffer.spare_capacity_mut()[..n]
-            .par_chunks_mut(CHUNK)
-            .enumerate()
-            .for_each(|(c, chunk)| self.fill(c * CHUNK, chunk, &first_bad));
-        // SAFETY: every one of the n slots was written above.
-        unsafe { buffer.set_len(n) };
-        first_bad.result(self)?;
-        Ok(Gathered::Buffer(buffer))
-    }
-}
-
-/// A query's rays in one buffer.
-enum Gathered<'a> {
-    Records(&'a [Ray]),
-    Buffer(Vec<Ray>),
-}
-
-impl std::ops::Deref for Gathered<'_> {
-    type Target = [Ray];
-    fn deref(&self) -> &[Ray] {
-        match self {
-            Gathered::Records(r) => r,
-            Gathered::Buffer(b) => b,
-        }
-    }
-}
-
-/// Where the first invalid ray of a query was seen, by index (rays are
-/// checked as they are read, by whichever thread reads them).
-struct FirstBad(AtomicUsize);
-
-impl FirstBad {
-    fn new() -> FirstBad {
-        FirstBad(AtomicUsize::new(usize::MAX))
-    }
-
-    #[inline]
-    fn check(&self, ray: &Ray, i: usize) {
-        if !rays::ray_is_valid(ray) {
-            self.0.fetch_min(i, Ordering::Relaxed);
-        }
-    }
-
-    /// The query's error, if a ray was invalid.
-    fn result(&self, query: &Query) -> Result<(), Error> {
-        match self.0.load(Ordering::Relaxed) {
-            usize::MAX => Ok(()),
-            i => Err(Error::Usage(rays::bad_ray(&query.ray(i), i).to_string())),
-        }
-    }
-}
-
 /// A vector of `n` elements that parallel chunks write, each once, before
 /// it is read (no zero fill: a recycled heap block would be filled
 /// by one thread first).
@@ -260,9 +123,49 @@ impl<T> Column<T> {
     }
 }
 
+/// The t column as it is filled: float32, or float64 (`intersect`'s t64).
+enum TColumn {
+    F32(Column<f32>),
+    F64(Column<f64>),
+}
+
+impl TColumn {
+    fn new(n: usize, t64: bool) -> TColumn {
+        if t64 {
+            TColumn::F64(Column::new(n))
+        } else {
+            TColumn::F32(Column::new(n))
+        }
+    }
+
+    /// # Safety
+    /// As `Column::set`.
+    #[inline]
+    unsafe fn set(&self, i: usize, t: f32, t64: f64) {
+        match self {
+            TColumn::F32(c) => unsafe { c.set(i, t) },
+            TColumn::F64(c) => unsafe { c.set(i, t64) },
+        }
+    }
+
+    /// # Safety
+    /// As `Column::filled`.
+    unsafe fn filled(self, n: usize) -> TValues {
+        match self {
+            TColumn::F32(c) => TValues::F32(unsafe { c.filled(n) }),
+            TColumn::F64(c) => TValues::F64(unsafe { c.filled(n) }),
+        }
+    }
+}
+
+enum TValues {
+    F32(Vec<f32>),
+    F64(Vec<f64>),
+}
+
 /// The hit columns Python receives.
 struct Columns {
-    t: Vec<f32>,
+    t: TValues,
     prim: Vec<i64>,
     u: Vec<f32>,
     v: Vec<f32>,
@@ -323,14 +226,16 @@ impl NativeScene {
     /// by chunk, then fails if a ray was invalid. The CPU path reads the
     /// rays as it traces them, without the renderers' lock, so threads
     /// trace at once; a GPU gets them in one buffer, and its queue is taken
-    /// in turn. Returns the fallback note, if any.
+    /// in turn. Hits come in the frame the rays were traced in (a local
+    /// query's: `Query::world_hit` turns them back). Returns the fallback
+    /// note, if any, and the query's precision warnings.
     fn trace_into(
         &self,
         query: Query,
         options: QueryOptions,
         device: DeviceChoice,
         sink: &(dyn Fn(&TracedChunk) + Sync),
-    ) -> Result<Option<String>, Error> {
+    ) -> Result<(Option<String>, Vec<String>), Error> {
         let scene = &self.scene;
         let mut renderers = self.renderers.lock().unwrap_or_else(|e| e.into_inner());
         let (renderer, note) = renderers.get(scene, device)?;
@@ -346,7 +251,11 @@ impl NativeScene {
                     let fill = |start: usize, out: &mut [MaybeUninit<Ray>]| {
                         query.fill(start, out, &first_bad)
                     };
-                    trace_rays_each(scene, QueryRays::Fill(n, &fill), options, sink);
+                    let rays = QueryRays::Fill(n, &fill);
+                    match query.local() {
+                        Some(_) => trace_local_rays_each(scene, rays, options, sink),
+                        None => trace_rays_each(scene, rays, options, sink),
+                    }
                     first_bad.result(&query)?;
                 }
             }
@@ -360,7 +269,14 @@ impl NativeScene {
                 .map(|mut b| std::mem::take(&mut *b))
                 .unwrap_or_default();
             let rays = query.gathered(buffer)?;
-            let hits = renderer.trace(scene, &rays, options.any_hit, options.intersect)?;
+            let hits = match (query.local(), renderer) {
+                (Some(_), Renderer::Gpu(gpu)) => {
+                    gpu.trace_local_rays(&rays, options.any_hit, options.intersect)?
+                }
+                (_, renderer) => {
+                    renderer.trace(scene, &rays, options.any_hit, options.intersect)?
+                }
+            };
             drop(renderers);
             each_chunk(scene, &rays, &hits, options.normals, sink);
             if let (Gathered::Buffer(b), Ok(mut home)) = (rays, self.scratch.try_lock()) {
@@ -369,11 +285,11 @@ impl NativeScene {
                 }
             }
         }
-        Ok(note)
+        Ok((note, query.warnings(&scene.placement())))
     }
 
-    fn warn(py: Python<'_>, note: Option<String>) -> PyResult<()> {
-        if let Some(note) = note {
+    fn warn(py: Python<'_>, notes: impl IntoIterator<Item = String>) -> PyResult<()> {
+        for note in notes {
             let warning = py.get_type::<pyo3::exceptions::PyRuntimeWarning>();
             PyErr::warn(
                 py,
@@ -388,9 +304,9 @@ impl NativeScene {
 
 /// Parses a query's arguments: either `records` (an (N, 8) float32 view of
 /// RAY_DTYPE records) or origins, directions, tmin and tmax, and runs
-/// `$body` with `$query` the `Query`.
+/// `$body` with `$query` the `Query` (on `$scene`).
 macro_rules! with_query {
-    ($origins:expr, $directions:expr, $tmin:expr, $tmax:expr, |$query:ident| $body:expr) => {{
+    ($scene:expr, $origins:expr, $directions:expr, $tmin:expr, $tmax:expr, |$query:ident| $body:expr) => {{
         match $directions {
             None => {
                 let records: PyReadonlyArray2<f32> = $origins.extract()?;
@@ -421,12 +337,16 @@ macro_rules! with_query {
                 }
                 let tmin = Bound1::extract("tmin", $tmin, n)?;
                 let tmax = Bound1::extract("tmax", $tmax, n)?;
+                let origins = origins.view();
                 let $query = Query::Arrays {
-                    origins: origins.view(),
+                    origins,
                     directions: directions.view(),
                     tmin: tmin.view(),
                     tmax: tmax.view(),
                     n,
+                    // float64 origins stay f64 until they are in the
+                    // scene's frame (docs/python.md, "Far from the origin").
+                    local: origins.is_f64().then(|| $scene.placement()),
                 };
                 $body
             }
@@ -472,8 +392,11 @@ impl NativeScene {
         Ok(NativeScene::new(scene))
     }
 
-    /// Closest hits: (t, prim_id, u, v, normal).
-    #[pyo3(signature = (origins, directions, tmin, tmax, device, intersect))]
+    /// Closest hits: (t, prim_id, u, v, normal); with `t64`, t in float64
+    /// (the trimesh drop-in's: locations from it are as precise as the
+    /// trace where the f32 t would round a long ray's).
+    #[pyo3(signature = (origins, directions, tmin, tmax, device, intersect, t64=false))]
+    #[allow(clippy::too_many_arguments)]
     fn intersect<'py>(
         &self,
         py: Python<'py>,
@@ -483,12 +406,14 @@ impl NativeScene {
         tmax: &Bound<'py, PyAny>,
         device: &str,
         intersect: &str,
+        t64: bool,
     ) -> PyResult<Bound<'py, PyDict>> {
         let (device, intersect) = (device_choice(device)?, intersect_choice(intersect)?);
-        with_query!(origins, directions, tmin, tmax, |query| {
-            let (columns, note) = detached(py, || {
+        with_query!(self.scene, origins, directions, tmin, tmax, |query| {
+            let (columns, notes) = detached(py, || {
                 let n = query.len();
-                let (t, prim) = (Column::new(n), Column::new(n));
+                let t = TColumn::new(n, t64);
+                let prim = Column::new(n);
                 let (u, v) = (Column::new(n), Column::new(n));
                 let normal = Column::<[f32; 3]>::new(n);
                 let options = QueryOptions {
@@ -497,13 +422,14 @@ impl NativeScene {
                     cpu_kernel: CpuKernel::active(),
                     normals: true,
                 };
-                let note = self.trace_into(query, options, device, &|chunk| {
+                let notes = self.trace_into(query, options, device, &|chunk| {
                     for (k, (hit, ng)) in chunk.hits.iter().zip(chunk.normals).enumerate() {
                         let i = chunk.start + k;
+                        let (hit, world_t) = query.world_hit(i, *hit);
                         // SAFETY: each chunk's rows are written by one
                         // thread, within the n rows.
                         unsafe {
-                            t.set(i, hit.t);
+                            t.set(i, hit.t, world_t);
                             prim.set(
                                 i,
                                 if hit.prim == NO_HIT {
@@ -528,9 +454,9 @@ impl NativeScene {
                         normal: normal.filled(n).into_flattened(),
                     }
                 };
-                Ok((columns, note))
+                Ok((columns, notes))
             })?;
-            NativeScene::warn(py, note)?;
+            NativeScene::warn(py, notes.0.into_iter().chain(notes.1))?;
             let Columns {
                 t,
                 prim,
@@ -538,10 +464,13 @@ impl NativeScene {
                 v,
                 normal,
             } = columns;
-            let n = t.len();
+            let n = prim.len();
             let normal = Array2::from_shape_vec((n, 3), normal).expect("3 per hit");
             let out = PyDict::new(py);
-            out.set_item("t", t.into_pyarray(py))?;
+            match t {
+                TValues::F32(t) => out.set_item("t", t.into_pyarray(py))?,
+                TValues::F64(t) => out.set_item("t", t.into_pyarray(py))?,
+            }
             out.set_item("prim_id", prim.into_pyarray(py))?;
             out.set_item("u", u.into_pyarray(py))?;
             out.set_item("v", v.into_pyarray(py))?;
@@ -563,8 +492,8 @@ impl NativeScene {
         intersect: &str,
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
         let (device, intersect) = (device_choice(device)?, intersect_choice(intersect)?);
-        with_query!(origins, directions, tmin, tmax, |query| {
-            let (hit, note) = detached(py, || {
+        with_query!(self.scene, origins, directions, tmin, tmax, |query| {
+            let (hit, notes) = detached(py, || {
                 let n = query.len();
                 let hit = Column::new(n);
                 let options = QueryOptions {
@@ -573,16 +502,20 @@ impl NativeScene {
                     cpu_kernel: CpuKernel::active(),
                     normals: false,
                 };
-                let note = self.trace_into(query, options, device, &|chunk| {
+                let notes = self.trace_into(query, options, device, &|chunk| {
                     for (k, h) in chunk.hits.iter().enumerate() {
+                        let i = chunk.start + k;
+                        // As `intersect` reports it (a hit beyond f32's t
+                        // is a miss, as warned).
+                        let (h, _) = query.world_hit(i, *h);
                         // SAFETY: one thread per chunk, within the rays.
-                        unsafe { hit.set(chunk.start + k, h.prim != NO_HIT) };
+                        unsafe { hit.set(i, h.prim != NO_HIT) };
                     }
                 })?;
                 // SAFETY: the trace handed over every ray's hit.
-                Ok((unsafe { hit.filled(n) }, note))
+                Ok((unsafe { hit.filled(n) }, notes))
             })?;
-            NativeScene::warn(py, note)?;
+            NativeScene::warn(py, notes.0.into_iter().chain(notes.1))?;
             Ok(hit.into_pyarray(py))
         })
     }
