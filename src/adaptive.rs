@@ -87,7 +87,7 @@ fn adaptive_passes(
     let target_variance = settings.target_error * settings.target_error;
     let seed = pass_scene.seed;
     pass_scene.spp = base;
-    let (mut rendered, _) = renderer.render(pass_scene, false)?;
+    let (mut rendered, _) = renderer.render(pass_scene, None)?;
     let pixels = rendered.prims.len();
     // Per pixel: samples so far, and the sum of squared deviations of
     // luminance about the mean (Chan et al.'s M2), to merge passes exactly.

@@ -148,7 +148,7 @@ pub fn default_ladder(models: &Path) -> Vec<PathBuf> {
 }
 
 /// Which renderers a benchmark runs on.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BenchDevices {
     /// The GPU adapter (any, lavapipe included) and the CPU path.
     Both,

@@ -4,12 +4,13 @@
 //! Where to look: `shaders/trace.wgsl` (the kernel), `cpu::kernel` (its CPU
 //! twin: intersection in `intersect_triangle`/`intersect_sphere`, shading in
 //! `shade`), `gpu` (wgpu host code), `scene` and `loading` (input),
-//! `output` (images), `diff` (comparisons), `rays` (ray queries), `cli` (the `lambert` binary).
+//! `output` (images), `diff` (comparisons), `rays` (ray queries), `jobs`
+//! (render work the front ends share). The `lambert` binary (src/bin/lambert/)
+//! is a front end of this library, built with the default `cli` feature.
 
 pub mod adaptive;
 pub mod bench;
 pub mod bvh;
-pub mod cli;
 pub mod cpu;
 pub mod cwbvh;
 pub mod diff;
@@ -17,13 +18,13 @@ pub mod error;
 pub mod files;
 pub mod gpu;
 pub mod inputs;
+pub mod jobs;
 pub mod layout;
 pub mod loading;
 pub mod memory;
 pub mod output;
 pub mod parts;
 pub mod placement;
-pub mod plot;
 pub mod probe;
 pub mod progress;
 pub mod rays;

@@ -1,54 +1,48 @@
-//! A progress bar that appears only once work has run for over a second.
+//! How far a render has got: the library reports units (tiles, rows) done,
+//! and whoever called it decides what to show. The `lambert` binary draws
+//! a progress bar; library callers, tests and Python pass none.
 
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::{Duration, Instant};
+/// One render pass's report, told of each unit as it is done (from any of
+/// the render's threads).
+pub trait ProgressBar: Send + Sync {
+    fn inc(&self, units: u64);
+    /// The pass is over (also when it failed).
+    fn finish(&self);
+}
 
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+/// Where a caller wants progress shown: it makes the bar of each pass.
+pub trait ProgressSink: Sync {
+    /// A pass over `total` units named `unit` ("tiles", "rows") begins.
+    fn start(&self, total: u64, unit: &str) -> Box<dyn ProgressBar>;
+}
 
+/// The report a render pass is given: a caller's bar, or nothing.
 pub struct Progress {
-    bar: Option<ProgressBar>,
-    start: Instant,
-    shown: AtomicBool,
+    bar: Option<Box<dyn ProgressBar>>,
 }
 
 impl Progress {
-    /// A bar over `total` units (tiles, rows), drawn on stderr after 1 s.
-    pub fn new(total: u64, unit: &str) -> Progress {
-        let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::hidden());
-        bar.set_style(
-            ProgressStyle::with_template(&format!(
-                "{{spinner}} [{{elapsed_precise}}] {{bar:40}} {{pos}}/{{len}} {unit} (eta {{eta}})"
-            ))
-            .expect("static template"),
-        );
+    /// A pass over `total` units, shown by `sink` if there is one.
+    pub fn start(sink: Option<&dyn ProgressSink>, total: u64, unit: &str) -> Progress {
         Progress {
-            bar: Some(bar),
-            start: Instant::now(),
-            shown: AtomicBool::new(false),
+            bar: sink.map(|sink| sink.start(total, unit)),
         }
     }
 
     /// No output at all: for library callers and tests.
     pub fn hidden() -> Progress {
-        Progress {
-            bar: None,
-            start: Instant::now(),
-            shown: AtomicBool::new(true),
-        }
+        Progress { bar: None }
     }
 
     pub fn inc(&self, units: u64) {
-        let Some(bar) = &self.bar else { return };
-        bar.inc(units);
-        if !self.shown.load(Ordering::Relaxed) && self.start.elapsed() > Duration::from_secs(1) {
-            self.shown.store(true, Ordering::Relaxed);
-            bar.set_draw_target(ProgressDrawTarget::stderr());
+        if let Some(bar) = &self.bar {
+            bar.inc(units);
         }
     }
 
     pub fn finish(&self) {
         if let Some(bar) = &self.bar {
-            bar.finish_and_clear();
+            bar.finish();
         }
     }
 }

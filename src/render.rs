@@ -8,11 +8,11 @@ use crate::error::{Error, Result};
 use crate::gpu::{AdapterRequest, Gpu, GpuRenderer};
 use crate::layout::{Hit, Ray};
 use crate::output::Rendered;
-use crate::progress::Progress;
+use crate::progress::{Progress, ProgressSink};
 use crate::scene::{Intersect, Scene};
 
-/// `--device`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+/// Where to render (`--device`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum DeviceChoice {
     /// A hardware GPU if there is one (or the adapter named), else the CPU path.
     #[default]
@@ -164,13 +164,14 @@ impl Renderer {
         }
     }
 
-    /// Renders `scene` from its current camera.
+    /// Renders `scene` from its current camera, showing progress on
+    /// `progress` if given.
     pub fn render(
         &mut self,
         scene: &Scene,
-        show_progress: bool,
+        progress: Option<&dyn ProgressSink>,
     ) -> Result<(Rendered, RenderTimings)> {
-        self.render_rows(scene, 0..scene.camera.height, show_progress)
+        self.render_rows(scene, 0..scene.camera.height, progress)
     }
 
     /// Renders rows `rows` of `scene`'s image (a part of it: `--tile`),
@@ -179,16 +180,12 @@ impl Renderer {
         &mut self,
         scene: &Scene,
         rows: std::ops::Range<u32>,
-        show_progress: bool,
+        progress: Option<&dyn ProgressSink>,
     ) -> Result<(Rendered, RenderTimings)> {
         match self {
             Renderer::Gpu(renderer) => {
                 renderer.set_camera(scene, &scene.camera);
-                let progress = if show_progress {
-                    Progress::new(renderer.tile_count(), "tiles")
-                } else {
-                    Progress::hidden()
-                };
+                let progress = Progress::start(progress, renderer.tile_count(), "tiles");
                 let (rendered, t) = renderer.render_rows(rows, &progress)?;
                 progress.finish();
                 Ok((
@@ -201,11 +198,7 @@ impl Renderer {
                 ))
             }
             Renderer::Cpu => {
-                let progress = if show_progress {
-                    Progress::new(rows.len() as u64, "rows")
-                } else {
-                    Progress::hidden()
-                };
+                let progress = Progress::start(progress, rows.len() as u64, "rows");
                 let start = Instant::now();
                 let rendered = cpu::render_rows(scene, Precision::F32, rows, &progress);
                 progress.finish();

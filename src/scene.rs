@@ -212,9 +212,7 @@ pub struct Scene {
 
 /// `--intersect`: the ray/triangle test. See docs/accuracy.md for what each
 /// costs and how far each can be trusted.
-#[derive(
-    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Deserialize, serde::Serialize, clap::ValueEnum,
-)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Deserialize, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Intersect {
     /// The lecture's plane intersection and three edge tests.
@@ -254,7 +252,7 @@ impl Intersect {
 
 /// `--accel`: the BVH, or testing every primitive (the reference that tests
 /// the BVH).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Accel {
     #[default]
     Bvh,

@@ -1059,7 +1059,7 @@ fn turntable_fills_every_placeholder() {
         assert!(path.exists(), "{} missing", path.display());
     }
     assert!(!case.path("f{}").exists() && !case.path("f0/frame_{:03}.png").exists());
-    let frames = lambert::cli::frame_path(Path::new("a_{}_{:02}_{}.exr"), 7).unwrap();
+    let frames = lambert::jobs::frame_path(Path::new("a_{}_{:02}_{}.exr"), 7).unwrap();
     assert_eq!(frames, Path::new("a_7_07_7.exr"));
 }
 

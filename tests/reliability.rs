@@ -465,7 +465,7 @@ fn a_gpu_render_does_not_need_the_hosts_geometry() {
         scene.spp = 2;
         let (mut renderer, _) =
             Renderer::open(&scene, DeviceChoice::Gpu, &Default::default()).expect("opens");
-        let (before, _) = renderer.render(&scene, false).expect("renders");
+        let (before, _) = renderer.render(&scene, None).expect("renders");
         let pixels = [[0, 0], [scene.camera.width / 2, scene.camera.height / 2]];
         let list = renderer
             .render_pixel_list(&scene, &pixels)
@@ -476,7 +476,7 @@ fn a_gpu_render_does_not_need_the_hosts_geometry() {
         assert!(scene.bvh.nodes.len() < full_bvh.max(2));
         assert!(full_triangles + full_bvh > 0);
         let (after, _) = renderer
-            .render(&scene, false)
+            .render(&scene, None)
             .expect("renders without the geometry");
         assert_eq!(before, after, "{name}");
         assert_eq!(
@@ -489,14 +489,14 @@ fn a_gpu_render_does_not_need_the_hosts_geometry() {
         let mut moved = scene.clone();
         moved.camera.eye[0] += 0.5;
         moved.spp = 3;
-        let (moved_image, _) = renderer.render(&moved, false).expect("renders");
+        let (moved_image, _) = renderer.render(&moved, None).expect("renders");
         let mut reference = common::load(name);
         reference.camera = moved.camera.clone();
         reference.spp = 3;
         let (fresh, _) = Renderer::open(&reference, DeviceChoice::Gpu, &Default::default())
             .expect("opens")
             .0
-            .render(&reference, false)
+            .render(&reference, None)
             .expect("renders");
         assert_eq!(moved_image, fresh, "{name} from another camera");
     }

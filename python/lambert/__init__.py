@@ -21,7 +21,7 @@ import os
 # Mesa's device-select Vulkan layer prints "error: XDG_RUNTIME_DIR is
 # invalid or not set" twice on a headless machine while listing adapters;
 # it only reorders them, which lambert ranks itself. Switched off as the
-# CLI does (src/main.rs), before the native module makes any wgpu
+# CLI does (src/bin/lambert/main.rs), before the native module makes any wgpu
 # instance, unless the user steers it.
 if "MESA_VK_DEVICE_SELECT" not in os.environ and "NODEVICE_SELECT" not in os.environ:
     os.environ["NODEVICE_SELECT"] = "1"

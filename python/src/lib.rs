@@ -580,9 +580,9 @@ impl NativeScene {
             let (renderer, note) = renderers.get(scene, device)?;
             let (rendered, _) = if renderer.is_cpu() {
                 drop(renderers);
-                Renderer::Cpu.render(view, false)?
+                Renderer::Cpu.render(view, None)?
             } else {
-                renderer.render(view, false)?
+                renderer.render(view, None)?
             };
             Ok((rendered.image, note))
         })?;

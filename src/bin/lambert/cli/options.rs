@@ -1,13 +1,96 @@
 //! Options several commands share: the adapter, the scene's settings, the
-//! view and a render's light, and their value parsers.
+//! view and a render's light, their value parsers, and the command line's
+//! names of the library's choices (the library knows nothing of clap).
 
 use std::path::Path;
 
-use clap::Args;
+use clap::{Args, ValueEnum};
 
-use crate::error::{Error, Result};
-use crate::gpu::AdapterRequest;
-use crate::scene::{Accel, Intersect, Scene, validate_spp};
+use lambert::bench::BenchDevices;
+use lambert::error::{Error, Result};
+use lambert::gpu::AdapterRequest;
+use lambert::render::DeviceChoice;
+use lambert::scene::{Accel, Intersect, Scene, validate_spp};
+
+/// `--device` of render, diff and trace: `DeviceChoice`.
+#[derive(Clone, Copy, Default, ValueEnum)]
+pub(super) enum Device {
+    /// A hardware GPU if there is one (or the adapter named), else the CPU path.
+    #[default]
+    Auto,
+    /// Any wgpu adapter, software ones such as lavapipe included.
+    Gpu,
+    /// The CPU reference path.
+    Cpu,
+}
+
+impl From<Device> for DeviceChoice {
+    fn from(device: Device) -> DeviceChoice {
+        match device {
+            Device::Auto => DeviceChoice::Auto,
+            Device::Gpu => DeviceChoice::Gpu,
+            Device::Cpu => DeviceChoice::Cpu,
+        }
+    }
+}
+
+/// `--device` of bench: `BenchDevices`.
+#[derive(Clone, Copy, ValueEnum)]
+pub(super) enum BenchDevice {
+    /// The GPU adapter (any, lavapipe included) and the CPU path.
+    Both,
+    Gpu,
+    Cpu,
+}
+
+impl From<BenchDevice> for BenchDevices {
+    fn from(device: BenchDevice) -> BenchDevices {
+        match device {
+            BenchDevice::Both => BenchDevices::Both,
+            BenchDevice::Gpu => BenchDevices::Gpu,
+            BenchDevice::Cpu => BenchDevices::Cpu,
+        }
+    }
+}
+
+/// `--accel`: `Accel`.
+#[derive(Clone, Copy, Default, ValueEnum)]
+enum AccelArg {
+    #[default]
+    Bvh,
+    BruteForce,
+}
+
+impl From<AccelArg> for Accel {
+    fn from(accel: AccelArg) -> Accel {
+        match accel {
+            AccelArg::Bvh => Accel::Bvh,
+            AccelArg::BruteForce => Accel::BruteForce,
+        }
+    }
+}
+
+/// `--intersect`: `Intersect`.
+#[derive(Clone, Copy, ValueEnum)]
+enum IntersectArg {
+    /// The lecture's plane intersection and three edge tests.
+    Seed,
+    /// Möller–Trumbore.
+    MollerTrumbore,
+    /// Woop, Benthin and Wald (JCGT 2013): no ray passes between triangles
+    /// that share an edge.
+    Watertight,
+}
+
+impl From<IntersectArg> for Intersect {
+    fn from(intersect: IntersectArg) -> Intersect {
+        match intersect {
+            IntersectArg::Seed => Intersect::Seed,
+            IntersectArg::MollerTrumbore => Intersect::MollerTrumbore,
+            IntersectArg::Watertight => Intersect::Watertight,
+        }
+    }
+}
 
 #[derive(Args, Clone)]
 pub(super) struct AdapterArgs {
@@ -32,10 +115,10 @@ impl AdapterArgs {
 #[derive(Args, Clone)]
 pub(super) struct SceneOptions {
     #[arg(long, value_enum, default_value_t)]
-    accel: Accel,
+    accel: AccelArg,
     /// Ray/triangle test [default: the scene's render.intersect, else watertight].
     #[arg(long, value_enum)]
-    intersect: Option<Intersect>,
+    intersect: Option<IntersectArg>,
     /// Samples per pixel [default: the scene's render.spp, else 1].
     #[arg(long)]
     spp: Option<u32>,
@@ -86,9 +169,9 @@ impl SceneOptions {
     }
 
     pub(super) fn apply(&self, scene: &mut Scene) -> Result<()> {
-        scene.accel = self.accel;
+        scene.accel = self.accel.into();
         if let Some(intersect) = self.intersect {
-            scene.intersect = intersect;
+            scene.intersect = intersect.into();
         }
         if let Some(spp) = self.spp {
             validate_spp(spp).map_err(|e| Error::Usage(format!("--{e}")))?;

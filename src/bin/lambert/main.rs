@@ -1,4 +1,10 @@
+//! The `lambert` command line: parses, calls the library, prints.
+
 use std::process::ExitCode;
+
+mod cli;
+mod plot;
+mod progress_bar;
 
 fn main() -> ExitCode {
     // Mesa's device-select Vulkan layer connects to a Wayland display while
@@ -19,7 +25,7 @@ fn main() -> ExitCode {
             "warning: cannot handle Ctrl-C ({e}): an interrupted write may leave a temporary file"
         );
     }
-    match lambert::cli::run() {
+    match cli::run() {
         Ok(code) => code,
         Err(e) => {
             eprintln!("error: {e}");

@@ -4,10 +4,10 @@ use std::path::Path;
 use std::process::ExitCode;
 
 use super::AdapterArgs;
-use crate::cpu;
-use crate::error::Result;
-use crate::gpu;
-use crate::scene::Scene;
+use lambert::cpu;
+use lambert::error::Result;
+use lambert::gpu;
+use lambert::scene::Scene;
 
 /// `lambert info MODEL`.
 pub(super) fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> {
@@ -20,8 +20,8 @@ pub(super) fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> 
     if let Some(b) = scene.bvh.bounds() {
         println!(
             "  bounds: {} to {}",
-            crate::scene::vector_text(b.min.as_dvec3()),
-            crate::scene::vector_text(b.max.as_dvec3())
+            lambert::scene::vector_text(b.min.as_dvec3()),
+            lambert::scene::vector_text(b.max.as_dvec3())
         );
     }
     let smooth = !scene.normals.is_empty();
@@ -39,7 +39,7 @@ pub(super) fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> 
         println!("    {i}: albedo [{r}, {g}, {b}]");
     }
     let c = &scene.camera;
-    let v = |a: [f64; 3]| crate::scene::vector_text(glam::DVec3::from(a));
+    let v = |a: [f64; 3]| lambert::scene::vector_text(glam::DVec3::from(a));
     println!(
         "  camera: eye {}, look_at {}, up {}, vfov {:.4}°, {}×{}",
         v(c.eye),
@@ -51,9 +51,9 @@ pub(super) fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> 
     );
     println!("  lights: {}", scene.lights.len());
     for light in &scene.lights {
-        let vector = crate::scene::vector_text(glam::Vec3::from(light.vector).as_dvec3());
-        let color = crate::scene::vector_text(glam::Vec3::from(light.color).as_dvec3());
-        if light.kind == crate::layout::LIGHT_POINT {
+        let vector = lambert::scene::vector_text(glam::Vec3::from(light.vector).as_dvec3());
+        let color = lambert::scene::vector_text(glam::Vec3::from(light.color).as_dvec3());
+        if light.kind == lambert::layout::LIGHT_POINT {
             println!("    point at {vector}, intensity {color}");
         } else {
             println!("    directional towards {vector} (from the surface), irradiance {color}");

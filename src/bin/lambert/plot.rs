@@ -8,10 +8,10 @@ use std::sync::Once;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use crate::bench::{LadderRow, Path32, Point};
-use crate::error::{Error, Result};
-use crate::output::write_atomically;
-use crate::scene::Intersect;
+use lambert::bench::{LadderRow, Path32, Point};
+use lambert::error::{Error, Result};
+use lambert::output::write_atomically;
+use lambert::scene::Intersect;
 
 const SIZE: (u32, u32) = (900, 600);
 
@@ -20,7 +20,7 @@ const SIZE: (u32, u32) = (900, 600);
 fn register_font() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {
-        let font = include_bytes!("../assets/fonts/DejaVuSans.ttf");
+        let font = include_bytes!("../../../assets/fonts/DejaVuSans.ttf");
         // A font that ships inside the binary always parses.
         let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, font);
     });
@@ -42,7 +42,7 @@ fn png_and_svg(
     write_atomically(&stem.with_extension("svg"), svg.as_bytes())?;
     let mut rgb = vec![0u8; (SIZE.0 * SIZE.1 * 3) as usize];
     draw_png(BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area())?;
-    let image = crate::output::encode_png_rgb8(SIZE.0, SIZE.1, &rgb)?;
+    let image = lambert::output::encode_png_rgb8(SIZE.0, SIZE.1, &rgb)?;
     write_atomically(&stem.with_extension("png"), &image)
 }
 

@@ -11,21 +11,22 @@ mod info;
 mod options;
 mod turntable;
 
-use options::{AdapterArgs, RenderOptions, SceneOptions, ViewOptions, fraction, non_negative};
-pub use turntable::frame_path;
+use options::{
+    AdapterArgs, BenchDevice, Device, RenderOptions, SceneOptions, ViewOptions, fraction,
+    non_negative,
+};
 
-use crate::adaptive::{AdaptiveSettings, render_adaptive};
-use crate::bench::BenchDevices;
-use crate::cpu::{self, Precision};
-use crate::diff::{self, Tolerance};
-use crate::error::{Error, Result};
-use crate::gpu::{AdapterRequest, Gpu, GpuRenderer};
-use crate::layout::NO_HIT;
-use crate::output::Rendered;
-use crate::progress::Progress;
-use crate::rays;
-use crate::render::{DeviceChoice, Renderer};
-use crate::scene::{Intersect, MAX_SPP, Scene};
+use crate::progress_bar;
+use lambert::adaptive::{AdaptiveSettings, render_adaptive};
+use lambert::cpu::{self, Precision};
+use lambert::diff::{self, Tolerance};
+use lambert::error::{Error, Result};
+use lambert::jobs::{self, oracle_scene, render_gpu};
+use lambert::layout::NO_HIT;
+use lambert::progress::Progress;
+use lambert::rays;
+use lambert::render::Renderer;
+use lambert::scene::{MAX_SPP, Scene};
 
 #[derive(Parser)]
 #[command(
@@ -82,14 +83,6 @@ struct InfoArgs {
     adapter: AdapterArgs,
 }
 
-/// The f64 oracle's version of `scene`: the watertight test, in double
-/// precision, is the reference every variant and device is measured against.
-pub fn oracle_scene(scene: &Scene) -> Scene {
-    let mut oracle = scene.clone();
-    oracle.intersect = Intersect::Watertight;
-    oracle
-}
-
 #[derive(Args)]
 struct RenderArgs {
     scene: PathBuf,
@@ -97,7 +90,7 @@ struct RenderArgs {
     #[arg(short, long)]
     output: PathBuf,
     #[arg(long, value_enum, default_value_t)]
-    device: DeviceChoice,
+    device: Device,
     #[command(flatten)]
     options: RenderOptions,
     #[command(flatten)]
@@ -133,7 +126,7 @@ struct RenderArgs {
 
 /// `lambert render --tile I/N`: renders the part and writes it.
 fn render_part(args: &RenderArgs, tile_text: &str, quiet: bool) -> Result<ExitCode> {
-    let tile = crate::parts::Tile::parse(tile_text)?;
+    let tile = lambert::parts::Tile::parse(tile_text)?;
     let refuse = |what: &str, why: &str| Err(Error::Usage(format!("--tile with {what}: {why}")));
     if args.target_error.is_some() {
         return refuse(
@@ -164,7 +157,7 @@ fn render_part(args: &RenderArgs, tile_text: &str, quiet: bool) -> Result<ExitCo
     let scene = args.options.load(&args.scene)?;
     print_warnings(&scene, quiet);
     let rows = tile.rows(scene.camera.height)?;
-    let (mut renderer, note) = Renderer::open(&scene, args.device, &args.adapter.request())?;
+    let (mut renderer, note) = Renderer::open(&scene, args.device.into(), &args.adapter.request())?;
     if let Some(note) = note.filter(|_| !quiet) {
         eprintln!("{note}");
     }
@@ -173,14 +166,15 @@ fn render_part(args: &RenderArgs, tile_text: &str, quiet: bool) -> Result<ExitCo
         Renderer::Cpu => "cpu",
     };
     // Fingerprinted before a GPU render lets the host's geometry go.
-    let hash = crate::parts::settings_hash(&scene, device);
+    let hash = lambert::parts::settings_hash(&scene, device);
     let mut scene = scene;
     if !renderer.is_cpu() {
         scene.release_geometry();
     }
     let start = Instant::now();
-    let (rendered, _) = renderer.render_rows(&scene, rows.clone(), !quiet)?;
-    crate::parts::write_part(
+    let (rendered, _) =
+        renderer.render_rows(&scene, rows.clone(), progress_bar::unless_quiet(quiet))?;
+    lambert::parts::write_part(
         &args.output,
         &rendered.image,
         tile,
@@ -208,7 +202,7 @@ fn render_part(args: &RenderArgs, tile_text: &str, quiet: bool) -> Result<ExitCo
 fn merge(args: &MergeArgs, quiet: bool) -> Result<ExitCode> {
     let parts: Vec<&Path> = args.parts.iter().map(PathBuf::as_path).collect();
     check_output_path(&args.output, &parts)?;
-    let image = crate::parts::merge(&args.parts, &args.output)?;
+    let image = lambert::parts::merge(&args.parts, &args.output)?;
     if !quiet {
         eprintln!(
             "wrote {} ({}×{}, from {} parts)",
@@ -275,7 +269,7 @@ struct TraceArgs {
     #[arg(short, long)]
     output: PathBuf,
     #[arg(long, value_enum, default_value_t)]
-    device: DeviceChoice,
+    device: Device,
     /// Report whether each ray hits anything (the first hit found), not the closest.
     #[arg(long)]
     any_hit: bool,
@@ -316,7 +310,7 @@ struct BenchArgs {
     #[arg(long)]
     plot: Option<PathBuf>,
     #[arg(long, value_enum, default_value = "both")]
-    device: BenchDevices,
+    device: BenchDevice,
     /// Image side for OBJ models (pixels).
     #[arg(long, default_value_t = 1024)]
     size: u32,
@@ -428,7 +422,7 @@ fn render(args: &RenderArgs, quiet: bool) -> Result<ExitCode> {
     print_warnings(&scene, quiet);
 
     let start = Instant::now();
-    let (mut renderer, note) = Renderer::open(&scene, args.device, &args.adapter.request())?;
+    let (mut renderer, note) = Renderer::open(&scene, args.device.into(), &args.adapter.request())?;
     let upload = start.elapsed();
     if let Some(note) = note.filter(|_| !quiet) {
         eprintln!("{note}");
@@ -453,12 +447,19 @@ fn render(args: &RenderArgs, quiet: bool) -> Result<ExitCode> {
         scene.release_geometry();
     }
     if let Some(budget) = args.time_budget {
-        scene.spp = spp_for_budget(&mut renderer, &mut scene, budget, quiet)?;
+        let plan = jobs::spp_for_budget(&mut renderer, &mut scene, budget)?;
+        if !quiet {
+            eprintln!(
+                "time budget {budget} s: a 1-spp pass takes {:.3} s, so {} spp",
+                plan.per_sample, plan.spp
+            );
+        }
+        scene.spp = plan.spp;
     }
     let mut samples = scene.camera.width as f64 * scene.camera.height as f64 * scene.spp as f64;
     let (rendered, timings) = match args.target_error {
         None => {
-            let (rendered, timings) = renderer.render(&scene, !quiet)?;
+            let (rendered, timings) = renderer.render(&scene, progress_bar::unless_quiet(quiet))?;
             if args.time_budget.is_some() && !quiet {
                 let noise = (rendered.variance.iter().map(|&v| v as f64).sum::<f64>()
                     / rendered.variance.len() as f64)
@@ -496,7 +497,7 @@ fn render(args: &RenderArgs, quiet: bool) -> Result<ExitCode> {
                 );
             }
             samples = report.total_samples as f64;
-            let timings = crate::render::RenderTimings {
+            let timings = lambert::render::RenderTimings {
                 render: start.elapsed(),
                 readback: Duration::ZERO,
                 device: None,
@@ -541,29 +542,6 @@ fn render(args: &RenderArgs, quiet: bool) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// Samples per pixel that fit in `budget` seconds, from a timed 1-spp pilot
-/// render (whose time counts against the budget).
-fn spp_for_budget(
-    renderer: &mut Renderer,
-    scene: &mut Scene,
-    budget: f64,
-    quiet: bool,
-) -> Result<u32> {
-    // The pilot's one sample set on the scene itself (no copy of it).
-    let spp = std::mem::replace(&mut scene.spp, 1);
-    let pilot = renderer.render(scene, false);
-    scene.spp = spp;
-    let (_, t) = pilot?;
-    let per_sample = (t.render + t.readback).as_secs_f64().max(1e-6);
-    let spp = ((budget - per_sample) / per_sample)
-        .floor()
-        .clamp(1.0, MAX_SPP as f64) as u32;
-    if !quiet {
-        eprintln!("time budget {budget} s: a 1-spp pass takes {per_sample:.3} s, so {spp} spp");
-    }
-    Ok(spp)
-}
-
 /// An image output: a known format, writable, and none of `inputs`.
 fn check_output_path(path: &Path, inputs: &[&Path]) -> Result<()> {
     let extension = path
@@ -571,18 +549,12 @@ fn check_output_path(path: &Path, inputs: &[&Path]) -> Result<()> {
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
     match extension.as_deref() {
-        Some("png" | "exr" | "pfm") => crate::output::prepare_output_for(path, inputs),
+        Some("png" | "exr" | "pfm") => lambert::output::prepare_output_for(path, inputs),
         _ => Err(Error::Usage(format!(
             "{}: unknown image format; use .png, .exr or .pfm",
             path.display()
         ))),
     }
-}
-
-/// Renders on the GPU (any adapter, lavapipe included) with a hidden bar.
-pub fn render_gpu(scene: &Scene, request: &AdapterRequest) -> Result<Rendered> {
-    let mut renderer = GpuRenderer::new(Gpu::open(request, false)?, scene)?;
-    Ok(renderer.render(&Progress::hidden())?.0)
 }
 
 fn diff(args: &DiffArgs, quiet: bool) -> Result<ExitCode> {
@@ -655,7 +627,7 @@ fn trace(args: &TraceArgs, quiet: bool) -> Result<ExitCode> {
         .chain(&args.obj)
         .map(PathBuf::as_path)
         .collect();
-    crate::output::prepare_output_for(&args.output, &inputs)?;
+    lambert::output::prepare_output_for(&args.output, &inputs)?;
     let start = Instant::now();
     let rays = rays::read_rays(&args.rays)?;
     let read_seconds = start.elapsed().as_secs_f64();
@@ -670,7 +642,7 @@ fn trace(args: &TraceArgs, quiet: bool) -> Result<ExitCode> {
             eprintln!("warning: {warning}");
         }
     }
-    let (mut renderer, note) = Renderer::open(&scene, args.device, &args.adapter.request())?;
+    let (mut renderer, note) = Renderer::open(&scene, args.device.into(), &args.adapter.request())?;
     if let Some(note) = note.filter(|_| !quiet) {
         eprintln!("{note}");
     }
@@ -737,7 +709,7 @@ fn trace(args: &TraceArgs, quiet: bool) -> Result<ExitCode> {
 }
 
 fn camera_rays(args: &CameraRaysArgs, quiet: bool) -> Result<ExitCode> {
-    crate::output::prepare_output_for(&args.output, &[&args.scene])?;
+    lambert::output::prepare_output_for(&args.output, &[&args.scene])?;
     let scene = args.view.load(&args.scene)?;
     let rays = rays::camera_rays(&scene);
     rays::write_rays(&args.output, &rays)?;

@@ -4,10 +4,10 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use super::BenchArgs;
-use crate::bench::{self, BenchDevices};
-use crate::error::{Error, Result};
-use crate::gpu::Gpu;
-use crate::scene::{MAX_SPP, validate_spp};
+use lambert::bench::{self, BenchDevices};
+use lambert::error::{Error, Result};
+use lambert::gpu::Gpu;
+use lambert::scene::{MAX_SPP, validate_spp};
 
 pub(super) fn bench(args: &BenchArgs, quiet: bool) -> Result<ExitCode> {
     if args.time_vs_error {
@@ -42,7 +42,7 @@ pub(super) fn bench(args: &BenchArgs, quiet: bool) -> Result<ExitCode> {
     for input in &inputs {
         let scene = bench::load_input(input, args.size)?;
         let name = input_name(input);
-        for row in bench::ladder_rows(&name, &scene, args.device, &request, args.runs)? {
+        for row in bench::ladder_rows(&name, &scene, args.device.into(), &request, args.runs)? {
             println!(
                 "{:<18} {:>9} {:>11.2} {:>11.2} {:>8.3} {:>7.1} {:>6} {:>9.1} {:>8.1}  {}",
                 row.model,
@@ -77,10 +77,10 @@ fn check_inputs_and_outputs(inputs: &[PathBuf], args: &BenchArgs) -> Result<()> 
     }
     let inputs: Vec<&Path> = inputs.iter().map(PathBuf::as_path).collect();
     if let Some(path) = &args.json {
-        crate::output::prepare_output_for(path, &inputs)?;
+        lambert::output::prepare_output_for(path, &inputs)?;
     }
     if let Some(dir) = &args.plot {
-        crate::output::prepare_output_for(&dir.join("time_per_ray.png"), &inputs)?;
+        lambert::output::prepare_output_for(&dir.join("time_per_ray.png"), &inputs)?;
     }
     Ok(())
 }
@@ -94,7 +94,7 @@ fn input_name(path: &Path) -> String {
 
 fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<()> {
     let text = serde_json::to_string_pretty(value).expect("bench results serialise");
-    crate::output::write_atomically(path, text.as_bytes())
+    lambert::output::write_atomically(path, text.as_bytes())
 }
 
 fn bench_time_vs_error(args: &BenchArgs, quiet: bool) -> Result<ExitCode> {
@@ -123,11 +123,12 @@ fn bench_time_vs_error(args: &BenchArgs, quiet: bool) -> Result<ExitCode> {
     };
     check_inputs_and_outputs(&inputs, args)?;
     let request = args.adapter.request();
-    let gpu = match args.device {
+    let devices = BenchDevices::from(args.device);
+    let gpu = match devices {
         BenchDevices::Cpu => false,
         _ => match Gpu::open(&request, false) {
             Ok(_) => true,
-            Err(e) if args.device == BenchDevices::Both => {
+            Err(e) if devices == BenchDevices::Both => {
                 if !quiet {
                     eprintln!("{e}\nnote: measuring the CPU paths only");
                 }
