@@ -1,8 +1,7 @@
 // Entry points: the render megakernel, every sample of a pixel in one
 // invocation (`render`), and adaptive sampling's later passes over a list
 // of pixels (`render_pixel_list`).
-// Bindings: both use all of group 0 (params, the scene's arrays and their
-// `_hi` halves, the BVH as buffers and as textures, loop_status). Group 1:
+// Bindings (naga's reflection): both use all of group 0, 0 to 14. Group 1:
 // `render` writes out_color and out_prim and keeps tile_sums between its
 // dispatches; `render_pixel_list` reads pixel_list and writes
 // pixel_results.

@@ -1,12 +1,16 @@
 // Entry points: a render with the shadow rays in a dispatch of their own
 // (gpu::ShadowDispatch): `render_primary`, `render_shadows`,
 // `render_shade`, in that order.
-// Bindings: all three use group 0 (params, the scene's arrays and their
-// `_hi` halves, the BVH as buffers and as textures, loop_status). Group 1:
-// `render_primary` reads out_color's size and writes split_hits,
-// shadow_queue, shadow_count and shadow_blocked; `render_shadows` reads
-// shadow_queue and shadow_count and writes shadow_blocked; `render_shade`
-// reads split_hits and shadow_blocked and writes out_color and out_prim.
+// Bindings (naga's reflection):
+// `render_primary`: all of group 0 (0 to 14); group 1's out_color (its
+// size), split_hits, shadow_queue, shadow_count, shadow_blocked (1:0,
+// 1:7 to 1:10).
+// `render_shadows`: group 0 but for triangle_normals, materials, lights
+// and triangle_normals_hi (0:0, 0:1, 0:3, 0:6 to 0:8, 0:10 to 0:14);
+// group 1's shadow_queue, shadow_count, shadow_blocked (1:8 to 1:10).
+// `render_shade`: group 0 but for loop_status (0:0 to 0:11, 0:13, 0:14);
+// group 1's out_color, out_prim, split_hits, shadow_blocked (1:0, 1:1,
+// 1:7, 1:10).
 
 // Shadow rays apart, pass 1: the pixel's primary hit (its one sample),
 // and its shadow rays queued.
