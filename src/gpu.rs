@@ -18,7 +18,7 @@ use crate::progress::Progress;
 use crate::scene::{Accel, Camera, Intersect, Scene};
 
 /// The kernel's source, validated by naga in tests/shaders.rs.
-pub const SHADER_SOURCE: &str = include_str!("../shaders/trace.wgsl");
+pub const SHADER_SOURCE: &str = crate::shader_source::SOURCE;
 
 /// Side of the square tile one dispatch renders: small enough that no
 /// dispatch runs long enough for a GPU watchdog to kill it.

@@ -1,4 +1,4 @@
-//! Structs shared by the host, the GPU shader (`shaders/trace.wgsl`) and the
+//! Structs shared by the host, the GPU shader (`shaders/layout.wgsl`) and the
 //! CPU reference. Each (but `BvhNode`, the CPU kernel's alone) mirrors the
 //! WGSL struct of the same name byte for byte
 //! (vec3 fields take 16 bytes with the following scalar in their padding);

@@ -1,7 +1,7 @@
 //! lambert: a GPU ray tracer (WGSL compute through wgpu) with a CPU reference
 //! path that mirrors the shader function by function, and an f64 oracle.
 //!
-//! Where to look: `shaders/trace.wgsl` (the kernel), `cpu::kernel` (its CPU
+//! Where to look: `shaders/` (the kernel, by stage), `cpu::kernel` (its CPU
 //! twin: intersection in `intersect_triangle`/`intersect_sphere`, shading in
 //! `shade`), `gpu` (wgpu host code), `scene` and `loading` (input),
 //! `output` (images), `diff` (comparisons), `rays` (ray queries), `jobs`
@@ -30,6 +30,7 @@ pub mod progress;
 pub mod rays;
 pub mod render;
 pub mod scene;
+pub mod shader_source;
 
 pub use error::{Error, Result};
 pub use scene::Scene;

@@ -1,0 +1,16 @@
+// Entry point: a ray query (`lambert trace`, the Python binding):
+// `trace_rays`, one ray per invocation, closest hit or (ANY_HIT) any.
+// Bindings (naga's reflection): group 0 but for triangle_normals,
+// materials, lights and triangle_normals_hi (0:0, 0:1, 0:3, 0:6 to 0:8,
+// 0:10 to 0:14); group 1's rays (read) and hits (written), 1:2 and 1:3.
+
+// One ray of a `lambert trace` batch. Misses leave t = FAR, prim = NO_HIT.
+@compute @workgroup_size(WORKGROUP_INVOCATIONS)
+fn trace_rays(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    stack_base = lane * STACK_ENTRIES;
+    if id.x >= arrayLength(&rays) {
+        return;
+    }
+    hits[id.x] = trace(rays[id.x], ANY_HIT);
+    report_cut_loops();
+}

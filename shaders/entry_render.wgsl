@@ -1,0 +1,52 @@
+// Entry points: the render megakernel, every sample of a pixel in one
+// invocation (`render`), and adaptive sampling's later passes over a list
+// of pixels (`render_pixel_list`).
+// Bindings (naga's reflection): both use all of group 0, 0 to 14. Group 1:
+// `render` writes out_color and out_prim and keeps tile_sums between its
+// dispatches; `render_pixel_list` reads pixel_list and writes
+// pixel_results.
+
+@compute @workgroup_size(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y)
+fn render(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    stack_base = lane * STACK_ENTRIES;
+    let slot = tile_slot(id);
+    if slot == NO_HIT {
+        return;
+    }
+    let pixel = params.tile_origin + id.xy;
+    var sums = vec4<f32>(0.0);
+    if params.sample_begin > 0u {
+        sums = tile_sums[slot];
+    }
+    let result = add_samples(pixel, sums);
+    if params.sample_begin == 0u {
+        textureStore(out_prim, id.xy, vec4<u32>(result.prim, 0u, 0u, 0u));
+    }
+    if params.sample_end == params.spp {
+        textureStore(out_color, id.xy, pixel_mean(result.sums));
+    } else {
+        tile_sums[slot] = result.sums;
+    }
+    report_cut_loops();
+}
+
+// Adaptive sampling's later passes: `params.spp` more samples (seeded by
+// `params.seed`) for each listed pixel, in parts as `render` adds them.
+@compute @workgroup_size(WORKGROUP_INVOCATIONS)
+fn render_pixel_list(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    stack_base = lane * STACK_ENTRIES;
+    if id.x >= arrayLength(&pixel_list) {
+        return;
+    }
+    var sums = vec4<f32>(0.0);
+    if params.sample_begin > 0u {
+        sums = pixel_results[id.x];
+    }
+    let result = add_samples(pixel_list[id.x], sums);
+    if params.sample_end == params.spp {
+        pixel_results[id.x] = pixel_mean(result.sums);
+    } else {
+        pixel_results[id.x] = result.sums;
+    }
+    report_cut_loops();
+}

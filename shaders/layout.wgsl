@@ -1,0 +1,264 @@
+// Stage: data layout. Every override (the host's per-scene specialisation),
+// the constants, the structs (each with a #[repr(C)] twin in src/layout.rs)
+// and the bindings of both groups, which entry points share; the entry
+// files (entry_*.wgsl) say which bindings each of them uses. The shader is
+// these files composed in order (src/shader_source.rs); the CPU twin of
+// each stage is the src/cpu/ file of the same name (docs/bvh.md).
+
+// Specialisation: the host sets these per scene so that a variant carries no
+// code for what its scene lacks. Defaults give the full shader.
+override HAS_TRIANGLES: bool = true;
+override HAS_SPHERES: bool = true;
+override HAS_SHADOWS: bool = true;
+override HAS_POINT_LIGHTS: bool = true;
+override HAS_DIRECTIONAL_LIGHTS: bool = true;
+// false: test every primitive (the reference that tests the BVH).
+override USE_BVH: bool = true;
+// Ray/triangle test: INTERSECT_SEED, INTERSECT_MOLLER_TRUMBORE or
+// INTERSECT_WATERTIGHT.
+override INTERSECT: u32 = 2u;
+// Entry point `trace_rays`: stop at the first hit found rather than the
+// closest.
+override ANY_HIT: bool = false;
+// Arrays too large for one storage binding are split over two: the first
+// this many elements in `triangles` (and `triangle_normals`), `bvh_nodes`
+// or `bvh_blocks`, the rest in the `_hi` binding. Unsplit: all.
+override TRIANGLES_PER_BINDING: u32 = 0xffffffffu;
+override NODES_PER_BINDING: u32 = 0xffffffffu;
+override BLOCKS_PER_BINDING: u32 = 0xffffffffu;
+// Read the BVH's nodes and blocks from `bvh_node_texels` and
+// `bvh_block_texels` rather than the storage buffers (gpu::BvhStorage:
+// lavapipe fetches texels with vector gathers, storage words a lane at a
+// time).
+override BVH_TEXELS: bool = false;
+// The `render` entry point's workgroup: gpu::RENDER_WORKGROUP, measured
+// (docs/bvh.md).
+override RENDER_WORKGROUP_X: u32 = 8u;
+override RENDER_WORKGROUP_Y: u32 = 8u;
+// Traversal stack entries per invocation in workgroup memory (gpu.rs):
+// the scene's BVH depth − 1, the most `trace_compressed` can push (see
+// MAX_DEPTH), up to cwbvh::SHORT_STACK_ENTRIES. A deeper tree sets
+// STACK_SPILLS: the stack's oldest entries then move to `stack_spill`.
+override STACK_ENTRIES: u32 = 8u;
+override STACK_SPILLS: bool = false;
+// `shade` takes its shadows from `shade_blocked` rather than tracing them.
+override SHADOWS_FROM_QUEUE: bool = false;
+// Invocations per workgroup of every entry point (RENDER_WORKGROUP_X ×
+// RENDER_WORKGROUP_Y for `render`).
+const WORKGROUP_INVOCATIONS: u32 = 64u;
+
+const NO_HIT: u32 = 0xffffffffu;
+// Texels a row of the BVH textures: 1 << TEXEL_ROW_BITS (gpu::TEXELS_PER_ROW).
+const TEXEL_ROW_BITS: u32 = 12u;
+// WGSL has no infinity literal; the largest finite f32 serves as "no hit yet".
+const FAR: f32 = 3.40282347e38;
+const LIGHT_POINT: u32 = 0u;
+const LIGHT_DIRECTIONAL: u32 = 1u;
+const FLAG_SMOOTH: u32 = 1u;
+const INTERSECT_SEED: u32 = 0u;
+const INTERSECT_MOLLER_TRUMBORE: u32 = 1u;
+const INTERSECT_WATERTIGHT: u32 = 2u;
+// Unit roundoff of f32 (pbrt's MachineEpsilon), for error bounds.
+const MACHINE_EPSILON: f32 = 5.96046448e-8;
+// Wide levels at most: bvh::MAX_DEPTH. A traversal stack entry is a node
+// group (a node and the entered children of it not visited yet), pushed
+// when traversal descends below that node: one per level at most, so a
+// tree of depth d needs d − 1 entries, and the tree is at most MAX_DEPTH
+// levels deep (Bvh::from_binary checks): the short stack and its spill
+// (STACK_ENTRIES, stack_spill) never overflow.
+const MAX_DEPTH: u32 = 24u;
+// CompressedNode meta bytes (src/layout.rs): 0 for an empty slot,
+// META_INTERIOR | rank for an interior child, META_LEAF | (count − 1) << 4
+// | offset for a leaf.
+const META_INTERIOR: u32 = 0x08u;
+const META_LEAF: u32 = 0x80u;
+// Widens a box's exit distance so that rounding in the slab test cannot cull
+// a box the ray grazes: pbrt-v4's 1 + 2·gamma(3), with room for a GPU's
+// reciprocal being up to a few ULPs off (WGSL allows 2.5). The watertight
+// triangle test relies on it: no box may drop a ray its triangles catch.
+const BOX_SLACK: f32 = 1.000001;
+
+// Layouts: each struct here has a #[repr(C)] twin in src/layout.rs, checked
+// against naga's reflection of this file by tests/shaders.rs.
+struct Params {
+    eye: vec3<f32>,
+    width: u32,
+    right: vec3<f32>,
+    height: u32,
+    up: vec3<f32>,
+    tan_half_x: f32,
+    forward: vec3<f32>,
+    tan_half_y: f32,
+    background: vec3<f32>,
+    num_triangles: u32,
+    ambient: vec3<f32>,
+    num_spheres: u32,
+    tile_origin: vec2<u32>,
+    num_lights: u32,
+    shadows: u32,
+    // Samples per pixel and the seed of their jitter.
+    spp: u32,
+    seed: u32,
+    // Columns of the spp-sample stratified grid (a divisor of spp).
+    strata_x: u32,
+    // The samples this dispatch adds to each pixel's sums: [begin, end).
+    sample_begin: u32,
+    sample_end: u32,
+    // How often `loops_completed`'s loop must run (2).
+    canary_loops: u32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
+struct Triangle {
+    v0: vec3<f32>,
+    material: u32,
+    v1: vec3<f32>,
+    flags: u32,
+    v2: vec3<f32>,
+    _pad: u32,
+}
+
+// Per-vertex shading normals; only read for triangles with FLAG_SMOOTH.
+struct TriangleNormals {
+    n0: vec4<f32>,
+    n1: vec4<f32>,
+    n2: vec4<f32>,
+}
+
+struct Sphere {
+    center: vec3<f32>,
+    radius: f32,
+    material: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+struct Material {
+    albedo: vec3<f32>,
+    _pad: u32,
+}
+
+// Point light: `vector` is its position and `color` its intensity I
+// (irradiance I / r² at distance r). Directional light: `vector` is the unit
+// direction towards the light and `color` its irradiance.
+struct Light {
+    vector: vec3<f32>,
+    kind: u32,
+    color: vec3<f32>,
+    _pad: u32,
+}
+
+struct Ray {
+    origin: vec3<f32>,
+    tmin: f32,
+    dir: vec3<f32>,
+    tmax: f32,
+}
+
+// Hit point = (1-u-v)·v0 + u·v1 + v·v2 for triangles; u = v = 0 for spheres.
+struct Hit {
+    t: f32,
+    prim: u32,
+    u: f32,
+    v: f32,
+}
+
+// One node of the compressed 8-wide BVH (80 bytes, src/layout.rs and
+// src/cwbvh.rs): child boxes quantised outwards to a byte per plane on a
+// grid of origin + q·2^(e − 127) per axis (e in byte a of exponents), whose
+// every point is an f32, so dequantising with fma is exact. Slots are in
+// octant order (ray_octant). child_meta: a byte per slot (slots 0–3 in child_meta.x,
+// low byte first): 0 empty, META_INTERIOR | rank for node child_base +
+// rank, META_LEAF | (count − 1) << 4 | offset for the leaf of count blocks
+// from block_base + offset. q[2a]: the slots' minima along axis a, q[2a +
+// 1] their maxima, bytes as in child_meta.
+struct CompressedNode {
+    origin: vec3<f32>,
+    exponents: u32,
+    child_base: u32,
+    block_base: u32,
+    child_meta: vec2<u32>,
+    q: array<vec2<u32>, 6>,
+}
+
+// Up to four primitives of a BVH leaf (src/layout.rs PrimBlock): lane i is
+// primitive prims[i] (NO_HIT: empty), and for a triangle v[k][a][i] is
+// coordinate a of its vertex k; other lanes have zero vertices, and
+// record_block_hits ignores what the 4-lane test says of them.
+struct PrimBlock {
+    v: array<array<vec4<f32>, 3>, 3>,
+    prims: vec4<u32>,
+}
+
+// Precomputed per ray for the watertight test: the axes permuted so that
+// the direction's largest component is z (kx, ky, kz), and the shear that
+// maps the direction onto +z.
+struct Shear {
+    axes: vec3<u32>,
+    s: vec3<f32>,
+    // The power of two `trace` scaled the direction by (see the CPU twin's
+    // prepare_ray): hit distances are scaled back by it.
+    t_scale: f32,
+}
+
+struct Surface {
+    position: vec3<f32>,
+    // How far `position` may be off the surface, per axis: see self_hit_bound.
+    error: vec3<f32>,
+    geometric_normal: vec3<f32>,
+    shading_normal: vec3<f32>,
+    albedo: vec3<f32>,
+}
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read> triangles: array<Triangle>;
+@group(0) @binding(2) var<storage, read> triangle_normals: array<TriangleNormals>;
+@group(0) @binding(3) var<storage, read> spheres: array<Sphere>;
+@group(0) @binding(4) var<storage, read> materials: array<Material>;
+@group(0) @binding(5) var<storage, read> lights: array<Light>;
+@group(0) @binding(6) var<storage, read> bvh_nodes: array<array<vec4<u32>, 5>>; // CompressedNode
+@group(0) @binding(7) var<storage, read> bvh_blocks: array<PrimBlock>;
+@group(0) @binding(8) var<storage, read> triangles_hi: array<Triangle>;
+@group(0) @binding(9) var<storage, read> triangle_normals_hi: array<TriangleNormals>;
+@group(0) @binding(10) var<storage, read> bvh_nodes_hi: array<array<vec4<u32>, 5>>; // CompressedNode
+@group(0) @binding(11) var<storage, read> bvh_blocks_hi: array<PrimBlock>;
+// Set to 1 by an invocation whose loops the driver cut short (see
+// `loops_completed`); the host then splits the work finer or fails.
+@group(0) @binding(12) var<storage, read_write> loop_status: array<atomic<u32>>;
+// With BVH_TEXELS: node i's words at texels 5i to 5i + 4, block i's at 10i
+// to 10i + 9 (v[k][a] at 10i + 3k + a, prims at 10i + 9), texel t at
+// (t mod row, t / row).
+@group(0) @binding(13) var bvh_node_texels: texture_2d<u32>;
+@group(0) @binding(14) var bvh_block_texels: texture_2d<u32>;
+// Group 1 holds what one entry point reads and writes: an image tile for
+// `render`, a batch of rays for `trace_rays`.
+@group(1) @binding(0) var out_color: texture_storage_2d<rgba32float, write>;
+@group(1) @binding(1) var out_prim: texture_storage_2d<r32uint, write>;
+@group(1) @binding(2) var<storage, read> rays: array<Ray>;
+@group(1) @binding(3) var<storage, read_write> hits: array<Hit>;
+// `render_pixel_list`: pixels to (re)sample, and their mean colours with the
+// variance of the mean (in w).
+@group(1) @binding(4) var<storage, read> pixel_list: array<vec2<u32>>;
+@group(1) @binding(5) var<storage, read_write> pixel_results: array<vec4<f32>>;
+// `render`: each tile pixel's running sums (colour, squared luminance)
+// between the dispatches that add its samples in turn.
+@group(1) @binding(6) var<storage, read_write> tile_sums: array<vec4<f32>>;
+// Shadow rays in a dispatch of their own (`render_primary`,
+// `render_shadows`, `render_shade`; gpu::ShadowDispatch): each tile
+// pixel's hit, the shadow rays to trace (compacted), how many, and each
+// pixel's blocked lights (bit i for light i).
+struct ShadowQuery {
+    slot: u32,
+    light: u32,
+    _pad: vec2<u32>,
+    ray: Ray,
+}
+@group(1) @binding(7) var<storage, read_write> split_hits: array<Hit>;
+@group(1) @binding(8) var<storage, read_write> shadow_queue: array<ShadowQuery>;
+@group(1) @binding(9) var<storage, read_write> shadow_count: array<atomic<u32>, 1>;
+@group(1) @binding(10) var<storage, read_write> shadow_blocked: array<atomic<u32>>;
+// `render_shade`'s pixel's word of shadow_blocked (at most
+// gpu::MAX_LIGHTS_APART lights).
+var<private> shade_blocked: u32;

@@ -1,0 +1,116 @@
+// Stage: sampling. Camera rays, the stratified, hashed sample positions, a
+// pixel's sums of samples and their mean, the tile pixel of an invocation,
+// and the check on loops the driver cut short (which every entry point
+// runs last). CPU twin: src/cpu/sample.rs (no twin for the tile and loop
+// checks: the CPU has neither).
+
+// Pinhole camera; `pixel` is a position in pixel units, row 0 at the top
+// (pixel centres are at +0.5).
+fn camera_ray(pixel: vec2<f32>) -> Ray {
+    let sx = (2.0 * pixel.x / f32(params.width) - 1.0) * params.tan_half_x;
+    let sy = (1.0 - 2.0 * pixel.y / f32(params.height)) * params.tan_half_y;
+    let dir = normalize(params.forward + sx * params.right + sy * params.up);
+    return Ray(params.eye, 0.0, dir, FAR);
+}
+
+// PCG hash (Jarzynski and Olano, "Hash Functions for GPU Rendering", JCGT
+// 2020): integer only, so the CPU path draws the very same numbers.
+fn pcg_hash(x: u32) -> u32 {
+    let state = x * 747796405u + 2891336453u;
+    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+// A uniform number in [0, 1) from the top 24 bits: exact in f32.
+fn unit_float(h: u32) -> f32 {
+    return f32(h >> 8u) * (1.0 / 16777216.0);
+}
+
+// Position of sample `sample` in `pixel`: the centre when spp = 1, else a
+// jittered point in its cell of a strata_x × (spp / strata_x) grid.
+fn sample_position(pixel: vec2<u32>, sample: u32) -> vec2<f32> {
+    let corner = vec2<f32>(pixel);
+    if params.spp == 1u {
+        return corner + 0.5;
+    }
+    let h = pcg_hash(pixel.x ^ pcg_hash(pixel.y ^ pcg_hash(sample ^ pcg_hash(params.seed))));
+    let jitter = vec2<f32>(unit_float(h), unit_float(pcg_hash(h)));
+    let strata_y = params.spp / params.strata_x;
+    let cell = vec2<f32>(vec2<u32>(sample % params.strata_x, sample / params.strata_x));
+    return corner + (cell + jitter) / vec2<f32>(f32(params.strata_x), f32(strata_y));
+}
+
+const LUMINANCE: vec3<f32> = vec3<f32>(0.2126, 0.7152, 0.0722);
+
+// Mesa's llvmpipe (lavapipe, and its GL driver) ends every loop after its
+// first iteration once an invocation group has run 65535 loop iterations in
+// all (gallivm's LP_MAX_TGSI_LOOP_ITERATIONS), silently: high-spp pixels
+// then lost their later samples' hits. A loop that must run
+// `params.canary_loops` (2) times, run last, tells whether that happened;
+// the host keeps each dispatch's samples under the budget and redoes the
+// work in smaller parts when it did. Other drivers never trip it.
+fn loops_completed() -> bool {
+    var runs = 0u;
+    for (var i = 0u; i < params.canary_loops; i++) {
+        runs += 1u;
+    }
+    return runs == params.canary_loops;
+}
+
+fn report_cut_loops() {
+    if !loops_completed() {
+        atomicOr(&loop_status[0], 1u);
+    }
+}
+
+// Samples `params.sample_begin` to `params.sample_end` of `pixel`, added in
+// turn to `sums` (colour, squared luminance): samples split over several
+// dispatches sum exactly as in one loop. `prim` is what the first of them
+// hit.
+struct SampleSums {
+    sums: vec4<f32>,
+    prim: u32,
+}
+
+fn add_samples(pixel: vec2<u32>, sums: vec4<f32>) -> SampleSums {
+    var sum = sums.xyz;
+    var sum_squares = sums.w;
+    var first_prim = NO_HIT;
+    for (var sample = params.sample_begin; sample < params.sample_end; sample++) {
+        let ray = camera_ray(sample_position(pixel, sample));
+        let hit = trace_closest(ray);
+        if sample == params.sample_begin {
+            first_prim = hit.prim;
+        }
+        let color = shade(ray, hit);
+        sum += color;
+        let y = dot(color, LUMINANCE);
+        sum_squares += y * y;
+    }
+    return SampleSums(vec4<f32>(sum, sum_squares), first_prim);
+}
+
+// A pixel's box-filtered mean and the variance of its mean luminance (the
+// square of its standard error, from the spread of its samples; 0 at 1
+// sample: adaptive sampling refines where it is large), from the sums of
+// all `params.spp` samples.
+fn pixel_mean(sums: vec4<f32>) -> vec4<f32> {
+    let n = f32(params.spp);
+    let mean = sums.xyz / n;
+    let y = dot(mean, LUMINANCE);
+    var variance = 0.0;
+    if params.spp > 1u {
+        variance = max(0.0, sums.w - n * y * y) / ((n - 1.0) * n);
+    }
+    return vec4<f32>(mean, variance);
+}
+
+// The tile pixel of a render invocation, or none.
+fn tile_slot(id: vec3<u32>) -> u32 {
+    let size = textureDimensions(out_color);
+    let pixel = params.tile_origin + id.xy;
+    if id.x >= size.x || id.y >= size.y || pixel.x >= params.width || pixel.y >= params.height {
+        return NO_HIT;
+    }
+    return id.y * size.x + id.x;
+}

@@ -1,0 +1,359 @@
+// Intersection, the twin of shaders/intersect.wgsl: the ray/triangle tests, the
+// ray/sphere test with its error-free arithmetic, and the recording of the
+// nearest hit. Included into cpu::f32 and cpu::f64 by kernel.rs.
+
+pub fn miss() -> Hit {
+    Hit {
+        t: FAR,
+        prim: NO_HIT,
+        u: 0.0,
+        v: 0.0,
+    }
+}
+
+impl<'a> Kernel<'a> {
+    /// The scene's ray/triangle test.
+    #[inline(always)]
+    pub fn intersect_triangle(
+        &self,
+        ray: &Ray,
+        shear: &Shear,
+        a: Vec3,
+        b: Vec3,
+        c: Vec3,
+    ) -> (Real, Real, Real) {
+        match self.intersect {
+            Intersect::Seed => intersect_triangle_seed(ray, a, b, c),
+            Intersect::MollerTrumbore => intersect_triangle_moller_trumbore(ray, a, b, c),
+            Intersect::Watertight => intersect_triangle_watertight(ray, shear, a, b, c),
+        }
+    }
+
+    /// (t, u, v) of primitive `prim` (triangles first, then spheres).
+    #[inline(always)]
+    pub fn intersect_primitive(&self, ray: &Ray, shear: &Shear, prim: u32) -> (Real, Real, Real) {
+        let triangles = &self.scene.triangles;
+        if (prim as usize) < triangles.len() {
+            let tri = &triangles[prim as usize];
+            return self.intersect_triangle(ray, shear, vec3(tri.v0), vec3(tri.v1), vec3(tri.v2));
+        }
+        let sphere = &self.scene.spheres[prim as usize - triangles.len()];
+        (intersect_sphere(ray, vec3(sphere.center), sphere.radius as Real), 0.0, 0.0)
+    }
+
+    /// Tests `prim`; if it is hit nearer than ray.tmax, makes it the hit and
+    /// shortens the ray. Returns whether it did.
+    #[inline(always)]
+    pub fn record_hit(&self, ray: &mut Ray, shear: &Shear, hit: &mut Hit, prim: u32) -> bool {
+        let (t, u, v) = self.intersect_primitive(ray, shear, prim);
+        if t < ray.tmax {
+            ray.tmax = t;
+            *hit = Hit { t, prim, u, v };
+            return true;
+        }
+        false
+    }
+
+    /// Tests a leaf block's primitives: its triangles in one 4-lane
+    /// watertight test, then (in lane order) its spheres, and its triangles
+    /// too under another triangle test. Each hit nearer than ray.tmax
+    /// becomes the hit and shortens the ray; returns whether there was one.
+    #[inline(always)]
+    pub fn record_block_hits(
+        &self,
+        ray: &mut Ray,
+        shear: &Shear,
+        hit: &mut Hit,
+        block: &PrimBlock,
+    ) -> bool {
+        let scene = self.scene;
+        let watertight = self.intersect == Intersect::Watertight;
+        let mut recorded = false;
+        let num_triangles = scene.triangles.len() as u32;
+        if watertight && num_triangles > 0 {
+            let lanes = intersect_triangle_block(ray, shear, block);
+            for (lane, &t) in lanes.t.to_array().iter().enumerate() {
+                // Only triangle lanes (the id test also drops empty ones): a
+                // GPU that fuses multiply-adds can see a hit in a lane of
+                // zero vertices.
+                if t < ray.tmax && block.prims[lane] < num_triangles {
+                    ray.tmax = t;
+                    let (u, v) = lanes.uv(lane);
+                    *hit = Hit {
+                        t,
+                        prim: block.prims[lane],
+                        u,
+                        v,
+                    };
+                    recorded = true;
+                }
+            }
+        }
+        if !watertight || !scene.spheres.is_empty() {
+            for &prim in &block.prims {
+                if prim != NO_HIT && !(watertight && prim < num_triangles) {
+                    recorded |= self.record_hit(ray, shear, hit, prim);
+                }
+            }
+        }
+        recorded
+    }
+}
+
+/// The lecture's test: plane hit t = n·(a − o)/(n·d), then three edge tests
+/// that must all agree in sign. Returns (t, u, v); t = FAR on a miss.
+pub fn intersect_triangle_seed(ray: &Ray, a: Vec3, b: Vec3, c: Vec3) -> (Real, Real, Real) {
+    let n = (b - a).cross(c - a);
+    let n_dot_d = n.dot(ray.dir);
+    if n_dot_d == 0.0 {
+        return NO_TRIANGLE_HIT;
+    }
+    let t = n.dot(a - ray.origin) / n_dot_d;
+    if !(t > ray.tmin && t < ray.tmax) {
+        return NO_TRIANGLE_HIT;
+    }
+    let p = ray.origin + t * ray.dir;
+    let e0 = (b - a).cross(p - a).dot(n);
+    let e1 = (c - b).cross(p - b).dot(n);
+    let e2 = (a - c).cross(p - c).dot(n);
+    let inside =
+        (e0 >= 0.0 && e1 >= 0.0 && e2 >= 0.0) || (e0 <= 0.0 && e1 <= 0.0 && e2 <= 0.0);
+    if !inside {
+        return NO_TRIANGLE_HIT;
+    }
+    let nn = n.dot(n);
+    (t, e2 / nn, e0 / nn)
+}
+
+const NO_TRIANGLE_HIT: (Real, Real, Real) = (FAR, 0.0, 0.0);
+
+/// Möller–Trumbore, with no epsilon on the determinant.
+pub fn intersect_triangle_moller_trumbore(
+    ray: &Ray,
+    a: Vec3,
+    b: Vec3,
+    c: Vec3,
+) -> (Real, Real, Real) {
+    let e1 = b - a;
+    let e2 = c - a;
+    let p = ray.dir.cross(e2);
+    let det = e1.dot(p);
+    if det == 0.0 {
+        return NO_TRIANGLE_HIT;
+    }
+    let inv_det = 1.0 / det;
+    let s = ray.origin - a;
+    let u = s.dot(p) * inv_det;
+    if !(0.0..=1.0).contains(&u) {
+        return NO_TRIANGLE_HIT;
+    }
+    let q = s.cross(e1);
+    let v = ray.dir.dot(q) * inv_det;
+    if !(v >= 0.0 && u + v <= 1.0) {
+        return NO_TRIANGLE_HIT;
+    }
+    let t = e2.dot(q) * inv_det;
+    if !(t > ray.tmin && t < ray.tmax) {
+        return NO_TRIANGLE_HIT;
+    }
+    (t, u, v)
+}
+
+#[inline(always)]
+pub fn ray_shear(dir: Vec3) -> Shear {
+    let m = dir.abs();
+    let kz = if m.x >= m.y && m.x >= m.z {
+        0
+    } else if m.y >= m.z {
+        1
+    } else {
+        2
+    };
+    let mut kx = (kz + 1) % 3;
+    let mut ky = (kx + 1) % 3;
+    // An array, not glam's Index: its match per access is a branch that
+    // mispredicts on rays of random directions.
+    let d = dir.to_array();
+    if d[kz] < 0.0 {
+        std::mem::swap(&mut kx, &mut ky);
+    }
+    Shear {
+        axes: [kx, ky, kz],
+        s: Vec3::new(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]),
+        t_scale: 1.0,
+    }
+}
+
+/// Woop, Benthin and Wald (JCGT 2013), as in the shader: edge values of
+/// exactly 0 count as inside.
+#[inline(always)]
+pub fn intersect_triangle_watertight(
+    ray: &Ray,
+    shear: &Shear,
+    a: Vec3,
+    b: Vec3,
+    c: Vec3,
+) -> (Real, Real, Real) {
+    let [kx, ky, kz] = shear.axes;
+    // Arrays, not glam's Index (a match per access): this is the hot loop.
+    let oa = (a - ray.origin).to_array();
+    let ob = (b - ray.origin).to_array();
+    let oc = (c - ray.origin).to_array();
+    let ax = oa[kx] - shear.s.x * oa[kz];
+    let ay = oa[ky] - shear.s.y * oa[kz];
+    let bx = ob[kx] - shear.s.x * ob[kz];
+    let by = ob[ky] - shear.s.y * ob[kz];
+    let cx = oc[kx] - shear.s.x * oc[kz];
+    let cy = oc[ky] - shear.s.y * oc[kz];
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        return NO_TRIANGLE_HIT;
+    }
+    let det = u + v + w;
+    if det == 0.0 {
+        return NO_TRIANGLE_HIT;
+    }
+    let t_scaled = u * shear.s.z * oa[kz] + v * shear.s.z * ob[kz] + w * shear.s.z * oc[kz];
+    let t = t_scaled / det;
+    if !(t > ray.tmin && t < ray.tmax) {
+        return NO_TRIANGLE_HIT;
+    }
+    (t, v / det, w / det)
+}
+
+/// A leaf block's four lanes after `intersect_triangle_block`: t per lane
+/// (FAR where it misses), and what u and v are divided from, since only a
+/// recorded hit needs them.
+#[derive(Clone, Copy, Debug)]
+pub struct BlockHits {
+    pub t: Vec4,
+    v: Vec4,
+    w: Vec4,
+    det: Vec4,
+}
+
+impl BlockHits {
+    /// (u, v) of lane `lane`, as `intersect_triangle_watertight` gives them.
+    #[inline(always)]
+    pub fn uv(&self, lane: usize) -> (Real, Real) {
+        let det = self.det.to_array()[lane];
+        (self.v.to_array()[lane] / det, self.w.to_array()[lane] / det)
+    }
+}
+
+/// `intersect_triangle_watertight` on a block's four lanes at once, the
+/// same operations in the same order in each: t per lane, FAR where a lane
+/// misses (unfused arithmetic, as here, always misses a lane of zero
+/// vertices; `record_block_hits` looks only at triangle lanes).
+#[inline(always)]
+pub fn intersect_triangle_block(ray: &Ray, shear: &Shear, block: &PrimBlock) -> BlockHits {
+    let [kx, ky, kz] = shear.axes;
+    let origin = ray.origin.to_array();
+    // Coordinate a of vertex k relative to the origin.
+    let rel = |k: usize, a: usize| vec4(block.v[k][a]) - Vec4::splat(origin[a]);
+    let (sx, sy, sz) = (
+        Vec4::splat(shear.s.x),
+        Vec4::splat(shear.s.y),
+        Vec4::splat(shear.s.z),
+    );
+    let (az, bz, cz) = (rel(0, kz), rel(1, kz), rel(2, kz));
+    let ax = rel(0, kx) - sx * az;
+    let ay = rel(0, ky) - sy * az;
+    let bx = rel(1, kx) - sx * bz;
+    let by = rel(1, ky) - sy * bz;
+    let cx = rel(2, kx) - sx * cz;
+    let cy = rel(2, ky) - sy * cz;
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    let zero = Vec4::ZERO;
+    let outside = (u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero))
+        & (u.cmpgt(zero) | v.cmpgt(zero) | w.cmpgt(zero));
+    let det = u + v + w;
+    let t = (u * sz * az + v * sz * bz + w * sz * cz) / det;
+    let hit = !outside
+        & det.cmpne(zero)
+        & t.cmpgt(Vec4::splat(ray.tmin))
+        & t.cmplt(Vec4::splat(ray.tmax));
+    BlockHits {
+        t: Vec4::select(hit, t, Vec4::splat(FAR)),
+        v,
+        w,
+        det,
+    }
+}
+
+/// Nearest root of |o + t·d − c|² = r² inside (tmin, tmax); FAR on a miss.
+/// The stable form of Ray Tracing Gems ch. 7: the discriminant from the
+/// ray's distance to the centre (|f|², not b² − ac), the near root as c/q,
+/// and c itself exactly enough (`sphere_gap`) that a ray five units from a
+/// sphere of radius 1e6 gets t to 1e-5.
+pub fn intersect_sphere(ray: &Ray, center: Vec3, radius: Real) -> Real {
+    let oc = ray.origin - center;
+    let a = ray.dir.dot(ray.dir);
+    let b = oc.dot(ray.dir);
+    let c = sphere_gap(ray.origin, center, radius);
+    let f = oc - (b / a) * ray.dir;
+    let discriminant = a * (radius * radius - f.dot(f));
+    if discriminant < 0.0 {
+        return FAR;
+    }
+    let q = -b - sign_nonzero(b) * discriminant.sqrt();
+    let t0 = c / q;
+    let t1 = q / a;
+    let near = t0.min(t1);
+    let far = t0.max(t1);
+    if near > ray.tmin && near < ray.tmax {
+        return near;
+    }
+    if far > ray.tmin && far < ray.tmax {
+        return far;
+    }
+    FAR
+}
+
+/// |o − c|² − r², to a few units in the last place of the result rather
+/// than of |o − c|²: near a large sphere the two squares agree in most of
+/// their digits (radius 1e6, five units off: 1e12 against a gap of 1e7),
+/// so each difference, square and sum keeps its rounding error
+/// (`two_sum`, `two_square`), and the errors are added back at the end.
+fn sphere_gap(origin: Vec3, center: Vec3, radius: Real) -> Real {
+    let (x, ex) = two_sum(origin.x, -center.x);
+    let (y, ey) = two_sum(origin.y, -center.y);
+    let (z, ez) = two_sum(origin.z, -center.z);
+    let (xx, exx) = two_square(x);
+    let (yy, eyy) = two_square(y);
+    let (zz, ezz) = two_square(z);
+    let (rr, err) = two_square(radius);
+    let (s1, e1) = two_sum(xx, yy);
+    let (s2, e2) = two_sum(s1, zz);
+    let (s3, e3) = two_sum(s2, -rr);
+    // (x + ex)² = x² + 2·x·ex + ex²; ex² is below every other error here.
+    let cross = 2.0 * (x * ex + y * ey + z * ez);
+    s3 + (((e1 + e2) + e3) + (((exx + eyy) + ezz) - err) + cross)
+}
+
+/// a + b as the rounded sum and its rounding error (Knuth's TwoSum: exact
+/// without branches, whichever is larger). The shader's takes the sum
+/// through `opaque_one` (1), lest a GPU compiler fold the error to 0.
+fn two_sum(a: Real, b: Real) -> (Real, Real) {
+    let s = a + b;
+    let bb = s - a;
+    (s, (a - (s - bb)) + (b - bb))
+}
+
+/// a² as the rounded square and its rounding error (Dekker): each product
+/// of halves is exact, so a fused multiply-add, which WGSL may or may not
+/// use, gives the same bits.
+fn two_square(a: Real) -> (Real, Real) {
+    let hi = high_half(a);
+    let lo = a - hi;
+    let p = a * a;
+    (p, ((hi * hi - p) + 2.0 * hi * lo) + lo * lo)
+}
+
+fn sign_nonzero(x: Real) -> Real {
+    if x < 0.0 { -1.0 } else { 1.0 }
+}

@@ -1,0 +1,161 @@
+//! The CPU path's render drivers: whole images, rows, the GPU's twin and
+//! adaptive sampling's pixel lists, rows in parallel with rayon.
+
+use rayon::prelude::*;
+
+use super::simd::{check_runs, with_simd};
+use super::{CpuKernel, Precision, f32, f64};
+use crate::layout;
+use crate::output::{Image, Rendered};
+use crate::progress::Progress;
+use crate::scene::Scene;
+
+/// One pixel in the chosen precision: colour, first primitive, variance of
+/// the mean luminance.
+#[inline(always)]
+fn pixel(
+    kernel32: &f32::Kernel,
+    kernel64: &f64::Kernel,
+    precision: Precision,
+    x: u32,
+    y: u32,
+) -> ([::core::primitive::f32; 3], u32, ::core::primitive::f32) {
+    match precision {
+        Precision::F32 => {
+            let (c, p, v) = kernel32.render_pixel(x, y);
+            (c.to_array(), p, v)
+        }
+        Precision::F64 => {
+            let (c, p, v) = kernel64.render_pixel(x, y);
+            (c.as_vec3().to_array(), p, v as ::core::primitive::f32)
+        }
+    }
+}
+
+/// Renders every pixel with the scene's samples; rows run in parallel.
+pub fn render(scene: &Scene, precision: Precision, progress: &Progress) -> Rendered {
+    render_with(scene, precision, progress, CpuKernel::active())
+}
+
+/// Renders rows `rows` of the scene's image alone (a part of it).
+pub fn render_rows(
+    scene: &Scene,
+    precision: Precision,
+    rows: std::ops::Range<u32>,
+    progress: &Progress,
+) -> Rendered {
+    render_rows_with(scene, precision, rows, progress, CpuKernel::active(), None)
+}
+
+/// `render` with a given CPU kernel (one this CPU runs).
+pub fn render_with(
+    scene: &Scene,
+    precision: Precision,
+    progress: &Progress,
+    cpu_kernel: CpuKernel,
+) -> Rendered {
+    render_rows_with(
+        scene,
+        precision,
+        0..scene.camera.height,
+        progress,
+        cpu_kernel,
+        None,
+    )
+}
+
+/// The GPU's twin: renders in single precision tracing the GPU's
+/// compressed BVH as the shader does (`f32::Kernel::trace_compressed`), so
+/// that a GPU/CPU difference is one of arithmetic, never of traversal
+/// order. What `lambert diff` and the tests compare the GPU with.
+pub fn render_gpu_twin(scene: &Scene, progress: &Progress) -> Rendered {
+    let nodes = crate::cwbvh::compress(&scene.bvh);
+    render_rows_with(
+        scene,
+        Precision::F32,
+        0..scene.camera.height,
+        progress,
+        CpuKernel::Portable,
+        Some(&nodes),
+    )
+}
+
+/// The twin's short stack: a WebGPU device's (the GPU's own where its
+/// workgroup memory is the minimum), spilling where the GPU's would.
+pub(super) fn twin_stack_entries(scene: &Scene) -> usize {
+    crate::cwbvh::short_stack(scene.bvh.depth(), crate::cwbvh::MIN_WORKGROUP_BYTES).0
+}
+
+fn render_rows_with(
+    scene: &Scene,
+    precision: Precision,
+    rows: std::ops::Range<u32>,
+    progress: &Progress,
+    cpu_kernel: CpuKernel,
+    compressed: Option<&[layout::CompressedNode]>,
+) -> Rendered {
+    check_runs(cpu_kernel);
+    let first_row = rows.start as usize;
+    let (width, height) = (scene.camera.width as usize, rows.len());
+    let mut rgb = vec![[0.0; 3]; width * height];
+    let mut prims = vec![0u32; width * height];
+    let mut variance = vec![0.0; width * height];
+    let mut kernel32 = f32::Kernel::new_for(scene, cpu_kernel.ymm_boxes());
+    kernel32.compressed = compressed;
+    kernel32.stack_entries = twin_stack_entries(scene);
+    let kernel64 = f64::Kernel::new(scene);
+    rgb.par_chunks_mut(width)
+        .zip(prims.par_chunks_mut(width))
+        .zip(variance.par_chunks_mut(width))
+        .enumerate()
+        .for_each(|(row, ((rgb_row, prim_row), variance_row))| {
+            let y = first_row + row;
+            // SAFETY: checked above.
+            unsafe {
+                with_simd(
+                    cpu_kernel,
+                    #[inline(always)]
+                    || {
+                        for x in 0..width {
+                            let (c, p, v) =
+                                pixel(&kernel32, &kernel64, precision, x as u32, y as u32);
+                            rgb_row[x] = c;
+                            prim_row[x] = p;
+                            variance_row[x] = v;
+                        }
+                    },
+                )
+            };
+            progress.inc(1);
+        });
+    Rendered {
+        image: Image {
+            width: width as u32,
+            height: height as u32,
+            rgb,
+        },
+        prims,
+        variance,
+    }
+}
+
+/// Renders the listed pixels only (adaptive sampling's later passes):
+/// mean colour and variance of the mean, as `render_pixel_list` on the GPU.
+pub fn render_pixel_list(scene: &Scene, pixels: &[[u32; 2]]) -> Vec<[::core::primitive::f32; 4]> {
+    let kernel32 = f32::Kernel::new(scene);
+    let kernel64 = f64::Kernel::new(scene);
+    pixels
+        .par_iter()
+        .map(|&[x, y]| {
+            // SAFETY: the active kernel runs on this CPU.
+            let (c, _, v) = unsafe {
+                with_simd(
+                    CpuKernel::active(),
+                    #[inline(always)]
+                    || pixel(&kernel32, &kernel64, Precision::F32, x, y),
+                )
+            };
+            [c[0], c[1], c[2], v]
+        })
+        .collect()
+}

@@ -1,0 +1,233 @@
+//! Which CPU kernel runs: the same functions compiled for different vector
+//! instructions, chosen by what the CPU has.
+
+/// `push_sorted_zmm` where there is none (the oracle; CPUs other than x86):
+/// never called, since only `trace_rays` asks for it, in single precision
+/// and where `f32::has_vector_sort` says the CPU has AVX-512.
+///
+/// # Safety
+/// None needed: unsafe only as `f32::push_sorted_zmm` is.
+pub(crate) unsafe fn no_push_sorted_zmm<Stack, Distances>(
+    _stack: &mut Stack,
+    _sp: &mut usize,
+    _t: &Distances,
+    _children: &[u32; crate::layout::BVH_WIDTH],
+    _entered: u32,
+) -> u32 {
+    unreachable!("push_sorted_zmm needs AVX-512 and single precision")
+}
+
+/// Panics unless this CPU runs `kernel`: what makes `with_simd` safe for
+/// the `_with` entry points.
+pub(super) fn check_runs(kernel: CpuKernel) {
+    if let Some(missing) = kernel.missing() {
+        panic!("the {} CPU kernel needs {missing}", kernel.name());
+    }
+}
+
+/// The CPU kernels: the same functions compiled for different vector
+/// instructions. Each runs the same IEEE operations, so each gives the
+/// portable kernel's results bit for bit (tests/cpu_kernels.rs checks that
+/// on every kernel the test machine can run).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum CpuKernel {
+    /// Plain Rust (SSE2 on x86-64; NEON or none elsewhere).
+    Portable,
+    /// AVX2 with FMA (x86 since 2013): the 8-lane slab test in one
+    /// register, and fused multiply-adds (without FMA, each is a library
+    /// call per lane: about 4× slower traversal).
+    Avx2Fma,
+    /// AVX-512 (F, VL, DQ, BW, with BMI1/2 and LZCNT): AVX2's kernel with
+    /// mask registers and embedded broadcasts, and incoherent rays order
+    /// their entered children in vector registers (`push_sorted_zmm`).
+    Avx512,
+}
+
+impl CpuKernel {
+    pub const ALL: [CpuKernel; 3] = [CpuKernel::Portable, CpuKernel::Avx2Fma, CpuKernel::Avx512];
+
+    /// The name `LAMBERT_CPU_KERNEL` and `lambert info` use.
+    pub fn name(self) -> &'static str {
+        match self {
+            CpuKernel::Portable => "portable",
+            CpuKernel::Avx2Fma => "avx2+fma",
+            CpuKernel::Avx512 => "avx-512",
+        }
+    }
+
+    /// What this CPU lacks for the kernel, or None when it can run it.
+    pub fn missing(self) -> Option<&'static str> {
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::is_x86_feature_detected as has;
+            let avx2_fma = has!("avx2") && has!("fma");
+            match self {
+                CpuKernel::Portable => None,
+                CpuKernel::Avx2Fma => (!avx2_fma).then_some("AVX2 and FMA"),
+                CpuKernel::Avx512 => {
+                    let avx512 =
+                        has!("avx512f") && has!("avx512vl") && has!("avx512dq") && has!("avx512bw");
+                    let bits = has!("bmi1") && has!("bmi2") && has!("lzcnt");
+                    (!(avx2_fma && avx512 && bits))
+                        .then_some("AVX-512 F/VL/DQ/BW with BMI1, BMI2 and LZCNT")
+                }
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        return match self {
+            CpuKernel::Portable => None,
+            _ => Some("an x86-64 CPU"),
+        };
+    }
+
+    /// The widest kernel this CPU runs.
+    pub fn detect() -> CpuKernel {
+        *CpuKernel::ALL
+            .iter()
+            .rev()
+            .find(|k| k.missing().is_none())
+            .unwrap_or(&CpuKernel::Portable)
+    }
+
+    /// The kernel this process uses: `detect`'s, or a narrower one named by
+    /// `LAMBERT_CPU_KERNEL` (portable, avx2+fma or avx-512; one the CPU
+    /// lacks falls back to the widest it has). Decided once.
+    pub fn active() -> CpuKernel {
+        static ACTIVE: std::sync::OnceLock<CpuKernel> = std::sync::OnceLock::new();
+        *ACTIVE.get_or_init(|| {
+            let best = CpuKernel::detect();
+            std::env::var("LAMBERT_CPU_KERNEL")
+                .ok()
+                .and_then(|name| {
+                    CpuKernel::ALL
+                        .into_iter()
+                        .find(|k| k.name() == name.to_lowercase())
+                })
+                .map_or(best, |asked| asked.min(best))
+        })
+    }
+
+    /// Whether node visits take `f32::intersect_boxes_ymm`.
+    pub fn ymm_boxes(self) -> bool {
+        self >= CpuKernel::Avx2Fma
+    }
+
+    /// Whether incoherent rays order children with `f32::push_sorted_zmm`.
+    pub fn vector_sort(self) -> bool {
+        self == CpuKernel::Avx512
+    }
+}
+
+/// Runs `f` (an `#[inline(always)]` closure) compiled for `kernel`'s vector
+/// instructions: the kernel's functions are inlined into it, so they run
+/// the same IEEE operations (the same results) in fewer instructions.
+///
+/// # Safety
+/// The CPU must run `kernel` (`CpuKernel::missing` is None).
+#[inline(always)]
+pub(super) unsafe fn with_simd<R>(kernel: CpuKernel, f: impl FnOnce() -> R) -> R {
+    #[cfg(target_arch = "x86_64")]
+    match kernel {
+        CpuKernel::Avx512 => {
+            #[target_feature(
+                enable = "avx2,fma,avx512f,avx512vl,avx512dq,avx512bw,bmi1,bmi2,lzcnt"
+            )]
+            fn avx512<R>(f: impl FnOnce() -> R) -> R {
+                f()
+            }
+            // SAFETY: the caller vouches for the features.
+            return unsafe { avx512(f) };
+        }
+        CpuKernel::Avx2Fma => {
+            #[target_feature(enable = "avx2,fma")]
+            fn avx2<R>(f: impl FnOnce() -> R) -> R {
+                f()
+            }
+            // SAFETY: the caller vouches for the features.
+            return unsafe { avx2(f) };
+        }
+        CpuKernel::Portable => {}
+    }
+    let _ = kernel;
+    f()
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::cpu::f32::{new_stack, push_sorted, push_sorted_zmm};
+    use crate::layout::{BVH_WIDTH, LEAF_BIT};
+
+    /// `push_sorted_zmm` pushes exactly what the insertion pushes, in the
+    /// same order, and visits the same child, for every set of entered
+    /// children (with one or two, the insertion does what `visit`'s own
+    /// cases do: visit the one; push the farther, visit the nearer, the
+    /// second on a tie), with ties, ±0, negative and huge distances, above
+    /// entries already pushed.
+    #[test]
+    fn vector_child_ordering_equals_the_insertion() {
+        if let Some(missing) = super::CpuKernel::Avx512.missing() {
+            // Straight to stderr: the harness would hide eprintln! of a
+            // passing test.
+            use std::io::Write;
+            let _ = writeln!(
+                std::io::stderr(),
+                "skipped: push_sorted_zmm needs {missing}, which this CPU lacks"
+            );
+            return;
+        }
+        // Few distinct values, so that ties are common.
+        let values = [-1.0, -0.0, 0.0, 0.5, 1.0, 2.5, 1e30, f32::MAX];
+        let children: [u32; BVH_WIDTH] = std::array::from_fn(|slot| {
+            if slot % 3 == 0 {
+                LEAF_BIT | slot as u32
+            } else {
+                40 + slot as u32
+            }
+        });
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let mut checked = 0;
+        for entered in 0..1u32 << BVH_WIDTH {
+            if entered == 0 {
+                continue;
+            }
+            for _ in 0..64 {
+                let t: [f32; BVH_WIDTH] =
+                    std::array::from_fn(|_| values[next() as usize % values.len()]);
+                let below = (next() % 5) as usize;
+                let (mut scalar, mut vector) = (new_stack(), new_stack());
+                for i in 0..below {
+                    scalar[i].write((i as u32, i as f32));
+                    vector[i].write((i as u32, i as f32));
+                }
+                let (mut sp_scalar, mut sp_vector) = (below, below);
+                let nearest = push_sorted(&mut scalar, &mut sp_scalar, &t, &children, entered);
+                // SAFETY: the CPU has AVX-512.
+                let nearest_vector =
+                    unsafe { push_sorted_zmm(&mut vector, &mut sp_vector, &t, &children, entered) };
+                assert_eq!(
+                    (nearest_vector, sp_vector),
+                    (nearest, sp_scalar),
+                    "{t:?} {entered:#b}"
+                );
+                // Every entry up to the popped one, bit for bit.
+                for i in 0..=sp_scalar {
+                    // SAFETY: written by both (pushed, or the popped nearest).
+                    let (a, b) = unsafe { (scalar[i].assume_init(), vector[i].assume_init()) };
+                    assert_eq!(
+                        (a.0, a.1.to_bits()),
+                        (b.0, b.1.to_bits()),
+                        "entry {i}: {t:?} {entered:#b}"
+                    );
+                }
+                checked += 1;
+            }
+        }
+        assert_eq!(checked, 255 * 64);
+    }
+}
