@@ -1,5 +1,4 @@
-//! Checks against closed-form answers, not the renderer's own formulas, on
-//! both the GPU and the CPU path.
+//! Closed-form answers (not the renderer's own formulas) on the GPU and CPU paths.
 
 mod common;
 

@@ -546,14 +546,6 @@ fn every_cpu_kernel_equals_the_portable_one() {
                     "{name}: {} kernel",
                     kernel.name()
                 );
-                let bits = |r: &lambert::output::Rendered| {
-                    r.image
-                        .rgb
-                        .iter()
-                        .flatten()
-                        .map(|c| c.to_bits())
-                        .collect::<Vec<_>>()
-                };
                 assert_eq!(
                     bits(&portable),
                     bits(&simd),

@@ -1,8 +1,11 @@
-//! The `lambert` binary as a user meets it: outputs, and a clear error with
-//! a non-zero exit (never a panic) for every kind of bad input.
+//! The `lambert` binary as a user meets it: outputs, and clear errors (never a panic) for bad input.
+
+mod common;
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
+
+use common::{lambert, lambert_command, s};
 
 const CAMERA: &str = r#"
 [camera]
@@ -16,13 +19,6 @@ height = 12
 const SPHERE: &str = "[[sphere]]\ncenter = [0.0, 0.0, 0.0]\nradius = 1.0\n";
 const LIGHT: &str = "[[point_light]]\nposition = [0.0, 2.0, 3.0]\nintensity = 10.0\n";
 const TRIANGLE_OBJ: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
-
-fn lambert(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lambert"))
-        .args(args)
-        .output()
-        .expect("lambert runs")
-}
 
 struct Case {
     dir: tempfile::TempDir,
@@ -53,10 +49,6 @@ impl Case {
         expect_failure(&output, expected);
         assert!(!out.exists(), "a failed render wrote an image");
     }
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
 }
 
 fn expect_failure(output: &Output, expected: &[&str]) {
@@ -705,7 +697,7 @@ fn successful_commands_print_no_error_lines() {
     ];
     for args in runs {
         // As on a headless CI machine.
-        let output = Command::new(env!("CARGO_BIN_EXE_lambert"))
+        let output = lambert_command()
             .env_remove("XDG_RUNTIME_DIR")
             .env_remove("WAYLAND_DISPLAY")
             .args(&args)
@@ -1101,7 +1093,7 @@ fn diff_heatmap_writes_png_exr_and_pfm() {
 fn bench_finds_the_bundled_scenes_from_any_folder() {
     let case = Case::new();
     let json = case.path("points.json");
-    let out = Command::new(env!("CARGO_BIN_EXE_lambert"))
+    let out = lambert_command()
         .current_dir(case.dir.path())
         .args([
             "bench",
@@ -1122,7 +1114,7 @@ fn bench_finds_the_bundled_scenes_from_any_folder() {
         assert!(points.iter().any(|p| p["scene"] == scene), "{scene}");
     }
     let missing = case.path("missing.obj");
-    let out = Command::new(env!("CARGO_BIN_EXE_lambert"))
+    let out = lambert_command()
         .current_dir(case.dir.path())
         .args(["bench", "--device", "cpu", s(&missing)])
         .output()

@@ -1,34 +1,13 @@
-//! Defects found by trying unusual but valid inputs (issue 22): each test
-//! failed before its fix.
+//! Defects found by trying unusual but valid inputs (issue 22): each test failed before its fix.
 
 mod common;
 
 use std::os::unix::fs::FileTypeExt;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 
 use common::*;
 use lambert::layout::{NO_HIT, Ray, Triangle};
-
-fn lambert(args: &[&str]) -> Output {
-    lambert_in(Path::new("."), args)
-}
-
-fn lambert_in(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lambert"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .expect("lambert runs")
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
 
 const SCENE: &str = "[camera]\neye = [0.0, 0.0, 3.0]\nlook_at = [0.0, 0.0, 0.0]\nvfov = 40.0\nwidth = 16\nheight = 12\n\
 [[sphere]]\ncenter = [0.0, 0.0, 0.0]\nradius = 1.0\n\
@@ -38,16 +17,6 @@ fn scene_file(dir: &Path) -> PathBuf {
     let path = dir.join("scene.toml");
     std::fs::write(&path, SCENE).unwrap();
     path
-}
-
-/// Files in `dir` whose names mark them as lambert's temporaries.
-fn temporaries(dir: &Path) -> Vec<String> {
-    std::fs::read_dir(dir)
-        .unwrap()
-        .flatten()
-        .map(|e| e.file_name().to_string_lossy().into_owned())
-        .filter(|n| n.ends_with(".tmp") || n.ends_with(".probe"))
-        .collect()
 }
 
 /// diff's statistics stay meaningful when a value is not finite: counted,
@@ -296,7 +265,7 @@ fn signals_leave_no_temporary_file_and_the_previous_output() {
         .iter()
         .enumerate()
     {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_lambert"))
+        let mut child = lambert_command()
             .args([
                 "render",
                 s(&scene),
@@ -416,7 +385,7 @@ fn diff_errors_exit_2_and_nonsense_options_are_refused() {
 fn quiet_is_quiet() {
     let dir = tempfile::tempdir().unwrap();
     let scene = scene_file(dir.path());
-    let out = Command::new(env!("CARGO_BIN_EXE_lambert"))
+    let out = lambert_command()
         .args([
             "render",
             s(&scene),
@@ -442,7 +411,7 @@ fn quiet_is_quiet() {
         }],
     )
     .unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_lambert"))
+    let out = lambert_command()
         .args([
             "trace",
             "--obj",
@@ -523,7 +492,7 @@ fn info_filters_and_backend_names() {
             "{text}"
         );
     }
-    let out = Command::new(env!("CARGO_BIN_EXE_lambert"))
+    let out = lambert_command()
         .arg("info")
         .env("WGPU_BACKEND", "bogus")
         .output()

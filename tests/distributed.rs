@@ -1,23 +1,15 @@
-//! Renders in parts (`--tile I/N`) merged by `lambert merge`, and turntable
-//! frames in ranges (`--frames A-B`), equal to single renders (issue 20).
+//! Tiled renders merged by `lambert merge` and turntable frame ranges equal single renders (issue 20).
+
+mod common;
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn lambert(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_lambert"))
-        .args(args)
-        .output()
-        .expect("lambert runs")
-}
+use common::{lambert, s};
 
 fn scene(name: &str) -> &'static str {
     // Leaked: a few short paths, for the argument lists' lifetimes.
     Box::leak(format!("{}/assets/scenes/{name}.toml", env!("CARGO_MANIFEST_DIR")).into_boxed_str())
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
 }
 
 fn ok(out: Output, what: &str) {

@@ -1,44 +1,14 @@
-//! Every file lambert opens is a regular file read with a size cap, and a
-//! model without triangles is one error in every format (issue 28, items
-//! 7 and 13). Each run of the binary has a deadline: a regression here is
-//! a hang, which must fail the test rather than stall the suite.
+//! Inputs are regular files read with a size cap; a model without triangles is one error (issue 28).
+// Items 7 and 13 of issue 28. Each run of the binary has a deadline: a
+// regression here is a hang, which must fail the test rather than stall
+// the suite.
 
-use std::io::Read;
+mod common;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Command;
 
-/// The binary's exit status, stdout and stderr; killed (and the test
-/// failed) past 20 s.
-fn lambert(args: &[&str]) -> (Option<i32>, String, String) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_lambert"))
-        .args(args)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("lambert runs");
-    let deadline = Instant::now() + Duration::from_secs(20);
-    let status = loop {
-        if let Some(status) = child.try_wait().unwrap() {
-            break status;
-        }
-        if Instant::now() > deadline {
-            child.kill().unwrap();
-            child.wait().unwrap();
-            panic!("lambert {args:?} still running after 20 s: killed");
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    };
-    let read = |mut pipe: Box<dyn Read>| {
-        let mut text = String::new();
-        pipe.read_to_string(&mut text).unwrap();
-        text
-    };
-    let stdout = read(Box::new(child.stdout.take().unwrap()));
-    let stderr = read(Box::new(child.stderr.take().unwrap()));
-    (status.code(), stdout, stderr)
-}
+use common::{lambert_with_deadline as lambert, s, write};
 
 /// Runs lambert, expecting a failure whose message holds `expected`.
 fn fails(args: &[&str], expected: &str) {
@@ -54,20 +24,10 @@ fn fails(args: &[&str], expected: &str) {
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
 
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
-
 fn fifo(dir: &Path, name: &str) -> PathBuf {
     let path = dir.join(name);
     let made = Command::new("mkfifo").arg(&path).status().unwrap();
     assert!(made.success());
-    path
-}
-
-fn write(dir: &Path, name: &str, bytes: impl AsRef<[u8]>) -> PathBuf {
-    let path = dir.join(name);
-    std::fs::write(&path, bytes).unwrap();
     path
 }
 

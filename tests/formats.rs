@@ -1,10 +1,8 @@
-//! Model formats (issue 17): PLY, OBJ with MTL materials, glTF/GLB, one
-//! `file` key for all, and a model file rendered with no scene file.
+//! Model formats (issue 17): PLY, OBJ with MTL, glTF/GLB, the `file` key, a model file alone.
 
 mod common;
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use common::*;
 use glam::DVec3;
@@ -13,16 +11,6 @@ use lambert::loading::{NormalMode, load_mesh};
 
 fn meshes(name: &str) -> PathBuf {
     asset(&format!("scenes/meshes/{name}"))
-}
-
-fn bits(r: &lambert::output::Rendered) -> Vec<u32> {
-    r.image.rgb.iter().flatten().map(|c| c.to_bits()).collect()
-}
-
-fn write(dir: &Path, name: &str, bytes: impl AsRef<[u8]>) -> PathBuf {
-    let path = dir.join(name);
-    std::fs::write(&path, bytes).unwrap();
-    path
 }
 
 /// Asserts that `text` contains each of `parts`.
@@ -978,7 +966,7 @@ fn a_model_file_alone_renders() {
         "boxes.glb",
     ] {
         let out = dir.path().join(format!("{model}.png"));
-        let output = Command::new(env!("CARGO_BIN_EXE_lambert"))
+        let output = lambert_command()
             .args([
                 "render",
                 meshes(model).to_str().unwrap(),
@@ -1003,7 +991,7 @@ fn a_model_file_alone_renders() {
             .count();
         assert!(lit > 64 * 48 / 10, "{model}: only {lit} lit pixels");
     }
-    let output = Command::new(env!("CARGO_BIN_EXE_lambert"))
+    let output = lambert_command()
         .args([
             "render",
             meshes("boxes.glb").to_str().unwrap(),
@@ -1027,7 +1015,7 @@ fn a_model_file_alone_renders() {
         message.contains(".obj, .ply, .ply.gz, .gltf and .glb"),
         "{message}"
     );
-    let output = Command::new(env!("CARGO_BIN_EXE_lambert"))
+    let output = lambert_command()
         .args(["info", meshes("boxes.glb").to_str().unwrap()])
         .output()
         .unwrap();

@@ -1,9 +1,8 @@
-//! The GPU's compressed BVH (src/cwbvh.rs) and its CPU twin
-//! (`cpu::trace_rays_gpu_twin`): the GPU's hits equal the twin's bit for
-//! bit, closest and any hit, from storage buffers and from textures;
-//! quantised boxes lose no hit, at any scale or
-//! offset; trees as deep as the builder allows trace within the stack, its
-//! short part spilling.
+//! The GPU's compressed BVH (src/cwbvh.rs) against its CPU twin, bit for bit.
+// `cpu::trace_rays_gpu_twin`: closest and any hit, from storage buffers and
+// from textures; quantised boxes lose no hit, at any scale or offset; trees
+// as deep as the builder allows trace within the stack, its short part
+// spilling.
 
 mod common;
 

@@ -1,5 +1,4 @@
-//! GPU (wgpu; lavapipe on CI) against the CPU reference on every bundled
-//! scene, with the tolerance `lambert diff` uses (docs/accuracy.md).
+//! GPU (lavapipe on CI) against the CPU reference on every bundled scene, with `lambert diff`'s tolerance.
 
 mod common;
 

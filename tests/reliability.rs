@@ -1,12 +1,11 @@
-//! Reliability (issue 21): the fuzz harness's findings as regression tests,
-//! writes interrupted by signals, concurrent writers, a full disk, and the
-//! GPU's limits.
+//! Reliability (issue 21): fuzz findings, signals, concurrent writers, a full disk, the GPU's limits.
 
 mod common;
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+use common::{lambert_command, s, temporaries};
 use lambert::inputs::Input;
 
 fn fuzz_dir(kind: &str) -> PathBuf {
@@ -142,24 +141,11 @@ fn scene_file(dir: &Path, name: &str, width: u32, height: u32, background: f32) 
     path
 }
 
+/// The binary with Mesa's device-select layer off (it warns on lavapipe).
 fn lambert() -> std::process::Command {
-    let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_lambert"));
+    let mut command = lambert_command();
     command.env("NODEVICE_SELECT", "1");
     command
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
-
-/// Files in `dir` whose names mark them as lambert's temporaries.
-fn temporaries(dir: &Path) -> Vec<String> {
-    std::fs::read_dir(dir)
-        .unwrap()
-        .flatten()
-        .map(|e| e.file_name().to_string_lossy().into_owned())
-        .filter(|n| n.ends_with(".tmp") || n.ends_with(".probe"))
-        .collect()
 }
 
 /// SIGINT or SIGTERM at any moment of a merge (reading the parts, then

@@ -1,5 +1,4 @@
-//! Anti-aliasing: stratified jittered samples drawn from an integer hash
-//! that both paths compute identically, and error that falls as spp rises.
+//! Anti-aliasing: stratified samples from a hash both paths share, and error falling as spp rises.
 
 mod common;
 

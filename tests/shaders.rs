@@ -1,6 +1,4 @@
-//! Every WGSL file parses and validates with naga, and every host struct that
-//! crosses to the GPU matches naga's reflection of the WGSL: size and member
-//! offsets. No GPU needed.
+//! Every WGSL file validates with naga and every host struct matches its WGSL layout (no GPU needed).
 
 use std::mem::{offset_of, size_of};
 

@@ -1,7 +1,7 @@
-//! Numerical stress suite (docs/accuracy.md): watertightness, self-
-//! intersection, edge cases, scale invariance, agreement with the f64 oracle,
-//! and GPU against CPU on ray sets. Every test runs on the CPU path and on
-//! the GPU (lavapipe in CI) and prints its figures (`--nocapture`).
+//! Numerical stress suite (docs/accuracy.md) on the CPU path and the GPU.
+// Watertightness, self-intersection, edge cases, scale invariance,
+// agreement with the f64 oracle, and GPU against CPU on ray sets. Every test
+// prints its figures (`--nocapture`).
 
 mod common;
 

@@ -10,6 +10,11 @@ use lambert::layout::{Sphere, Triangle};
 use lambert::output::Rendered;
 use lambert::progress::Progress;
 
+mod bin;
+// Each test file uses some of these; unused ones are no warning.
+#[allow(unused_imports)]
+pub use bin::*;
+
 pub fn asset(path: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("assets")
@@ -48,6 +53,11 @@ pub fn render_cpu(scene: &Scene) -> Rendered {
 
 pub fn render_oracle(scene: &Scene) -> Rendered {
     cpu::render(scene, Precision::F64, &Progress::hidden())
+}
+
+/// An image's values as bits, for bit-for-bit comparisons.
+pub fn bits(r: &Rendered) -> Vec<u32> {
+    r.image.rgb.iter().flatten().map(|c| c.to_bits()).collect()
 }
 
 pub fn assert_close(actual: [f32; 3], expected: [f64; 3], rel: f64, what: &str) {
