@@ -5,7 +5,7 @@
 use crate::error::{Error, Result};
 use crate::scene::{Intersect, Scene};
 
-use super::bindings::{IMAGE_TILE, PIXEL_LIST, RAYS, SCENE};
+use super::bindings::{BindingTable, IMAGE_TILE, PIXEL_LIST, RAYS, SCENE};
 use super::device::Gpu;
 use super::render::SplitShadows;
 use super::upload::{BvhStorage, SceneBuffers};
@@ -16,8 +16,15 @@ use super::{GpuRenderer, RENDER_WORKGROUP};
 pub(super) struct Layouts {
     pub scene: wgpu::BindGroupLayout,
     pub image: wgpu::BindGroupLayout,
-    pub rays: wgpu::BindGroupLayout,
-    pub pixels: wgpu::BindGroupLayout,
+    pub rays: ListLayout,
+    pub pixels: ListLayout,
+}
+
+/// The layout of a list pass's group, with the table `run_list` binds its
+/// input and output by.
+pub(super) struct ListLayout {
+    pub table: &'static BindingTable,
+    pub layout: wgpu::BindGroupLayout,
 }
 
 impl Layouts {
@@ -25,8 +32,14 @@ impl Layouts {
         Layouts {
             scene: SCENE.layout(device),
             image: IMAGE_TILE.layout(device),
-            rays: RAYS.layout(device),
-            pixels: PIXEL_LIST.layout(device),
+            rays: ListLayout {
+                table: &RAYS,
+                layout: RAYS.layout(device),
+            },
+            pixels: ListLayout {
+                table: &PIXEL_LIST,
+                layout: PIXEL_LIST.layout(device),
+            },
         }
     }
 }
@@ -175,7 +188,7 @@ impl GpuRenderer {
             constants.push(("INTERSECT", intersect.shader_value() as f64));
             constants.push(("ANY_HIT", if any_hit { 1.0 } else { 0.0 }));
             let p = &self.pipelines;
-            let pipeline = p.build(&self.gpu, "trace_rays", &p.layouts.rays, &constants)?;
+            let pipeline = p.build(&self.gpu, "trace_rays", &p.layouts.rays.layout, &constants)?;
             self.pipelines.trace[a][i] = Some(pipeline);
         }
         Ok(())
@@ -188,7 +201,7 @@ impl GpuRenderer {
             let pipeline = p.build(
                 &self.gpu,
                 "render_pixel_list",
-                &p.layouts.pixels,
+                &p.layouts.pixels.layout,
                 &p.constants,
             )?;
             self.pipelines.pixel_list = Some(pipeline);

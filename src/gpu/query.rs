@@ -8,7 +8,8 @@ use crate::error::{Error, Result};
 use crate::layout::{Hit, NO_HIT, Params, Ray};
 use crate::scene::Intersect;
 
-use super::bindings::{BindingTable, PIXEL_LIST, RAYS, SCENE};
+use super::bindings::SCENE;
+use super::pipelines::ListLayout;
 use super::timer::Timer;
 use super::{GpuRenderer, RENDER_WORKGROUP, TILE, WORKGROUP_INVOCATIONS};
 
@@ -51,9 +52,9 @@ impl GpuRenderer {
         let pipeline = self.pipelines.trace[any_hit as usize][intersect.shader_value() as usize]
             .as_ref()
             .expect("prepared");
-        let layout = &self.pipelines.layouts.rays;
+        let list = &self.pipelines.layouts.rays;
         let (hits, device): (Vec<Hit>, _) =
-            self.run_list(pipeline, &RAYS, layout, rays, 1 << 20, None, true)?;
+            self.run_list(pipeline, list, rays, 1 << 20, None, true)?;
         self.lists.trace_device_time = device;
         if self.loops_were_cut()? {
             return Err(Error::Gpu(format!(
@@ -74,20 +75,12 @@ impl GpuRenderer {
         self.prepare_pixel_list()?;
         loop {
             let pipeline = self.pipelines.pixel_list.as_ref().expect("built");
-            let layout = &self.pipelines.layouts.pixels;
+            let list = &self.pipelines.layouts.pixels;
             let step = self.samples_per_dispatch.min(self.params.spp);
             // As many samples per dispatch as a full tile at 1 spp.
             let batch =
                 ((TILE * TILE) / step).max(RENDER_WORKGROUP[0] * RENDER_WORKGROUP[1]) as usize;
-            let (results, _) = self.run_list(
-                pipeline,
-                &PIXEL_LIST,
-                layout,
-                pixels,
-                batch,
-                Some(step),
-                false,
-            )?;
+            let (results, _) = self.run_list(pipeline, list, pixels, batch, Some(step), false)?;
             if !self.loops_were_cut()? {
                 return Ok(results);
             }
@@ -102,7 +95,7 @@ impl GpuRenderer {
     }
 
     /// Runs a one-invocation-per-item entry point over `inputs` (bound at
-    /// `table`'s first binding, outputs at its second), `batch` items per
+    /// `list`'s first binding, outputs at its second), `batch` items per
     /// dispatch so that no dispatch runs long; with `step`, the scene's
     /// samples that many at a time, a dispatch each. With `timed`, also
     /// returns the dispatches' device time, summed, where timestamps work
@@ -110,14 +103,14 @@ impl GpuRenderer {
     fn run_list<I: bytemuck::Pod, O: bytemuck::Pod>(
         &self,
         pipeline: &wgpu::ComputePipeline,
-        table: &BindingTable,
-        layout: &wgpu::BindGroupLayout,
+        list: &ListLayout,
         inputs: &[I],
         batch: usize,
         step: Option<u32>,
         timed: bool,
     ) -> Result<(Vec<O>, Option<Duration>)> {
         const LIST_WORKGROUP: usize = WORKGROUP_INVOCATIONS as usize;
+        let table = list.table;
         let [input, output] = table.entries else {
             unreachable!("a list's bindings are its input and its output")
         };
@@ -170,7 +163,7 @@ impl GpuRenderer {
             let group = table.bind_group(
                 &gpu.device,
                 "list",
-                layout,
+                &list.layout,
                 vec![
                     (input.name, range(&in_buffer, in_len)),
                     (output.name, range(&out_buffer, out_len)),
