@@ -216,7 +216,10 @@ impl NativeScene {
     fn new(scene: Scene) -> NativeScene {
         NativeScene {
             scene: Arc::new(scene),
-            renderers: Mutex::new(Renderers::new(AdapterRequest::default())),
+            // The GPU's environment variables, as the CLI reads them.
+            renderers: Mutex::new(Renderers::new(
+                AdapterRequest::default().with_environment(|name| std::env::var(name).ok()),
+            )),
             scratch: Mutex::new(Vec::new()),
         }
     }

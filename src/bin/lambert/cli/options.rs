@@ -103,11 +103,15 @@ pub(super) struct AdapterArgs {
 }
 
 impl AdapterArgs {
+    /// The request, completed from the environment: wgpu's own variables
+    /// and lambert's GPU ones (the library reads none).
     pub(super) fn request(&self) -> AdapterRequest {
         AdapterRequest {
             name: self.adapter.clone(),
             backend: self.backend.clone(),
+            ..Default::default()
         }
+        .with_environment(|name| std::env::var(name).ok())
     }
 }
 

@@ -1,0 +1,187 @@
+//! The shader's bindings, one named table per bind group layout: the
+//! layouts and the bind groups are built from these tables, so no binding
+//! number is written anywhere else. tests/bindings.rs checks every entry
+//! against naga's reflection of the shader, and every shader binding
+//! against the tables.
+
+/// What a binding holds, as the bind group layout declares it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BindingKind {
+    Uniform,
+    /// A read-only storage buffer.
+    Storage,
+    /// A read-write storage buffer.
+    StorageWrite,
+    /// A write-only storage texture of this format.
+    Image(wgpu::TextureFormat),
+    /// A read-only rgba32uint texture (`BvhStorage::Texels`).
+    Texels,
+}
+
+/// One binding: the shader's name for it, its number, its kind.
+#[derive(Clone, Copy, Debug)]
+pub struct Binding {
+    pub name: &'static str,
+    pub binding: u32,
+    pub kind: BindingKind,
+}
+
+/// The bindings of one bind group layout, at `group` in the pipelines.
+#[derive(Debug)]
+pub struct BindingTable {
+    pub label: &'static str,
+    pub group: u32,
+    pub entries: &'static [Binding],
+}
+
+const fn bind(name: &'static str, binding: u32, kind: BindingKind) -> Binding {
+    Binding {
+        name,
+        binding,
+        kind,
+    }
+}
+
+use BindingKind::{Image, Storage, StorageWrite, Texels, Uniform};
+
+/// Group 0 of every pipeline: the resident scene.
+pub const SCENE: BindingTable = BindingTable {
+    label: "scene",
+    group: 0,
+    entries: &[
+        bind("params", 0, Uniform),
+        bind("triangles", 1, Storage),
+        bind("triangle_normals", 2, Storage),
+        bind("spheres", 3, Storage),
+        bind("materials", 4, Storage),
+        bind("lights", 5, Storage),
+        bind("bvh_nodes", 6, Storage),
+        bind("bvh_blocks", 7, Storage),
+        bind("triangles_hi", 8, Storage),
+        bind("triangle_normals_hi", 9, Storage),
+        bind("bvh_nodes_hi", 10, Storage),
+        bind("bvh_blocks_hi", 11, Storage),
+        bind("loop_status", 12, StorageWrite),
+        bind("bvh_node_texels", 13, Texels),
+        bind("bvh_block_texels", 14, Texels),
+    ],
+};
+
+const OUT_COLOR: Binding = bind("out_color", 0, Image(wgpu::TextureFormat::Rgba32Float));
+const OUT_PRIM: Binding = bind("out_prim", 1, Image(wgpu::TextureFormat::R32Uint));
+
+/// Group 1 of `render`: a tile's pixels.
+pub const IMAGE_TILE: BindingTable = BindingTable {
+    label: "image tile",
+    group: 1,
+    entries: &[OUT_COLOR, OUT_PRIM, bind("tile_sums", 6, StorageWrite)],
+};
+
+/// Group 1 of `render_primary`, `render_shadows` and `render_shade`.
+pub const SHADOWS_APART: BindingTable = BindingTable {
+    label: "image tile, shadows apart",
+    group: 1,
+    entries: &[
+        OUT_COLOR,
+        OUT_PRIM,
+        bind("split_hits", 7, StorageWrite),
+        bind("shadow_queue", 8, StorageWrite),
+        bind("shadow_count", 9, StorageWrite),
+        bind("shadow_blocked", 10, StorageWrite),
+    ],
+};
+
+/// Group 1 of `trace_rays`: its input, then its output (`run_list`).
+pub const RAYS: BindingTable = BindingTable {
+    label: "rays",
+    group: 1,
+    entries: &[bind("rays", 2, Storage), bind("hits", 3, StorageWrite)],
+};
+
+/// Group 1 of `render_pixel_list`: its input, then its output.
+pub const PIXEL_LIST: BindingTable = BindingTable {
+    label: "pixel list",
+    group: 1,
+    entries: &[
+        bind("pixel_list", 4, Storage),
+        bind("pixel_results", 5, StorageWrite),
+    ],
+};
+
+/// Every table.
+pub const TABLES: [&BindingTable; 5] = [&SCENE, &IMAGE_TILE, &SHADOWS_APART, &RAYS, &PIXEL_LIST];
+
+impl BindingTable {
+    pub(super) fn layout(&self, device: &wgpu::Device) -> wgpu::BindGroupLayout {
+        let buffer = |ty| wgpu::BindingType::Buffer {
+            ty,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        };
+        let entries: Vec<wgpu::BindGroupLayoutEntry> = self
+            .entries
+            .iter()
+            .map(|entry| wgpu::BindGroupLayoutEntry {
+                binding: entry.binding,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: match entry.kind {
+                    Uniform => buffer(wgpu::BufferBindingType::Uniform),
+                    Storage => buffer(wgpu::BufferBindingType::Storage { read_only: true }),
+                    StorageWrite => buffer(wgpu::BufferBindingType::Storage { read_only: false }),
+                    Image(format) => wgpu::BindingType::StorageTexture {
+                        access: wgpu::StorageTextureAccess::WriteOnly,
+                        format,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                    },
+                    Texels => wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Uint,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                },
+                count: None,
+            })
+            .collect();
+        device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some(self.label),
+            entries: &entries,
+        })
+    }
+
+    /// A bind group of `layout` (this table's) with each of the table's
+    /// bindings given by name in `resources`.
+    pub(super) fn bind_group(
+        &self,
+        device: &wgpu::Device,
+        label: &str,
+        layout: &wgpu::BindGroupLayout,
+        resources: Vec<(&str, wgpu::BindingResource<'_>)>,
+    ) -> wgpu::BindGroup {
+        assert_eq!(
+            resources.len(),
+            self.entries.len(),
+            "{}: one resource per binding",
+            self.label
+        );
+        let entries: Vec<wgpu::BindGroupEntry> = resources
+            .into_iter()
+            .map(|(name, resource)| wgpu::BindGroupEntry {
+                binding: self.binding(name),
+                resource,
+            })
+            .collect();
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(label),
+            layout,
+            entries: &entries,
+        })
+    }
+
+    fn binding(&self, name: &str) -> u32 {
+        self.entries
+            .iter()
+            .find(|e| e.name == name)
+            .unwrap_or_else(|| panic!("the {} bind group has no binding {name}", self.label))
+            .binding
+    }
+}

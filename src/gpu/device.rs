@@ -1,0 +1,149 @@
+//! An open device and queue: its limits, its error slot, and waiting on it.
+
+use std::sync::{Arc, Mutex};
+
+use crate::error::{Error, Result};
+
+use super::adapter::{AdapterRequest, choose_adapter, describe, is_software};
+
+/// `LAMBERT_GPU_MAX_BUFFER_BYTES`: a cap on the buffer and binding sizes
+/// lambert requests from the adapter (`Gpu::open_limited`).
+pub const MAX_BUFFER_ENV: &str = "LAMBERT_GPU_MAX_BUFFER_BYTES";
+
+/// `LAMBERT_SHADOW_DISPATCH`: megakernel or apart (`ShadowDispatch`).
+pub const SHADOW_DISPATCH_ENV: &str = "LAMBERT_SHADOW_DISPATCH";
+
+/// Settings a front end found in the environment, as it found them: each
+/// is parsed where it is used, so that a bad value fails only the work that
+/// needs it.
+#[derive(Clone, Debug, Default)]
+pub struct GpuOptions {
+    /// `MAX_BUFFER_ENV`: bytes, checked when a device is opened.
+    pub max_buffer_bytes: Option<String>,
+    /// `SHADOW_DISPATCH_ENV`, checked when a scene is uploaded.
+    pub shadow_dispatch: Option<String>,
+}
+
+impl GpuOptions {
+    fn max_buffer_bytes(&self) -> Result<Option<u64>> {
+        match &self.max_buffer_bytes {
+            None => Ok(None),
+            Some(v) => v.trim().parse().map(Some).map_err(|_| {
+                Error::Usage(format!("{MAX_BUFFER_ENV}={v}: expected a number of bytes"))
+            }),
+        }
+    }
+}
+
+/// An open device and queue.
+pub struct Gpu {
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub info: wgpu::AdapterInfo,
+    pub limits: wgpu::Limits,
+    /// The request's options, for the renderers opened on this device.
+    pub options: GpuOptions,
+    errors: Arc<Mutex<Option<String>>>,
+}
+
+impl Gpu {
+    /// Opens the best adapter matching `request`: hardware before software,
+    /// Vulkan/Metal/DX12 before GL. With `hardware_only`, software
+    /// rasterisers such as lavapipe do not count.
+    pub fn open(request: &AdapterRequest, hardware_only: bool) -> Result<Gpu> {
+        Gpu::open_limited(request, hardware_only, request.options.max_buffer_bytes()?)
+    }
+
+    /// `open`, requesting at most `max_buffer_bytes` per buffer and per
+    /// storage binding (when given) instead of all the adapter offers: what
+    /// a smaller GPU would do, for tests and for sharing a device.
+    pub fn open_limited(
+        request: &AdapterRequest,
+        hardware_only: bool,
+        max_buffer_bytes: Option<u64>,
+    ) -> Result<Gpu> {
+        let adapter = choose_adapter(request, hardware_only)?;
+        let info = adapter.get_info();
+        let limits = requested_limits(&adapter, max_buffer_bytes);
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("lambert"),
+            // GPU time of each dispatch, where the adapter can measure it.
+            required_features: adapter.features() & wgpu::Features::TIMESTAMP_QUERY,
+            required_limits: limits.clone(),
+            ..Default::default()
+        }))
+        .map_err(|e| Error::Gpu(format!("cannot open {}: {e}", describe(&info))))?;
+        let errors = error_slot(&device, &info);
+        Ok(Gpu {
+            device,
+            queue,
+            info,
+            limits,
+            options: request.options.clone(),
+            errors,
+        })
+    }
+
+    pub fn describe(&self) -> String {
+        describe(&self.info)
+    }
+
+    /// A software rasteriser such as lavapipe.
+    pub fn is_software(&self) -> bool {
+        is_software(&self.info)
+    }
+
+    fn check_errors(&self) -> Result<()> {
+        match self.errors.lock().unwrap().take() {
+            Some(e) => Err(Error::Gpu(e)),
+            None => Ok(()),
+        }
+    }
+
+    pub(super) fn wait(&self) -> Result<()> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| Error::Gpu(format!("waiting for the device: {e}")))?;
+        self.check_errors()
+    }
+
+    /// Largest storage binding, bytes.
+    pub(super) fn binding_limit(&self) -> u64 {
+        self.limits
+            .max_storage_buffer_binding_size
+            .min(self.limits.max_buffer_size)
+    }
+}
+
+/// The adapter's real limits, not wgpu's conservative defaults (large
+/// scenes need big storage bindings), capped at `max_buffer_bytes`.
+fn requested_limits(adapter: &wgpu::Adapter, max_buffer_bytes: Option<u64>) -> wgpu::Limits {
+    let mut limits = adapter.limits();
+    if let Some(max) = max_buffer_bytes {
+        limits.max_buffer_size = limits.max_buffer_size.min(max);
+        limits.max_storage_buffer_binding_size = limits.max_storage_buffer_binding_size.min(max);
+    }
+    limits
+}
+
+/// Where the device's errors wait for the next `Gpu::wait`.
+fn error_slot(device: &wgpu::Device, info: &wgpu::AdapterInfo) -> Arc<Mutex<Option<String>>> {
+    // wgpu's default handler panics; keep the error and report it instead.
+    let errors = Arc::new(Mutex::new(None));
+    let slot = errors.clone();
+    device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+        slot.lock().unwrap().get_or_insert(e.to_string());
+    }));
+    // A lost device (a driver reset, a removed GPU, `destroy`) is an
+    // error with the driver's reason at the next wait, not a hang.
+    let slot = errors.clone();
+    let name = describe(info);
+    device.set_device_lost_callback(move |reason, message| {
+        slot.lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .get_or_insert(format!(
+                "the device {name} was lost ({reason:?}): {message}"
+            ));
+    });
+    errors
+}

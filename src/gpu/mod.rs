@@ -1,0 +1,57 @@
+//! The GPU path: adapter choice, scene upload, and tiled dispatch of
+//! the shader (`shaders/*.wgsl`, composed in `shader_source`) through wgpu, split by concern:
+//!
+//! - `adapter`: which adapter a request asks for, and the choice;
+//! - `device`: the open device, its limits and errors, the front ends'
+//!   options;
+//! - `upload`: the scene's buffers and the BVH's storage;
+//! - `bindings`: the bind group tables, checked against the shader;
+//! - `shader`: the shader's source and its specialisation;
+//! - `pipelines`: the module's layouts and pipelines, built on first use;
+//! - `renderer`: `GpuRenderer`, a scene resident on the device;
+//! - `render`: the render passes (megakernel, or shadows apart);
+//! - `query`: ray queries and pixel lists;
+//! - `timer` and `readback`: timestamps, and getting results back.
+
+mod adapter;
+pub mod bindings;
+mod device;
+mod pipelines;
+mod query;
+mod readback;
+mod render;
+mod renderer;
+mod shader;
+mod timer;
+mod upload;
+
+pub use adapter::{AdapterRequest, enumerate_adapters};
+pub use device::{Gpu, GpuOptions, MAX_BUFFER_ENV, SHADOW_DISPATCH_ENV};
+pub use readback::padded_bytes_per_row;
+pub use render::ShadowDispatch;
+pub use renderer::{GpuRenderer, params_for};
+pub use shader::{SHADER_SOURCE, specialisation};
+pub use timer::GpuTimings;
+pub use upload::{BvhStorage, TEXELS_PER_ROW};
+
+/// Side of the square tile one dispatch renders: small enough that no
+/// dispatch runs long enough for a GPU watchdog to kill it.
+pub const TILE: u32 = 256;
+/// The `render` entry point's workgroup (x, y) in pixels
+/// (`RENDER_WORKGROUP_X`/`_Y` in shaders/layout.wgsl), measured on lavapipe against
+/// 16×16 and 64×1 (docs/bvh.md).
+const RENDER_WORKGROUP: [u32; 2] = [8, 8];
+/// Invocations per workgroup of every entry point (`WORKGROUP_INVOCATIONS`
+/// in shaders/layout.wgsl, which sizes the traversal stacks in workgroup memory by
+/// it).
+pub const WORKGROUP_INVOCATIONS: u32 = 64;
+const _: () = assert!(RENDER_WORKGROUP[0] * RENDER_WORKGROUP[1] == WORKGROUP_INVOCATIONS);
+
+/// Most lights a render traces the shadow rays of apart (the shader's
+/// `shadow_blocked` has a bit of a pixel's word each; the queue holds a
+/// ray for each light of each tile pixel, `SHADOW_QUERY_BYTES`).
+pub const MAX_LIGHTS_APART: u32 = 8;
+
+/// Bytes of the shader's `ShadowQuery` (a queued shadow ray; GPU-only,
+/// checked against naga's layout in tests/shaders.rs).
+pub const SHADOW_QUERY_BYTES: u64 = 48;

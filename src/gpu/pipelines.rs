@@ -1,0 +1,211 @@
+//! The shader module, its bind group layouts and its compute pipelines,
+//! each built on first use: a ray query never compiles the render entry
+//! point, nor a render the query's.
+
+use crate::error::{Error, Result};
+use crate::scene::{Intersect, Scene};
+
+use super::bindings::{BindingTable, IMAGE_TILE, PIXEL_LIST, RAYS, SCENE};
+use super::device::Gpu;
+use super::render::SplitShadows;
+use super::upload::{BvhStorage, SceneBuffers};
+use super::{GpuRenderer, RENDER_WORKGROUP};
+
+/// The bind group layouts every renderer builds, one per binding table
+/// (the shadows-apart passes build theirs with them).
+pub(super) struct Layouts {
+    pub scene: wgpu::BindGroupLayout,
+    pub image: wgpu::BindGroupLayout,
+    pub rays: ListLayout,
+    pub pixels: ListLayout,
+}
+
+/// The layout of a list pass's group, with the table `run_list` binds its
+/// input and output by.
+pub(super) struct ListLayout {
+    pub table: &'static BindingTable,
+    pub layout: wgpu::BindGroupLayout,
+}
+
+impl Layouts {
+    pub fn new(device: &wgpu::Device) -> Layouts {
+        Layouts {
+            scene: SCENE.layout(device),
+            image: IMAGE_TILE.layout(device),
+            rays: ListLayout {
+                table: &RAYS,
+                layout: RAYS.layout(device),
+            },
+            pixels: ListLayout {
+                table: &PIXEL_LIST,
+                layout: PIXEL_LIST.layout(device),
+            },
+        }
+    }
+}
+
+/// The module, the overrides specialising it to the resident scene, and
+/// the pipelines built so far.
+pub(super) struct Pipelines {
+    pub module: wgpu::ShaderModule,
+    pub constants: Vec<(&'static str, f64)>,
+    pub layouts: Layouts,
+    pub render: Option<wgpu::ComputePipeline>,
+    /// The passes of a render with its shadow rays apart, built on first
+    /// use where `shadow_dispatch` asks for them.
+    pub split: Option<SplitShadows>,
+    /// `trace_rays` pipelines: by any hit or closest hit, then by
+    /// ray/triangle test.
+    pub trace: [[Option<wgpu::ComputePipeline>; 3]; 2],
+    pub pixel_list: Option<wgpu::ComputePipeline>,
+}
+
+impl Pipelines {
+    pub fn new(
+        module: wgpu::ShaderModule,
+        constants: Vec<(&'static str, f64)>,
+        layouts: Layouts,
+    ) -> Pipelines {
+        Pipelines {
+            module,
+            constants,
+            layouts,
+            render: None,
+            split: None,
+            trace: Default::default(),
+            pixel_list: None,
+        }
+    }
+
+    /// `entry_point` with the scene at group 0 and `output_layout` at 1.
+    pub fn build(
+        &self,
+        gpu: &Gpu,
+        entry_point: &str,
+        output_layout: &wgpu::BindGroupLayout,
+        constants: &[(&str, f64)],
+    ) -> Result<wgpu::ComputePipeline> {
+        let scope = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let pipeline = compute_pipeline(
+            &gpu.device,
+            &self.module,
+            entry_point,
+            &[&self.layouts.scene, output_layout],
+            constants,
+        );
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(Error::Gpu(format!(
+                "building the {entry_point} pipeline: {e}"
+            )));
+        }
+        gpu.wait()?;
+        Ok(pipeline)
+    }
+}
+
+/// `specialisation`'s overrides (or some of them) and those the upload
+/// decides: how the arrays are split, where the BVH is read from, the
+/// workgroup's shape and the traversal stack's size.
+pub(super) fn resident_constants(
+    mut constants: Vec<(&'static str, f64)>,
+    buffers: &SceneBuffers,
+    storage: BvhStorage,
+    scene: &Scene,
+    gpu: &Gpu,
+) -> Vec<(&'static str, f64)> {
+    constants.push((
+        "TRIANGLES_PER_BINDING",
+        buffers.triangles.per_binding as f64,
+    ));
+    constants.push(("NODES_PER_BINDING", buffers.nodes.per_binding as f64));
+    constants.push(("BLOCKS_PER_BINDING", buffers.blocks.per_binding as f64));
+    constants.push(("BVH_TEXELS", (storage == BvhStorage::Texels) as u32 as f64));
+    constants.push(("RENDER_WORKGROUP_X", RENDER_WORKGROUP[0] as f64));
+    constants.push(("RENDER_WORKGROUP_Y", RENDER_WORKGROUP[1] as f64));
+    let (stack_entries, spills) = crate::cwbvh::short_stack(
+        scene.bvh.depth(),
+        gpu.limits.max_compute_workgroup_storage_size,
+    );
+    constants.push(("STACK_ENTRIES", stack_entries as f64));
+    constants.push(("STACK_SPILLS", spills as u32 as f64));
+    constants
+}
+
+pub(super) fn compute_pipeline(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    entry_point: &str,
+    layouts: &[&wgpu::BindGroupLayout],
+    constants: &[(&str, f64)],
+) -> wgpu::ComputePipeline {
+    let layouts: Vec<Option<&wgpu::BindGroupLayout>> = layouts.iter().copied().map(Some).collect();
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(entry_point),
+        bind_group_layouts: &layouts,
+        immediate_size: 0,
+    });
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(entry_point),
+        layout: Some(&pipeline_layout),
+        module,
+        entry_point: Some(entry_point),
+        compilation_options: wgpu::PipelineCompilationOptions {
+            constants,
+            zero_initialize_workgroup_memory: false,
+        },
+        cache: None,
+    })
+}
+
+impl GpuRenderer {
+    /// Builds the render pipeline if not built yet (so that timing a render
+    /// can leave the compile out).
+    pub fn prepare_render(&mut self) -> Result<()> {
+        if self.shadows_apart() {
+            if self.pipelines.split.is_none() {
+                self.pipelines.split = Some(self.build_split()?);
+            }
+        } else if self.pipelines.render.is_none() {
+            let p = &self.pipelines;
+            let pipeline = p.build(&self.gpu, "render", &p.layouts.image, &p.constants)?;
+            self.pipelines.render = Some(pipeline);
+        }
+        Ok(())
+    }
+
+    /// Builds the `trace_rays` pipeline for closest or any hit with the
+    /// given ray/triangle test, if not built yet.
+    pub fn prepare_trace(&mut self, any_hit: bool, intersect: Intersect) -> Result<()> {
+        let (a, i) = (any_hit as usize, intersect.shader_value() as usize);
+        if self.pipelines.trace[a][i].is_none() {
+            let mut constants: Vec<(&str, f64)> = self
+                .pipelines
+                .constants
+                .iter()
+                .filter(|(name, _)| *name != "INTERSECT")
+                .copied()
+                .collect();
+            constants.push(("INTERSECT", intersect.shader_value() as f64));
+            constants.push(("ANY_HIT", if any_hit { 1.0 } else { 0.0 }));
+            let p = &self.pipelines;
+            let pipeline = p.build(&self.gpu, "trace_rays", &p.layouts.rays.layout, &constants)?;
+            self.pipelines.trace[a][i] = Some(pipeline);
+        }
+        Ok(())
+    }
+
+    /// Builds the `render_pixel_list` pipeline if not built yet.
+    pub(super) fn prepare_pixel_list(&mut self) -> Result<()> {
+        if self.pipelines.pixel_list.is_none() {
+            let p = &self.pipelines;
+            let pipeline = p.build(
+                &self.gpu,
+                "render_pixel_list",
+                &p.layouts.pixels.layout,
+                &p.constants,
+            )?;
+            self.pipelines.pixel_list = Some(pipeline);
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,302 @@
+//! The render passes: tile by tile, in the `render` megakernel or with the
+//! shadow rays apart (`render_primary`, `render_shadows`, `render_shade`),
+//! each tile read back before the next.
+
+use std::time::{Duration, Instant};
+
+use crate::error::{Error, Result};
+use crate::layout::Hit;
+use crate::output::{Image, Rendered};
+use crate::progress::Progress;
+use crate::scene::Scene;
+
+use super::bindings::{IMAGE_TILE, SCENE, SHADOWS_APART};
+use super::device::SHADOW_DISPATCH_ENV;
+use super::timer::{GpuTimings, Timer};
+use super::{
+    GpuRenderer, MAX_LIGHTS_APART, RENDER_WORKGROUP, SHADOW_QUERY_BYTES, TILE,
+    WORKGROUP_INVOCATIONS,
+};
+
+/// Samples a dispatch adds to each pixel on llvmpipe: the bundled scenes'
+/// pixels ran out of loop iterations from about 192 (a 3,674-triangle
+/// bunny, two lights); a heavier scene halves it as often as it needs.
+pub(super) const LLVMPIPE_SAMPLES_PER_DISPATCH: u32 = 32;
+
+/// How a render traces its shadow rays: in the `render` megakernel, each
+/// invocation after its own primary hit, or apart (`render_primary`
+/// queues them, `render_shadows` traces the queue side by side,
+/// `render_shade` shades; the same image, bit for bit). Apart measured
+/// faster on lavapipe (docs/bvh.md): the default wherever shadows are
+/// traced and there are at most `MAX_LIGHTS_APART` lights, for renders
+/// at one sample per pixel (`shadows_apart`).
+/// LAMBERT_SHADOW_DISPATCH=megakernel|apart chooses (`GpuOptions`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShadowDispatch {
+    Megakernel,
+    Apart,
+}
+
+impl ShadowDispatch {
+    /// Apart where it applies, unless `chosen` (LAMBERT_SHADOW_DISPATCH)
+    /// says otherwise.
+    pub(super) fn for_scene(scene: &Scene, chosen: Option<&str>) -> Result<ShadowDispatch> {
+        let applies =
+            scene.shadows && (1..=MAX_LIGHTS_APART as usize).contains(&scene.lights.len());
+        match chosen {
+            None | Some("apart") if applies => Ok(ShadowDispatch::Apart),
+            None | Some("apart") | Some("megakernel") => Ok(ShadowDispatch::Megakernel),
+            Some(other) => Err(Error::Usage(format!(
+                "{SHADOW_DISPATCH_ENV}={other:?}: use \"megakernel\" or \"apart\""
+            ))),
+        }
+    }
+}
+
+/// The three passes of a render with its shadow rays apart, and their
+/// buffers.
+pub(super) struct SplitShadows {
+    primary: wgpu::ComputePipeline,
+    shadows: wgpu::ComputePipeline,
+    shade: wgpu::ComputePipeline,
+    group: wgpu::BindGroup,
+    count: wgpu::Buffer,
+}
+
+impl GpuRenderer {
+    /// Renders tile by tile, reading each back before the next.
+    pub fn render(&mut self, progress: &Progress) -> Result<(Rendered, GpuTimings)> {
+        self.render_rows(0..self.params.height, progress)
+    }
+
+    /// Renders rows `rows` of the image alone (a part of it), tile by tile.
+    /// If the driver cut the shader's loops short anywhere (checked once,
+    /// after the last tile), renders again with half as many samples per
+    /// dispatch, down to one, then fails rather than return a wrong
+    /// picture.
+    pub fn render_rows(
+        &mut self,
+        rows: std::ops::Range<u32>,
+        progress: &Progress,
+    ) -> Result<(Rendered, GpuTimings)> {
+        self.prepare_render()?;
+        loop {
+            let result = self.render_rows_once(&rows, progress)?;
+            if !self.loops_were_cut()? {
+                return Ok(result);
+            }
+            self.fewer_samples_per_dispatch()?;
+        }
+    }
+
+    fn render_rows_once(
+        &mut self,
+        rows: &std::ops::Range<u32>,
+        progress: &Progress,
+    ) -> Result<(Rendered, GpuTimings)> {
+        let width = self.params.width;
+        let height = rows.len() as u32;
+        let mut rgb = vec![[0.0f32; 3]; width as usize * height as usize];
+        let mut prims = vec![0u32; width as usize * height as usize];
+        let mut variance = vec![0.0f32; width as usize * height as usize];
+        let mut timings = GpuTimings::default();
+        let side = self.tile_side();
+        for tile_y in rows.clone().step_by(side as usize) {
+            for tile_x in (0..width).step_by(side as usize) {
+                let tile_width = side.min(width - tile_x);
+                let tile_height = side.min(rows.end - tile_y);
+                let start = Instant::now();
+                let device_time = self.render_tile(tile_x, tile_y, tile_width, tile_height)?;
+                timings.render += start.elapsed();
+                if let Some(t) = device_time {
+                    *timings.device.get_or_insert(Duration::ZERO) += t;
+                }
+
+                let start = Instant::now();
+                self.tile
+                    .read(&self.gpu, tile_width, tile_height, |row, colors, ids| {
+                        let offset = ((tile_y - rows.start + row) * width + tile_x) as usize;
+                        let n = tile_width as usize;
+                        for (i, src) in colors.chunks(4).enumerate() {
+                            rgb[offset + i] = [src[0], src[1], src[2]];
+                            variance[offset + i] = src[3];
+                        }
+                        prims[offset..offset + n].copy_from_slice(ids);
+                    })?;
+                timings.readback += start.elapsed();
+                progress.inc(1);
+            }
+        }
+        Ok((
+            Rendered {
+                image: Image { width, height, rgb },
+                prims,
+                variance,
+            },
+            timings,
+        ))
+    }
+
+    /// Side of the tiles `render` dispatches: TILE at 1 sample per pixel
+    /// per dispatch, smaller as they grow, so that a dispatch traces about
+    /// as many camera rays (TILE²) at any spp.
+    pub fn tile_side(&self) -> u32 {
+        let samples = self.params.spp.min(self.samples_per_dispatch());
+        let side = TILE / samples.isqrt().max(1);
+        let step = RENDER_WORKGROUP[0].max(RENDER_WORKGROUP[1]);
+        side.next_multiple_of(step).clamp(step, TILE)
+    }
+
+    /// Number of tiles `render` dispatches for the current camera.
+    pub fn tile_count(&self) -> u64 {
+        let side = self.tile_side();
+        self.params.width.div_ceil(side) as u64 * self.params.height.div_ceil(side) as u64
+    }
+
+    /// Renders one tile, its samples over as many dispatches as
+    /// `samples_per_dispatch` asks. Returns the device time where
+    /// timestamps work.
+    fn render_tile(&mut self, x: u32, y: u32, width: u32, height: u32) -> Result<Option<Duration>> {
+        let spp = self.params.spp;
+        let step = self.samples_per_dispatch().min(spp);
+        let mut device_time = None;
+        for begin in (0..spp).step_by(step as usize) {
+            self.params.sample_begin = begin;
+            self.params.sample_end = (begin + step).min(spp);
+            if let Some(t) = self.dispatch_tile(x, y, width, height)? {
+                *device_time.get_or_insert(Duration::ZERO) += t;
+            }
+        }
+        Ok(device_time)
+    }
+
+    /// Samples a render dispatch adds to a pixel: one with the shadow rays
+    /// apart (each sample's passes in turn).
+    fn samples_per_dispatch(&self) -> u32 {
+        if self.shadows_apart() {
+            1
+        } else {
+            self.samples_per_dispatch
+        }
+    }
+
+    /// Whether this render traces its shadow rays apart: as
+    /// `shadow_dispatch` asks, at one sample per pixel. With more, each
+    /// sample would be a dispatch of its own, waited on: the sampling
+    /// tests' high-spp renders took 152 s rather than 19.
+    pub fn shadows_apart(&self) -> bool {
+        self.shadow_dispatch == ShadowDispatch::Apart && self.params.spp == 1
+    }
+
+    /// Halves `samples_per_dispatch` after the driver cut loops short.
+    pub(super) fn fewer_samples_per_dispatch(&mut self) -> Result<()> {
+        let step = self.samples_per_dispatch().min(self.params.spp);
+        if step <= 1 {
+            return Err(Error::Gpu(format!(
+                "{} cut the shader's loops short even at one sample per pixel per dispatch \
+                 (Mesa's llvmpipe ends loops after 65535 iterations an invocation group): \
+                 this scene is too complex for this adapter; use --device cpu",
+                self.gpu.describe()
+            )));
+        }
+        self.samples_per_dispatch = step / 2;
+        Ok(())
+    }
+
+    /// Whether any invocation since the last call found its loops cut short
+    /// (the shader's `report_cut_loops`); clears the flag.
+    pub(super) fn loops_were_cut(&self) -> Result<bool> {
+        self.resident.loop_status.were_cut(&self.gpu)
+    }
+
+    /// Renders one tile; returns its device time where timestamps work.
+    fn dispatch_tile(
+        &mut self,
+        x: u32,
+        y: u32,
+        width: u32,
+        height: u32,
+    ) -> Result<Option<Duration>> {
+        self.params.tile_origin = [x, y];
+        let gpu = &self.gpu;
+        let resident = &self.resident;
+        gpu.queue
+            .write_buffer(&resident.params_buffer, 0, bytemuck::bytes_of(&self.params));
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        let [wx, wy] = RENDER_WORKGROUP;
+        if let (true, Some(split)) = (self.shadows_apart(), &self.pipelines.split) {
+            encoder.clear_buffer(&split.count, 0, None);
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("render tile, shadows apart"),
+                timestamp_writes: self.timer.as_ref().map(Timer::writes),
+            });
+            pass.set_bind_group(SCENE.group, &resident.scene_group, &[]);
+            pass.set_bind_group(SHADOWS_APART.group, &split.group, &[]);
+            pass.set_pipeline(&split.primary);
+            pass.dispatch_workgroups(width.div_ceil(wx), height.div_ceil(wy), 1);
+            pass.set_pipeline(&split.shadows);
+            pass.dispatch_workgroups((width * height).div_ceil(WORKGROUP_INVOCATIONS), 1, 1);
+            pass.set_pipeline(&split.shade);
+            pass.dispatch_workgroups(width.div_ceil(wx), height.div_ceil(wy), 1);
+        } else {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("render tile"),
+                timestamp_writes: self.timer.as_ref().map(Timer::writes),
+            });
+            pass.set_pipeline(self.pipelines.render.as_ref().expect("prepared"));
+            pass.set_bind_group(SCENE.group, &resident.scene_group, &[]);
+            pass.set_bind_group(IMAGE_TILE.group, &resident.image_group, &[]);
+            pass.dispatch_workgroups(width.div_ceil(wx), height.div_ceil(wy), 1);
+        }
+        if let Some(timer) = &self.timer {
+            timer.resolve(&mut encoder);
+        }
+        gpu.queue.submit([encoder.finish()]);
+        gpu.wait()?;
+        self.timer.as_ref().map(|t| t.read(gpu)).transpose()
+    }
+
+    /// The passes and buffers of a render with its shadow rays apart.
+    pub(super) fn build_split(&self) -> Result<SplitShadows> {
+        let device = &self.gpu.device;
+        let layout = SHADOWS_APART.layout(device);
+        let pixels = (TILE * TILE) as u64;
+        let lights = (self.params.num_lights as u64).max(1);
+        let buffer = |label, size| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let hits = buffer("primary hits", pixels * std::mem::size_of::<Hit>() as u64);
+        let queue = buffer("shadow queue", pixels * lights * SHADOW_QUERY_BYTES);
+        let count = buffer("shadow count", 4);
+        let blocked = buffer("shadow blocked", pixels * 4);
+        let [color, prim] = self.tile.views();
+        let group = SHADOWS_APART.bind_group(
+            device,
+            SHADOWS_APART.label,
+            &layout,
+            vec![
+                ("out_color", wgpu::BindingResource::TextureView(&color)),
+                ("out_prim", wgpu::BindingResource::TextureView(&prim)),
+                ("split_hits", hits.as_entire_binding()),
+                ("shadow_queue", queue.as_entire_binding()),
+                ("shadow_count", count.as_entire_binding()),
+                ("shadow_blocked", blocked.as_entire_binding()),
+            ],
+        );
+        let p = &self.pipelines;
+        let mut from_queue = p.constants.clone();
+        from_queue.push(("SHADOWS_FROM_QUEUE", 1.0));
+        Ok(SplitShadows {
+            primary: p.build(&self.gpu, "render_primary", &layout, &p.constants)?,
+            shadows: p.build(&self.gpu, "render_shadows", &layout, &p.constants)?,
+            shade: p.build(&self.gpu, "render_shade", &layout, &from_queue)?,
+            group,
+            count,
+        })
+    }
+}

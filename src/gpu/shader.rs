@@ -1,0 +1,26 @@
+//! The shader's source and the overrides that specialise it: the one place
+//! the host reads `shaders/` from.
+
+use crate::layout::{LIGHT_DIRECTIONAL, LIGHT_POINT};
+use crate::scene::{Accel, Scene};
+
+/// The kernel's source, validated by naga in tests/shaders.rs.
+pub const SHADER_SOURCE: &str = crate::shader_source::SOURCE;
+
+/// Pipeline-overridable constants that strip what `scene` does not use.
+pub fn specialisation(scene: &Scene) -> Vec<(&'static str, f64)> {
+    let flag = |b: bool| if b { 1.0 } else { 0.0 };
+    let has_light = |kind| scene.lights.iter().any(|l| l.kind == kind);
+    vec![
+        ("HAS_TRIANGLES", flag(!scene.triangles.is_empty())),
+        ("HAS_SPHERES", flag(!scene.spheres.is_empty())),
+        (
+            "HAS_SHADOWS",
+            flag(scene.shadows && !scene.lights.is_empty()),
+        ),
+        ("HAS_POINT_LIGHTS", flag(has_light(LIGHT_POINT))),
+        ("HAS_DIRECTIONAL_LIGHTS", flag(has_light(LIGHT_DIRECTIONAL))),
+        ("USE_BVH", flag(scene.accel == Accel::Bvh)),
+        ("INTERSECT", scene.intersect.shader_value() as f64),
+    ]
+}

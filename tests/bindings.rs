@@ -1,0 +1,132 @@
+//! The host's bind group tables (`lambert::gpu::bindings`) against naga's
+//! reflection of the shader: every entry is a global of the shader at that
+//! group and binding, of that kind and access, and every shader binding has
+//! an entry. No GPU needed.
+
+use lambert::gpu::bindings::{BindingKind, BindingTable, TABLES};
+
+fn module() -> naga::Module {
+    naga::front::wgsl::parse_str(lambert::gpu::SHADER_SOURCE)
+        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(lambert::gpu::SHADER_SOURCE)))
+}
+
+/// The kind a bind group layout must give `global`, read from the shader,
+/// or why it has none.
+fn shader_kind(
+    module: &naga::Module,
+    global: &naga::GlobalVariable,
+) -> Result<BindingKind, String> {
+    use naga::{AddressSpace, ImageClass, ImageDimension, ScalarKind, StorageAccess, TypeInner};
+    match (global.space, &module.types[global.ty].inner) {
+        (AddressSpace::Uniform, _) => Ok(BindingKind::Uniform),
+        (AddressSpace::Storage { access }, _) if access.contains(StorageAccess::STORE) => {
+            Ok(BindingKind::StorageWrite)
+        }
+        (AddressSpace::Storage { .. }, _) => Ok(BindingKind::Storage),
+        (
+            AddressSpace::Handle,
+            TypeInner::Image {
+                dim: ImageDimension::D2,
+                arrayed: false,
+                class,
+            },
+        ) => match class {
+            ImageClass::Storage { format, access } if *access == StorageAccess::STORE => {
+                let format = match format {
+                    naga::StorageFormat::Rgba32Float => wgpu::TextureFormat::Rgba32Float,
+                    naga::StorageFormat::R32Uint => wgpu::TextureFormat::R32Uint,
+                    other => return Err(format!("a storage texture of format {other:?}")),
+                };
+                Ok(BindingKind::Image(format))
+            }
+            ImageClass::Sampled {
+                kind: ScalarKind::Uint,
+                multi: false,
+            } => Ok(BindingKind::Texels),
+            other => Err(format!("a 2D image of class {other:?}")),
+        },
+        (space, inner) => Err(format!("{space:?} {inner:?}")),
+    }
+}
+
+/// The shader's bound globals: (name, group, binding, kind or why not).
+fn shader_bindings(module: &naga::Module) -> Vec<(String, u32, u32, Result<BindingKind, String>)> {
+    module
+        .global_variables
+        .iter()
+        .filter_map(|(_, g)| {
+            let b = g.binding.as_ref()?;
+            Some((
+                g.name.clone().expect("bound globals are named"),
+                b.group,
+                b.binding,
+                shader_kind(module, g),
+            ))
+        })
+        .collect()
+}
+
+#[test]
+fn every_table_entry_is_the_shader_binding_of_that_name() {
+    let module = module();
+    let shader = shader_bindings(&module);
+    for table in TABLES {
+        for entry in table.entries {
+            let (_, group, binding, kind) = shader
+                .iter()
+                .find(|(name, ..)| name == entry.name)
+                .unwrap_or_else(|| panic!("{}: the shader binds no {}", table.label, entry.name));
+            assert_eq!(
+                (*group, *binding),
+                (table.group, entry.binding),
+                "{}: (group, binding) of {}",
+                table.label,
+                entry.name
+            );
+            assert_eq!(
+                kind.as_ref(),
+                Ok(&entry.kind),
+                "{}: kind of {}",
+                table.label,
+                entry.name
+            );
+        }
+    }
+}
+
+#[test]
+fn every_shader_binding_has_a_table_entry() {
+    let module = module();
+    let shader = shader_bindings(&module);
+    assert!(!shader.is_empty(), "the shader binds nothing");
+    let in_tables = |name: &str, group: u32, binding: u32| {
+        TABLES.iter().any(|t: &&BindingTable| {
+            t.group == group
+                && t.entries
+                    .iter()
+                    .any(|e| e.name == name && e.binding == binding)
+        })
+    };
+    for (name, group, binding, _) in &shader {
+        assert!(
+            in_tables(name, *group, *binding),
+            "the shader's {name} (group {group}, binding {binding}) is in no binding table"
+        );
+    }
+}
+
+#[test]
+fn no_table_binds_a_number_twice() {
+    for table in TABLES {
+        let mut numbers: Vec<u32> = table.entries.iter().map(|e| e.binding).collect();
+        numbers.sort();
+        let len = numbers.len();
+        numbers.dedup();
+        assert_eq!(
+            numbers.len(),
+            len,
+            "{}: a binding number twice",
+            table.label
+        );
+    }
+}
