@@ -124,6 +124,7 @@ fn bytes_text(bytes: u64) -> String {
 }
 
 /// What a file that is not a regular file is, in words.
+#[cfg(unix)]
 fn kind_of(meta: &std::fs::Metadata) -> &'static str {
     use std::os::unix::fs::FileTypeExt;
     let t = meta.file_type();
@@ -137,6 +138,17 @@ fn kind_of(meta: &std::fs::Metadata) -> &'static str {
         "a character device"
     } else if t.is_block_device() {
         "a block device"
+    } else {
+        "not a file"
+    }
+}
+
+/// What a file that is not a regular file is, in words: elsewhere than
+/// Unix, the standard library tells only folders apart.
+#[cfg(not(unix))]
+fn kind_of(meta: &std::fs::Metadata) -> &'static str {
+    if meta.is_dir() {
+        "a directory"
     } else {
         "not a file"
     }
