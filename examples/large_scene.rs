@@ -7,11 +7,11 @@
 use std::time::Instant;
 
 use glam::{DVec3, Vec3};
+use lambert::camera::Camera;
 use lambert::diff::{Tolerance, compare};
 use lambert::gpu::{AdapterRequest, Gpu, GpuRenderer};
 use lambert::layout::{LIGHT_DIRECTIONAL, Light, Triangle};
 use lambert::progress::Progress;
-use lambert::scene::Camera;
 use lambert::{Scene, cpu, probe};
 
 fn main() -> lambert::Result<()> {

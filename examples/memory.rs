@@ -84,10 +84,10 @@ fn icosphere_scene() -> Scene {
         .collect();
     drop((vertices, faces));
     let mut scene = Scene::from_triangles(triangles);
-    scene.camera = lambert::scene::frame_camera(&(glam::DVec3::splat(-1.0), glam::DVec3::ONE));
+    scene.camera = lambert::camera::frame_camera(&(glam::DVec3::splat(-1.0), glam::DVec3::ONE));
     scene
         .lights
-        .push(lambert::scene::default_light(&scene.camera));
+        .push(lambert::camera::default_light(&scene.camera));
     scene
 }
 

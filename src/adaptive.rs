@@ -6,9 +6,10 @@
 use serde::Serialize;
 
 use crate::error::Result;
+use crate::limits::MAX_SPP;
 use crate::output::Rendered;
 use crate::render::Renderer;
-use crate::scene::{MAX_SPP, Scene};
+use crate::scene::Scene;
 
 const LUMINANCE: [f32; 3] = [0.2126, 0.7152, 0.0722];
 

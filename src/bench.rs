@@ -9,6 +9,7 @@ use glam::Vec3;
 use serde::Serialize;
 
 use crate::adaptive::{AdaptiveSettings, render_adaptive};
+use crate::camera::Camera;
 use crate::cpu::{self, Precision};
 use crate::diff::{self, Tolerance};
 use crate::error::{Error, Result};
@@ -18,7 +19,7 @@ use crate::output::Rendered;
 use crate::probe;
 use crate::progress::Progress;
 use crate::render::Renderer;
-use crate::scene::{Accel, Camera, Intersect, Scene};
+use crate::scene::{Accel, Intersect, Scene};
 
 /// Time a measurement may take beyond its warm-up: slow points get fewer
 /// timed runs (at least one), so that a large scene's sweep stays within
@@ -74,7 +75,7 @@ pub fn scene_for_obj(path: &Path, size: u32) -> Result<Scene> {
     });
     scene.ambient = [0.05; 3];
     scene.shadows = true;
-    crate::scene::validate_camera(&scene.camera)
+    crate::camera::validate_camera(&scene.camera)
         .map_err(|e| Error::Usage(format!("{}: cannot frame the model: {e}", path.display())))?;
     Ok(scene)
 }
@@ -568,7 +569,7 @@ pub fn check_spp_list(list: &[u32]) -> Result<()> {
         return Err(Error::Usage("--spp-list needs at least one value".into()));
     }
     for &spp in list {
-        crate::scene::validate_spp(spp).map_err(|e| Error::Usage(format!("--spp-list: {e}")))?;
+        crate::limits::validate_spp(spp).map_err(|e| Error::Usage(format!("--spp-list: {e}")))?;
     }
     Ok(())
 }

@@ -34,7 +34,7 @@ pub const SHORT_STACK_ENTRIES: usize = 8;
 /// `STACK_SPILLS`).
 pub fn short_stack(depth: usize, workgroup_bytes: u32) -> (usize, bool) {
     let needed = depth.saturating_sub(1).max(1);
-    let fits = workgroup_bytes as usize / (8 * crate::gpu::WORKGROUP_INVOCATIONS as usize);
+    let fits = workgroup_bytes as usize / (8 * crate::layout::WORKGROUP_INVOCATIONS as usize);
     let entries = needed.min(SHORT_STACK_ENTRIES).min(fits).max(1);
     (entries, needed > entries)
 }

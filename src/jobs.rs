@@ -1,15 +1,17 @@
 //! Render work the front ends share (the `lambert` binary, and the Python
 //! package where it needs it): the f64 oracle's scene, a GPU render, the
-//! time budget's pilot, and a turntable's cameras and frame names.
+//! time budget's pilot, and a turntable's frame names (its cameras:
+//! `camera::orbit`).
 
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
 use crate::gpu::{AdapterRequest, Gpu, GpuRenderer};
+use crate::limits::MAX_SPP;
 use crate::output::Rendered;
 use crate::progress::Progress;
 use crate::render::Renderer;
-use crate::scene::{Camera, Intersect, MAX_SPP, Scene};
+use crate::scene::{Intersect, Scene};
 
 /// The f64 oracle's version of `scene`: the watertight test, in double
 /// precision, is the reference every variant and device is measured against.
@@ -51,19 +53,6 @@ pub fn spp_for_budget(
         .floor()
         .clamp(1.0, MAX_SPP as f64) as u32;
     Ok(BudgetPlan { per_sample, spp })
-}
-
-/// The camera of frame `frame` of `frames`, orbiting look_at about up.
-pub fn orbit(camera: &Camera, frame: u32, frames: u32) -> Camera {
-    let centre = glam::DVec3::from(camera.look_at);
-    let axis = glam::DVec3::from(camera.up).normalize();
-    let angle = std::f64::consts::TAU * frame as f64 / frames as f64;
-    let eye = centre
-        + glam::DQuat::from_axis_angle(axis, angle) * (glam::DVec3::from(camera.eye) - centre);
-    Camera {
-        eye: eye.to_array(),
-        ..camera.clone()
-    }
 }
 
 /// `frames/frame_{:04}.png` with frame 7 → `frames/frame_0007.png`; every

@@ -8,6 +8,10 @@ use bytemuck::{Pod, Zeroable};
 
 /// Primitive id of a miss.
 pub const NO_HIT: u32 = u32::MAX;
+/// Invocations per workgroup of every entry point (`WORKGROUP_INVOCATIONS`
+/// in shaders/layout.wgsl, which sizes the traversal stacks in workgroup
+/// memory by it; `cwbvh::short_stack` sizes the GPU's stack by it too).
+pub const WORKGROUP_INVOCATIONS: u32 = 64;
 /// `Light::kind` of a point light.
 pub const LIGHT_POINT: u32 = 0;
 /// `Light::kind` of a directional light.

@@ -11,6 +11,7 @@
 pub mod adaptive;
 pub mod bench;
 pub mod bvh;
+pub mod camera;
 pub mod cpu;
 pub mod cwbvh;
 pub mod diff;
@@ -20,6 +21,7 @@ pub mod gpu;
 pub mod inputs;
 pub mod jobs;
 pub mod layout;
+pub mod limits;
 pub mod loading;
 pub mod memory;
 pub mod output;

@@ -196,9 +196,9 @@ fn check_part_header(bytes: &[u8], fail: &dyn Fn(String) -> Error) -> Result<()>
     }
     let display = header.shared_attributes.display_window.size;
     let side = |v: usize| u32::try_from(v).unwrap_or(u32::MAX);
-    crate::scene::validate_resolution(side(display.width()), side(display.height()))
+    crate::limits::validate_resolution(side(display.width()), side(display.height()))
         .and_then(|_| {
-            crate::scene::validate_resolution(
+            crate::limits::validate_resolution(
                 side(header.layer_size.width()),
                 side(header.layer_size.height()),
             )

@@ -10,7 +10,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::layout::{Hit, NO_HIT, Ray};
-use crate::scene::{Camera, MAX_LOCAL_COORDINATE, Scene, vector_text};
+use crate::limits::{MAX_LOCAL_COORDINATE, vector_text};
 
 /// A scene is centred on its bounds only when their centre is more than
 /// this many times their diagonal from the origin: nearer, f32 already
@@ -48,40 +48,6 @@ pub struct Placement {
     pub offset: DVec3,
     /// Radius, about the local origin, of a sphere holding all geometry.
     pub radius: f64,
-}
-
-impl Scene {
-    /// `camera` relative to the scene's offset (in f64): what the kernels'
-    /// camera basis is built from.
-    pub fn local_camera(&self, camera: &Camera) -> Camera {
-        let local = |p: [f64; 3]| (DVec3::from(p) - self.offset).to_array();
-        Camera {
-            eye: local(camera.eye),
-            look_at: local(camera.look_at),
-            ..camera.clone()
-        }
-    }
-
-    /// The camera's eye and look_at within MAX_LOCAL_COORDINATE of the
-    /// offset, as the geometry is.
-    pub(crate) fn check_camera_placement(&self) -> Result<(), String> {
-        for (name, world) in [("eye", self.camera.eye), ("look_at", self.camera.look_at)] {
-            checked_local(&format!("camera.{name}"), DVec3::from(world), self.offset)?;
-        }
-        Ok(())
-    }
-
-    /// Its offset, and the radius of its geometry about it (from the
-    /// BVH's bounds).
-    pub fn placement(&self) -> Placement {
-        let radius = self.bvh.bounds().map_or(0.0, |b| {
-            b.min.as_dvec3().abs().max(b.max.as_dvec3().abs()).length()
-        });
-        Placement {
-            offset: self.offset,
-            radius,
-        }
-    }
 }
 
 /// A ray query's rays in the scene's local frame, and how far along its

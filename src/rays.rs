@@ -219,52 +219,6 @@ pub fn read_hits(path: &Path) -> Result<Vec<Hit>> {
     Ok(bytemuck::pod_collect_to_vec(&bytes))
 }
 
-/// The unnormalised geometric normal at `hit` of `ray`: (v1 − v0) × (v2 − v0)
-/// of the triangle hit (Embree's Ng), the centre-to-hit vector of a sphere
-/// (length: its radius), zero on a miss.
-#[inline]
-pub fn hit_normal(scene: &Scene, ray: &Ray, hit: &Hit) -> [f32; 3] {
-    use glam::Vec3;
-    let prim = hit.prim as usize;
-    let triangles = &scene.triangles;
-    if hit.prim == NO_HIT {
-        [0.0; 3]
-    } else if prim < triangles.len() {
-        let t = &triangles[prim];
-        let v0 = Vec3::from(t.v0);
-        (Vec3::from(t.v1) - v0)
-            .cross(Vec3::from(t.v2) - v0)
-            .to_array()
-    } else {
-        let sphere = &scene.spheres[prim - triangles.len()];
-        // `ray` is in world coordinates, the sphere relative to the offset.
-        let origin = (Vec3::from(ray.origin).as_dvec3() - scene.offset).as_vec3();
-        let point = origin + hit.t * Vec3::from(ray.dir);
-        (point - Vec3::from(sphere.center)).to_array()
-    }
-}
-
-/// Asks the CPU to fetch the triangles `hits` name before `hit_normal`
-/// reads them: the kernel reads its own copy of the triangles (the BVH's
-/// blocks), so these are cold, and one at a time each is a trip to memory
-/// (incoherent rays through the dragon: 40–70 ms a million hits; fetched
-/// together, their latencies overlap).
-#[inline]
-pub fn prefetch_hit_triangles(scene: &Scene, hits: &[Hit]) {
-    #[cfg(target_arch = "x86_64")]
-    for hit in hits {
-        if let Some(t) = scene.triangles.get(hit.prim as usize) {
-            // SAFETY: a prefetch is a hint; it cannot fault.
-            unsafe {
-                use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-                _mm_prefetch::<_MM_HINT_T0>((t as *const crate::layout::Triangle).cast());
-            }
-        }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = (scene, hits);
-}
-
 /// The camera rays of `scene` through its pixel centres, row by row from the
 /// top: the same rays `render` shoots at spp = 1 (unit direction, tmin 0,
 /// tmax +inf).
@@ -273,7 +227,7 @@ pub fn camera_rays(scene: &Scene) -> Vec<Ray> {
 }
 
 /// `camera_rays` through another camera (another image size, say).
-pub fn camera_rays_for(scene: &Scene, camera: &crate::scene::Camera) -> Vec<Ray> {
+pub fn camera_rays_for(scene: &Scene, camera: &crate::camera::Camera) -> Vec<Ray> {
     let mut kernel = cpu::f32::Kernel::new(scene);
     kernel.camera = cpu::f32::CameraBasis::new(&scene.local_camera(camera));
     let (width, height) = (camera.width, camera.height);

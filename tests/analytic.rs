@@ -342,7 +342,7 @@ intensity = 10.0
 #[test]
 fn sphere_hits_are_right_at_the_radius_limit() {
     use lambert::layout::{Hit, Ray, Sphere};
-    let radius = lambert::scene::MAX_SPHERE_RADIUS as f32;
+    let radius = lambert::limits::MAX_SPHERE_RADIUS as f32;
     let mut rays = Vec::new();
     let mut spheres = Vec::new();
     // Centres on and off the f32 integer grid, so that o − c rounds too.

@@ -1,4 +1,4 @@
-//! The code's shape read from its own files: file sizes today, and the module graph's cycles.
+//! The code's shape read from its own files: file sizes, no cycle among the modules, and each import against the layer table.
 // docs/architecture.md says what each module is for and where it belongs.
 
 use std::collections::{BTreeMap, BTreeSet};
@@ -11,10 +11,9 @@ const MAX_RUST_LINES: usize = 800;
 /// No shader file may be longer.
 const MAX_SHADER_LINES: usize = 600;
 
-/// Today's oversized Rust files, each with its line count when it was
-/// listed: none may grow, and each leaves the list once split below
-/// MAX_RUST_LINES (issue 29).
-const OVERSIZED_RUST: &[(&str, usize)] = &[("src/scene.rs", 1046)];
+/// Rust files allowed past MAX_RUST_LINES, each with its line count when
+/// it was listed (none may grow): none since issue 29's splits.
+const OVERSIZED_RUST: &[(&str, usize)] = &[];
 /// Shaders allowed past MAX_SHADER_LINES: none since the split by stage.
 const OVERSIZED_SHADERS: &[(&str, usize)] = &[];
 
@@ -101,10 +100,14 @@ fn the_size_check_catches_new_and_grown_files() {
 // ---- the module graph -------------------------------------------------------
 
 /// `text` without comments (line, doc and block) and string literals, so
-/// that only code is searched for `crate::` paths.
+/// that only code is searched for `crate::` paths; the newlines of what it
+/// drops stay, so that every line keeps its number.
 fn code_only(text: &str) -> String {
     let chars: Vec<char> = text.chars().collect();
     let mut out = String::with_capacity(text.len());
+    let newlines = |out: &mut String, dropped: &[char]| {
+        out.extend(dropped.iter().filter(|&&c| c == '\n'));
+    };
     let mut i = 0;
     while i < chars.len() {
         let next = chars.get(i + 1).copied();
@@ -115,11 +118,13 @@ fn code_only(text: &str) -> String {
                 }
             }
             '/' if next == Some('*') => {
+                let start = i;
                 i += 2;
                 while i + 1 < chars.len() && !(chars[i] == '*' && chars[i + 1] == '/') {
                     i += 1;
                 }
                 i += 2;
+                newlines(&mut out, &chars[start..i.min(chars.len())]);
             }
             'r' if (next == Some('"') || next == Some('#'))
                 && !(i > 0 && is_ident(chars[i - 1])) =>
@@ -131,6 +136,7 @@ fn code_only(text: &str) -> String {
                     i += 1;
                     continue;
                 }
+                let start = i;
                 i += hashes + 2;
                 let close: Vec<char> = std::iter::once('"')
                     .chain(std::iter::repeat_n('#', hashes))
@@ -140,14 +146,17 @@ fn code_only(text: &str) -> String {
                 }
                 i += close.len();
                 out.push_str("\"\"");
+                newlines(&mut out, &chars[start..i.min(chars.len())]);
             }
             '"' => {
+                let start = i;
                 i += 1;
                 while i < chars.len() && chars[i] != '"' {
                     i += if chars[i] == '\\' { 2 } else { 1 };
                 }
                 i += 1;
                 out.push_str("\"\"");
+                newlines(&mut out, &chars[start..i.min(chars.len())]);
             }
             // A char literal ('"' among them), not a lifetime.
             '\'' if chars.get(i + 2) == Some(&'\'') => i += 3,
@@ -171,10 +180,21 @@ fn is_ident(c: char) -> bool {
     c.is_alphanumeric() || c == '_'
 }
 
+/// A `crate::` path: where it is written (a char index: the `crate::`, or
+/// the member of a group) and its segments after `crate`.
+type CratePath = (usize, Vec<String>);
+
 /// The paths of a use tree or path starting at `chars[*i]` (just after a
-/// `crate::`), each as its segments, prefixed by `prefix`; a group
-/// (`{a, b::c}`) gives one path per member.
-fn paths(chars: &[char], i: &mut usize, prefix: Vec<String>, found: &mut Vec<Vec<String>>) {
+/// `crate::`, or at a group's member, written at `at`), each as its
+/// segments, prefixed by `prefix`; a group (`{a, b::c}`) gives one path
+/// per member.
+fn paths(
+    chars: &[char],
+    i: &mut usize,
+    at: usize,
+    prefix: Vec<String>,
+    found: &mut Vec<CratePath>,
+) {
     let skip_space = |i: &mut usize| {
         while *i < chars.len() && chars[*i].is_whitespace() {
             *i += 1;
@@ -194,7 +214,7 @@ fn paths(chars: &[char], i: &mut usize, prefix: Vec<String>, found: &mut Vec<Vec
                     }
                     Some(',') => *i += 1,
                     None => return,
-                    _ => paths(chars, i, path.clone(), found),
+                    _ => paths(chars, i, *i, path.clone(), found),
                 }
             }
         }
@@ -210,7 +230,7 @@ fn paths(chars: &[char], i: &mut usize, prefix: Vec<String>, found: &mut Vec<Vec
         if chars.get(*i) == Some(&':') && chars.get(*i + 1) == Some(&':') {
             *i += 2;
         } else {
-            found.push(path);
+            found.push((at, path));
             // Past the rest of this member (`as name`, `*`) to `,` or `}`.
             while *i < chars.len() && !matches!(chars[*i], ',' | '}' | ';' | '{') {
                 if !(chars[*i].is_whitespace() || is_ident(chars[*i]) || chars[*i] == '*') {
@@ -225,16 +245,34 @@ fn paths(chars: &[char], i: &mut usize, prefix: Vec<String>, found: &mut Vec<Vec
 
 /// Every `crate::…` path in `code`, as segments after `crate`.
 fn crate_paths(code: &str) -> Vec<Vec<String>> {
+    crate_paths_at(code).into_iter().map(|(_, p)| p).collect()
+}
+
+/// `crate_paths`, each with the line (from 1) it is written on.
+fn crate_paths_at(code: &str) -> Vec<CratePath> {
+    let mut line = 1;
+    let mut counted = 0;
     let chars: Vec<char> = code.chars().collect();
+    let mut found = crate_paths_found(&chars);
+    for (at, _) in &mut found {
+        line += chars[counted..*at].iter().filter(|&&c| c == '\n').count();
+        counted = *at;
+        *at = line;
+    }
+    found
+}
+
+/// The `crate::` paths of `chars`, each at the char index it is written at.
+fn crate_paths_found(chars: &[char]) -> Vec<CratePath> {
     let mut found = Vec::new();
     let mut i = 0;
-    while let Some(at) = code_find(&chars, i, "crate::") {
+    while let Some(at) = code_find(chars, i, "crate::") {
         let before = at.checked_sub(1).map(|b| chars[b]);
         i = at + "crate::".len();
         if before.is_some_and(|c| is_ident(c) || c == '$') {
             continue;
         }
-        paths(&chars, &mut i, Vec::new(), &mut found);
+        paths(chars, &mut i, at, Vec::new(), &mut found);
     }
     found
 }
@@ -394,11 +432,9 @@ fn cycles_are_found() {
     assert_eq!(cycles(&graph), [["a", "b", "c"]]);
 }
 
-/// The check issue 29's redesign turns on: the library's modules import
-/// each other in one direction only (docs/architecture.md). Run it with
-/// `--ignored` to see today's cycles.
+/// The library's modules import each other in one direction only
+/// (docs/architecture.md); `--nocapture` prints the graph.
 #[test]
-#[ignore = "the module graph has cycles today (docs/architecture.md); issue 29's redesign turns this check on"]
 fn the_module_graph_has_no_cycle() {
     let graph = module_graph();
     assert!(graph.len() > 10, "read only {graph:?}");
@@ -415,4 +451,157 @@ fn the_module_graph_has_no_cycle() {
         "modules that reach each other:\n{}",
         text.join("\n")
     );
+}
+
+// ---- the layers -------------------------------------------------------------
+
+/// Each top-level module of the library and its layer (docs/architecture.md,
+/// "Layers"): a module imports only from layers below its own or from its
+/// own layer, and never one of FORBIDDEN. A new module must be placed here.
+const LAYERS: &[(&str, u32)] = &[
+    ("error", 0),
+    ("files", 0),
+    ("layout", 0),
+    ("limits", 0),
+    ("memory", 0),
+    ("output", 0),
+    ("progress", 0),
+    ("shader_source", 0),
+    ("camera", 1),
+    ("bvh", 2),
+    ("cwbvh", 2),
+    ("diff", 2),
+    ("loading", 2),
+    ("placement", 2),
+    ("probe", 2),
+    ("scene", 3),
+    ("cpu", 4),
+    ("gpu", 4),
+    ("rays", 5),
+    ("render", 5),
+    ("adaptive", 6),
+    ("inputs", 6),
+    ("jobs", 6),
+    ("parts", 6),
+    ("bench", 7),
+];
+
+/// Imports no layer allows: the backends are siblings.
+const FORBIDDEN: &[(&str, &str)] = &[("cpu", "gpu"), ("gpu", "cpu")];
+
+/// The crate root's re-exports, and the module each comes from.
+const ROOT_REEXPORTS: &[(&str, &str)] =
+    &[("Error", "error"), ("Result", "error"), ("Scene", "scene")];
+
+fn layer_of(module: &str) -> Option<u32> {
+    LAYERS.iter().find(|(m, _)| *m == module).map(|&(_, l)| l)
+}
+
+/// Every import against the table in `files` (each a path under src/ and
+/// its text), as `file:line: import: why`.
+fn layer_violations(files: &[(PathBuf, String)]) -> Vec<String> {
+    let mut problems = Vec::new();
+    for (path, text) in files {
+        let Some(module) = module_of(path) else {
+            continue;
+        };
+        let Some(layer) = layer_of(&module) else {
+            problems.push(format!(
+                "{}: module `{module}` has no layer in tests/architecture.rs's LAYERS (nor in docs/architecture.md)",
+                path.display()
+            ));
+            continue;
+        };
+        for (line, segments) in crate_paths_at(&code_only(text)) {
+            let import = format!("crate::{}", segments.join("::"));
+            let first = segments.first().map_or("", String::as_str);
+            let target = ROOT_REEXPORTS
+                .iter()
+                .find(|(name, _)| *name == first)
+                .map_or(first, |&(_, m)| m);
+            if target == module {
+                continue;
+            }
+            let at = format!("{}:{line}: {import}", path.display());
+            match layer_of(target) {
+                None => problems.push(format!("{at}: `{first}` is no module in the layer table")),
+                Some(l) if l > layer => problems.push(format!(
+                    "{at}: `{module}` (layer {layer}) imports `{target}` (layer {l}), a layer above it"
+                )),
+                Some(_) if FORBIDDEN.contains(&(module.as_str(), target)) => problems.push(format!(
+                    "{at}: `{module}` may not import `{target}` (the backends are siblings)"
+                )),
+                Some(_) => {}
+            }
+        }
+    }
+    problems
+}
+
+/// Every module of src/ imports only what its layer allows.
+#[test]
+fn every_import_keeps_to_the_layers() {
+    let files: Vec<(PathBuf, String)> = files("src", ".rs")
+        .into_iter()
+        .map(|path| {
+            let text = std::fs::read_to_string(Path::new(ROOT).join(&path)).unwrap();
+            (path, text)
+        })
+        .collect();
+    assert!(files.len() > 20, "found only {} files", files.len());
+    let problems = layer_violations(&files);
+    assert!(
+        problems.is_empty(),
+        "imports against the layers (docs/architecture.md):\n{}",
+        problems.join("\n")
+    );
+}
+
+/// The layer check names the file, line and import of each import upward,
+/// between the backends, of an unknown name, and a module with no layer;
+/// and passes what the table allows.
+#[test]
+fn the_layer_check_catches_imports_against_the_table() {
+    let file = |path: &str, text: &str| (PathBuf::from(path), text.to_string());
+    let problems = layer_violations(&[
+        file(
+            "src/cwbvh.rs",
+            "use crate::layout::Ray;\n/* a\ncomment */ let n = crate::gpu::X;",
+        ),
+        file(
+            "src/cpu/render.rs",
+            "use crate::{\n    scene::Scene,\n    gpu::GpuRenderer,\n};",
+        ),
+        file("src/gpu/renderer.rs", "use crate::cpu::f32::CameraBasis;"),
+        file(
+            "src/loading/mod.rs",
+            "fn f() -> crate::Result<crate::Scene> {}",
+        ),
+        file(
+            "src/scene/mod.rs",
+            "use crate::camera::Camera;\nuse crate::scene::x;\nlet s = \"crate::gpu\";",
+        ),
+        file("src/limits.rs", "use crate::nothing::X;"),
+        file("src/newmod.rs", "use crate::error::Error;"),
+        file("src/bin/lambert/main.rs", "use crate::cli;"),
+    ]);
+    assert_eq!(
+        problems,
+        [
+            "src/cwbvh.rs:3: crate::gpu::X: `cwbvh` (layer 2) imports `gpu` (layer 4), a layer above it",
+            "src/cpu/render.rs:3: crate::gpu::GpuRenderer: `cpu` may not import `gpu` (the backends are siblings)",
+            "src/gpu/renderer.rs:1: crate::cpu::f32::CameraBasis: `gpu` may not import `cpu` (the backends are siblings)",
+            "src/loading/mod.rs:1: crate::Scene: `loading` (layer 2) imports `scene` (layer 3), a layer above it",
+            "src/limits.rs:1: crate::nothing::X: `nothing` is no module in the layer table",
+            "src/newmod.rs: module `newmod` has no layer in tests/architecture.rs's LAYERS (nor in docs/architecture.md)",
+        ]
+    );
+}
+
+/// The layer table names every module of src/, and only those.
+#[test]
+fn the_layer_table_names_every_module() {
+    let modules: BTreeSet<String> = module_graph().into_keys().collect();
+    let table: BTreeSet<String> = LAYERS.iter().map(|(m, _)| m.to_string()).collect();
+    assert_eq!(modules, table);
 }

@@ -252,7 +252,7 @@ fn assert_short_stacks_agree(name: &str, scene: &Scene, rays: &[Ray]) {
             let mut gpu = open_gpu();
             if let Some(entries) = entries {
                 gpu.limits.max_compute_workgroup_storage_size =
-                    entries * 8 * lambert::gpu::WORKGROUP_INVOCATIONS;
+                    entries * 8 * lambert::layout::WORKGROUP_INVOCATIONS;
             }
             let shape = short_stack(depth, gpu.limits.max_compute_workgroup_storage_size);
             if entries.is_some() {

@@ -4,10 +4,11 @@ mod common;
 
 use common::*;
 use lambert::Scene;
+use lambert::camera::strata_columns;
 use lambert::cpu::{self, Precision};
 use lambert::diff::{Tolerance, compare};
 use lambert::progress::Progress;
-use lambert::scene::{Intersect, strata_columns};
+use lambert::scene::Intersect;
 
 fn at_spp(scene: &Scene, spp: u32) -> Scene {
     let mut s = scene.clone();
@@ -180,7 +181,7 @@ fn high_spp_renders_agree_on_both_paths_at_every_size() {
     let mut renderer = lambert::gpu::GpuRenderer::new(gpu, &bunny).unwrap();
     let sizes = [(1, 1), (5, 3), (9, 17)];
     for (width, height) in sizes {
-        for spp in [1, 7, 64, 192, 256, 1000, lambert::scene::MAX_SPP] {
+        for spp in [1, 7, 64, 192, 256, 1000, lambert::limits::MAX_SPP] {
             // 9×17 at the top spp costs the CPU path most; its smaller
             // neighbours cover the same per-pixel work.
             if width * height > 20 && spp > 256 {

@@ -195,7 +195,7 @@ fn shader_constants_match_host() {
     assert_eq!(constant("META_LEAF"), format!("Literal(U32({META_LEAF}))"));
     assert_eq!(
         constant("WORKGROUP_INVOCATIONS"),
-        format!("Literal(U32({}))", lambert::gpu::WORKGROUP_INVOCATIONS)
+        format!("Literal(U32({}))", lambert::layout::WORKGROUP_INVOCATIONS)
     );
 }
 

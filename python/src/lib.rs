@@ -18,7 +18,7 @@ use lambert::gpu::AdapterRequest;
 use lambert::layout::{Hit, NO_HIT, Ray};
 use lambert::output::Image;
 use lambert::render::{DeviceChoice, Renderer, Renderers};
-use lambert::scene::{Intersect, Scene};
+use lambert::scene::{Intersect, Scene, hit_normal, prefetch_hit_triangles};
 use lambert::{Error, rays};
 use numpy::ndarray::{Array2, Array3};
 use numpy::{
@@ -187,11 +187,11 @@ fn each_chunk(
         let start = i * CHUNK;
         let mut chunk_normals = Vec::new();
         if normals {
-            rays::prefetch_hit_triangles(scene, hits);
+            prefetch_hit_triangles(scene, hits);
             chunk_normals.extend(
                 (start..)
                     .zip(hits)
-                    .map(|(r, hit)| rays::hit_normal(scene, &rays[r], hit)),
+                    .map(|(r, hit)| hit_normal(scene, &rays[r], hit)),
             );
         }
         each(&TracedChunk {
@@ -569,7 +569,7 @@ impl NativeScene {
                 .resized(width, height)
                 .map_err(|e| Error::Usage(format!("width/height: {e}")))?;
             let spp = spp.unwrap_or(scene.spp);
-            lambert::scene::validate_spp(spp).map_err(Error::Usage)?;
+            lambert::limits::validate_spp(spp).map_err(Error::Usage)?;
             // Another size or sample count is another scene to the
             // renderers: a copy with those settings (the GPU's buffers
             // stay the ones uploaded).

@@ -202,4 +202,6 @@ fn high_half(x: Real) -> Real {
     Real::from_bits(x.to_bits() & 0xffff_f000)
 }
 
+pub use crate::camera::f32::CameraBasis;
+
 include!("kernel.rs");

@@ -39,4 +39,6 @@ fn high_half(x: Real) -> Real {
     Real::from_bits(x.to_bits() & !((1u64 << 26) - 1))
 }
 
+pub use crate::camera::f64::CameraBasis;
+
 include!("kernel.rs");

@@ -8,7 +8,7 @@ use crate::layout::{
     BVH_WIDTH, BvhNode, CompressedNode, FLAG_SMOOTH, LEAF_BIT, LIGHT_POINT, META_LEAF, NO_HIT,
     PrimBlock, leaf_range,
 };
-use crate::scene::{Accel, Camera, Intersect, Scene};
+use crate::scene::{Accel, Intersect, Scene};
 
 /// Widens a box's exit distance so that rounding cannot cull a box the ray
 /// grazes, as in the shader.
@@ -90,10 +90,6 @@ fn vec4(v: [f32; 4]) -> Vec4 {
     Vec4::new(v[0] as Real, v[1] as Real, v[2] as Real, v[3] as Real)
 }
 
-fn vec3_f64(v: [f64; 3]) -> Vec3 {
-    Vec3::new(v[0] as Real, v[1] as Real, v[2] as Real)
-}
-
 /// A scene seen from one camera: what the shader's bindings hold.
 pub struct Kernel<'a> {
     pub camera: CameraBasis,
@@ -128,7 +124,7 @@ impl<'a> Kernel<'a> {
             scene,
             background: vec3(scene.background),
             ambient: vec3(scene.ambient),
-            strata_x: crate::scene::strata_columns(scene.spp),
+            strata_x: crate::camera::strata_columns(scene.spp),
             intersect: scene.intersect,
             ymm_boxes,
             compressed: None,

@@ -151,7 +151,7 @@ pub struct QueryOptions {
     pub any_hit: bool,
     pub intersect: Intersect,
     pub cpu_kernel: CpuKernel,
-    /// Each hit's geometric normal too (`rays::hit_normal`'s, bit for bit),
+    /// Each hit's geometric normal too (`scene::hit_normal`'s, bit for bit),
     /// taken from the leaf block the kernel just read.
     pub normals: bool,
 }
@@ -310,7 +310,7 @@ unsafe fn trace_chunk<const LANES: usize, const PREFETCH: bool, const VECTOR_SOR
         for (i, (ray, out)) in rays.iter().zip(hits).enumerate() {
             let hit = query_hit(kernel.trace(f32::Ray::from_query(ray), any_hit));
             if let Some(normal) = normals.get_mut(i) {
-                normal.write(crate::rays::hit_normal(kernel.scene, ray, &hit));
+                normal.write(crate::scene::hit_normal(kernel.scene, ray, &hit));
             }
             out.write(hit);
         }
@@ -367,7 +367,7 @@ unsafe fn trace_chunk<const LANES: usize, const PREFETCH: bool, const VECTOR_SOR
     }
 }
 
-/// `rays::hit_normal`, bit for bit, from the vertices' copies in the leaf
+/// `scene::hit_normal`, bit for bit, from the vertices' copies in the leaf
 /// block that holds the hit (the kernel has just read it: the triangle
 /// array's record would be a miss in cache).
 #[inline(always)]
@@ -387,7 +387,7 @@ fn block_normal(scene: &Scene, ray: &layout::Ray, hit: &layout::Hit, block: u32)
         let v0 = vertex(0);
         return (vertex(1) - v0).cross(vertex(2) - v0).to_array();
     }
-    crate::rays::hit_normal(scene, ray, hit)
+    crate::scene::hit_normal(scene, ray, hit)
 }
 
 /// A ray query's answer from the kernel's hit: misses as `Hit::MISS`.

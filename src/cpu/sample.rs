@@ -1,41 +1,7 @@
-// Sampling, the twin of shaders/sample.wgsl: the camera, camera rays,
+// Sampling, the twin of shaders/sample.wgsl: camera rays (through the
+// camera's basis, `camera::f32`/`f64::CameraBasis`),
 // stratified hashed sample positions, and a pixel's samples and mean.
 // Included into cpu::f32 and cpu::f64 by kernel.rs.
-
-/// The camera convention of docs/scene-format.md in this precision.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CameraBasis {
-    pub eye: Vec3,
-    pub right: Vec3,
-    pub up: Vec3,
-    pub forward: Vec3,
-    /// tan(vfov/2)·W/H
-    pub tan_half_x: Real,
-    /// tan(vfov/2)
-    pub tan_half_y: Real,
-    pub width: u32,
-    pub height: u32,
-}
-
-impl CameraBasis {
-    pub fn new(camera: &Camera) -> CameraBasis {
-        let eye = vec3_f64(camera.eye);
-        let forward = (vec3_f64(camera.look_at) - eye).normalize();
-        let right = forward.cross(vec3_f64(camera.up)).normalize();
-        let up = right.cross(forward);
-        let tan_half_y = (camera.vfov.to_radians() * 0.5).tan() as Real;
-        CameraBasis {
-            eye,
-            right,
-            up,
-            forward,
-            tan_half_x: tan_half_y * camera.width as Real / camera.height as Real,
-            tan_half_y,
-            width: camera.width,
-            height: camera.height,
-        }
-    }
-}
 
 impl<'a> Kernel<'a> {
     /// Pinhole camera; `pixel` in pixel units, row 0 at the top.

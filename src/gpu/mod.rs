@@ -41,11 +41,9 @@ pub const TILE: u32 = 256;
 /// (`RENDER_WORKGROUP_X`/`_Y` in shaders/layout.wgsl), measured on lavapipe against
 /// 16×16 and 64×1 (docs/bvh.md).
 const RENDER_WORKGROUP: [u32; 2] = [8, 8];
-/// Invocations per workgroup of every entry point (`WORKGROUP_INVOCATIONS`
-/// in shaders/layout.wgsl, which sizes the traversal stacks in workgroup memory by
-/// it).
-pub const WORKGROUP_INVOCATIONS: u32 = 64;
-const _: () = assert!(RENDER_WORKGROUP[0] * RENDER_WORKGROUP[1] == WORKGROUP_INVOCATIONS);
+// The render workgroup is every entry point's (`layout::WORKGROUP_INVOCATIONS`).
+const _: () =
+    assert!(RENDER_WORKGROUP[0] * RENDER_WORKGROUP[1] == crate::layout::WORKGROUP_INVOCATIONS);
 
 /// Most lights a render traces the shadow rays of apart (the shader's
 /// `shadow_blocked` has a bit of a pixel's word each; the queue holds a

@@ -5,13 +5,13 @@ use std::collections::HashMap;
 use std::time::Duration;
 
 use crate::error::{Error, Result};
-use crate::layout::{Hit, NO_HIT, Params, Ray};
+use crate::layout::{Hit, NO_HIT, Params, Ray, WORKGROUP_INVOCATIONS};
 use crate::scene::Intersect;
 
 use super::bindings::SCENE;
 use super::pipelines::ListLayout;
 use super::timer::Timer;
-use super::{GpuRenderer, RENDER_WORKGROUP, TILE, WORKGROUP_INVOCATIONS};
+use super::{GpuRenderer, RENDER_WORKGROUP, TILE};
 
 /// What the list passes keep between calls.
 #[derive(Default)]

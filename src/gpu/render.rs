@@ -5,7 +5,7 @@
 use std::time::{Duration, Instant};
 
 use crate::error::{Error, Result};
-use crate::layout::Hit;
+use crate::layout::{Hit, WORKGROUP_INVOCATIONS};
 use crate::output::{Image, Rendered};
 use crate::progress::Progress;
 use crate::scene::Scene;
@@ -13,10 +13,7 @@ use crate::scene::Scene;
 use super::bindings::{IMAGE_TILE, SCENE, SHADOWS_APART};
 use super::device::SHADOW_DISPATCH_ENV;
 use super::timer::{GpuTimings, Timer};
-use super::{
-    GpuRenderer, MAX_LIGHTS_APART, RENDER_WORKGROUP, SHADOW_QUERY_BYTES, TILE,
-    WORKGROUP_INVOCATIONS,
-};
+use super::{GpuRenderer, MAX_LIGHTS_APART, RENDER_WORKGROUP, SHADOW_QUERY_BYTES, TILE};
 
 /// Samples a dispatch adds to each pixel on llvmpipe: the bundled scenes'
 /// pixels ran out of loop iterations from about 192 (a 3,674-triangle

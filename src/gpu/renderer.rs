@@ -5,10 +5,11 @@ use std::time::{Duration, Instant};
 
 use wgpu::util::DeviceExt;
 
-use crate::cpu::f32::CameraBasis;
+use crate::camera::f32::CameraBasis;
+use crate::camera::{Camera, strata_columns};
 use crate::error::{Error, Result};
 use crate::layout::Params;
-use crate::scene::{Camera, Scene};
+use crate::scene::Scene;
 
 use super::TILE;
 use super::adapter::is_llvmpipe;
@@ -82,7 +83,7 @@ pub fn params_for(scene: &Scene, camera: &Camera) -> Params {
         shadows: scene.shadows as u32,
         spp: scene.spp,
         seed: scene.seed,
-        strata_x: crate::scene::strata_columns(scene.spp),
+        strata_x: strata_columns(scene.spp),
         sample_begin: 0,
         sample_end: scene.spp,
         canary_loops: 2,

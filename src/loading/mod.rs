@@ -168,10 +168,10 @@ pub fn area_weighted_normals(mesh: &Mesh) -> Vec<DVec3> {
 /// magnitude the f32 tests support.
 /// `text` is the coordinate as the file wrote it.
 pub fn check_coordinate(x: f64, text: &str) -> std::result::Result<f64, String> {
-    if !x.is_finite() || x.abs() > crate::scene::MAX_COORDINATE {
+    if !x.is_finite() || x.abs() > crate::limits::MAX_COORDINATE {
         return Err(format!(
             "coordinate {text} must be finite with magnitude at most {:e}",
-            crate::scene::MAX_COORDINATE
+            crate::limits::MAX_COORDINATE
         ));
     }
     Ok(x)

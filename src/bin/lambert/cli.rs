@@ -23,10 +23,11 @@ use lambert::diff::{self, Tolerance};
 use lambert::error::{Error, Result};
 use lambert::jobs::{self, oracle_scene, render_gpu};
 use lambert::layout::NO_HIT;
+use lambert::limits::MAX_SPP;
 use lambert::progress::Progress;
 use lambert::rays;
 use lambert::render::Renderer;
-use lambert::scene::{MAX_SPP, Scene};
+use lambert::scene::Scene;
 
 #[derive(Parser)]
 #[command(

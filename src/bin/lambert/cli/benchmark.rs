@@ -7,7 +7,7 @@ use super::BenchArgs;
 use lambert::bench::{self, BenchDevices};
 use lambert::error::{Error, Result};
 use lambert::gpu::Gpu;
-use lambert::scene::{MAX_SPP, validate_spp};
+use lambert::limits::{MAX_SPP, validate_spp};
 
 pub(super) fn bench(args: &BenchArgs, quiet: bool) -> Result<ExitCode> {
     if args.time_vs_error {

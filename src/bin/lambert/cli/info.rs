@@ -20,8 +20,8 @@ pub(super) fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> 
     if let Some(b) = scene.bvh.bounds() {
         println!(
             "  bounds: {} to {}",
-            lambert::scene::vector_text(b.min.as_dvec3()),
-            lambert::scene::vector_text(b.max.as_dvec3())
+            lambert::limits::vector_text(b.min.as_dvec3()),
+            lambert::limits::vector_text(b.max.as_dvec3())
         );
     }
     let smooth = !scene.normals.is_empty();
@@ -39,7 +39,7 @@ pub(super) fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> 
         println!("    {i}: albedo [{r}, {g}, {b}]");
     }
     let c = &scene.camera;
-    let v = |a: [f64; 3]| lambert::scene::vector_text(glam::DVec3::from(a));
+    let v = |a: [f64; 3]| lambert::limits::vector_text(glam::DVec3::from(a));
     println!(
         "  camera: eye {}, look_at {}, up {}, vfov {:.4}°, {}×{}",
         v(c.eye),
@@ -51,8 +51,8 @@ pub(super) fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> 
     );
     println!("  lights: {}", scene.lights.len());
     for light in &scene.lights {
-        let vector = lambert::scene::vector_text(glam::Vec3::from(light.vector).as_dvec3());
-        let color = lambert::scene::vector_text(glam::Vec3::from(light.color).as_dvec3());
+        let vector = lambert::limits::vector_text(glam::Vec3::from(light.vector).as_dvec3());
+        let color = lambert::limits::vector_text(glam::Vec3::from(light.color).as_dvec3());
         if light.kind == lambert::layout::LIGHT_POINT {
             println!("    point at {vector}, intensity {color}");
         } else {

@@ -9,8 +9,9 @@ use clap::{Args, ValueEnum};
 use lambert::bench::BenchDevices;
 use lambert::error::{Error, Result};
 use lambert::gpu::AdapterRequest;
+use lambert::limits::validate_spp;
 use lambert::render::DeviceChoice;
-use lambert::scene::{Accel, Intersect, Scene, validate_spp};
+use lambert::scene::{Accel, Intersect, Scene};
 
 /// `--device` of render, diff and trace: `DeviceChoice`.
 #[derive(Clone, Copy, Default, ValueEnum)]

@@ -5,8 +5,9 @@ use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
 use super::{RenderArgs, check_output_path, print_warnings, seconds};
+use lambert::camera::orbit;
 use lambert::error::{Error, Result};
-use lambert::jobs::{frame_path, orbit};
+use lambert::jobs::frame_path;
 use lambert::render::Renderer;
 
 /// `--frames A-B` (or `A`) of `frames`: inclusive, within 0..frames.

@@ -1,0 +1,177 @@
+//! Where rays start: the `[camera]` table, its basis in both precisions,
+//! the camera framed on a model with none, a turntable's orbit, the
+//! stratified sample grid, and the default light (placed by the camera).
+//! Below the scene and both backends, which all read it.
+
+use glam::DVec3;
+use serde::Deserialize;
+
+use crate::layout::{LIGHT_DIRECTIONAL, Light};
+use crate::limits::{checked_point, validate_resolution, vector_text};
+
+/// The basis in single precision, as on the GPU.
+#[allow(clippy::unnecessary_cast)]
+pub mod f32 {
+    use super::Camera;
+    type Real = f32;
+    type Vec3 = glam::Vec3;
+    include!("basis.rs");
+}
+
+/// The basis in double precision, for the oracle.
+#[allow(clippy::unnecessary_cast)]
+pub mod f64 {
+    use super::Camera;
+    type Real = f64;
+    type Vec3 = glam::DVec3;
+    include!("basis.rs");
+}
+
+/// The `[camera]` table. Kept in f64 so the oracle can use it at full
+/// precision; the f32 paths round it once.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Camera {
+    pub eye: [f64; 3],
+    pub look_at: [f64; 3],
+    #[serde(default = "default_up")]
+    pub up: [f64; 3],
+    /// Vertical field of view, degrees.
+    pub vfov: f64,
+    pub width: u32,
+    pub height: u32,
+}
+
+pub fn default_up() -> [f64; 3] {
+    [0.0, 1.0, 0.0]
+}
+
+impl Camera {
+    /// This camera at another image size: with only one of width and
+    /// height given, the other keeps the aspect ratio.
+    pub fn resized(&self, width: Option<u32>, height: Option<u32>) -> Result<Camera, String> {
+        let (w, h) = (self.width as f64, self.height as f64);
+        let (width, height) = match (width, height) {
+            (None, None) => return Ok(self.clone()),
+            (Some(width), Some(height)) => (width, height),
+            (Some(width), None) => (width, ((width as f64 * h / w).round() as u32).max(1)),
+            (None, Some(height)) => (((height as f64 * w / h).round() as u32).max(1), height),
+        };
+        validate_resolution(width, height)?;
+        Ok(Camera {
+            width,
+            height,
+            ..self.clone()
+        })
+    }
+}
+
+/// Smallest sine of the angle between camera.up and the view direction:
+/// closer, the camera's right vector (f × up) is mostly rounding. Any up
+/// that passes gives the same camera as its part perpendicular to f.
+pub const MIN_UP_SINE: f64 = 1e-6;
+
+pub fn validate_camera(camera: &Camera) -> Result<(), String> {
+    for (name, v) in [
+        ("eye", camera.eye),
+        ("look_at", camera.look_at),
+        ("up", camera.up),
+    ] {
+        checked_point(&format!("camera.{name}"), v)?;
+    }
+    let eye = DVec3::from(camera.eye);
+    let forward = DVec3::from(camera.look_at) - eye;
+    if forward.length_squared() == 0.0 {
+        return Err("camera.eye and camera.look_at are the same point".into());
+    }
+    let up = DVec3::from(camera.up);
+    if up.length_squared() == 0.0 {
+        return Err("camera.up is the zero vector".into());
+    }
+    let sine = forward.normalize().cross(up.normalize()).length();
+    if sine < MIN_UP_SINE {
+        return Err(format!(
+            "camera.up = {} is parallel to the view direction (look_at − eye): the angle between them must be at least {MIN_UP_SINE:e} rad",
+            vector_text(DVec3::from(camera.up))
+        ));
+    }
+    if !(camera.vfov > 0.0 && camera.vfov < 180.0) {
+        return Err(format!(
+            "camera.vfov = {} must be in (0, 180) degrees",
+            camera.vfov
+        ));
+    }
+    validate_resolution(camera.width, camera.height).map_err(|e| format!("camera: {e}"))
+}
+
+/// A model rendered alone: its resolution unless its camera's aspect ratio
+/// or --width/--height say otherwise.
+pub const DEFAULT_WIDTH: u32 = 1024;
+pub const DEFAULT_HEIGHT: u32 = 768;
+/// Field of view of the camera framed on a model with none.
+pub const FRAMED_VFOV_DEG: f64 = 40.0;
+
+/// The camera framed on a model with none: looking at the centre of its
+/// bounding box from the front-right and above (along (1, 0.75, 2) from
+/// it, +Y up), at the distance where the box's bounding sphere just fits
+/// the narrower field of view, with a 5% margin.
+pub fn frame_camera(&(lo, hi): &(DVec3, DVec3)) -> Camera {
+    let centre = 0.5 * (lo + hi);
+    let radius = (0.5 * (hi - lo).length()).max(1e-6);
+    let aspect = DEFAULT_WIDTH as f64 / DEFAULT_HEIGHT as f64;
+    let half_v = (FRAMED_VFOV_DEG / 2.0).to_radians();
+    let half_h = (half_v.tan() * aspect).atan();
+    let distance = 1.05 * radius / half_v.min(half_h).sin();
+    let eye = centre + distance * DVec3::new(1.0, 0.75, 2.0).normalize();
+    Camera {
+        eye: eye.to_array(),
+        look_at: centre.to_array(),
+        up: default_up(),
+        vfov: FRAMED_VFOV_DEG,
+        width: DEFAULT_WIDTH,
+        height: DEFAULT_HEIGHT,
+    }
+}
+
+/// The camera of frame `frame` of `frames`, orbiting look_at about up.
+pub fn orbit(camera: &Camera, frame: u32, frames: u32) -> Camera {
+    let centre = DVec3::from(camera.look_at);
+    let axis = DVec3::from(camera.up).normalize();
+    let angle = std::f64::consts::TAU * frame as f64 / frames as f64;
+    let eye =
+        centre + glam::DQuat::from_axis_angle(axis, angle) * (DVec3::from(camera.eye) - centre);
+    Camera {
+        eye: eye.to_array(),
+        ..camera.clone()
+    }
+}
+
+/// The light of a model with none: directional, irradiance 1, shining
+/// from behind the camera's right shoulder (from the camera, 30% to its
+/// right and 50% up), so that what the camera sees is lit.
+pub fn default_light(camera: &Camera) -> Light {
+    let basis = f64::CameraBasis::new(camera);
+    directional_light(basis.forward - 0.3 * basis.right - 0.5 * basis.up, [1.0; 3])
+}
+
+/// A directional light travelling along `direction` (finite, non-zero,
+/// as the caller checked) with `irradiance`; the shader takes the way to
+/// the light.
+pub fn directional_light(direction: DVec3, irradiance: [f32; 3]) -> Light {
+    Light {
+        vector: (-direction.normalize()).as_vec3().to_array(),
+        kind: LIGHT_DIRECTIONAL,
+        color: irradiance,
+        _pad: 0,
+    }
+}
+
+/// Columns of the stratified sample grid: the largest divisor of `spp` not
+/// above its square root, so that the grid is as square as `spp` allows and
+/// every cell holds one sample.
+pub fn strata_columns(spp: u32) -> u32 {
+    (1..=spp.isqrt().max(1))
+        .rev()
+        .find(|d| spp.is_multiple_of(*d))
+        .unwrap_or(1)
+}

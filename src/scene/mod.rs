@@ -1,0 +1,497 @@
+//! The scene: the flattened geometry both render paths read, its
+//! materials and lights, and where it sits (its offset). Read from a TOML
+//! scene file (`file`, docs/scene-format.md) or a model file alone
+//! (`model`).
+
+use std::path::Path;
+
+use glam::{DMat3, DVec3};
+use serde::Deserialize;
+
+use crate::bvh::{Bvh, MAX_PRIMITIVES};
+use crate::camera::{Camera, default_up};
+use crate::error::{Error, Result};
+use crate::layout::{
+    FLAG_SMOOTH, Hit, LIGHT_POINT, Light, Material, NO_HIT, Ray, Sphere, Triangle, TriangleNormals,
+};
+use crate::limits::{MAX_COORDINATE, MAX_LOCAL_COORDINATE, checked_point, vector_text};
+use crate::loading;
+use crate::placement::{Placement, checked_local};
+
+mod file;
+mod model;
+
+/// A loaded, validated scene, flattened into the buffers the GPU receives.
+///
+/// Primitive ids: triangles in file order across meshes in scene order
+/// (polygons fan-triangulated), then spheres.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub camera: Camera,
+    pub background: [f32; 3],
+    pub ambient: [f32; 3],
+    pub shadows: bool,
+    pub triangles: Vec<Triangle>,
+    /// One entry per triangle when any mesh is smooth, else empty.
+    pub normals: Vec<TriangleNormals>,
+    pub spheres: Vec<Sphere>,
+    pub materials: Vec<Material>,
+    pub lights: Vec<Light>,
+    /// Over all primitives; built by `load`/`from_toml`.
+    pub bvh: Bvh,
+    /// How rays find their hits; both paths follow it.
+    pub accel: Accel,
+    /// The ray/triangle test both paths use.
+    pub intersect: Intersect,
+    /// Samples per pixel (1: the pixel centre).
+    pub spp: u32,
+    /// Seed of the sample jitter.
+    pub seed: u32,
+    /// What loading read but ignored or could not find (each names its
+    /// file); the CLI prints them.
+    pub warnings: Vec<String>,
+    /// World position (f64) of the origin of the f32 geometry, lights and
+    /// camera the kernels see: the centre of a scene far from the origin,
+    /// else zero (`placement::centring_offset`).
+    pub offset: DVec3,
+}
+
+/// `--intersect`: the ray/triangle test. See docs/accuracy.md for what each
+/// costs and how far each can be trusted.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Deserialize, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Intersect {
+    /// The lecture's plane intersection and three edge tests.
+    Seed,
+    /// Möller–Trumbore.
+    MollerTrumbore,
+    /// Woop, Benthin and Wald (JCGT 2013): no ray passes between triangles
+    /// that share an edge.
+    #[default]
+    Watertight,
+}
+
+impl Intersect {
+    pub const ALL: [Intersect; 3] = [
+        Intersect::Seed,
+        Intersect::MollerTrumbore,
+        Intersect::Watertight,
+    ];
+
+    /// The shader's INTERSECT override value.
+    pub fn shader_value(self) -> u32 {
+        match self {
+            Intersect::Seed => 0,
+            Intersect::MollerTrumbore => 1,
+            Intersect::Watertight => 2,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Intersect::Seed => "seed",
+            Intersect::MollerTrumbore => "moller-trumbore",
+            Intersect::Watertight => "watertight",
+        }
+    }
+}
+
+/// `--accel`: the BVH, or testing every primitive (the reference that tests
+/// the BVH).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Accel {
+    #[default]
+    Bvh,
+    BruteForce,
+}
+
+/// A colour given as one number (grey) or as `[r, g, b]`.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[serde(untagged, expecting = "a number or an array of 3 numbers")]
+pub enum Rgb {
+    Uniform(f64),
+    PerChannel([f64; 3]),
+}
+
+impl Rgb {
+    pub fn to_array(self) -> [f64; 3] {
+        match self {
+            Rgb::Uniform(v) => [v; 3],
+            Rgb::PerChannel(v) => v,
+        }
+    }
+}
+
+/// A face's albedo when neither the scene nor its file gives one.
+pub const DEFAULT_ALBEDO: [f32; 3] = [0.8; 3];
+
+/// A model with no light of its own, rendered alone: ambient light, so
+/// that no face is black.
+pub const DEFAULT_AMBIENT: f32 = 0.1;
+
+impl Scene {
+    /// Loads a scene file (mesh paths are relative to its folder), or a
+    /// model file alone as a whole scene (`from_model`).
+    pub fn load(path: &Path) -> Result<Scene> {
+        Scene::load_with_camera(path, None)
+    }
+
+    /// `load`, with a glTF file's camera chosen by name.
+    pub fn load_with_camera(path: &Path, camera: Option<&str>) -> Result<Scene> {
+        let is_toml = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("toml"));
+        if is_toml {
+            if camera.is_some() {
+                return Err(Error::Usage(
+                    "--camera picks a glTF file's camera; a TOML scene has one camera".into(),
+                ));
+            }
+            let text = crate::files::read_text_capped(path, crate::files::MAX_TEXT_BYTES)?;
+            return Scene::from_toml(&text, path);
+        }
+        let format = loading::Format::of(path).map_err(|_| {
+            Error::Usage(format!(
+                "{}: not a scene (.toml) or a model file ({})",
+                path.display(),
+                loading::SUPPORTED
+            ))
+        })?;
+        Scene::from_model(path, format, camera)
+    }
+
+    /// A scene of bare triangles (one grey material), for probes.
+    pub fn from_triangles(triangles: Vec<Triangle>) -> Scene {
+        let mut scene = Scene::bare();
+        let material = scene.add_material([0.8; 3]);
+        scene.triangles = triangles
+            .into_iter()
+            .map(|t| Triangle { material, ..t })
+            .collect();
+        scene.rebuild_bvh();
+        scene
+    }
+
+    /// No geometry, no lights, and a camera that nothing uses yet.
+    fn bare() -> Scene {
+        Scene {
+            camera: Camera {
+                eye: [0.0, 0.0, 1.0],
+                look_at: [0.0; 3],
+                up: default_up(),
+                vfov: 60.0,
+                width: 1,
+                height: 1,
+            },
+            background: [0.0; 3],
+            ambient: [0.0; 3],
+            shadows: false,
+            triangles: Vec::new(),
+            normals: Vec::new(),
+            spheres: Vec::new(),
+            materials: Vec::new(),
+            lights: Vec::new(),
+            bvh: Bvh::default(),
+            accel: Accel::default(),
+            intersect: Intersect::default(),
+            spp: 1,
+            seed: 0,
+            warnings: Vec::new(),
+            offset: DVec3::ZERO,
+        }
+    }
+
+    fn add_material(&mut self, albedo: [f32; 3]) -> u32 {
+        self.materials.push(Material { albedo, _pad: 0 });
+        (self.materials.len() - 1) as u32
+    }
+
+    /// Adds `mesh` (called `what` in errors about the file at `path`),
+    /// every face with `albedo` when given, else with its file's material
+    /// (DEFAULT_ALBEDO where it has none).
+    fn add_mesh(
+        &mut self,
+        path: &Path,
+        what: &str,
+        mut mesh: loading::Mesh,
+        transform: &Transform,
+        albedo: Option<[f32; 3]>,
+    ) -> Result<()> {
+        self.warnings.append(&mut mesh.warnings);
+        let uniform = match albedo {
+            Some(a) => Some(a),
+            None if mesh.face_materials.is_empty() => Some(DEFAULT_ALBEDO),
+            None => None,
+        };
+        let (material, file_materials, fallback) = match uniform {
+            Some(a) => (self.add_material(a), Vec::new(), 0),
+            None => {
+                let ids: Vec<u32> = mesh
+                    .materials
+                    .iter()
+                    .map(|&a| self.add_material(a))
+                    .collect();
+                let fallback = if mesh.face_materials.iter().any(Option::is_none) {
+                    self.add_material(DEFAULT_ALBEDO)
+                } else {
+                    0
+                };
+                (0, ids, fallback)
+            }
+        };
+        let face_material = |i: usize| match mesh.face_materials.get(i) {
+            _ if file_materials.is_empty() => material,
+            Some(Some(m)) => file_materials[*m as usize],
+            _ => fallback,
+        };
+        let offset = self.offset;
+        let to_f32 = |v: u32| -> Result<[f32; 3]> {
+            let p = mesh.positions[v as usize];
+            let q = transform.point(p);
+            let local = q - offset;
+            if !q.is_finite() || q.abs().max_element() > MAX_COORDINATE {
+                return Err(Error::scene(
+                    path,
+                    format!(
+                        "{what}: vertex {} at {} is transformed to {}, beyond the supported magnitude {MAX_COORDINATE:e}",
+                        v + 1,
+                        vector_text(p),
+                        vector_text(q)
+                    ),
+                ));
+            }
+            if local.abs().max_element() > MAX_LOCAL_COORDINATE {
+                return Err(Error::scene(
+                    path,
+                    format!(
+                        "{what}: vertex {} at {} is transformed to {}, {} from the scene's centre {}: \
+                         the scene may span at most {MAX_LOCAL_COORDINATE:e} from its centre on each axis",
+                        v + 1,
+                        vector_text(p),
+                        vector_text(q),
+                        vector_text(local),
+                        vector_text(offset)
+                    ),
+                ));
+            }
+            // Rounded once, from f64, relative to the offset.
+            Ok(local.as_vec3().to_array())
+        };
+        let smooth = mesh.normals.is_some();
+        if smooth && self.normals.len() < self.triangles.len() {
+            self.normals
+                .resize(self.triangles.len(), TriangleNormals::default());
+        }
+        self.triangles.reserve(mesh.triangles.len());
+        for (i, tri) in mesh.triangles.iter().enumerate() {
+            let [a, b, c] = *tri;
+            self.triangles.push(Triangle {
+                v0: to_f32(a)?,
+                material: face_material(i),
+                v1: to_f32(b)?,
+                flags: if smooth { FLAG_SMOOTH } else { 0 },
+                v2: to_f32(c)?,
+                _pad: 0,
+            });
+            if let Some(normals) = &mesh.normals {
+                let n = normals[i].map(|n| {
+                    let m = transform.normal(n);
+                    [m.x as f32, m.y as f32, m.z as f32, 0.0]
+                });
+                self.normals.push(TriangleNormals {
+                    n0: n[0],
+                    n1: n[1],
+                    n2: n[2],
+                });
+            } else if !self.normals.is_empty() {
+                self.normals.push(TriangleNormals::default());
+            }
+        }
+        self.check_primitive_count(path)
+    }
+
+    /// The BVH addresses at most `MAX_PRIMITIVES` primitives.
+    fn check_primitive_count(&self, path: &Path) -> Result<()> {
+        if self.primitive_count() > MAX_PRIMITIVES {
+            return Err(Error::scene(
+                path,
+                format!(
+                    "the scene has {} primitives; lambert supports at most {MAX_PRIMITIVES}",
+                    self.primitive_count()
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Drops the triangles, their normals, the spheres and the BVH: what a
+    /// render on a GPU, which has its own copy once the scene is uploaded,
+    /// no longer needs on the host (materials, lights and the camera stay).
+    pub fn release_geometry(&mut self) {
+        self.triangles = Vec::new();
+        self.normals = Vec::new();
+        self.spheres = Vec::new();
+        self.bvh = Bvh::default();
+    }
+
+    /// Rebuilds the BVH after the geometry changed.
+    pub fn rebuild_bvh(&mut self) {
+        self.bvh = Bvh::build(&self.triangles, &self.spheres);
+    }
+
+    pub fn primitive_count(&self) -> usize {
+        self.triangles.len() + self.spheres.len()
+    }
+}
+
+/// Object-to-world transform of a mesh: scale, then rotate about X, Y, Z (in
+/// that order, fixed axes), then translate.
+struct Transform {
+    linear: DMat3,
+    normal: DMat3,
+    translate: DVec3,
+}
+
+impl Transform {
+    const IDENTITY: Transform = Transform {
+        linear: DMat3::IDENTITY,
+        normal: DMat3::IDENTITY,
+        translate: DVec3::ZERO,
+    };
+
+    fn point(&self, p: DVec3) -> DVec3 {
+        self.linear * p + self.translate
+    }
+
+    fn normal(&self, n: DVec3) -> DVec3 {
+        (self.normal * n).normalize_or_zero()
+    }
+}
+
+/// A point light at world `position` of `intensity` (candela), kept
+/// relative to the scene's `offset`; `field` names it in errors.
+fn point_light(
+    field: &str,
+    position: [f64; 3],
+    intensity: Rgb,
+    offset: DVec3,
+) -> Result<Light, String> {
+    Ok(Light {
+        vector: point(&format!("{field}.position"), position, offset)?,
+        kind: LIGHT_POINT,
+        color: colour(&format!("{field}.intensity"), intensity)?,
+        _pad: 0,
+    })
+}
+
+/// A directional light travelling along `direction` (finite, non-zero)
+/// with `irradiance`; the shader takes the way to the light.
+fn directional_light(field: &str, direction: DVec3, irradiance: Rgb) -> Result<Light, String> {
+    if !direction.is_finite() || direction.length_squared() == 0.0 {
+        return Err(format!(
+            "{field}.direction = {} must be a finite, non-zero vector",
+            vector_text(direction)
+        ));
+    }
+    let irradiance = colour(&format!("{field}.irradiance"), irradiance)?;
+    Ok(crate::camera::directional_light(direction, irradiance))
+}
+
+/// A world position: finite and within MAX_COORDINATE, kept relative to
+/// the scene's `offset` (within MAX_LOCAL_COORDINATE of it) and rounded to
+/// f32 from there.
+fn point(field: &str, v: [f64; 3], offset: DVec3) -> Result<[f32; 3], String> {
+    let local = checked_local(field, DVec3::from(checked_point(field, v)?), offset)?;
+    Ok(local.as_vec3().to_array())
+}
+
+fn colour(field: &str, rgb: Rgb) -> Result<[f32; 3], String> {
+    let v = rgb.to_array();
+    if v.iter()
+        .all(|c| c.is_finite() && *c >= 0.0 && *c <= f32::MAX as f64)
+    {
+        Ok(v.map(|c| c as f32))
+    } else {
+        Err(format!("{field} = {v:?} must be finite and non-negative"))
+    }
+}
+
+impl Scene {
+    /// `camera` relative to the scene's offset (in f64): what the kernels'
+    /// camera basis is built from.
+    pub fn local_camera(&self, camera: &Camera) -> Camera {
+        let local = |p: [f64; 3]| (DVec3::from(p) - self.offset).to_array();
+        Camera {
+            eye: local(camera.eye),
+            look_at: local(camera.look_at),
+            ..camera.clone()
+        }
+    }
+
+    /// The camera's eye and look_at within MAX_LOCAL_COORDINATE of the
+    /// offset, as the geometry is.
+    pub(crate) fn check_camera_placement(&self) -> Result<(), String> {
+        for (name, world) in [("eye", self.camera.eye), ("look_at", self.camera.look_at)] {
+            checked_local(&format!("camera.{name}"), DVec3::from(world), self.offset)?;
+        }
+        Ok(())
+    }
+
+    /// Its offset, and the radius of its geometry about it (from the
+    /// BVH's bounds).
+    pub fn placement(&self) -> Placement {
+        let radius = self.bvh.bounds().map_or(0.0, |b| {
+            b.min.as_dvec3().abs().max(b.max.as_dvec3().abs()).length()
+        });
+        Placement {
+            offset: self.offset,
+            radius,
+        }
+    }
+}
+
+/// The unnormalised geometric normal at `hit` of `ray`: (v1 − v0) × (v2 − v0)
+/// of the triangle hit (Embree's Ng), the centre-to-hit vector of a sphere
+/// (length: its radius), zero on a miss.
+#[inline]
+pub fn hit_normal(scene: &Scene, ray: &Ray, hit: &Hit) -> [f32; 3] {
+    use glam::Vec3;
+    let prim = hit.prim as usize;
+    let triangles = &scene.triangles;
+    if hit.prim == NO_HIT {
+        [0.0; 3]
+    } else if prim < triangles.len() {
+        let t = &triangles[prim];
+        let v0 = Vec3::from(t.v0);
+        (Vec3::from(t.v1) - v0)
+            .cross(Vec3::from(t.v2) - v0)
+            .to_array()
+    } else {
+        let sphere = &scene.spheres[prim - triangles.len()];
+        // `ray` is in world coordinates, the sphere relative to the offset.
+        let origin = (Vec3::from(ray.origin).as_dvec3() - scene.offset).as_vec3();
+        let point = origin + hit.t * Vec3::from(ray.dir);
+        (point - Vec3::from(sphere.center)).to_array()
+    }
+}
+
+/// Asks the CPU to fetch the triangles `hits` name before `hit_normal`
+/// reads them: the kernel reads its own copy of the triangles (the BVH's
+/// blocks), so these are cold, and one at a time each is a trip to memory
+/// (incoherent rays through the dragon: 40–70 ms a million hits; fetched
+/// together, their latencies overlap).
+#[inline]
+pub fn prefetch_hit_triangles(scene: &Scene, hits: &[Hit]) {
+    #[cfg(target_arch = "x86_64")]
+    for hit in hits {
+        if let Some(t) = scene.triangles.get(hit.prim as usize) {
+            // SAFETY: a prefetch is a hint; it cannot fault.
+            unsafe {
+                use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+                _mm_prefetch::<_MM_HINT_T0>((t as *const crate::layout::Triangle).cast());
+            }
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (scene, hits);
+}
