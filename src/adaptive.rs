@@ -5,6 +5,7 @@
 
 use serde::Serialize;
 
+use crate::camera::View;
 use crate::error::Result;
 use crate::limits::MAX_SPP;
 use crate::output::Rendered;
@@ -64,31 +65,24 @@ fn luminance(c: [f32; 3]) -> f64 {
     (0..3).map(|i| (c[i] * LUMINANCE[i]) as f64).sum()
 }
 
-/// Renders `scene` adaptively on `renderer` (opened for `scene`). Each
-/// pass's sample count and seed are set on `scene` itself, not on a copy of
-/// it, and put back at the end.
+/// Renders `scene` adaptively on `renderer` (opened for `scene`), seen
+/// from `view`; each pass sets its own sample count and seed on a copy of
+/// the view, never on the scene.
 pub fn render_adaptive(
     renderer: &mut Renderer,
-    scene: &mut Scene,
-    settings: AdaptiveSettings,
-) -> Result<(Rendered, AdaptiveReport)> {
-    let (spp, seed) = (scene.spp, scene.seed);
-    let result = adaptive_passes(renderer, scene, settings);
-    (scene.spp, scene.seed) = (spp, seed);
-    result
-}
-
-fn adaptive_passes(
-    renderer: &mut Renderer,
-    pass_scene: &mut Scene,
+    scene: &Scene,
+    view: &View,
     settings: AdaptiveSettings,
 ) -> Result<(Rendered, AdaptiveReport)> {
     let base = settings.base_spp.clamp(2, MAX_SPP);
     let max_spp = settings.max_spp.clamp(base, MAX_SPP);
     let target_variance = settings.target_error * settings.target_error;
-    let seed = pass_scene.seed;
-    pass_scene.spp = base;
-    let (mut rendered, _) = renderer.render(pass_scene, None)?;
+    let seed = view.seed;
+    let mut pass_view = View {
+        spp: base,
+        ..view.clone()
+    };
+    let (mut rendered, _) = renderer.render(scene, &pass_view, None)?;
     let pixels = rendered.prims.len();
     // Per pixel: samples so far, and the sum of squared deviations of
     // luminance about the mean (Chan et al.'s M2), to merge passes exactly.
@@ -99,7 +93,7 @@ fn adaptive_passes(
         .map(|&v| v as f64 * base as f64 * (base - 1) as f64)
         .collect();
     let mut report = AdaptiveReport::default();
-    let width = pass_scene.camera.width;
+    let width = view.camera.width;
     let mut spp = base;
     let mut pass = 1u32;
     while spp < max_spp {
@@ -114,11 +108,11 @@ fn adaptive_passes(
             break;
         }
         report.refined_per_pass.push(list.len());
-        pass_scene.spp = extra;
+        pass_view.spp = extra;
         // Another seed per pass: its samples are independent of the others.
-        pass_scene.seed = seed.wrapping_add(pass.wrapping_mul(0x9e37_79b9));
+        pass_view.seed = seed.wrapping_add(pass.wrapping_mul(0x9e37_79b9));
         let coords: Vec<[u32; 2]> = list.iter().map(|&i| [i % width, i / width]).collect();
-        let results = renderer.render_pixel_list(pass_scene, &coords)?;
+        let results = renderer.render_pixel_list(scene, &pass_view, &coords)?;
         for (&i, r) in list.iter().zip(&results) {
             let i = i as usize;
             let (na, nb) = (samples[i] as f64, extra as f64);

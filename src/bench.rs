@@ -464,9 +464,9 @@ pub fn time_vs_error(
                 )?)),
                 _ => Renderer::Cpu,
             };
-            let mut adaptive_scene = scene.clone();
+            let view = scene.view();
             let (seconds, (image, report)) = median_time(knobs.runs, || {
-                render_adaptive(&mut renderer, &mut adaptive_scene, settings)
+                render_adaptive(&mut renderer, scene, &view, settings)
             })?;
             let stats = diff::compare(&image, &reference, &tolerance)?;
             let point = Point {

@@ -5,6 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::camera::View;
 use crate::error::{Error, Result};
 use crate::gpu::{AdapterRequest, Gpu, GpuRenderer};
 use crate::limits::MAX_SPP;
@@ -40,14 +41,15 @@ pub struct BudgetPlan {
 /// render (whose time counts against the budget).
 pub fn spp_for_budget(
     renderer: &mut Renderer,
-    scene: &mut Scene,
+    scene: &Scene,
+    view: &View,
     budget: f64,
 ) -> Result<BudgetPlan> {
-    // The pilot's one sample set on the scene itself (no copy of it).
-    let spp = std::mem::replace(&mut scene.spp, 1);
-    let pilot = renderer.render(scene, None);
-    scene.spp = spp;
-    let (_, t) = pilot?;
+    let pilot = View {
+        spp: 1,
+        ..view.clone()
+    };
+    let (_, t) = renderer.render(scene, &pilot, None)?;
     let per_sample = (t.render + t.readback).as_secs_f64().max(1e-6);
     let spp = ((budget - per_sample) / per_sample)
         .floor()

@@ -3,6 +3,7 @@
 
 use std::time::{Duration, Instant};
 
+use crate::camera::View;
 use crate::cpu::{self, Precision};
 use crate::error::{Error, Result};
 use crate::gpu::{AdapterRequest, Gpu, GpuRenderer};
@@ -164,27 +165,30 @@ impl Renderer {
         }
     }
 
-    /// Renders `scene` from its current camera, showing progress on
-    /// `progress` if given.
+    /// Renders `scene` as `view` sees it (any camera, size, spp or seed;
+    /// `Scene::view` is the file's own), showing progress on `progress` if
+    /// given.
     pub fn render(
         &mut self,
         scene: &Scene,
+        view: &View,
         progress: Option<&dyn ProgressSink>,
     ) -> Result<(Rendered, RenderTimings)> {
-        self.render_rows(scene, 0..scene.camera.height, progress)
+        self.render_rows(scene, view, 0..view.camera.height, progress)
     }
 
-    /// Renders rows `rows` of `scene`'s image (a part of it: `--tile`),
+    /// Renders rows `rows` of `view`'s image (a part of it: `--tile`),
     /// each pixel exactly as in the whole image.
     pub fn render_rows(
         &mut self,
         scene: &Scene,
+        view: &View,
         rows: std::ops::Range<u32>,
         progress: Option<&dyn ProgressSink>,
     ) -> Result<(Rendered, RenderTimings)> {
         match self {
             Renderer::Gpu(renderer) => {
-                renderer.set_camera(scene, &scene.camera);
+                renderer.set_view(scene, view);
                 let progress = Progress::start(progress, renderer.tile_count(), "tiles");
                 let (rendered, t) = renderer.render_rows(rows, &progress)?;
                 progress.finish();
@@ -200,7 +204,7 @@ impl Renderer {
             Renderer::Cpu => {
                 let progress = Progress::start(progress, rows.len() as u64, "rows");
                 let start = Instant::now();
-                let rendered = cpu::render_rows(scene, Precision::F32, rows, &progress);
+                let rendered = cpu::render_rows(scene, view, Precision::F32, rows, &progress);
                 progress.finish();
                 Ok((
                     rendered,
@@ -214,19 +218,20 @@ impl Renderer {
         }
     }
 
-    /// Renders the listed pixels with `scene`'s spp and seed: mean colour
+    /// Renders the listed pixels with `view`'s spp and seed: mean colour
     /// and variance of the mean (adaptive sampling's later passes).
     pub fn render_pixel_list(
         &mut self,
         scene: &Scene,
+        view: &View,
         pixels: &[[u32; 2]],
     ) -> Result<Vec<[f32; 4]>> {
         match self {
             Renderer::Gpu(renderer) => {
-                renderer.set_camera(scene, &scene.camera);
+                renderer.set_view(scene, view);
                 renderer.render_pixel_list(pixels)
             }
-            Renderer::Cpu => Ok(cpu::render_pixel_list(scene, pixels)),
+            Renderer::Cpu => Ok(cpu::render_pixel_list(scene, view, pixels)),
         }
     }
 

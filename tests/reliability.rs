@@ -451,10 +451,12 @@ fn a_gpu_render_does_not_need_the_hosts_geometry() {
         scene.spp = 2;
         let (mut renderer, _) =
             Renderer::open(&scene, DeviceChoice::Gpu, &Default::default()).expect("opens");
-        let (before, _) = renderer.render(&scene, None).expect("renders");
+        let (before, _) = renderer
+            .render(&scene, &scene.view(), None)
+            .expect("renders");
         let pixels = [[0, 0], [scene.camera.width / 2, scene.camera.height / 2]];
         let list = renderer
-            .render_pixel_list(&scene, &pixels)
+            .render_pixel_list(&scene, &scene.view(), &pixels)
             .expect("pixel list");
         let (full_triangles, full_bvh) = (scene.triangles.len(), scene.bvh.nodes.len());
         scene.release_geometry();
@@ -462,27 +464,28 @@ fn a_gpu_render_does_not_need_the_hosts_geometry() {
         assert!(scene.bvh.nodes.len() < full_bvh.max(2));
         assert!(full_triangles + full_bvh > 0);
         let (after, _) = renderer
-            .render(&scene, None)
+            .render(&scene, &scene.view(), None)
             .expect("renders without the geometry");
         assert_eq!(before, after, "{name}");
         assert_eq!(
             list,
             renderer
-                .render_pixel_list(&scene, &pixels)
+                .render_pixel_list(&scene, &scene.view(), &pixels)
                 .expect("pixel list")
         );
-        // And from another camera, at another sample count.
-        let mut moved = scene.clone();
+        // And from another camera, at another sample count: only the view
+        // changes, not the scene.
+        let mut moved = scene.view();
         moved.camera.eye[0] += 0.5;
         moved.spp = 3;
-        let (moved_image, _) = renderer.render(&moved, None).expect("renders");
+        let (moved_image, _) = renderer.render(&scene, &moved, None).expect("renders");
         let mut reference = common::load(name);
         reference.camera = moved.camera.clone();
         reference.spp = 3;
         let (fresh, _) = Renderer::open(&reference, DeviceChoice::Gpu, &Default::default())
             .expect("opens")
             .0
-            .render(&reference, None)
+            .render(&reference, &reference.view(), None)
             .expect("renders");
         assert_eq!(moved_image, fresh, "{name} from another camera");
     }

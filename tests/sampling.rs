@@ -124,7 +124,7 @@ fn adaptive_sampling_beats_uniform_at_the_same_sample_count() {
     use lambert::adaptive::{AdaptiveSettings, render_adaptive};
     use lambert::render::Renderer;
     for name in ["edge_cases", "spheres"] {
-        let mut scene = load(name);
+        let scene = load(name);
         let mut reference = at_spp(&scene, 256);
         reference.seed = 777;
         let reference = cpu::render(&reference, Precision::F64, &Progress::hidden());
@@ -134,11 +134,12 @@ fn adaptive_sampling_beats_uniform_at_the_same_sample_count() {
             max_spp: 64,
         };
         let (cpu_image, report) =
-            render_adaptive(&mut Renderer::Cpu, &mut scene, settings).unwrap();
+            render_adaptive(&mut Renderer::Cpu, &scene, &scene.view(), settings).unwrap();
         let mut gpu = Renderer::Gpu(Box::new(
             lambert::gpu::GpuRenderer::new(open_gpu(), &scene).unwrap(),
         ));
-        let (gpu_image, gpu_report) = render_adaptive(&mut gpu, &mut scene, settings).unwrap();
+        let (gpu_image, gpu_report) =
+            render_adaptive(&mut gpu, &scene, &scene.view(), settings).unwrap();
         // Same samples on both paths: the same pixels refined, the same image.
         assert_eq!(
             report.refined_per_pass, gpu_report.refined_per_pass,
@@ -190,7 +191,7 @@ fn high_spp_renders_agree_on_both_paths_at_every_size() {
             let mut scene = at_spp(&bunny, spp);
             scene.camera.width = width;
             scene.camera.height = height;
-            renderer.set_camera(&scene, &scene.camera);
+            renderer.set_view(&scene, &scene.view());
             let gpu_image = renderer.render(&Progress::hidden()).unwrap().0;
             let cpu_image = render_cpu(&scene);
             let stats = compare(&gpu_image, &cpu_image, &Tolerance::default()).unwrap();
@@ -212,11 +213,13 @@ fn high_spp_renders_agree_on_both_paths_at_every_size() {
         base_spp: 4,
         max_spp: 1024,
     };
-    let (cpu_image, report) = render_adaptive(&mut Renderer::Cpu, &mut scene, settings).unwrap();
+    let (cpu_image, report) =
+        render_adaptive(&mut Renderer::Cpu, &scene, &scene.view(), settings).unwrap();
     let mut gpu = Renderer::Gpu(Box::new(
         lambert::gpu::GpuRenderer::new(open_gpu(), &scene).unwrap(),
     ));
-    let (gpu_image, gpu_report) = render_adaptive(&mut gpu, &mut scene, settings).unwrap();
+    let (gpu_image, gpu_report) =
+        render_adaptive(&mut gpu, &scene, &scene.view(), settings).unwrap();
     assert_eq!(report.refined_per_pass, gpu_report.refined_per_pass);
     assert!(report.refined_per_pass.len() >= 7, "{report:?}");
     let stats = compare(&gpu_image, &cpu_image, &Tolerance::default()).unwrap();

@@ -10,6 +10,7 @@ use std::panic::AssertUnwindSafe;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
+use lambert::camera::View;
 use lambert::cpu::{
     CpuKernel, QueryOptions, QueryRays, SharedOut, TracedChunk, trace_local_rays_each,
     trace_rays_each,
@@ -570,22 +571,20 @@ impl NativeScene {
                 .map_err(|e| Error::Usage(format!("width/height: {e}")))?;
             let spp = spp.unwrap_or(scene.spp);
             lambert::limits::validate_spp(spp).map_err(Error::Usage)?;
-            // Another size or sample count is another scene to the
-            // renderers: a copy with those settings (the GPU's buffers
-            // stay the ones uploaded).
-            let view = (camera != scene.camera || spp != scene.spp).then(|| Scene {
+            // Another size or sample count is only another view: the scene,
+            // and the GPU's buffers, stay the ones uploaded.
+            let view = View {
                 camera,
                 spp,
-                ..Scene::clone(scene)
-            });
-            let view = view.as_ref().unwrap_or(scene);
+                seed: scene.seed,
+            };
             let mut renderers = self.renderers.lock().unwrap_or_else(|e| e.into_inner());
             let (renderer, note) = renderers.get(scene, device)?;
             let (rendered, _) = if renderer.is_cpu() {
                 drop(renderers);
-                Renderer::Cpu.render(view, None)?
+                Renderer::Cpu.render(scene, &view, None)?
             } else {
-                renderer.render(view, None)?
+                renderer.render(scene, &view, None)?
             };
             Ok((rendered.image, note))
         })?;

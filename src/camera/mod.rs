@@ -27,6 +27,19 @@ pub mod f64 {
     include!("basis.rs");
 }
 
+/// What one render looks at: the camera (image size included), samples
+/// per pixel and the jitter's seed. A per-call setting, apart from the
+/// scene's geometry, so that one resident scene renders at any size or spp;
+/// a scene file's own is `Scene::view`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct View {
+    pub camera: Camera,
+    /// Samples per pixel (1: the pixel centre).
+    pub spp: u32,
+    /// Seed of the sample jitter.
+    pub seed: u32,
+}
+
 /// The `[camera]` table. Kept in f64 so the oracle can use it at full
 /// precision; the f32 paths round it once.
 #[derive(Clone, Debug, Deserialize, PartialEq)]

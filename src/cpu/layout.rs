@@ -8,6 +8,7 @@ use crate::layout::{
     BVH_WIDTH, BvhNode, CompressedNode, FLAG_SMOOTH, LEAF_BIT, LIGHT_POINT, META_LEAF, NO_HIT,
     PrimBlock, leaf_range,
 };
+use crate::camera::View;
 use crate::scene::{Accel, Intersect, Scene};
 
 /// Widens a box's exit distance so that rounding cannot cull a box the ray
@@ -90,10 +91,13 @@ fn vec4(v: [f32; 4]) -> Vec4 {
     Vec4::new(v[0] as Real, v[1] as Real, v[2] as Real, v[3] as Real)
 }
 
-/// A scene seen from one camera: what the shader's bindings hold.
+/// A scene seen from one view: what the shader's bindings hold.
 pub struct Kernel<'a> {
     pub camera: CameraBasis,
     pub scene: &'a Scene,
+    /// The view's samples per pixel and jitter seed.
+    spp: u32,
+    seed: u32,
     background: Vec3,
     ambient: Vec3,
     strata_x: u32,
@@ -119,12 +123,19 @@ impl<'a> Kernel<'a> {
     /// `new`, with node visits through `intersect_boxes_ymm` or not: the
     /// SIMD kernels' tests compare each against the portable one.
     pub fn new_for(scene: &'a Scene, ymm_boxes: bool) -> Kernel<'a> {
+        Kernel::with_view(scene, &scene.view(), ymm_boxes)
+    }
+
+    /// `scene` seen from `view` rather than its file's own.
+    pub fn with_view(scene: &'a Scene, view: &View, ymm_boxes: bool) -> Kernel<'a> {
         Kernel {
-            camera: CameraBasis::new(&scene.local_camera(&scene.camera)),
+            camera: CameraBasis::new(&scene.local_camera(&view.camera)),
             scene,
+            spp: view.spp,
+            seed: view.seed,
             background: vec3(scene.background),
             ambient: vec3(scene.ambient),
-            strata_x: crate::camera::strata_columns(scene.spp),
+            strata_x: crate::camera::strata_columns(view.spp),
             intersect: scene.intersect,
             ymm_boxes,
             compressed: None,

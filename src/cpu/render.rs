@@ -5,6 +5,7 @@ use rayon::prelude::*;
 
 use super::simd::{check_runs, with_simd};
 use super::{CpuKernel, Precision, f32, f64};
+use crate::camera::View;
 use crate::layout;
 use crate::output::{Image, Rendered};
 use crate::progress::Progress;
@@ -37,14 +38,23 @@ pub fn render(scene: &Scene, precision: Precision, progress: &Progress) -> Rende
     render_with(scene, precision, progress, CpuKernel::active())
 }
 
-/// Renders rows `rows` of the scene's image alone (a part of it).
+/// Renders rows `rows` of `view`'s image of `scene` alone (a part of it).
 pub fn render_rows(
     scene: &Scene,
+    view: &View,
     precision: Precision,
     rows: std::ops::Range<u32>,
     progress: &Progress,
 ) -> Rendered {
-    render_rows_with(scene, precision, rows, progress, CpuKernel::active(), None)
+    render_rows_with(
+        scene,
+        view,
+        precision,
+        rows,
+        progress,
+        CpuKernel::active(),
+        None,
+    )
 }
 
 /// `render` with a given CPU kernel (one this CPU runs).
@@ -56,6 +66,7 @@ pub fn render_with(
 ) -> Rendered {
     render_rows_with(
         scene,
+        &scene.view(),
         precision,
         0..scene.camera.height,
         progress,
@@ -72,6 +83,7 @@ pub fn render_gpu_twin(scene: &Scene, progress: &Progress) -> Rendered {
     let nodes = crate::cwbvh::compress(&scene.bvh);
     render_rows_with(
         scene,
+        &scene.view(),
         Precision::F32,
         0..scene.camera.height,
         progress,
@@ -88,6 +100,7 @@ pub(super) fn twin_stack_entries(scene: &Scene) -> usize {
 
 fn render_rows_with(
     scene: &Scene,
+    view: &View,
     precision: Precision,
     rows: std::ops::Range<u32>,
     progress: &Progress,
@@ -96,14 +109,14 @@ fn render_rows_with(
 ) -> Rendered {
     check_runs(cpu_kernel);
     let first_row = rows.start as usize;
-    let (width, height) = (scene.camera.width as usize, rows.len());
+    let (width, height) = (view.camera.width as usize, rows.len());
     let mut rgb = vec![[0.0; 3]; width * height];
     let mut prims = vec![0u32; width * height];
     let mut variance = vec![0.0; width * height];
-    let mut kernel32 = f32::Kernel::new_for(scene, cpu_kernel.ymm_boxes());
+    let mut kernel32 = f32::Kernel::with_view(scene, view, cpu_kernel.ymm_boxes());
     kernel32.compressed = compressed;
     kernel32.stack_entries = twin_stack_entries(scene);
-    let kernel64 = f64::Kernel::new(scene);
+    let kernel64 = f64::Kernel::with_view(scene, view, f64::has_ymm_boxes());
     rgb.par_chunks_mut(width)
         .zip(prims.par_chunks_mut(width))
         .zip(variance.par_chunks_mut(width))
@@ -140,10 +153,15 @@ fn render_rows_with(
 }
 
 /// Renders the listed pixels only (adaptive sampling's later passes):
-/// mean colour and variance of the mean, as `render_pixel_list` on the GPU.
-pub fn render_pixel_list(scene: &Scene, pixels: &[[u32; 2]]) -> Vec<[::core::primitive::f32; 4]> {
-    let kernel32 = f32::Kernel::new(scene);
-    let kernel64 = f64::Kernel::new(scene);
+/// mean colour and variance of the mean over `view`'s samples, as
+/// `render_pixel_list` on the GPU.
+pub fn render_pixel_list(
+    scene: &Scene,
+    view: &View,
+    pixels: &[[u32; 2]],
+) -> Vec<[::core::primitive::f32; 4]> {
+    let kernel32 = f32::Kernel::with_view(scene, view, f32::has_ymm_boxes());
+    let kernel64 = f64::Kernel::with_view(scene, view, f64::has_ymm_boxes());
     pixels
         .par_iter()
         .map(|&[x, y]| {

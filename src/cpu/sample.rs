@@ -21,13 +21,12 @@ impl<'a> Kernel<'a> {
     /// Position of sample `sample` in pixel (x, y): the centre when spp = 1,
     /// else a jittered point in its cell of the stratified grid.
     pub fn sample_position(&self, x: u32, y: u32, sample: u32) -> (Real, Real) {
-        let scene = self.scene;
-        if scene.spp == 1 {
+        if self.spp == 1 {
             return (x as Real + 0.5, y as Real + 0.5);
         }
-        let h = pcg_hash(x ^ pcg_hash(y ^ pcg_hash(sample ^ pcg_hash(scene.seed))));
+        let h = pcg_hash(x ^ pcg_hash(y ^ pcg_hash(sample ^ pcg_hash(self.seed))));
         let (jx, jy) = (unit_float(h), unit_float(pcg_hash(h)));
-        let strata_y = scene.spp / self.strata_x;
+        let strata_y = self.spp / self.strata_x;
         let (cx, cy) = ((sample % self.strata_x) as Real, (sample / self.strata_x) as Real);
         (
             x as Real + (cx + jx) / self.strata_x as Real,
@@ -39,7 +38,7 @@ impl<'a> Kernel<'a> {
     /// first sample hit, and the variance of its mean luminance.
     #[inline(always)]
     pub fn render_pixel(&self, x: u32, y: u32) -> (Vec3, u32, Real) {
-        let (sums, prim) = self.add_samples(x, y, 0..self.scene.spp, (Vec3::ZERO, 0.0));
+        let (sums, prim) = self.add_samples(x, y, 0..self.spp, (Vec3::ZERO, 0.0));
         let (mean, variance) = self.pixel_mean(sums);
         (mean, prim, variance)
     }
@@ -73,10 +72,10 @@ impl<'a> Kernel<'a> {
     }
 
     /// The pixel's mean and the variance of its mean luminance, from the
-    /// sums of all the scene's samples.
+    /// sums of all the view's samples.
     pub fn pixel_mean(&self, (sum, sum_squares): (Vec3, Real)) -> (Vec3, Real) {
         let luminance = Vec3::new(0.2126, 0.7152, 0.0722);
-        let spp = self.scene.spp;
+        let spp = self.spp;
         let n = spp as Real;
         let mean = sum / n;
         let l = mean.dot(luminance);

@@ -6,7 +6,7 @@ use std::time::{Duration, Instant};
 use wgpu::util::DeviceExt;
 
 use crate::camera::f32::CameraBasis;
-use crate::camera::{Camera, strata_columns};
+use crate::camera::{View, strata_columns};
 use crate::error::{Error, Result};
 use crate::layout::Params;
 use crate::scene::Scene;
@@ -61,10 +61,10 @@ pub(super) struct Resident {
     pub loop_status: LoopStatus,
 }
 
-/// The uniform for `scene` seen from `camera`: the f32 reference's basis, so
+/// The uniform for `scene` seen from `view`: the f32 reference's basis, so
 /// both paths shoot the very same rays.
-pub fn params_for(scene: &Scene, camera: &Camera) -> Params {
-    let basis = CameraBasis::new(&scene.local_camera(camera));
+pub fn params_for(scene: &Scene, view: &View) -> Params {
+    let basis = CameraBasis::new(&scene.local_camera(&view.camera));
     Params {
         eye: basis.eye.to_array(),
         width: basis.width,
@@ -81,11 +81,11 @@ pub fn params_for(scene: &Scene, camera: &Camera) -> Params {
         tile_origin: [0, 0],
         num_lights: scene.lights.len() as u32,
         shadows: scene.shadows as u32,
-        spp: scene.spp,
-        seed: scene.seed,
-        strata_x: strata_columns(scene.spp),
+        spp: view.spp,
+        seed: view.seed,
+        strata_x: strata_columns(view.spp),
         sample_begin: 0,
-        sample_end: scene.spp,
+        sample_end: view.spp,
         canary_loops: 2,
         _pad0: 0,
         _pad1: 0,
@@ -125,7 +125,7 @@ impl GpuRenderer {
     ) -> Result<GpuRenderer> {
         let start = Instant::now();
         let device = &gpu.device;
-        let params = params_for(scene, &scene.camera);
+        let params = params_for(scene, &scene.view());
         let params_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("params"),
             contents: bytemuck::bytes_of(&params),
@@ -200,14 +200,15 @@ impl GpuRenderer {
         &self.gpu
     }
 
-    /// Points the resident scene's camera elsewhere; uploads nothing else.
-    pub fn set_camera(&mut self, scene: &Scene, camera: &Camera) {
+    /// Sets the view (camera, size, spp, seed) the resident scene is
+    /// rendered from; uploads nothing else.
+    pub fn set_view(&mut self, scene: &Scene, view: &View) {
         // The counts are the uploaded scene's: the host's copy may have
         // released its geometry (`Scene::release_geometry`).
         self.params = Params {
             num_triangles: self.params.num_triangles,
             num_spheres: self.params.num_spheres,
-            ..params_for(scene, camera)
+            ..params_for(scene, view)
         };
     }
 }

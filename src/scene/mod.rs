@@ -9,7 +9,7 @@ use glam::{DMat3, DVec3};
 use serde::Deserialize;
 
 use crate::bvh::{Bvh, MAX_PRIMITIVES};
-use crate::camera::{Camera, default_up};
+use crate::camera::{Camera, View, default_up};
 use crate::error::{Error, Result};
 use crate::layout::{
     FLAG_SMOOTH, Hit, LIGHT_POINT, Light, Material, NO_HIT, Ray, Sphere, Triangle, TriangleNormals,
@@ -417,6 +417,15 @@ fn colour(field: &str, rgb: Rgb) -> Result<[f32; 3], String> {
 }
 
 impl Scene {
+    /// The view the scene's file asks for (its camera, spp and seed).
+    pub fn view(&self) -> View {
+        View {
+            camera: self.camera.clone(),
+            spp: self.spp,
+            seed: self.seed,
+        }
+    }
+
     /// `camera` relative to the scene's offset (in f64): what the kernels'
     /// camera basis is built from.
     pub fn local_camera(&self, camera: &Camera) -> Camera {

@@ -173,8 +173,12 @@ fn render_part(args: &RenderArgs, tile_text: &str, quiet: bool) -> Result<ExitCo
         scene.release_geometry();
     }
     let start = Instant::now();
-    let (rendered, _) =
-        renderer.render_rows(&scene, rows.clone(), progress_bar::unless_quiet(quiet))?;
+    let (rendered, _) = renderer.render_rows(
+        &scene,
+        &scene.view(),
+        rows.clone(),
+        progress_bar::unless_quiet(quiet),
+    )?;
     lambert::parts::write_part(
         &args.output,
         &rendered.image,
@@ -447,28 +451,30 @@ fn render(args: &RenderArgs, quiet: bool) -> Result<ExitCode> {
     if !renderer.is_cpu() {
         scene.release_geometry();
     }
+    let mut view = scene.view();
     if let Some(budget) = args.time_budget {
-        let plan = jobs::spp_for_budget(&mut renderer, &mut scene, budget)?;
+        let plan = jobs::spp_for_budget(&mut renderer, &scene, &view, budget)?;
         if !quiet {
             eprintln!(
                 "time budget {budget} s: a 1-spp pass takes {:.3} s, so {} spp",
                 plan.per_sample, plan.spp
             );
         }
-        scene.spp = plan.spp;
+        view.spp = plan.spp;
     }
-    let mut samples = scene.camera.width as f64 * scene.camera.height as f64 * scene.spp as f64;
+    let mut samples = view.camera.width as f64 * view.camera.height as f64 * view.spp as f64;
     let (rendered, timings) = match args.target_error {
         None => {
-            let (rendered, timings) = renderer.render(&scene, progress_bar::unless_quiet(quiet))?;
+            let (rendered, timings) =
+                renderer.render(&scene, &view, progress_bar::unless_quiet(quiet))?;
             if args.time_budget.is_some() && !quiet {
                 let noise = (rendered.variance.iter().map(|&v| v as f64).sum::<f64>()
                     / rendered.variance.len() as f64)
                     .sqrt();
                 eprintln!(
                     "time budget: {} spp; expected RMSE from sampling noise {}",
-                    scene.spp,
-                    if scene.spp > 1 {
+                    view.spp,
+                    if view.spp > 1 {
                         format!("{noise:.3e}")
                     } else {
                         "unknown at 1 spp".to_string()
@@ -481,11 +487,11 @@ fn render(args: &RenderArgs, quiet: bool) -> Result<ExitCode> {
             let settings = AdaptiveSettings {
                 target_error: target,
                 // The scene's (or --spp's) samples, when it asks for more than one.
-                base_spp: if scene.spp > 1 { scene.spp } else { 4 },
+                base_spp: if view.spp > 1 { view.spp } else { 4 },
                 max_spp: args.max_spp,
             };
             let start = Instant::now();
-            let (rendered, report) = render_adaptive(&mut renderer, &mut scene, settings)?;
+            let (rendered, report) = render_adaptive(&mut renderer, &scene, &view, settings)?;
             if !quiet {
                 eprintln!(
                     "adaptive: {:.1} samples per pixel on average ({} samples); pixels refined per pass {:?}; {} pixels still above {target} at {} spp; expected RMSE from sampling noise {:.3e}",

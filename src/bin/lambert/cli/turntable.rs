@@ -53,13 +53,13 @@ pub(super) fn turntable(args: &RenderArgs, frames: u32, quiet: bool) -> Result<E
     if !renderer.is_cpu() {
         scene.release_geometry();
     }
-    let start_camera = scene.camera.clone();
+    let mut view = scene.view();
     let mut total = Duration::ZERO;
     let rendered_frames = range.clone().count() as u32;
     for frame in range {
-        scene.camera = orbit(&start_camera, frame, frames);
+        view.camera = orbit(&scene.camera, frame, frames);
         let start = Instant::now();
-        let (rendered, _) = renderer.render(&scene, None)?;
+        let (rendered, _) = renderer.render(&scene, &view, None)?;
         let elapsed = start.elapsed();
         total += elapsed;
         let path = frame_path(&args.output, frame)?;
