@@ -16,6 +16,7 @@ use lambert::cpu::{
     trace_rays_each,
 };
 use lambert::gpu::AdapterRequest;
+use lambert::jobs::{self, Sampling};
 use lambert::layout::{Hit, NO_HIT, Ray};
 use lambert::output::Image;
 use lambert::render::{DeviceChoice, Renderer, Renderers};
@@ -580,13 +581,14 @@ impl NativeScene {
             };
             let mut renderers = self.renderers.lock().unwrap_or_else(|e| e.into_inner());
             let (renderer, note) = renderers.get(scene, device)?;
-            let (rendered, _) = if renderer.is_cpu() {
+            // The CLI's job code, at the view's spp.
+            let sampled = if renderer.is_cpu() {
                 drop(renderers);
-                Renderer::Cpu.render(scene, &view, None)?
+                jobs::render_view(&mut Renderer::Cpu, scene, &view, Sampling::Fixed, None)?
             } else {
-                renderer.render(scene, &view, None)?
+                jobs::render_view(renderer, scene, &view, Sampling::Fixed, None)?
             };
-            Ok((rendered.image, note))
+            Ok((sampled.rendered.image, note))
         })?;
         NativeScene::warn(py, note)?;
         let (w, h) = (image.width as usize, image.height as usize);

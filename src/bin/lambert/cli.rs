@@ -17,11 +17,12 @@ use options::{
 };
 
 use crate::progress_bar;
-use lambert::adaptive::{AdaptiveSettings, render_adaptive};
 use lambert::cpu::{self, Precision};
 use lambert::diff::{self, Tolerance};
 use lambert::error::{Error, Result};
-use lambert::jobs::{self, oracle_scene, render_gpu};
+use lambert::jobs::{
+    self, ImageJob, ImageReport, Sampling, TileJob, oracle_scene, render_gpu, seconds,
+};
 use lambert::layout::NO_HIT;
 use lambert::limits::MAX_SPP;
 use lambert::progress::Progress;
@@ -157,48 +158,25 @@ fn render_part(args: &RenderArgs, tile_text: &str, quiet: bool) -> Result<ExitCo
     check_output_path(&args.output, &[&args.scene])?;
     let scene = args.options.load(&args.scene)?;
     print_warnings(&scene, quiet);
-    let rows = tile.rows(scene.camera.height)?;
-    let (mut renderer, note) = Renderer::open(&scene, args.device.into(), &args.adapter.request())?;
-    if let Some(note) = note.filter(|_| !quiet) {
-        eprintln!("{note}");
-    }
-    let device = match renderer {
-        Renderer::Gpu(_) => "gpu",
-        Renderer::Cpu => "cpu",
-    };
-    // Fingerprinted before a GPU render lets the host's geometry go.
-    let hash = lambert::parts::settings_hash(&scene, device);
-    let mut scene = scene;
-    if !renderer.is_cpu() {
-        scene.release_geometry();
-    }
-    let start = Instant::now();
-    let (rendered, _) = renderer.render_rows(
-        &scene,
-        &scene.view(),
-        rows.clone(),
-        progress_bar::unless_quiet(quiet),
-    )?;
-    lambert::parts::write_part(
-        &args.output,
-        &rendered.image,
+    let job = TileJob {
         tile,
-        scene.camera.height,
-        rows.clone(),
-        &hash,
-    )?;
+        output: &args.output,
+        device: args.device.into(),
+        adapter: &args.adapter.request(),
+    };
+    let report = jobs::render_tile(scene, &job, progress_bar::unless_quiet(quiet))?;
     if !quiet {
         eprintln!(
             "wrote {}: part {}/{} (rows {} to {} of {}×{}) on {} in {}",
-            args.output.display(),
-            tile.index,
-            tile.count,
-            rows.start,
-            rows.end - 1,
-            scene.camera.width,
-            scene.camera.height,
-            renderer.describe(),
-            seconds(start.elapsed())
+            report.output.display(),
+            report.tile.index,
+            report.tile.count,
+            report.rows.start,
+            report.rows.end - 1,
+            report.width,
+            report.height,
+            report.device,
+            seconds(report.elapsed)
         );
     }
     Ok(ExitCode::SUCCESS)
@@ -378,10 +356,6 @@ fn print_warnings(scene: &Scene, quiet: bool) {
     }
 }
 
-fn seconds(d: Duration) -> String {
-    format!("{:.3} s", d.as_secs_f64())
-}
-
 fn render(args: &RenderArgs, quiet: bool) -> Result<ExitCode> {
     if let Some(target) = args.target_error {
         if !(target.is_finite() && target > 0.0) {
@@ -425,128 +399,87 @@ fn render(args: &RenderArgs, quiet: bool) -> Result<ExitCode> {
     let scene = args.options.load(&args.scene)?;
     let load = start.elapsed();
     print_warnings(&scene, quiet);
-
-    let start = Instant::now();
-    let (mut renderer, note) = Renderer::open(&scene, args.device.into(), &args.adapter.request())?;
-    let upload = start.elapsed();
-    if let Some(note) = note.filter(|_| !quiet) {
-        eprintln!("{note}");
-    }
-    if !quiet {
-        eprintln!("rendering on {}", renderer.describe());
-    }
-    // What the report at the end says of the geometry, before a GPU
-    // render lets the host's copy go.
-    let primitives = scene.primitive_count();
-    let bvh = &scene.bvh;
-    let bvh_report = format!(
-        "BVH: {} nodes, depth {}, SAH cost {:.1}, built in {} (part of load), {:.1} MiB on the device",
-        bvh.nodes.len(),
-        bvh.depth(),
-        bvh.sah_cost(),
-        seconds(bvh.build_time),
-        bvh.device_bytes() as f64 / (1 << 20) as f64
-    );
-    let mut scene = scene;
-    if !renderer.is_cpu() {
-        scene.release_geometry();
-    }
-    let mut view = scene.view();
-    if let Some(budget) = args.time_budget {
-        let plan = jobs::spp_for_budget(&mut renderer, &scene, &view, budget)?;
-        if !quiet {
-            eprintln!(
-                "time budget {budget} s: a 1-spp pass takes {:.3} s, so {} spp",
-                plan.per_sample, plan.spp
-            );
-        }
-        view.spp = plan.spp;
-    }
-    let mut samples = view.camera.width as f64 * view.camera.height as f64 * view.spp as f64;
-    let (rendered, timings) = match args.target_error {
-        None => {
-            let (rendered, timings) =
-                renderer.render(&scene, &view, progress_bar::unless_quiet(quiet))?;
-            if args.time_budget.is_some() && !quiet {
-                let noise = (rendered.variance.iter().map(|&v| v as f64).sum::<f64>()
-                    / rendered.variance.len() as f64)
-                    .sqrt();
-                eprintln!(
-                    "time budget: {} spp; expected RMSE from sampling noise {}",
-                    view.spp,
-                    if view.spp > 1 {
-                        format!("{noise:.3e}")
-                    } else {
-                        "unknown at 1 spp".to_string()
-                    }
-                );
-            }
-            (rendered, timings)
-        }
-        Some(target) => {
-            let settings = AdaptiveSettings {
-                target_error: target,
-                // The scene's (or --spp's) samples, when it asks for more than one.
-                base_spp: if view.spp > 1 { view.spp } else { 4 },
-                max_spp: args.max_spp,
-            };
-            let start = Instant::now();
-            let (rendered, report) = render_adaptive(&mut renderer, &scene, &view, settings)?;
-            if !quiet {
-                eprintln!(
-                    "adaptive: {:.1} samples per pixel on average ({} samples); pixels refined per pass {:?}; {} pixels still above {target} at {} spp; expected RMSE from sampling noise {:.3e}",
-                    report.mean_spp,
-                    report.total_samples,
-                    report.refined_per_pass,
-                    report.above_target,
-                    report.max_spp,
-                    report.expected_rmse
-                );
-            }
-            samples = report.total_samples as f64;
-            let timings = lambert::render::RenderTimings {
-                render: start.elapsed(),
-                readback: Duration::ZERO,
-                device: None,
-            };
-            (rendered, timings)
-        }
+    let sampling = match (args.time_budget, args.target_error) {
+        (Some(budget), _) => Sampling::Budget(budget),
+        (None, Some(target_error)) => Sampling::Adaptive {
+            target_error,
+            max_spp: args.max_spp,
+        },
+        (None, None) => Sampling::Fixed,
     };
-
-    let start = Instant::now();
-    rendered.image.save(&args.output)?;
-    let write = start.elapsed();
+    let job = ImageJob {
+        output: &args.output,
+        device: args.device.into(),
+        adapter: &args.adapter.request(),
+        sampling,
+    };
+    let report = jobs::render_image(scene, &job, progress_bar::unless_quiet(quiet))?;
     if !quiet {
-        let rays = samples;
-        eprintln!(
-            "wrote {} ({}×{}, {} primitives)",
-            args.output.display(),
-            scene.camera.width,
-            scene.camera.height,
-            primitives
-        );
-        eprintln!("{bvh_report}");
-        eprintln!(
-            "time: load {}, upload {}, render {}, readback {}, write {}",
-            seconds(load),
-            seconds(upload),
-            seconds(timings.render),
-            seconds(timings.readback),
-            seconds(write)
-        );
-        eprintln!(
-            "{:.2} Mrays/s (primary rays, render stage)",
-            rays / timings.render.as_secs_f64() / 1e6
-        );
-        if let Some(device) = timings.device {
-            eprintln!(
-                "GPU time (timestamp queries): {}, {:.2} Mrays/s",
-                seconds(device),
-                rays / device.as_secs_f64() / 1e6
-            );
-        }
+        print_image_report(&report, job.sampling, load);
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// `lambert render`'s report of one image.
+fn print_image_report(report: &ImageReport, sampling: Sampling, load: Duration) {
+    if let Some(budget) = &report.budget {
+        eprintln!(
+            "time budget: {} spp; expected RMSE from sampling noise {}",
+            budget.plan.spp,
+            match budget.expected_rmse {
+                Some(noise) => format!("{noise:.3e}"),
+                None => "unknown at 1 spp".to_string(),
+            }
+        );
+    }
+    if let (Some(adaptive), Sampling::Adaptive { target_error, .. }) = (&report.adaptive, sampling)
+    {
+        eprintln!(
+            "adaptive: {:.1} samples per pixel on average ({} samples); pixels refined per pass {:?}; {} pixels still above {} at {} spp; expected RMSE from sampling noise {:.3e}",
+            adaptive.mean_spp,
+            adaptive.total_samples,
+            adaptive.refined_per_pass,
+            adaptive.above_target,
+            target_error,
+            adaptive.max_spp,
+            adaptive.expected_rmse
+        );
+    }
+    let bvh = &report.bvh;
+    eprintln!(
+        "wrote {} ({}×{}, {} primitives)",
+        report.output.display(),
+        report.width,
+        report.height,
+        report.primitives
+    );
+    eprintln!(
+        "BVH: {} nodes, depth {}, SAH cost {:.1}, built in {} (part of load), {:.1} MiB on the device",
+        bvh.nodes,
+        bvh.depth,
+        bvh.sah_cost,
+        seconds(bvh.build_time),
+        bvh.device_bytes as f64 / (1 << 20) as f64
+    );
+    let t = &report.timings;
+    eprintln!(
+        "time: load {}, upload {}, render {}, readback {}, write {}",
+        seconds(load),
+        seconds(report.upload),
+        seconds(t.render),
+        seconds(t.readback),
+        seconds(report.write)
+    );
+    eprintln!(
+        "{:.2} Mrays/s (primary rays, render stage)",
+        report.mrays_per_second()
+    );
+    if let (Some(device), Some(rate)) = (t.device, report.device_mrays_per_second()) {
+        eprintln!(
+            "GPU time (timestamp queries): {}, {rate:.2} Mrays/s",
+            seconds(device)
+        );
+    }
 }
 
 /// An image output: a known format, writable, and none of `inputs`.

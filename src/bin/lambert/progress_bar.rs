@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 use indicatif::{ProgressDrawTarget, ProgressStyle};
 use lambert::progress::{ProgressBar, ProgressSink};
 
-/// Draws each render pass's bar on stderr.
+/// Draws each render pass's bar, and jobs' lines, on stderr.
 pub struct StderrBar;
 
 impl ProgressSink for StderrBar {
@@ -26,6 +26,10 @@ impl ProgressSink for StderrBar {
             start: Instant::now(),
             shown: AtomicBool::new(false),
         })
+    }
+
+    fn line(&self, text: &str) {
+        eprintln!("{text}");
     }
 }
 

@@ -1,14 +1,12 @@
-//! `lambert render --turntable N`: frames orbiting the camera's look_at,
-//! the scene uploaded once, named by a pattern.
+//! `lambert render --turntable N`: its options checked, then the job
+//! (`jobs::render_turntable`) and its report.
 
 use std::process::ExitCode;
-use std::time::{Duration, Instant};
 
-use super::{RenderArgs, check_output_path, print_warnings, seconds};
-use lambert::camera::orbit;
+use super::{RenderArgs, check_output_path, print_warnings};
+use crate::progress_bar;
 use lambert::error::{Error, Result};
-use lambert::jobs::frame_path;
-use lambert::render::Renderer;
+use lambert::jobs::{TurntableJob, frame_path, render_turntable, seconds};
 
 /// `--frames A-B` (or `A`) of `frames`: inclusive, within 0..frames.
 pub(super) fn frame_range(text: &str, frames: u32) -> Result<std::ops::RangeInclusive<u32>> {
@@ -41,40 +39,22 @@ pub(super) fn turntable(args: &RenderArgs, frames: u32, quiet: bool) -> Result<E
         lambert::output::refuse_input(&frame_path(&args.output, frame)?, &[&args.scene])?;
     }
     check_output_path(&frame_path(&args.output, *range.start())?, &[&args.scene])?;
-    let mut scene = args.options.load(&args.scene)?;
+    let scene = args.options.load(&args.scene)?;
     print_warnings(&scene, quiet);
-    let (mut renderer, note) = Renderer::open(&scene, args.device.into(), &args.adapter.request())?;
-    if let Some(note) = note.filter(|_| !quiet) {
-        eprintln!("{note}");
-    }
-    if !quiet {
-        eprintln!("rendering {frames} frames on {}", renderer.describe());
-    }
-    if !renderer.is_cpu() {
-        scene.release_geometry();
-    }
-    let mut view = scene.view();
-    let mut total = Duration::ZERO;
-    let rendered_frames = range.clone().count() as u32;
-    for frame in range {
-        view.camera = orbit(&scene.camera, frame, frames);
-        let start = Instant::now();
-        let (rendered, _) = renderer.render(&scene, &view, None)?;
-        let elapsed = start.elapsed();
-        total += elapsed;
-        let path = frame_path(&args.output, frame)?;
-        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-        }
-        rendered.image.save(&path)?;
-        if !quiet {
-            eprintln!("frame {frame}: {} ({})", seconds(elapsed), path.display());
-        }
-    }
+    let job = TurntableJob {
+        pattern: &args.output,
+        frames,
+        range,
+        device: args.device.into(),
+        adapter: &args.adapter.request(),
+    };
+    let report = render_turntable(scene, &job, progress_bar::unless_quiet(quiet))?;
     if !quiet {
         eprintln!(
-            "{rendered_frames} of {frames} frames, {} per frame on average (render and readback; the scene was uploaded once)",
-            seconds(total / rendered_frames)
+            "{} of {} frames, {} per frame on average (render and readback; the scene was uploaded once)",
+            report.written.len(),
+            report.frames,
+            seconds(report.mean_frame_time())
         );
     }
     Ok(ExitCode::SUCCESS)

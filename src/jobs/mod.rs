@@ -1,0 +1,78 @@
+//! Render jobs, the work the front ends share (the `lambert` binary, and
+//! the Python package): one image (`image`, with a time budget or adaptive
+//! sampling), a part of one (`tile`), turntable frames (`turntable`). Each
+//! opens the device, renders and writes, tells a `ProgressSink` what it is
+//! doing as it goes, and returns a report for its caller to print; the
+//! caller parses options and loads the scene. Also the f64 oracle's scene
+//! and a plain GPU render, which `diff` and the benchmarks share.
+
+use std::time::{Duration, Instant};
+
+use crate::error::Result;
+use crate::gpu::{AdapterRequest, Gpu, GpuRenderer};
+use crate::output::Rendered;
+use crate::progress::{Progress, ProgressSink};
+use crate::render::{DeviceChoice, Renderer};
+use crate::scene::{Intersect, Scene};
+
+mod image;
+mod tile;
+mod turntable;
+
+pub use image::{
+    BudgetPlan, BudgetReport, BvhSummary, ImageJob, ImageReport, Sampled, Sampling, render_image,
+    render_view,
+};
+pub use tile::{TileJob, TileReport, render_tile};
+pub use turntable::{FrameReport, TurntableJob, TurntableReport, frame_path, render_turntable};
+
+/// The f64 oracle's version of `scene`: the watertight test, in double
+/// precision, is the reference every variant and device is measured against.
+pub fn oracle_scene(scene: &Scene) -> Scene {
+    let mut oracle = scene.clone();
+    oracle.intersect = Intersect::Watertight;
+    oracle
+}
+
+/// Renders on the GPU (any adapter, lavapipe included), showing no progress.
+pub fn render_gpu(scene: &Scene, request: &AdapterRequest) -> Result<Rendered> {
+    let mut renderer = GpuRenderer::new(Gpu::open(request, false)?, scene)?;
+    Ok(renderer.render(&Progress::hidden())?.0)
+}
+
+/// Seconds as the reports print them: `1.234 s`.
+pub fn seconds(d: Duration) -> String {
+    format!("{:.3} s", d.as_secs_f64())
+}
+
+/// A line for the user, if the caller shows them.
+fn say(sink: Option<&dyn ProgressSink>, text: &str) {
+    if let Some(sink) = sink {
+        sink.line(text);
+    }
+}
+
+/// A renderer for `scene` on the device `choice` asks for, the note of a
+/// fallback to the CPU path said; and how long opening took (the upload).
+fn open(
+    scene: &Scene,
+    choice: DeviceChoice,
+    request: &AdapterRequest,
+    sink: Option<&dyn ProgressSink>,
+) -> Result<(Renderer, Duration)> {
+    let start = Instant::now();
+    let (renderer, note) = Renderer::open(scene, choice, request)?;
+    let upload = start.elapsed();
+    if let Some(note) = note {
+        say(sink, &note);
+    }
+    Ok((renderer, upload))
+}
+
+/// Once the scene is on a GPU its host copy of the geometry can go: the
+/// renders to come read the device's.
+fn release_on_gpu(renderer: &Renderer, scene: &mut Scene) {
+    if !renderer.is_cpu() {
+        scene.release_geometry();
+    }
+}
