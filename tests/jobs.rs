@@ -1,0 +1,123 @@
+//! Render jobs called as a library (`lambert::jobs`): their reports, the files they write and the lines they say as they go.
+
+mod common;
+
+use std::sync::Mutex;
+
+use lambert::camera::View;
+use lambert::jobs::{self, ImageJob, Sampling, TurntableJob};
+use lambert::progress::{ProgressBar, ProgressSink};
+use lambert::render::{DeviceChoice, Renderer};
+
+/// Keeps a job's lines; draws no bar.
+#[derive(Default)]
+struct Lines(Mutex<Vec<String>>);
+
+struct NoBar;
+
+impl ProgressBar for NoBar {
+    fn inc(&self, _units: u64) {}
+    fn finish(&self) {}
+}
+
+impl ProgressSink for Lines {
+    fn start(&self, _total: u64, _unit: &str) -> Box<dyn ProgressBar> {
+        Box::new(NoBar)
+    }
+
+    fn line(&self, text: &str) {
+        self.0.lock().unwrap().push(text.to_string());
+    }
+}
+
+fn small(name: &str) -> lambert::Scene {
+    let mut scene = common::load(name);
+    (scene.camera.width, scene.camera.height) = (16, 12);
+    scene
+}
+
+#[test]
+fn a_turntable_job_writes_its_frames_and_says_each() {
+    let dir = tempfile::tempdir().unwrap();
+    let pattern = dir.path().join("f_{:02}.png");
+    let job = TurntableJob {
+        pattern: &pattern,
+        frames: 4,
+        range: 1..=2,
+        device: DeviceChoice::Cpu,
+        adapter: &Default::default(),
+    };
+    let lines = Lines::default();
+    let report = jobs::render_turntable(small("spheres"), &job, Some(&lines)).unwrap();
+    let frames: Vec<u32> = report.written.iter().map(|f| f.frame).collect();
+    assert_eq!(frames, [1, 2]);
+    assert_eq!(report.frames, 4);
+    for frame in &report.written {
+        assert!(frame.path.is_file(), "{}", frame.path.display());
+    }
+    assert_eq!(report.written[0].path, dir.path().join("f_01.png"));
+    let lines = lines.0.into_inner().unwrap();
+    assert_eq!(lines.len(), 3, "{lines:?}");
+    assert_eq!(lines[0], format!("rendering 4 frames on {}", report.device));
+    assert!(lines[1].starts_with("frame 1: ") && lines[1].ends_with("f_01.png)"));
+    assert!(lines[2].starts_with("frame 2: ") && lines[2].ends_with("f_02.png)"));
+}
+
+#[test]
+fn an_image_job_reports_what_its_sampling_chose() {
+    let dir = tempfile::tempdir().unwrap();
+    let output = dir.path().join("image.pfm");
+    let budget = 0.2;
+    let job = ImageJob {
+        output: &output,
+        device: DeviceChoice::Cpu,
+        adapter: &Default::default(),
+        sampling: Sampling::Budget(budget),
+    };
+    let lines = Lines::default();
+    let report = jobs::render_image(small("spheres"), &job, Some(&lines)).unwrap();
+    assert!(output.is_file());
+    let chosen = report.budget.expect("a budget's report").plan.spp;
+    assert_eq!(report.samples, (16 * 12 * chosen) as f64);
+    assert_eq!((report.width, report.height), (16, 12));
+    let lines = lines.0.into_inner().unwrap();
+    assert_eq!(lines[0], format!("rendering on {}", report.device));
+    assert!(
+        lines[1].starts_with(&format!("time budget {budget} s: a 1-spp pass takes "))
+            && lines[1].ends_with(&format!(", so {chosen} spp")),
+        "{lines:?}"
+    );
+
+    let job = ImageJob {
+        sampling: Sampling::Adaptive {
+            target_error: 1e-6,
+            max_spp: 16,
+        },
+        ..job
+    };
+    let mut scene = small("spheres");
+    scene.spp = 1;
+    let report = jobs::render_image(scene, &job, None).unwrap();
+    let adaptive = report.adaptive.expect("an adaptive report");
+    // From 4 samples (the scene asks for 1), refined where above the target.
+    assert!(!adaptive.refined_per_pass.is_empty(), "{adaptive:?}");
+    assert_eq!(report.samples, adaptive.total_samples as f64);
+    assert!(adaptive.total_samples > 16 * 12 * 4, "{adaptive:?}");
+}
+
+/// What Python's render does: another size and spp as a view of the same
+/// scene, through the job code, equal to a scene loaded with them.
+#[test]
+fn a_view_renders_as_a_scene_with_its_settings() {
+    let scene = common::load("spheres");
+    let view = View {
+        spp: 3,
+        ..small("spheres").view()
+    };
+    let sampled =
+        jobs::render_view(&mut Renderer::Cpu, &scene, &view, Sampling::Fixed, None).unwrap();
+    let mut reference = small("spheres");
+    reference.spp = 3;
+    assert_eq!(sampled.rendered, common::render_cpu(&reference));
+    assert_eq!(sampled.samples, (16 * 12 * 3) as f64);
+}
