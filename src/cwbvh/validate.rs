@@ -162,7 +162,14 @@ pub fn validate(nodes: &[CompressedNode], bvh: &Bvh) -> Result<TreeStats, Invali
             node_box.grow(&b);
             match child {
                 Child::Leaf { first, count } => {
-                    sizes.add(&bvh.blocks[first as usize..(first + count) as usize]);
+                    let blocks = (first as usize)..(first as usize + count as usize);
+                    let Some(blocks) = bvh.blocks.get(blocks.clone()) else {
+                        return Err(fail(format!(
+                            "slot {slot}: leaf blocks {blocks:?} beyond the tree's {}",
+                            bvh.blocks.len()
+                        )));
+                    };
+                    sizes.add(blocks);
                     sah.leaf(count, &b);
                 }
                 Child::Interior { rank } => {
