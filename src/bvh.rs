@@ -22,6 +22,11 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
+mod validate;
+
+pub use validate::{Invalid, TreeStats};
+pub(crate) use validate::{LeafSizes, SahCost, inside};
+
 use crate::layout::{
     BVH_WIDTH, BvhNode, LEAF_BIT, LEAF_FIRST_MASK, PrimBlock, Sphere, Triangle, leaf_range,
     leaf_ref,
@@ -241,24 +246,19 @@ impl Bvh {
     /// block's 4-lane test both cost 1), relative to the root's area: lower
     /// is better.
     pub fn sah_cost(&self) -> f64 {
-        let Some(root) = self.bounds() else {
-            return 0.0;
-        };
-        let root_area = (root.half_area() as f64).max(f64::MIN_POSITIVE);
-        let mut cost = 0.0;
+        let mut cost = SahCost::default();
         for node in &self.nodes {
             let mut node_box = Aabb::EMPTY;
             for slot in occupied_slots(node) {
                 let b = child_aabb(node, slot);
                 node_box.grow(&b);
                 if node.children[slot] & LEAF_BIT != 0 {
-                    let (_, count) = leaf_range(node.children[slot]);
-                    cost += (COST_INTERSECT * count as f32 * b.half_area()) as f64;
+                    cost.leaf(leaf_range(node.children[slot]).1, &b);
                 }
             }
-            cost += (COST_TRAVERSAL * node_box.half_area()) as f64;
+            cost.node(&node_box);
         }
-        cost / root_area
+        cost.relative_to(self.bounds())
     }
 
     /// Wide levels from the root to the deepest leaf (1: the root's children

@@ -13,6 +13,10 @@
 //! box it gets contains the exact one. The slab test then sees a box at
 //! least as large as the wide tree's, and the watertight guarantee holds.
 
+mod validate;
+
+pub use validate::validate;
+
 use glam::Vec3;
 
 use crate::bvh::{Aabb, Bvh, child_aabb, occupied_slots};

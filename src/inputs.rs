@@ -6,7 +6,7 @@
 use std::path::Path;
 
 use crate::error::Result;
-use crate::loading::{self, NormalMode};
+use crate::loading::{self, Mesh, NormalMode};
 
 /// A user-facing input format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -67,25 +67,42 @@ impl Input {
         let modes = [NormalMode::Face, NormalMode::Smooth];
         match self {
             Input::Toml => crate::Scene::from_toml(&String::from_utf8_lossy(bytes), path).map(drop),
-            Input::Obj => {
-                let text = String::from_utf8_lossy(bytes);
-                modes
-                    .into_iter()
-                    .try_for_each(|m| loading::parse_obj(&text, path, m).map(drop))
-            }
+            Input::Obj | Input::Ply | Input::Gltf => modes
+                .into_iter()
+                .try_for_each(|m| self.mesh(bytes, path, m).map(drop)),
             Input::Mtl => loading::obj::parse_mtl(
                 &String::from_utf8_lossy(bytes),
                 path,
                 &mut Default::default(),
             ),
-            Input::Ply => modes
-                .into_iter()
-                .try_for_each(|m| loading::ply::parse_ply(bytes, path, m).map(drop)),
-            Input::Gltf => modes
-                .into_iter()
-                .try_for_each(|m| loading::gltf::parse_scene(bytes, path, m).map(drop)),
             Input::Rays => crate::rays::parse_rays(bytes, path).map(drop),
             Input::Part => crate::parts::parse_part(bytes, path).map(drop),
         }
+    }
+
+    /// A model input (OBJ, PLY, glTF) as a scene of its triangles alone
+    /// (`Scene::from_arrays`, its BVH built), for the fuzz harness to
+    /// validate the tree; None for other formats and models without
+    /// triangles.
+    pub fn model_scene(self, bytes: &[u8], path: &Path) -> Result<Option<crate::Scene>> {
+        let Some(mesh) = self.mesh(bytes, path, NormalMode::Face)? else {
+            return Ok(None);
+        };
+        if mesh.triangles.is_empty() {
+            return Ok(None);
+        }
+        let vertices: Vec<[f64; 3]> = mesh.positions.iter().map(|p| p.to_array()).collect();
+        let faces: Vec<[i64; 3]> = mesh.triangles.iter().map(|t| t.map(i64::from)).collect();
+        crate::Scene::from_arrays(&vertices, &faces, None).map(Some)
+    }
+
+    /// The mesh of a model input; None for other formats.
+    fn mesh(self, bytes: &[u8], path: &Path, mode: NormalMode) -> Result<Option<Mesh>> {
+        Ok(Some(match self {
+            Input::Obj => loading::parse_obj(&String::from_utf8_lossy(bytes), path, mode)?,
+            Input::Ply => loading::ply::parse_ply(bytes, path, mode)?,
+            Input::Gltf => loading::gltf::parse_scene(bytes, path, mode)?.mesh,
+            _ => return Ok(None),
+        }))
     }
 }

@@ -5,103 +5,31 @@ mod common;
 use common::*;
 use glam::Vec3;
 use lambert::Scene;
-use lambert::bvh::{Aabb, MAX_DEPTH, MAX_LEAF, child_aabb, occupied_slots};
 use lambert::cpu::f32::{Kernel, Ray, ray_shear};
-use lambert::layout::{BVH_WIDTH, EMPTY_SLOT, LEAF_BIT, NO_HIT, Sphere, Triangle, leaf_range};
+use lambert::layout::{BVH_WIDTH, NO_HIT, Sphere, Triangle};
 use lambert::scene::Accel;
 use proptest::prelude::*;
 
-/// Every primitive referenced exactly once, each leaf's blocks full but for
-/// the last, their lanes holding their triangles' vertices, each leaf's box
-/// around its primitives, children inside their parents' slots, empty slots with
-/// inverted boxes, depth within the shader's stack.
+/// The wide tree's invariants (`Bvh::validate`) and the compressed tree's
+/// (`cwbvh::validate`), whose statistics agree with the wide tree's.
 fn check_structure(scene: &Scene) {
     let bvh = &scene.bvh;
-    let prim_bounds = |p: u32| -> Aabb {
-        let p = p as usize;
-        if let Some(t) = scene.triangles.get(p) {
-            let v = [t.v0, t.v1, t.v2].map(Vec3::from);
-            Aabb {
-                min: v[0].min(v[1]).min(v[2]),
-                max: v[0].max(v[1]).max(v[2]),
-            }
-        } else {
-            let s = &scene.spheres[p - scene.triangles.len()];
-            let (c, r) = (Vec3::from(s.center), Vec3::splat(s.radius));
-            Aabb {
-                min: c - r,
-                max: c + r,
-            }
-        }
-    };
-    let inside = |inner: &Aabb, outer: &Aabb| {
-        inner.min.cmpge(outer.min).all() && inner.max.cmple(outer.max).all()
-    };
-    let mut seen = vec![0u32; scene.primitive_count()];
-    let mut leaves = 0;
-    for (i, node) in bvh.nodes.iter().enumerate() {
-        let holds_child = node.children.map(|c| c != EMPTY_SLOT);
-        assert_eq!(
-            node.occupied,
-            (0..BVH_WIDTH)
-                .filter(|&s| holds_child[s])
-                .map(|s| 1 << s)
-                .sum::<u32>(),
-            "occupancy of node {i}"
-        );
-        for (slot, &child) in node.children.iter().enumerate() {
-            let b = child_aabb(node, slot);
-            if child == EMPTY_SLOT {
-                assert!(
-                    b.min.cmpgt(b.max).all(),
-                    "empty slot {slot} of node {i} has a box"
-                );
-            } else if child & LEAF_BIT != 0 {
-                let (first, count) = leaf_range(child);
-                let blocks = &bvh.blocks[first as usize..(first + count) as usize];
-                let prims: Vec<u32> = blocks.iter().flat_map(|b| b.prims).collect();
-                let used = prims.iter().filter(|&&p| p != NO_HIT).count();
-                assert!(
-                    (1..=MAX_LEAF).contains(&used) && used > prims.len() - 4,
-                    "a leaf of {used} primitives in {count} blocks"
-                );
-                for (lane, block) in blocks.iter().flat_map(|b| (0..4).map(move |l| (l, b))) {
-                    let p = block.prims[lane];
-                    let vertices = [0, 1, 2].map(|k| [0, 1, 2].map(|a| block.v[k][a][lane]));
-                    match scene.triangles.get(p as usize) {
-                        Some(t) => assert_eq!(vertices, [t.v0, t.v1, t.v2], "triangle {p}'s lane"),
-                        None => assert_eq!(vertices, [[0.0; 3]; 3], "lane of {p} has vertices"),
-                    }
-                    if p != NO_HIT {
-                        seen[p as usize] += 1;
-                        assert!(inside(&prim_bounds(p), &b), "prim {p} outside its leaf");
-                    }
-                }
-                leaves += 1;
-            } else {
-                assert!(
-                    child as usize > i && (child as usize) < bvh.nodes.len(),
-                    "child {child} of {i} is not after its parent"
-                );
-                let c = &bvh.nodes[child as usize];
-                for grandchild in occupied_slots(c) {
-                    assert!(
-                        inside(&child_aabb(c, grandchild), &b),
-                        "node {child} leaves slot {slot} of node {i}"
-                    );
-                }
-            }
-        }
-    }
-    assert!(
-        seen.iter().all(|&n| n == 1),
-        "a primitive is missing or repeated"
+    let stats = bvh
+        .validate(&scene.triangles, &scene.spheres)
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        (stats.nodes, stats.leaves, stats.depth),
+        (bvh.nodes.len(), bvh.leaf_count(), bvh.depth())
     );
-    assert_eq!(leaves, bvh.leaf_count());
-    assert!(
-        bvh.depth() <= MAX_DEPTH,
-        "depth {} exceeds the stack",
-        bvh.depth()
+    let compressed = lambert::cwbvh::compress(bvh);
+    let cstats = lambert::cwbvh::validate(&compressed, bvh).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        (cstats.nodes, cstats.leaves, cstats.depth),
+        (stats.nodes, stats.leaves, stats.depth)
+    );
+    assert_eq!(
+        (cstats.leaf_min, cstats.leaf_max),
+        (stats.leaf_min, stats.leaf_max)
     );
 }
 
@@ -246,6 +174,114 @@ fn degenerate_inputs_build_and_trace() {
         check_rays(&s, &rays);
         println!("{what}: depth {}", s.bvh.depth());
     }
+}
+
+/// A corrupted tree fails validation with an error naming the node, the
+/// slot and what is wrong: a leaf's box that does not hold its primitives,
+/// a primitive in two leaves, one in none, and a compressed child box that
+/// does not contain the exact one.
+#[test]
+fn validate_names_what_is_wrong_in_a_corrupted_tree() {
+    use lambert::layout::{CompressedNode, LEAF_BIT, leaf_range};
+    let scene = scene_of(
+        (0..400)
+            .map(|i| {
+                let (x, y) = ((i % 20) as f32, (i / 20) as f32);
+                triangle([x, y, 0.0], [x + 1.0, y, 0.0], [x, y + 1.0, 0.0])
+            })
+            .collect(),
+        vec![],
+    );
+    let error = |bvh: &lambert::bvh::Bvh| {
+        bvh.validate(&scene.triangles, &scene.spheres)
+            .expect_err("a corrupted tree passed")
+            .to_string()
+    };
+    // Every leaf as (node, slot, first block, blocks).
+    let leaves: Vec<(usize, usize, usize, usize)> = scene
+        .bvh
+        .nodes
+        .iter()
+        .enumerate()
+        .flat_map(|(i, n)| n.children.iter().enumerate().map(move |(s, &c)| (i, s, c)))
+        .filter(|&(_, _, c)| c != u32::MAX && c & LEAF_BIT != 0)
+        .map(|(i, s, c)| {
+            let (first, count) = leaf_range(c);
+            (i, s, first as usize, count as usize)
+        })
+        .collect();
+    let used = |b: &lambert::layout::PrimBlock| b.prims.iter().filter(|&&p| p != NO_HIT).count();
+
+    // A leaf's box shrunk to its minimum along x.
+    let (node, slot, first, _) = leaves[0];
+    let mut bvh = scene.bvh.clone();
+    bvh.nodes[node].bounds[1][slot] = bvh.nodes[node].bounds[0][slot];
+    let p = bvh.blocks[first].prims[0];
+    let message = error(&bvh);
+    assert!(
+        message.starts_with(&format!(
+            "BVH node {node}: slot {slot}: primitive {p}'s box"
+        )) && message.contains("outside the leaf's box"),
+        "{message}"
+    );
+
+    // The first leaf's first primitive copied over a lane of the last leaf.
+    let (node, slot, last, _) = *leaves.last().unwrap();
+    let mut bvh = scene.bvh.clone();
+    let (from, mut to) = (bvh.blocks[first], bvh.blocks[last]);
+    to.prims[0] = from.prims[0];
+    for k in 0..3 {
+        for a in 0..3 {
+            to.v[k][a][0] = from.v[k][a][0];
+        }
+    }
+    bvh.blocks[last] = to;
+    let message = error(&bvh);
+    assert!(
+        message.starts_with(&format!(
+            "BVH node {node}: slot {slot}: primitive {p} is also in node {} slot {}",
+            leaves[0].0, leaves[0].1
+        )),
+        "{message}"
+    );
+
+    // A primitive dropped from a one-block leaf of two or more.
+    let &(_, _, block, _) = leaves
+        .iter()
+        .find(|&&(_, _, first, count)| count == 1 && used(&scene.bvh.blocks[first]) >= 2)
+        .expect("a one-block leaf of two primitives or more");
+    let mut bvh = scene.bvh.clone();
+    let lane = used(&bvh.blocks[block]) - 1;
+    let dropped = bvh.blocks[block].prims[lane];
+    bvh.blocks[block].prims[lane] = NO_HIT;
+    for k in 0..3 {
+        for a in 0..3 {
+            bvh.blocks[block].v[k][a][lane] = 0.0;
+        }
+    }
+    assert_eq!(
+        error(&bvh),
+        format!("BVH: primitive {dropped} is in no leaf")
+    );
+
+    // A compressed child's box shrunk to its minimum along x.
+    let mut nodes = lambert::cwbvh::compress(&scene.bvh);
+    lambert::cwbvh::validate(&nodes, &scene.bvh).expect("the compressed tree is valid");
+    let slot = (0..BVH_WIDTH)
+        .find(|&s| CompressedNode::byte(nodes[0].child_meta, s) != 0)
+        .unwrap();
+    let min = CompressedNode::byte(nodes[0].q[0], slot);
+    let row = &mut nodes[0].q[1][slot / 4];
+    *row = *row & !(0xff << (8 * (slot % 4))) | min << (8 * (slot % 4));
+    let message = lambert::cwbvh::validate(&nodes, &scene.bvh)
+        .expect_err("a shrunk compressed box passed")
+        .to_string();
+    assert!(
+        message.starts_with(&format!(
+            "compressed BVH node 0: slot {slot}: the quantised box"
+        )) && message.contains("does not contain the exact one"),
+        "{message}"
+    );
 }
 
 proptest! {

@@ -1122,3 +1122,27 @@ fn bench_finds_the_bundled_scenes_from_any_folder() {
     expect_failure(&out, &["missing.obj: no such file"]);
     assert!(String::from_utf8_lossy(&out.stderr).starts_with("error: "));
 }
+
+/// `lambert info MODEL` prints both trees' statistics as `validate` measures
+/// them (issue 29 item 1).
+#[test]
+fn info_prints_the_trees_statistics() {
+    let path = common::asset("scenes/meshes/bunny_lowres.obj");
+    let info = lambert(&["info", s(&path)]);
+    assert!(info.status.success(), "{info:?}");
+    let stdout = String::from_utf8_lossy(&info.stdout);
+    let scene = lambert::Scene::load(&path).unwrap();
+    let bvh = scene
+        .bvh
+        .validate(&scene.triangles, &scene.spheres)
+        .unwrap();
+    let nodes = lambert::cwbvh::compress(&scene.bvh);
+    let compressed = lambert::cwbvh::validate(&nodes, &scene.bvh).unwrap();
+    assert!(bvh.nodes > 1 && bvh.leaves > bvh.nodes, "{bvh}");
+    for line in [
+        format!("  BVH (CPU): {bvh}\n"),
+        format!("  compressed BVH (GPU): {compressed}\n"),
+    ] {
+        assert!(stdout.contains(&line), "expected '{line}' in: {stdout}");
+    }
+}

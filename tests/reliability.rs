@@ -490,3 +490,27 @@ fn a_gpu_render_does_not_need_the_hosts_geometry() {
         assert_eq!(moved_image, fresh, "{name} from another camera");
     }
 }
+
+/// Every model in the fuzz corpus and regressions that parses makes a BVH,
+/// and a compressed one, that `validate` accepts: what the harness checks
+/// of each input it makes.
+#[test]
+fn fuzz_models_build_valid_trees() {
+    let mut checked = 0;
+    for (input, path) in fuzz_files("corpus")
+        .into_iter()
+        .chain(fuzz_files("regressions"))
+    {
+        let bytes = std::fs::read(&path).unwrap();
+        let Ok(Some(scene)) = input.model_scene(&bytes, &path) else {
+            continue;
+        };
+        let bvh = &scene.bvh;
+        bvh.validate(&scene.triangles, &scene.spheres)
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        lambert::cwbvh::validate(&lambert::cwbvh::compress(bvh), bvh)
+            .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        checked += 1;
+    }
+    assert!(checked >= 10, "only {checked} models built a scene");
+}

@@ -10,9 +10,11 @@
 //! flags, it is a plain mutation fuzzer over the saved corpus (the short
 //! CI pass).
 //!
-//! Every input is checked for: a panic; a hang (over one second); and an
+//! Every input is checked for: a panic; a hang (over one second); an
 //! allocation beyond a fixed budget plus a multiple of the input's size
-//! (peak live bytes, counted by `lambert::memory::Counting`). Each finding is
+//! (peak live bytes, counted by `lambert::memory::Counting`); and, for a
+//! model that parses, a BVH (or its compressed form) that fails
+//! `validate`, built from its triangles alone. Each finding is
 //! saved under the artifacts folder and the run exits with status 1.
 //!
 //! lambert-fuzz TARGET|all [--runs N] [--seconds S] [--corpus DIR]…
@@ -463,6 +465,21 @@ enum Finding {
     Panic(String),
     Hang(Duration),
     Memory(usize),
+    /// A model that parses and whose BVH fails `validate`.
+    InvalidTree(String),
+}
+
+/// What is wrong with the BVH, and its compressed form, built from a model
+/// input that parses (a scene of its triangles); None where they are valid
+/// or the input is no model a scene is made of.
+fn invalid_tree(input: Input, data: &[u8], path: &Path) -> Option<String> {
+    let scene = input.model_scene(data, path).ok()??;
+    let bvh = &scene.bvh;
+    let invalid = bvh
+        .validate(&scene.triangles, &scene.spheres)
+        .err()
+        .or_else(|| lambert::cwbvh::validate(&lambert::cwbvh::compress(bvh), bvh).err())?;
+    Some(invalid.to_string())
 }
 
 struct Outcome {
@@ -481,7 +498,9 @@ fn run_one(input: Input, data: &[u8], path: &Path) -> Outcome {
     let base = lambert::memory::reset_peak();
     let start = Instant::now();
     STARTED.store(now_ns(), Relaxed);
-    let result = std::panic::catch_unwind(|| input.parse(data, path));
+    let result = std::panic::catch_unwind(|| {
+        input.parse(data, path).map(|()| invalid_tree(input, data, path))
+    });
     STARTED.store(0, Relaxed);
     let elapsed = start.elapsed();
     let allocated = lambert::memory::peak().saturating_sub(base);
@@ -496,6 +515,7 @@ fn run_one(input: Input, data: &[u8], path: &Path) -> Outcome {
         )),
         Ok(_) if elapsed > HANG => Some(Finding::Hang(elapsed)),
         Ok(_) if allocated > budget => Some(Finding::Memory(allocated)),
+        Ok(Ok(Some(invalid))) => Some(Finding::InvalidTree(invalid)),
         Ok(_) => None,
     };
     Outcome {
@@ -593,6 +613,7 @@ fn fuzz(input: Input, options: &Options, coverage: &mut Coverage) -> Report {
         let (kind, what) = match finding {
             Finding::Panic(m) => ("crash", format!("panicked: {m}")),
             Finding::Hang(t) => ("hang", format!("took {:.2} s", t.as_secs_f64())),
+            Finding::InvalidTree(m) => ("tree", format!("an invalid tree: {m}")),
             Finding::Memory(b) => (
                 "memory",
                 format!(

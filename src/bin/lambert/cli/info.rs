@@ -5,7 +5,7 @@ use std::process::ExitCode;
 
 use super::AdapterArgs;
 use lambert::cpu;
-use lambert::error::Result;
+use lambert::error::{Error, Result};
 use lambert::gpu;
 use lambert::scene::Scene;
 
@@ -24,6 +24,17 @@ pub(super) fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> 
             lambert::limits::vector_text(b.max.as_dvec3())
         );
     }
+    // The trees checked as they are measured: a failure is a builder's bug,
+    // reported rather than printed as statistics.
+    let invalid = |e: lambert::bvh::Invalid| Error::scene(path, format!("{e} (a bug in lambert)"));
+    let bvh = scene
+        .bvh
+        .validate(&scene.triangles, &scene.spheres)
+        .map_err(invalid)?;
+    println!("  BVH (CPU): {bvh}");
+    let compressed = lambert::cwbvh::compress(&scene.bvh);
+    let compressed = lambert::cwbvh::validate(&compressed, &scene.bvh).map_err(invalid)?;
+    println!("  compressed BVH (GPU): {compressed}");
     let smooth = !scene.normals.is_empty();
     println!(
         "  normals: {}",
