@@ -159,17 +159,19 @@ impl Placement {
         }
     }
 
-    /// `localize` for a chunk of rays, into `local` and `shifts` (each as
-    /// long as `rays`), on this thread; false, with nothing written, where
-    /// every ray stays as it is.
-    pub fn localize_into(&self, rays: &[Ray], local: &mut [Ray], shifts: &mut [f64]) -> bool {
+    /// `localize` for a chunk of rays, on this thread: None where every
+    /// ray stays as it is (the usual case, which then costs no copy).
+    pub fn localize_chunk(&self, rays: &[Ray]) -> Option<(Vec<Ray>, Vec<f64>)> {
         if self.offset == DVec3::ZERO && !rays.iter().any(|r| self.is_far(r)) {
-            return false;
+            return None;
         }
-        for ((r, l), s) in rays.iter().zip(local).zip(shifts) {
-            (*l, *s) = self.local_ray(world(r.origin), world(r.dir), r.tmin as f64, r.tmax as f64);
-        }
-        true
+        Some(
+            rays.iter()
+                .map(|r| {
+                    self.local_ray(world(r.origin), world(r.dir), r.tmin as f64, r.tmax as f64)
+                })
+                .unzip(),
+        )
     }
 
     /// Whether a world f32 ray's origin (the scene not being centred) is
