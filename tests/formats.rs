@@ -1166,3 +1166,56 @@ fn mtl_grey_xyz_and_spectral_colours() {
         assert!(message.contains(expected), "{message}");
     }
 }
+
+/// A TOML mesh scaled by a negative factor on one or three axes is
+/// mirrored: its faces keep facing out (two corners swapped, and their
+/// normals with them); on two axes it is a rotation and nothing swaps.
+#[test]
+fn toml_mirrored_meshes_keep_their_normals_facing_out() {
+    let dir = tempfile::tempdir().unwrap();
+    // A tetrahedron whose faces all face out.
+    std::fs::write(
+        dir.path().join("tet.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvn 0 0 1\nf 1//1 3//1 2//1\nf 1//1 2//1 4//1\nf 1//1 4//1 3//1\nf 2//1 3//1 4//1\n",
+    )
+    .unwrap();
+    for (scale, mirrored) in [
+        ("[-1.0, 1.0, 1.0]", true),
+        ("[1.0, -2.0, 1.0]", true),
+        ("-1.0", true),
+        ("[-1.0, -1.0, 1.0]", false),
+        ("1.0", false),
+    ] {
+        let text = format!(
+            "[camera]\neye = [3.0, 3.0, 3.0]\nlook_at = [0.0, 0.0, 0.0]\nvfov = 40.0\nwidth = 8\nheight = 8\n\
+             [[mesh]]\nfile = \"tet.obj\"\nnormals = \"smooth\"\nscale = {scale}\n\
+             [[point_light]]\nposition = [0.0, 5.0, 0.0]\nintensity = 1.0\n"
+        );
+        let s = Scene::from_toml(&text, &dir.path().join("s.toml")).unwrap();
+        assert_eq!(s.triangles.len(), 4, "{scale}");
+        let v = |p: [f32; 3]| DVec3::from(p.map(f64::from));
+        let corners: Vec<DVec3> = s
+            .triangles
+            .iter()
+            .flat_map(|t| [v(t.v0), v(t.v1), v(t.v2)])
+            .collect();
+        let centre = corners.iter().sum::<DVec3>() / corners.len() as f64;
+        for t in &s.triangles {
+            let [a, b, c] = [v(t.v0), v(t.v1), v(t.v2)];
+            let outward = (a + b + c) / 3.0 - centre;
+            assert!(
+                (b - a).cross(c - a).dot(outward) > 0.0,
+                "{scale}: {t:?} faces in"
+            );
+        }
+        // The first face (1, 3, 2) keeps its first corner; a mirror swaps the others.
+        let first = &s.triangles[0];
+        let expected_v1 = if mirrored { v(first.v2) } else { v(first.v1) };
+        assert_eq!(v(first.v0), DVec3::ZERO, "{scale}");
+        assert!(
+            expected_v1.x == 0.0 && expected_v1.z == 0.0,
+            "{scale}: {first:?}"
+        );
+        assert_eq!(s.normals.len(), 4, "{scale}: smooth normals kept");
+    }
+}

@@ -282,9 +282,17 @@ impl Scene {
             self.normals
                 .resize(self.triangles.len(), TriangleNormals::default());
         }
+        // A mirroring transform (negative determinant) would turn every
+        // face inside out; two corners swapped keep them facing out, as a
+        // glTF node's mirror does.
+        let mirrored = transform.linear.determinant() < 0.0;
         self.triangles.reserve(mesh.triangles.len());
         for (i, tri) in mesh.triangles.iter().enumerate() {
-            let [a, b, c] = *tri;
+            let [a, b, c] = if mirrored {
+                [tri[0], tri[2], tri[1]]
+            } else {
+                *tri
+            };
             self.triangles.push(Triangle {
                 v0: to_f32(a)?,
                 material: face_material(i),
@@ -294,7 +302,9 @@ impl Scene {
                 _pad: 0,
             });
             if let Some(normals) = &mesh.normals {
-                let n = normals[i].map(|n| {
+                let [na, nb, nc] = normals[i];
+                let corners = if mirrored { [na, nc, nb] } else { [na, nb, nc] };
+                let n = corners.map(|n| {
                     let m = transform.normal(n);
                     [m.x as f32, m.y as f32, m.z as f32, 0.0]
                 });
