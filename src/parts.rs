@@ -125,6 +125,13 @@ pub fn write_part(
     attributes.layer_name = None;
     attributes.layer_position = Vec2(0, rows.start as i32);
     attributes.software_name = Some(Text::from("lambert"));
+    // One custom attribute in each of the crate's two maps (layer and
+    // image): two in one HashMap were written in a different order from
+    // run to run, so the same part differed in bytes.
+    attributes.other.insert(
+        Text::from(ATTRIBUTE_HASH),
+        AttributeValue::Text(Text::from(hash)),
+    );
     let layer = Layer::new(
         (width, rows.len()),
         attributes,
@@ -138,10 +145,6 @@ pub fn write_part(
         AttributeValue::Text(Text::from(
             format!("{}/{}", tile.index, tile.count).as_str(),
         )),
-    );
-    image.attributes.other.insert(
-        Text::from(ATTRIBUTE_HASH),
-        AttributeValue::Text(Text::from(hash)),
     );
     let mut bytes = std::io::Cursor::new(Vec::new());
     image.write().to_buffered(&mut bytes).map_err(|e| {

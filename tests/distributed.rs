@@ -341,3 +341,38 @@ fn merge_refuses_an_output_that_is_one_of_its_parts() {
     );
     assert_eq!(std::fs::read(&fresh).unwrap(), merged_before);
 }
+
+/// The same part, rendered again, is the same file byte for byte (its
+/// EXR attributes were once written in a random order).
+#[test]
+fn a_part_rendered_twice_is_the_same_bytes() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut first: Option<Vec<u8>> = None;
+    for run in 0..6 {
+        let path = dir.path().join(format!("part_{run}.exr"));
+        let out = path.to_str().unwrap();
+        ok(
+            lambert(&[
+                "render",
+                scene("cornell"),
+                "--device",
+                "cpu",
+                "--width",
+                "32",
+                "--height",
+                "32",
+                "--tile",
+                "0/2",
+                "-q",
+                "-o",
+                out,
+            ]),
+            "tile",
+        );
+        let bytes = std::fs::read(&path).unwrap();
+        match &first {
+            None => first = Some(bytes),
+            Some(f) => assert!(*f == bytes, "run {run} wrote other bytes than run 0"),
+        }
+    }
+}
