@@ -6,6 +6,7 @@
 //! triangles from any format are the same primitives.
 
 pub mod gltf;
+pub mod material;
 pub mod obj;
 pub mod ply;
 
