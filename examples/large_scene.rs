@@ -37,7 +37,7 @@ fn main() -> lambert::Result<()> {
     drop((vertices, faces));
     let generated = start.elapsed();
     let mut scene = Scene::from_triangles(triangles);
-    scene.camera = Camera {
+    scene.view.camera = Camera {
         eye: [0.0, 0.6, 3.2],
         look_at: [0.0; 3],
         up: [0.0, 1.0, 0.0],
@@ -79,7 +79,12 @@ fn main() -> lambert::Result<()> {
     let (gpu_image, _) = renderer.render(&Progress::hidden())?;
     let gpu_time = start.elapsed();
     let start = Instant::now();
-    let cpu_image = cpu::render(&scene, cpu::Precision::F32, &Progress::hidden());
+    let cpu_image = cpu::render(
+        &scene,
+        &scene.view,
+        cpu::Precision::F32,
+        &Progress::hidden(),
+    );
     let cpu_time = start.elapsed();
     println!(
         "{size}x{size}: GPU {:.2} s, CPU path {:.2} s",

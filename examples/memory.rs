@@ -84,10 +84,11 @@ fn icosphere_scene() -> Scene {
         .collect();
     drop((vertices, faces));
     let mut scene = Scene::from_triangles(triangles);
-    scene.camera = lambert::camera::frame_camera(&(glam::DVec3::splat(-1.0), glam::DVec3::ONE));
+    scene.view.camera =
+        lambert::camera::frame_camera(&(glam::DVec3::splat(-1.0), glam::DVec3::ONE));
     scene
         .lights
-        .push(lambert::camera::default_light(&scene.camera));
+        .push(lambert::camera::default_light(&scene.view.camera));
     scene
 }
 
@@ -101,13 +102,18 @@ fn run(model: &str) -> lambert::Result<()> {
             Scene::load(Path::new(model))
         }
     })?;
-    scene.camera.width = SIZE;
-    scene.camera.height = SIZE;
+    scene.view.camera.width = SIZE;
+    scene.view.camera.height = SIZE;
     let triangles = scene.triangles.len() as u64;
     let needed = scene_bytes(&scene);
     let after_load = memory::live() as u64 - baseline;
     measure("CPU render", &mut phases, || {
-        cpu::render(&scene, cpu::Precision::F32, &Progress::hidden())
+        cpu::render(
+            &scene,
+            &scene.view,
+            cpu::Precision::F32,
+            &Progress::hidden(),
+        )
     });
     let gpu = Gpu::open(&AdapterRequest::default(), false)?;
     let adapter = gpu.describe();

@@ -10,7 +10,6 @@ use crate::error::Result;
 use crate::limits::MAX_SPP;
 use crate::output::Rendered;
 use crate::render::Renderer;
-use crate::scene::Scene;
 
 const LUMINANCE: [f32; 3] = [0.2126, 0.7152, 0.0722];
 
@@ -65,12 +64,10 @@ fn luminance(c: [f32; 3]) -> f64 {
     (0..3).map(|i| (c[i] * LUMINANCE[i]) as f64).sum()
 }
 
-/// Renders `scene` adaptively on `renderer` (opened for `scene`), seen
-/// from `view`; each pass sets its own sample count and seed on a copy of
-/// the view, never on the scene.
+/// Renders `renderer`'s scene adaptively, seen from `view`; each pass
+/// sets its own sample count and seed on a copy of the view.
 pub fn render_adaptive(
     renderer: &mut Renderer,
-    scene: &Scene,
     view: &View,
     settings: AdaptiveSettings,
 ) -> Result<(Rendered, AdaptiveReport)> {
@@ -82,7 +79,7 @@ pub fn render_adaptive(
         spp: base,
         ..view.clone()
     };
-    let (mut rendered, _) = renderer.render(scene, &pass_view, None)?;
+    let (mut rendered, _) = renderer.render(&pass_view, None)?;
     let pixels = rendered.prims.len();
     // Per pixel: samples so far, and the sum of squared deviations of
     // luminance about the mean (Chan et al.'s M2), to merge passes exactly.
@@ -112,7 +109,7 @@ pub fn render_adaptive(
         // Another seed per pass: its samples are independent of the others.
         pass_view.seed = seed.wrapping_add(pass.wrapping_mul(0x9e37_79b9));
         let coords: Vec<[u32; 2]> = list.iter().map(|&i| [i % width, i / width]).collect();
-        let results = renderer.render_pixel_list(scene, &pass_view, &coords)?;
+        let results = renderer.render_pixel_list(&pass_view, &coords)?;
         for (&i, r) in list.iter().zip(&results) {
             let i = i as usize;
             let (na, nb) = (samples[i] as f64, extra as f64);

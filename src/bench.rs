@@ -3,13 +3,14 @@
 //! the other (docs/benchmarks.md).
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use glam::Vec3;
 use serde::Serialize;
 
 use crate::adaptive::{AdaptiveSettings, render_adaptive};
-use crate::camera::Camera;
+use crate::camera::{Camera, View};
 use crate::cpu::{self, Precision};
 use crate::diff::{self, Tolerance};
 use crate::error::{Error, Result};
@@ -18,7 +19,7 @@ use crate::layout::{LIGHT_DIRECTIONAL, Light, NO_HIT, Ray};
 use crate::output::Rendered;
 use crate::probe;
 use crate::progress::Progress;
-use crate::render::Renderer;
+use crate::render::{DeviceChoice, Renderer, open_gpu};
 use crate::scene::{Accel, Intersect, Scene};
 
 /// Time a measurement may take beyond its warm-up: slow points get fewer
@@ -59,7 +60,7 @@ pub fn scene_for_obj(path: &Path, size: u32) -> Result<Scene> {
     let vfov: f32 = 30.0;
     let distance = radius / (vfov.to_radians() * 0.5).sin();
     let eye = centre + Vec3::new(0.0, 0.3, 1.0).normalize() * distance;
-    scene.camera = Camera {
+    scene.view.camera = Camera {
         eye: eye.as_dvec3().to_array(),
         look_at: centre.as_dvec3().to_array(),
         up: [0.0, 1.0, 0.0],
@@ -75,7 +76,7 @@ pub fn scene_for_obj(path: &Path, size: u32) -> Result<Scene> {
     });
     scene.ambient = [0.05; 3];
     scene.shadows = true;
-    crate::camera::validate_camera(&scene.camera)
+    crate::camera::validate_camera(&scene.view.camera)
         .map_err(|e| Error::Usage(format!("{}: cannot frame the model: {e}", path.display())))?;
     Ok(scene)
 }
@@ -158,18 +159,16 @@ pub enum BenchDevices {
 }
 
 impl BenchDevices {
-    fn renderers(self, scene: &Scene, request: &AdapterRequest) -> Result<Vec<Renderer>> {
-        let mut renderers = Vec::new();
-        if self != BenchDevices::Cpu {
-            renderers.push(Renderer::Gpu(Box::new(GpuRenderer::new(
-                Gpu::open(request, false)?,
-                scene,
-            )?)));
-        }
-        if self != BenchDevices::Gpu {
-            renderers.push(Renderer::Cpu);
-        }
-        Ok(renderers)
+    fn renderers(self, scene: &Arc<Scene>, request: &AdapterRequest) -> Result<Vec<Renderer>> {
+        let devices = match self {
+            BenchDevices::Both => &[DeviceChoice::Gpu, DeviceChoice::Cpu][..],
+            BenchDevices::Gpu => &[DeviceChoice::Gpu],
+            BenchDevices::Cpu => &[DeviceChoice::Cpu],
+        };
+        devices
+            .iter()
+            .map(|&device| Ok(Renderer::open(Arc::clone(scene), device, request)?.0))
+            .collect()
     }
 }
 
@@ -234,7 +233,7 @@ pub fn shadow_rays(scene: &Scene, primary: &[Ray], hits: &[crate::layout::Hit]) 
 /// Primary and shadow ray throughput of `scene` on each renderer.
 pub fn ladder_rows(
     name: &str,
-    scene: &Scene,
+    scene: &Arc<Scene>,
     devices: BenchDevices,
     request: &AdapterRequest,
     runs: usize,
@@ -252,7 +251,7 @@ pub fn ladder_rows(
         let mut timed = |rays: &[Ray], any_hit: bool| {
             let mut device = Vec::new();
             let (wall, _) = median_time(runs, || {
-                let hits = renderer.trace(scene, rays, any_hit, scene.intersect);
+                let hits = renderer.trace(rays, any_hit, scene.intersect);
                 device.extend(renderer.trace_device_time());
                 hits
             })?;
@@ -357,7 +356,7 @@ fn leaks(path: Path32, intersect: Intersect, request: &AdapterRequest) -> Result
                 .filter(|h| h.prim == NO_HIT)
                 .count(),
             Path32::GpuF32 => {
-                let mut r = GpuRenderer::new(Gpu::open(request, false)?, &scene)?;
+                let mut r = open_gpu(&scene, request)?;
                 probe::count_misses(&r.trace_rays(&rays, false, scene.intersect)?)
             }
         };
@@ -370,21 +369,29 @@ fn leaks(path: Path32, intersect: Intersect, request: &AdapterRequest) -> Result
 /// `reference_spp` with another seed.
 pub fn time_vs_error(
     name: &str,
-    scene: &Scene,
+    scene: &Arc<Scene>,
     knobs: &Knobs,
     request: &AdapterRequest,
     log: &mut dyn FnMut(&str),
 ) -> Result<Vec<Point>> {
-    let mut reference_scene = scene.clone();
+    let mut reference_scene = Scene::clone(scene);
     reference_scene.intersect = Intersect::Watertight;
-    reference_scene.spp = knobs.reference_spp;
-    // Its own stream of samples: adaptive passes use seed + k·0x9e3779b9.
-    reference_scene.seed = cpu::f32::pcg_hash(scene.seed ^ 0x5eed_5eed);
+    let reference_view = View {
+        spp: knobs.reference_spp,
+        // Its own stream of samples: adaptive passes use seed + k·0x9e3779b9.
+        seed: cpu::f32::pcg_hash(scene.view.seed ^ 0x5eed_5eed),
+        ..scene.view.clone()
+    };
     log(&format!(
         "{name}: reference = f64 oracle at {} spp",
         knobs.reference_spp
     ));
-    let reference = cpu::render(&reference_scene, Precision::F64, &Progress::hidden());
+    let reference = cpu::render(
+        &reference_scene,
+        &reference_view,
+        Precision::F64,
+        &Progress::hidden(),
+    );
     let tolerance = Tolerance::default();
     let mut paths = vec![Path32::CpuF32, Path32::CpuF64];
     if knobs.gpu {
@@ -395,9 +402,12 @@ pub fn time_vs_error(
         for intersect in Intersect::ALL {
             let leak_count = leaks(path, intersect, request)?;
             for &spp in &knobs.spp {
-                let mut s = scene.clone();
+                let mut s = Scene::clone(scene);
                 s.intersect = intersect;
-                s.spp = spp;
+                let view = View {
+                    spp,
+                    ..scene.view.clone()
+                };
                 let mut variants = vec![(Accel::Bvh, "specialised")];
                 // The skips change time, not the image: measured once, at
                 // the default test and the first spp of the list.
@@ -410,7 +420,7 @@ pub fn time_vs_error(
                 for (accel, shader) in variants {
                     s.accel = accel;
                     let (seconds, device, image) =
-                        time_render(&s, path, shader == "full", knobs.runs, request)?;
+                        time_render(&s, &view, path, shader == "full", knobs.runs, request)?;
                     let stats = diff::compare(&image, &reference, &tolerance)?;
                     let point = Point {
                         scene: name.to_string(),
@@ -457,16 +467,13 @@ pub fn time_vs_error(
                 base_spp: base,
                 max_spp,
             };
-            let mut renderer = match path {
-                Path32::GpuF32 => Renderer::Gpu(Box::new(GpuRenderer::new(
-                    Gpu::open(request, false)?,
-                    scene,
-                )?)),
-                _ => Renderer::Cpu,
+            let device = match path {
+                Path32::GpuF32 => DeviceChoice::Gpu,
+                _ => DeviceChoice::Cpu,
             };
-            let view = scene.view();
+            let (mut renderer, _) = Renderer::open(Arc::clone(scene), device, request)?;
             let (seconds, (image, report)) = median_time(knobs.runs, || {
-                render_adaptive(&mut renderer, scene, &view, settings)
+                render_adaptive(&mut renderer, &scene.view, settings)
             })?;
             let stats = diff::compare(&image, &reference, &tolerance)?;
             let point = Point {
@@ -503,10 +510,11 @@ pub fn time_vs_error(
     Ok(points)
 }
 
-/// Median wall time of a render, the device time of the last run (GPU with
-/// timestamp queries only), and its image.
+/// Median wall time of a render of `scene` seen from `view`, the device
+/// time of the last run (GPU with timestamp queries only), and its image.
 fn time_render(
     scene: &Scene,
+    view: &View,
     path: Path32,
     full_shader: bool,
     runs: usize,
@@ -514,18 +522,19 @@ fn time_render(
 ) -> Result<(Duration, Option<Duration>, Rendered)> {
     let cpu = |precision| {
         let (t, image) = median_time(runs, || {
-            Ok(cpu::render(scene, precision, &Progress::hidden()))
+            Ok(cpu::render(scene, view, precision, &Progress::hidden()))
         })?;
         Ok((t, None, image))
     };
     match path {
         Path32::GpuF32 => {
-            let gpu = Gpu::open(request, false)?;
             let mut r = if full_shader {
-                GpuRenderer::with_full_shader(gpu, scene)?
+                // `--device gpu`'s adapter, with the unspecialised shader.
+                GpuRenderer::with_full_shader(Gpu::open(request, false)?, scene)?
             } else {
-                GpuRenderer::new(gpu, scene)?
+                open_gpu(scene, request)?
             };
+            r.set_view(view);
             r.prepare_render()?;
             let (t, (image, timings)) = median_time(runs, || r.render(&Progress::hidden()))?;
             Ok((t, timings.device, image))

@@ -10,6 +10,7 @@
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
+use crate::camera::View;
 use crate::error::{Error, Result};
 use crate::output::{Image, write_atomically};
 use crate::scene::Scene;
@@ -72,18 +73,18 @@ impl Fingerprint {
 }
 
 /// The hash a part records: the scene's geometry, materials, lights,
-/// camera and image size, background, ambient, shadows, intersection
-/// test, acceleration, samples, seed, and which path renders (the GPU's
-/// pixels differ from the CPU's within tolerance, so parts of the two do
-/// not mix).
-pub fn settings_hash(scene: &Scene, device: &str) -> String {
+/// background, ambient, shadows, intersection test and acceleration; the
+/// view's camera, image size, samples and seed; and which path renders
+/// (the GPU's pixels differ from the CPU's within tolerance, so parts of
+/// the two do not mix).
+pub fn settings_hash(scene: &Scene, view: &View, device: &str) -> String {
     let mut h = Fingerprint(0xcbf2_9ce4_8422_2325);
     h.add(bytemuck::cast_slice(&scene.triangles));
     h.add(bytemuck::cast_slice(&scene.normals));
     h.add(bytemuck::cast_slice(&scene.spheres));
     h.add(bytemuck::cast_slice(&scene.materials));
     h.add(bytemuck::cast_slice(&scene.lights));
-    let c = &scene.camera;
+    let c = &view.camera;
     for v in c.eye.iter().chain(&c.look_at).chain(&c.up).chain([&c.vfov]) {
         h.add(&v.to_le_bytes());
     }
@@ -91,8 +92,8 @@ pub fn settings_hash(scene: &Scene, device: &str) -> String {
         c.width,
         c.height,
         scene.shadows as u32,
-        scene.spp,
-        scene.seed,
+        view.spp,
+        view.seed,
         scene.intersect.shader_value(),
         scene.accel as u32,
     ] {

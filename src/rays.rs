@@ -219,11 +219,11 @@ pub fn read_hits(path: &Path) -> Result<Vec<Hit>> {
     Ok(bytemuck::pod_collect_to_vec(&bytes))
 }
 
-/// The camera rays of `scene` through its pixel centres, row by row from the
-/// top: the same rays `render` shoots at spp = 1 (unit direction, tmin 0,
-/// tmax +inf).
+/// The camera rays of `scene`'s default view through its pixel centres,
+/// row by row from the top: the same rays `render` shoots at spp = 1 (unit
+/// direction, tmin 0, tmax +inf).
 pub fn camera_rays(scene: &Scene) -> Vec<Ray> {
-    camera_rays_for(scene, &scene.camera)
+    camera_rays_for(scene, &scene.view.camera)
 }
 
 /// `camera_rays` through another camera (another image size, say).

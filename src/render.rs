@@ -1,6 +1,7 @@
 //! Choosing where a scene renders (GPU through wgpu, or the CPU reference)
 //! and rendering it there.
 
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use crate::camera::View;
@@ -25,11 +26,13 @@ pub enum DeviceChoice {
 }
 
 /// A scene resident on its device (GPU buffers and pipelines, or the CPU
-/// path): render it again from another camera, or trace ray queries
-/// against it, and nothing but the camera or the rays is uploaded.
+/// path sharing the scene): render it again from another view, or trace
+/// ray queries against it, and nothing but the view or the rays is
+/// uploaded. The GPU renderer keeps its own copy of all it needs, so the
+/// host's geometry may go once it is opened.
 pub enum Renderer {
     Gpu(Box<GpuRenderer>),
-    Cpu,
+    Cpu(Arc<Scene>),
 }
 
 /// Why `--device auto` took the CPU path.
@@ -39,71 +42,99 @@ fn fallback_note(error: &crate::Error) -> String {
     )
 }
 
+/// What `open_device` opened.
+enum Opened {
+    Gpu(GpuRenderer),
+    /// The CPU path, with the note of `auto`'s fallback, if it fell back.
+    Cpu(Option<String>),
+}
+
+/// The one policy of where a scene renders: `cpu` the CPU path; `gpu` any
+/// adapter (software ones included), failing if none opens or the scene
+/// does not fit; `auto` a hardware adapter (or the one named), else the
+/// CPU path with a note, as for a scene too large for the adapter.
+fn open_device(scene: &Scene, choice: DeviceChoice, request: &AdapterRequest) -> Result<Opened> {
+    let gpu = match choice {
+        DeviceChoice::Cpu => return Ok(Opened::Cpu(None)),
+        DeviceChoice::Gpu => Gpu::open(request, false)?,
+        DeviceChoice::Auto => match Gpu::open(request, !request.names_adapter()) {
+            Ok(gpu) => gpu,
+            Err(e) => return Ok(Opened::Cpu(Some(fallback_note(&e)))),
+        },
+    };
+    match GpuRenderer::new(gpu, scene) {
+        Ok(renderer) => Ok(Opened::Gpu(renderer)),
+        // A scene too large for the adapter still renders with auto.
+        Err(Error::GpuLimit(e)) if choice == DeviceChoice::Auto => Ok(Opened::Cpu(Some(format!(
+            "GPU: {e}\nnote: using the CPU path instead"
+        )))),
+        Err(e) => Err(e),
+    }
+}
+
+/// `scene` uploaded to a GPU as `--device gpu` opens one (any adapter,
+/// software ones included): for the measurements and comparisons that
+/// need the GPU itself.
+pub fn open_gpu(scene: &Scene, request: &AdapterRequest) -> Result<GpuRenderer> {
+    match open_device(scene, DeviceChoice::Gpu, request)? {
+        Opened::Gpu(renderer) => Ok(renderer),
+        Opened::Cpu(_) => unreachable!("`gpu` never takes the CPU path"),
+    }
+}
+
 /// The renderers of one scene, each opened (and the scene uploaded to it)
 /// once, on first use: what a long-lived scene (the Python package's)
 /// keeps, so that `auto` and `gpu` share one GPU where they can.
 pub struct Renderers {
+    scene: Arc<Scene>,
     request: AdapterRequest,
     cpu: Renderer,
     gpu: Option<Renderer>,
     /// Whether `gpu` is a hardware adapter (`auto` uses it then).
     gpu_is_hardware: bool,
-    /// Set once `auto` found no GPU to use: the note it gave.
-    auto_fell_back: Option<String>,
+    /// Set once `auto` took the CPU path.
+    auto_fell_back: bool,
 }
 
 impl Renderers {
-    pub fn new(request: AdapterRequest) -> Renderers {
+    pub fn new(scene: Arc<Scene>, request: AdapterRequest) -> Renderers {
         Renderers {
+            cpu: Renderer::Cpu(Arc::clone(&scene)),
+            scene,
             request,
-            cpu: Renderer::Cpu,
             gpu: None,
             gpu_is_hardware: false,
-            auto_fell_back: None,
+            auto_fell_back: false,
         }
     }
 
     /// The renderer `choice` asks for, opening it if need be. The note, on
     /// the first fallback of `auto` to the CPU path only, says why.
-    pub fn get(
-        &mut self,
-        scene: &Scene,
-        choice: DeviceChoice,
-    ) -> Result<(&mut Renderer, Option<String>)> {
+    pub fn get(&mut self, choice: DeviceChoice) -> Result<(&mut Renderer, Option<String>)> {
         let named = self.request.names_adapter();
         match choice {
             DeviceChoice::Cpu => Ok((&mut self.cpu, None)),
-            DeviceChoice::Gpu => {
-                if self.gpu.is_none() {
-                    self.open_gpu(scene, Gpu::open(&self.request, false)?)?;
-                }
-                Ok((self.gpu.as_mut().expect("opened"), None))
-            }
-            DeviceChoice::Auto => {
-                if self.gpu.is_some() && (self.gpu_is_hardware || named) {
+            DeviceChoice::Gpu | DeviceChoice::Auto => {
+                let usable = choice == DeviceChoice::Gpu || self.gpu_is_hardware || named;
+                if self.gpu.is_some() && usable {
                     return Ok((self.gpu.as_mut().expect("opened"), None));
                 }
-                if self.auto_fell_back.is_some() {
+                if choice == DeviceChoice::Auto && self.auto_fell_back {
                     return Ok((&mut self.cpu, None));
                 }
-                match Gpu::open(&self.request, !named).and_then(|gpu| self.open_gpu(scene, gpu)) {
-                    Ok(()) => Ok((self.gpu.as_mut().expect("opened"), None)),
-                    // No GPU, or a scene too large for it: the CPU path.
-                    Err(e @ (Error::Gpu(_) | Error::GpuLimit(_))) => {
-                        let note = fallback_note(&e);
-                        self.auto_fell_back = Some(note.clone());
-                        Ok((&mut self.cpu, Some(note)))
+                match open_device(&self.scene, choice, &self.request)? {
+                    Opened::Gpu(renderer) => {
+                        self.gpu_is_hardware = !renderer.gpu().is_software();
+                        let gpu = self.gpu.insert(Renderer::Gpu(Box::new(renderer)));
+                        Ok((gpu, None))
                     }
-                    Err(e) => Err(e),
+                    Opened::Cpu(note) => {
+                        self.auto_fell_back = true;
+                        Ok((&mut self.cpu, note))
+                    }
                 }
             }
         }
-    }
-
-    fn open_gpu(&mut self, scene: &Scene, gpu: Gpu) -> Result<()> {
-        self.gpu_is_hardware = !gpu.is_software();
-        self.gpu = Some(Renderer::Gpu(Box::new(GpuRenderer::new(gpu, scene)?)));
-        Ok(())
     }
 }
 
@@ -117,78 +148,64 @@ pub struct RenderTimings {
 }
 
 impl Renderer {
-    /// Opens the device `choice` asks for and uploads `scene`. The string
-    /// returned, if any, explains a fallback to the CPU path.
+    /// Opens the device `choice` asks for and uploads `scene` to it, or
+    /// shares it with the CPU path. The string returned, if any, explains
+    /// a fallback to the CPU path.
     pub fn open(
-        scene: &Scene,
+        scene: Arc<Scene>,
         choice: DeviceChoice,
         request: &AdapterRequest,
     ) -> Result<(Renderer, Option<String>)> {
-        let gpu = match choice {
-            DeviceChoice::Cpu => return Ok((Renderer::Cpu, None)),
-            DeviceChoice::Gpu => Gpu::open(request, false)?,
-            DeviceChoice::Auto => match Gpu::open(request, !request.names_adapter()) {
-                Ok(gpu) => gpu,
-                Err(e) => return Ok((Renderer::Cpu, Some(fallback_note(&e)))),
-            },
-        };
-        match GpuRenderer::new(gpu, scene) {
-            Ok(renderer) => Ok((Renderer::Gpu(Box::new(renderer)), None)),
-            // A scene too large for the adapter still renders with auto.
-            Err(Error::GpuLimit(e)) if choice == DeviceChoice::Auto => Ok((
-                Renderer::Cpu,
-                Some(format!("GPU: {e}\nnote: using the CPU path instead")),
-            )),
-            Err(e) => Err(e),
-        }
+        Ok(match open_device(&scene, choice, request)? {
+            Opened::Gpu(renderer) => (Renderer::Gpu(Box::new(renderer)), None),
+            Opened::Cpu(note) => (Renderer::Cpu(scene), note),
+        })
     }
 
     pub fn is_cpu(&self) -> bool {
-        matches!(self, Renderer::Cpu)
+        matches!(self, Renderer::Cpu(_))
     }
 
     /// Device time of the last GPU `trace`, from timestamp queries.
     pub fn trace_device_time(&self) -> Option<std::time::Duration> {
         match self {
             Renderer::Gpu(r) => r.trace_device_time(),
-            Renderer::Cpu => None,
+            Renderer::Cpu(_) => None,
         }
     }
 
     pub fn describe(&self) -> String {
         match self {
             Renderer::Gpu(r) => format!("GPU: {}", r.gpu().describe()),
-            Renderer::Cpu => format!(
+            Renderer::Cpu(_) => format!(
                 "CPU reference path ({} threads)",
                 rayon::current_num_threads()
             ),
         }
     }
 
-    /// Renders `scene` as `view` sees it (any camera, size, spp or seed;
+    /// Renders the scene as `view` sees it (any camera, size, spp or seed;
     /// `Scene::view` is the file's own), showing progress on `progress` if
     /// given.
     pub fn render(
         &mut self,
-        scene: &Scene,
         view: &View,
         progress: Option<&dyn ProgressSink>,
     ) -> Result<(Rendered, RenderTimings)> {
-        self.render_rows(scene, view, 0..view.camera.height, progress)
+        self.render_rows(view, 0..view.camera.height, progress)
     }
 
     /// Renders rows `rows` of `view`'s image (a part of it: `--tile`),
     /// each pixel exactly as in the whole image.
     pub fn render_rows(
         &mut self,
-        scene: &Scene,
         view: &View,
         rows: std::ops::Range<u32>,
         progress: Option<&dyn ProgressSink>,
     ) -> Result<(Rendered, RenderTimings)> {
         match self {
             Renderer::Gpu(renderer) => {
-                renderer.set_view(scene, view);
+                renderer.set_view(view);
                 let progress = Progress::start(progress, renderer.tile_count(), "tiles");
                 let (rendered, t) = renderer.render_rows(rows, &progress)?;
                 progress.finish();
@@ -201,7 +218,7 @@ impl Renderer {
                     },
                 ))
             }
-            Renderer::Cpu => {
+            Renderer::Cpu(scene) => {
                 let progress = Progress::start(progress, rows.len() as u64, "rows");
                 let start = Instant::now();
                 let rendered = cpu::render_rows(scene, view, Precision::F32, rows, &progress);
@@ -220,18 +237,13 @@ impl Renderer {
 
     /// Renders the listed pixels with `view`'s spp and seed: mean colour
     /// and variance of the mean (adaptive sampling's later passes).
-    pub fn render_pixel_list(
-        &mut self,
-        scene: &Scene,
-        view: &View,
-        pixels: &[[u32; 2]],
-    ) -> Result<Vec<[f32; 4]>> {
+    pub fn render_pixel_list(&mut self, view: &View, pixels: &[[u32; 2]]) -> Result<Vec<[f32; 4]>> {
         match self {
             Renderer::Gpu(renderer) => {
-                renderer.set_view(scene, view);
+                renderer.set_view(view);
                 renderer.render_pixel_list(pixels)
             }
-            Renderer::Cpu => Ok(cpu::render_pixel_list(scene, view, pixels)),
+            Renderer::Cpu(scene) => Ok(cpu::render_pixel_list(scene, view, pixels)),
         }
     }
 
@@ -239,22 +251,16 @@ impl Renderer {
     pub fn prepare_trace(&mut self, any_hit: bool, intersect: Intersect) -> Result<()> {
         match self {
             Renderer::Gpu(renderer) => renderer.prepare_trace(any_hit, intersect),
-            Renderer::Cpu => Ok(()),
+            Renderer::Cpu(_) => Ok(()),
         }
     }
 
-    /// Traces a ray query against `scene` (which must be the scene the
-    /// engine was opened with) with the ray/triangle test `intersect`.
-    pub fn trace(
-        &mut self,
-        scene: &Scene,
-        rays: &[Ray],
-        any_hit: bool,
-        intersect: Intersect,
-    ) -> Result<Vec<Hit>> {
+    /// Traces a ray query against the scene with the ray/triangle test
+    /// `intersect`.
+    pub fn trace(&mut self, rays: &[Ray], any_hit: bool, intersect: Intersect) -> Result<Vec<Hit>> {
         match self {
             Renderer::Gpu(renderer) => renderer.trace_rays(rays, any_hit, intersect),
-            Renderer::Cpu => Ok(cpu::trace_rays_with(
+            Renderer::Cpu(scene) => Ok(cpu::trace_rays_with(
                 scene,
                 rays,
                 any_hit,

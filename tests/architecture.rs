@@ -605,3 +605,61 @@ fn the_layer_table_names_every_module() {
     let table: BTreeSet<String> = LAYERS.iter().map(|(m, _)| m.to_string()).collect();
     assert_eq!(modules, table);
 }
+
+// ---- the environment --------------------------------------------------------
+
+/// `file:line` of each read of an environment variable (`env::var`,
+/// `var_os`, `vars`) in the code of the library's files: the front ends
+/// (`src/bin/`) read them and pass them in as options.
+fn environment_reads(files: &[(PathBuf, String)]) -> Vec<String> {
+    let mut found = Vec::new();
+    for (path, text) in files {
+        if path.starts_with("src/bin") {
+            continue;
+        }
+        for (i, line) in code_only(text).lines().enumerate() {
+            if line.contains("env::var") {
+                found.push(format!("{}:{}", path.display(), i + 1));
+            }
+        }
+    }
+    found
+}
+
+/// The library reads no environment variable (`LAMBERT_*`, wgpu's):
+/// docs/architecture.md's rule.
+#[test]
+fn the_library_reads_no_environment_variable() {
+    let files: Vec<(PathBuf, String)> = files("src", ".rs")
+        .into_iter()
+        .map(|path| {
+            let text = std::fs::read_to_string(Path::new(ROOT).join(&path)).unwrap();
+            (path, text)
+        })
+        .collect();
+    let reads = environment_reads(&files);
+    assert!(
+        reads.is_empty(),
+        "environment variables read in the library (read them in the front ends and pass them in):\n{}",
+        reads.join("\n")
+    );
+}
+
+/// The check finds a read in the library's code, not in a comment, a string
+/// or the binary's code.
+#[test]
+fn the_environment_check_finds_reads() {
+    let file = |path: &str, text: &str| (PathBuf::from(path), text.to_string());
+    let reads = environment_reads(&[
+        file(
+            "src/cpu/simd.rs",
+            "// std::env::var(\"X\")\nlet s = \"env::var\";\nlet v = std::env::var(\"X\");",
+        ),
+        file(
+            "src/gpu/device.rs",
+            "use std::env;\n\nlet v = env::var_os(\"Y\");",
+        ),
+        file("src/bin/lambert/main.rs", "let v = std::env::var(\"X\");"),
+    ]);
+    assert_eq!(reads, ["src/cpu/simd.rs:3", "src/gpu/device.rs:3"]);
+}

@@ -574,8 +574,14 @@ fn every_cpu_kernel_equals_the_portable_one() {
             }
             if *name != "soup" {
                 let hidden = lambert::progress::Progress::hidden();
-                let portable = render_with(scene, Precision::F32, &hidden, CpuKernel::Portable);
-                let simd = render_with(scene, Precision::F32, &hidden, kernel);
+                let portable = render_with(
+                    scene,
+                    &scene.view,
+                    Precision::F32,
+                    &hidden,
+                    CpuKernel::Portable,
+                );
+                let simd = render_with(scene, &scene.view, Precision::F32, &hidden, kernel);
                 assert_eq!(
                     portable.prims,
                     simd.prims,

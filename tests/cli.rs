@@ -682,6 +682,45 @@ fn time_budget_and_target_error_render_and_report() {
     }
 }
 
+/// `LAMBERT_CPU_KERNEL` is read by the binary, not the library: `info`
+/// reports the kernel it names (or the widest narrower one the CPU has),
+/// and the wider ones as not chosen; a name that is no kernel's leaves the
+/// widest.
+#[test]
+fn the_cpu_kernel_variable_reaches_the_cli() {
+    use lambert::cpu::{CPU_KERNEL_ENV, CpuKernel};
+    let info = |value: &str| {
+        let out = lambert_command()
+            .arg("info")
+            .env(CPU_KERNEL_ENV, value)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{out:?}");
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let text = info("Portable");
+    assert!(text.contains(", portable kernel"), "{text}");
+    let best = CpuKernel::detect();
+    if best > CpuKernel::Portable {
+        let wider = format!("{} kernel: available, not chosen", best.name());
+        assert!(text.contains(&wider), "{text}");
+    }
+    let text = info("no such kernel");
+    assert!(
+        text.contains(&format!(", {} kernel", best.name())),
+        "{text}"
+    );
+    assert_eq!(
+        CpuKernel::narrowed_to(Some("AVX-512")),
+        best.min(CpuKernel::Avx512)
+    );
+    assert_eq!(
+        CpuKernel::narrowed_to(Some("avx2+fma")),
+        best.min(CpuKernel::Avx2Fma)
+    );
+    assert_eq!(CpuKernel::narrowed_to(None), best);
+}
+
 /// A headless machine's commands print no line that says "error" unless
 /// something failed (Mesa's device-select layer printed two about
 /// XDG_RUNTIME_DIR), and `info` names the CPU kernel in use.
@@ -713,7 +752,9 @@ fn successful_commands_print_no_error_lines() {
             );
         }
         if args == ["info"] {
-            let kernel = lambert::cpu::CpuKernel::active().name();
+            // The kernel the CLI chose from the environment, as it reads it.
+            let asked = std::env::var(lambert::cpu::CPU_KERNEL_ENV).ok();
+            let kernel = lambert::cpu::CpuKernel::narrowed_to(asked.as_deref()).name();
             assert!(text.contains(&format!("{kernel} kernel")), "{text}");
         }
     }

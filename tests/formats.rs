@@ -370,7 +370,10 @@ fn gltf_hierarchy_camera_lights_and_materials() {
     assert!((camera.aspect_ratio.unwrap() - 4.0 / 3.0).abs() < 1e-6);
 
     let scene = Scene::load(&path).unwrap();
-    assert_eq!((scene.camera.width, scene.camera.height), (1024, 768));
+    assert_eq!(
+        (scene.view.camera.width, scene.view.camera.height),
+        (1024, 768)
+    );
     assert_eq!(scene.lights.len(), 2);
     let point = scene
         .lights
@@ -389,8 +392,8 @@ fn gltf_hierarchy_camera_lights_and_materials() {
     assert!((glam::Vec3::from(sun.color) - glam::Vec3::new(0.75, 0.75, 0.9)).length() < 1e-6);
 
     let mut small = scene.clone();
-    small.camera.width = 64;
-    small.camera.height = 48;
+    small.view.camera.width = 64;
+    small.view.camera.height = 48;
     let (gpu, cpu) = (render_gpu(&small), render_cpu(&small));
     let stats = lambert::diff::compare(&gpu, &cpu, &Default::default()).unwrap();
     assert!(stats.passed, "{stats}");
@@ -407,7 +410,7 @@ fn gltf_in_a_toml_scene_brings_geometry_only() {
     std::fs::copy(meshes("boxes.glb"), dir.path().join("meshes/BOXES.GLB")).unwrap();
     let s = Scene::from_toml(text, &dir.path().join("s.toml")).unwrap();
     assert_eq!(s.lights.len(), 1);
-    assert_eq!(s.camera.vfov, 50.0);
+    assert_eq!(s.view.camera.vfov, 50.0);
     assert_eq!(s.triangles.len(), 14);
     let max_x = s
         .triangles

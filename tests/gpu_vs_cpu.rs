@@ -93,7 +93,7 @@ fn cpu_reference_agrees_with_f64_oracle() {
 #[test]
 fn edge_case_scene_behaves() {
     let scene = load("edge_cases");
-    let (w, h) = (scene.camera.width, scene.camera.height);
+    let (w, h) = (scene.view.camera.width, scene.view.camera.height);
     for r in [render_gpu(&scene), render_cpu(&scene)] {
         // The triangle whose plane holds the eye (mesh 1, primitive 4) is
         // never hit: its rays start in its plane or run parallel to it.
@@ -172,7 +172,7 @@ fn shadow_rays_apart_render_as_the_megakernel_does() {
     let hidden = lambert::progress::Progress::hidden();
     for name in ["cornell", "spheres", "bunny", "dragon", "edge_cases"] {
         let mut scene = load(name);
-        scene.spp = 1;
+        scene.view.spp = 1;
         let mut renderer = GpuRenderer::new(open_gpu(), &scene).expect("scene uploads");
         assert_eq!(renderer.shadow_dispatch, ShadowDispatch::Apart, "{name}");
         assert!(renderer.shadows_apart(), "{name}");
@@ -186,7 +186,7 @@ fn shadow_rays_apart_render_as_the_megakernel_does() {
         };
         assert!(bits(&apart) == bits(&mega), "{name}: apart differs");
         println!("{name}: shadow rays apart = megakernel, bit for bit");
-        scene.spp = 3;
+        scene.view.spp = 3;
         let renderer = GpuRenderer::new(open_gpu(), &scene).expect("scene uploads");
         assert!(!renderer.shadows_apart(), "{name} at 3 spp");
     }

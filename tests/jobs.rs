@@ -2,7 +2,7 @@
 
 mod common;
 
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 
 use lambert::camera::View;
 use lambert::jobs::{self, ImageJob, Sampling, TurntableJob};
@@ -32,7 +32,7 @@ impl ProgressSink for Lines {
 
 fn small(name: &str) -> lambert::Scene {
     let mut scene = common::load(name);
-    (scene.camera.width, scene.camera.height) = (16, 12);
+    (scene.view.camera.width, scene.view.camera.height) = (16, 12);
     scene
 }
 
@@ -96,7 +96,7 @@ fn an_image_job_reports_what_its_sampling_chose() {
         ..job
     };
     let mut scene = small("spheres");
-    scene.spp = 1;
+    scene.view.spp = 1;
     let report = jobs::render_image(scene, &job, None).unwrap();
     let adaptive = report.adaptive.expect("an adaptive report");
     // From 4 samples (the scene asks for 1), refined where above the target.
@@ -112,12 +112,12 @@ fn a_view_renders_as_a_scene_with_its_settings() {
     let scene = common::load("spheres");
     let view = View {
         spp: 3,
-        ..small("spheres").view()
+        ..small("spheres").view
     };
-    let sampled =
-        jobs::render_view(&mut Renderer::Cpu, &scene, &view, Sampling::Fixed, None).unwrap();
+    let mut renderer = Renderer::Cpu(Arc::new(scene));
+    let sampled = jobs::render_view(&mut renderer, &view, Sampling::Fixed, None).unwrap();
     let mut reference = small("spheres");
-    reference.spp = 3;
+    reference.view.spp = 3;
     assert_eq!(sampled.rendered, common::render_cpu(&reference));
     assert_eq!(sampled.samples, (16 * 12 * 3) as f64);
 }

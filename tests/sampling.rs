@@ -5,14 +5,27 @@ mod common;
 use common::*;
 use lambert::Scene;
 use lambert::camera::strata_columns;
-use lambert::cpu::{self, Precision};
+use lambert::cpu;
 use lambert::diff::{Tolerance, compare};
 use lambert::progress::Progress;
+use lambert::render::{DeviceChoice, Renderer};
 use lambert::scene::Intersect;
+use std::sync::Arc;
+
+/// `scene` rendered adaptively from its own view on `device`.
+fn adaptive_on(
+    scene: &Scene,
+    device: DeviceChoice,
+    settings: lambert::adaptive::AdaptiveSettings,
+) -> (lambert::output::Rendered, lambert::adaptive::AdaptiveReport) {
+    let shared = Arc::new(scene.clone());
+    let (mut renderer, _) = Renderer::open(shared, device, &Default::default()).unwrap();
+    lambert::adaptive::render_adaptive(&mut renderer, &scene.view, settings).unwrap()
+}
 
 fn at_spp(scene: &Scene, spp: u32) -> Scene {
     let mut s = scene.clone();
-    s.spp = spp;
+    s.view.spp = spp;
     s
 }
 
@@ -37,7 +50,7 @@ fn strata_form_a_full_grid() {
 #[test]
 fn samples_stay_in_their_pixel_and_cover_its_cells() {
     let mut s = load("edge_cases");
-    s.spp = 16;
+    s.view.spp = 16;
     let kernel = cpu::f32::Kernel::new(&s);
     for (x, y) in [(0, 0), (7, 3), (64, 64)] {
         let mut cells = [false; 16];
@@ -56,7 +69,7 @@ fn samples_stay_in_their_pixel_and_cover_its_cells() {
         );
     }
     // spp = 1 keeps the pixel centre.
-    s.spp = 1;
+    s.view.spp = 1;
     assert_eq!(
         cpu::f32::Kernel::new(&s).sample_position(3, 5, 0),
         (3.5, 5.5)
@@ -69,9 +82,9 @@ fn error_falls_as_spp_rises_on_hard_edges() {
     for name in ["edge_cases", "spheres"] {
         let scene = load(name);
         let mut reference = at_spp(&scene, 256);
-        reference.seed = 12345;
+        reference.view.seed = 12345;
         reference.intersect = Intersect::Watertight;
-        let reference = cpu::render(&reference, Precision::F64, &Progress::hidden());
+        let reference = render_oracle(&reference);
         let mut last = f64::INFINITY;
         for spp in [1, 4, 16, 64] {
             let image = render_cpu(&at_spp(&scene, spp));
@@ -121,25 +134,19 @@ fn specialised_and_full_shaders_render_the_same_image() {
 
 #[test]
 fn adaptive_sampling_beats_uniform_at_the_same_sample_count() {
-    use lambert::adaptive::{AdaptiveSettings, render_adaptive};
-    use lambert::render::Renderer;
+    use lambert::adaptive::AdaptiveSettings;
     for name in ["edge_cases", "spheres"] {
         let scene = load(name);
         let mut reference = at_spp(&scene, 256);
-        reference.seed = 777;
-        let reference = cpu::render(&reference, Precision::F64, &Progress::hidden());
+        reference.view.seed = 777;
+        let reference = render_oracle(&reference);
         let settings = AdaptiveSettings {
             target_error: 0.01,
             base_spp: 4,
             max_spp: 64,
         };
-        let (cpu_image, report) =
-            render_adaptive(&mut Renderer::Cpu, &scene, &scene.view(), settings).unwrap();
-        let mut gpu = Renderer::Gpu(Box::new(
-            lambert::gpu::GpuRenderer::new(open_gpu(), &scene).unwrap(),
-        ));
-        let (gpu_image, gpu_report) =
-            render_adaptive(&mut gpu, &scene, &scene.view(), settings).unwrap();
+        let (cpu_image, report) = adaptive_on(&scene, DeviceChoice::Cpu, settings);
+        let (gpu_image, gpu_report) = adaptive_on(&scene, DeviceChoice::Gpu, settings);
         // Same samples on both paths: the same pixels refined, the same image.
         assert_eq!(
             report.refined_per_pass, gpu_report.refined_per_pass,
@@ -175,8 +182,7 @@ fn adaptive_sampling_beats_uniform_at_the_same_sample_count() {
 /// spp, with no warning.
 #[test]
 fn high_spp_renders_agree_on_both_paths_at_every_size() {
-    use lambert::adaptive::{AdaptiveSettings, render_adaptive};
-    use lambert::render::Renderer;
+    use lambert::adaptive::AdaptiveSettings;
     let bunny = load("bunny");
     let gpu = open_gpu();
     let mut renderer = lambert::gpu::GpuRenderer::new(gpu, &bunny).unwrap();
@@ -189,9 +195,9 @@ fn high_spp_renders_agree_on_both_paths_at_every_size() {
                 continue;
             }
             let mut scene = at_spp(&bunny, spp);
-            scene.camera.width = width;
-            scene.camera.height = height;
-            renderer.set_view(&scene, &scene.view());
+            scene.view.camera.width = width;
+            scene.view.camera.height = height;
+            renderer.set_view(&scene.view);
             let gpu_image = renderer.render(&Progress::hidden()).unwrap().0;
             let cpu_image = render_cpu(&scene);
             let stats = compare(&gpu_image, &cpu_image, &Tolerance::default()).unwrap();
@@ -206,20 +212,15 @@ fn high_spp_renders_agree_on_both_paths_at_every_size() {
         }
     }
     let mut scene = bunny.clone();
-    scene.camera.width = 7;
-    scene.camera.height = 5;
+    scene.view.camera.width = 7;
+    scene.view.camera.height = 5;
     let settings = AdaptiveSettings {
         target_error: 1e-5,
         base_spp: 4,
         max_spp: 1024,
     };
-    let (cpu_image, report) =
-        render_adaptive(&mut Renderer::Cpu, &scene, &scene.view(), settings).unwrap();
-    let mut gpu = Renderer::Gpu(Box::new(
-        lambert::gpu::GpuRenderer::new(open_gpu(), &scene).unwrap(),
-    ));
-    let (gpu_image, gpu_report) =
-        render_adaptive(&mut gpu, &scene, &scene.view(), settings).unwrap();
+    let (cpu_image, report) = adaptive_on(&scene, DeviceChoice::Cpu, settings);
+    let (gpu_image, gpu_report) = adaptive_on(&scene, DeviceChoice::Gpu, settings);
     assert_eq!(report.refined_per_pass, gpu_report.refined_per_pass);
     assert!(report.refined_per_pass.len() >= 7, "{report:?}");
     let stats = compare(&gpu_image, &cpu_image, &Tolerance::default()).unwrap();

@@ -513,8 +513,8 @@ fn transformed_spheres(scale: f64, translate: f64) -> Scene {
     let mut s = load("spheres");
     let map = |p: [f32; 3]| p.map(|c| (c as f64 * scale + translate) as f32);
     let map64 = |p: [f64; 3]| p.map(|c| c * scale + translate);
-    s.camera.eye = map64(s.camera.eye);
-    s.camera.look_at = map64(s.camera.look_at);
+    s.view.camera.eye = map64(s.view.camera.eye);
+    s.view.camera.look_at = map64(s.view.camera.look_at);
     for t in &mut s.triangles {
         t.v0 = map(t.v0);
         t.v1 = map(t.v1);

@@ -216,13 +216,15 @@ struct NativeScene {
 
 impl NativeScene {
     fn new(scene: Scene) -> NativeScene {
+        let scene = Arc::new(scene);
         NativeScene {
-            scene: Arc::new(scene),
             // The GPU's environment variables, as the CLI reads them.
             renderers: Mutex::new(Renderers::new(
+                Arc::clone(&scene),
                 AdapterRequest::default().with_environment(|name| std::env::var(name).ok()),
             )),
             scratch: Mutex::new(Vec::new()),
+            scene,
         }
     }
 
@@ -243,7 +245,7 @@ impl NativeScene {
     ) -> Result<(Option<String>, Vec<String>), Error> {
         let scene = &self.scene;
         let mut renderers = self.renderers.lock().unwrap_or_else(|e| e.into_inner());
-        let (renderer, note) = renderers.get(scene, device)?;
+        let (renderer, note) = renderers.get(device)?;
         if renderer.is_cpu() {
             drop(renderers);
             match query {
@@ -278,9 +280,7 @@ impl NativeScene {
                 (Some(_), Renderer::Gpu(gpu)) => {
                     gpu.trace_local_rays(&rays, options.any_hit, options.intersect)?
                 }
-                (_, renderer) => {
-                    renderer.trace(scene, &rays, options.any_hit, options.intersect)?
-                }
+                (_, renderer) => renderer.trace(&rays, options.any_hit, options.intersect)?,
             };
             drop(renderers);
             each_chunk(scene, &rays, &hits, options.normals, sink);
@@ -537,6 +537,7 @@ impl NativeScene {
         let scene = &self.scene;
         let (origins, directions) = detached(py, || {
             let camera = scene
+                .view
                 .camera
                 .resized(width, height)
                 .map_err(|e| Error::Usage(format!("width/height: {e}")))?;
@@ -567,26 +568,29 @@ impl NativeScene {
         let scene = &self.scene;
         let (image, note) = detached(py, || {
             let camera = scene
+                .view
                 .camera
                 .resized(width, height)
                 .map_err(|e| Error::Usage(format!("width/height: {e}")))?;
-            let spp = spp.unwrap_or(scene.spp);
+            let spp = spp.unwrap_or(scene.view.spp);
             lambert::limits::validate_spp(spp).map_err(Error::Usage)?;
             // Another size or sample count is only another view: the scene,
             // and the GPU's buffers, stay the ones uploaded.
             let view = View {
                 camera,
                 spp,
-                seed: scene.seed,
+                ..scene.view.clone()
             };
             let mut renderers = self.renderers.lock().unwrap_or_else(|e| e.into_inner());
-            let (renderer, note) = renderers.get(scene, device)?;
+            let (renderer, note) = renderers.get(device)?;
             // The CLI's job code, at the view's spp.
             let sampled = if renderer.is_cpu() {
+                // The CPU path shares the scene: other threads render at once.
                 drop(renderers);
-                jobs::render_view(&mut Renderer::Cpu, scene, &view, Sampling::Fixed, None)?
+                let mut cpu = Renderer::Cpu(Arc::clone(scene));
+                jobs::render_view(&mut cpu, &view, Sampling::Fixed, None)?
             } else {
-                jobs::render_view(renderer, scene, &view, Sampling::Fixed, None)?
+                jobs::render_view(renderer, &view, Sampling::Fixed, None)?
             };
             Ok((sampled.rendered.image, note))
         })?;
@@ -604,7 +608,7 @@ impl NativeScene {
         let device = device_choice(device)?;
         let (name, note) = detached(py, || {
             let mut renderers = self.renderers.lock().unwrap_or_else(|e| e.into_inner());
-            let (renderer, note) = renderers.get(&self.scene, device)?;
+            let (renderer, note) = renderers.get(device)?;
             Ok((renderer.describe(), note))
         })?;
         NativeScene::warn(py, note)?;
@@ -633,7 +637,7 @@ impl NativeScene {
     /// The scene's camera: eye, look_at, up, vfov (degrees), width, height.
     #[getter]
     fn camera<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let c = &self.scene.camera;
+        let c = &self.scene.view.camera;
         let out = PyDict::new(py);
         out.set_item("eye", c.eye)?;
         out.set_item("look_at", c.look_at)?;
@@ -646,7 +650,7 @@ impl NativeScene {
 
     #[getter]
     fn spp(&self) -> u32 {
-        self.scene.spp
+        self.scene.view.spp
     }
 }
 
@@ -681,6 +685,8 @@ fn write_image(py: Python<'_>, path: PathBuf, image: PyReadonlyArray3<'_, f32>) 
 
 #[pymodule]
 fn _lambert(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    // The CPU kernel the user asks for, as the CLI reads it.
+    CpuKernel::select(std::env::var(lambert::cpu::CPU_KERNEL_ENV).ok().as_deref());
     m.add_class::<NativeScene>()?;
     m.add_function(wrap_pyfunction!(write_image, m)?)?;
     Ok(())

@@ -30,7 +30,7 @@ pub mod f64 {
 /// What one render looks at: the camera (image size included), samples
 /// per pixel and the jitter's seed. A per-call setting, apart from the
 /// scene's geometry, so that one resident scene renders at any size or spp;
-/// a scene file's own is `Scene::view`.
+/// a scene file's own is the scene's `view` field, its default.
 #[derive(Clone, Debug, PartialEq)]
 pub struct View {
     pub camera: Camera,
@@ -60,6 +60,18 @@ pub fn default_up() -> [f64; 3] {
 }
 
 impl Camera {
+    /// This camera with eye and look_at relative to `offset` (in f64):
+    /// what the kernels' camera basis is built from, for geometry kept
+    /// relative to a scene's offset.
+    pub fn relative_to(&self, offset: DVec3) -> Camera {
+        let local = |p: [f64; 3]| (DVec3::from(p) - offset).to_array();
+        Camera {
+            eye: local(self.eye),
+            look_at: local(self.look_at),
+            ..self.clone()
+        }
+    }
+
     /// This camera at another image size: with only one of width and
     /// height given, the other keeps the aspect ratio.
     pub fn resized(&self, width: Option<u32>, height: Option<u32>) -> Result<Camera, String> {

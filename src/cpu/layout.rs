@@ -116,6 +116,7 @@ pub struct Kernel<'a> {
 }
 
 impl<'a> Kernel<'a> {
+    /// `scene` seen from its default view (ray queries use no camera).
     pub fn new(scene: &'a Scene) -> Kernel<'a> {
         Kernel::new_for(scene, has_ymm_boxes())
     }
@@ -123,10 +124,10 @@ impl<'a> Kernel<'a> {
     /// `new`, with node visits through `intersect_boxes_ymm` or not: the
     /// SIMD kernels' tests compare each against the portable one.
     pub fn new_for(scene: &'a Scene, ymm_boxes: bool) -> Kernel<'a> {
-        Kernel::with_view(scene, &scene.view(), ymm_boxes)
+        Kernel::with_view(scene, &scene.view, ymm_boxes)
     }
 
-    /// `scene` seen from `view` rather than its file's own.
+    /// `scene` seen from `view` rather than its default (`Scene::view`).
     pub fn with_view(scene: &'a Scene, view: &View, ymm_boxes: bool) -> Kernel<'a> {
         Kernel {
             camera: CameraBasis::new(&scene.local_camera(&view.camera)),

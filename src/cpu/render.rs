@@ -33,9 +33,10 @@ fn pixel(
     }
 }
 
-/// Renders every pixel with the scene's samples; rows run in parallel.
-pub fn render(scene: &Scene, precision: Precision, progress: &Progress) -> Rendered {
-    render_with(scene, precision, progress, CpuKernel::active())
+/// Renders every pixel of `view`'s image of `scene` with its samples;
+/// rows run in parallel.
+pub fn render(scene: &Scene, view: &View, precision: Precision, progress: &Progress) -> Rendered {
+    render_with(scene, view, precision, progress, CpuKernel::active())
 }
 
 /// Renders rows `rows` of `view`'s image of `scene` alone (a part of it).
@@ -60,15 +61,16 @@ pub fn render_rows(
 /// `render` with a given CPU kernel (one this CPU runs).
 pub fn render_with(
     scene: &Scene,
+    view: &View,
     precision: Precision,
     progress: &Progress,
     cpu_kernel: CpuKernel,
 ) -> Rendered {
     render_rows_with(
         scene,
-        &scene.view(),
+        view,
         precision,
-        0..scene.camera.height,
+        0..view.camera.height,
         progress,
         cpu_kernel,
         None,
@@ -79,13 +81,13 @@ pub fn render_with(
 /// compressed BVH as the shader does (`f32::Kernel::trace_compressed`), so
 /// that a GPU/CPU difference is one of arithmetic, never of traversal
 /// order. What `lambert diff` and the tests compare the GPU with.
-pub fn render_gpu_twin(scene: &Scene, progress: &Progress) -> Rendered {
+pub fn render_gpu_twin(scene: &Scene, view: &View, progress: &Progress) -> Rendered {
     let nodes = crate::cwbvh::compress(&scene.bvh);
     render_rows_with(
         scene,
-        &scene.view(),
+        view,
         Precision::F32,
-        0..scene.camera.height,
+        0..view.camera.height,
         progress,
         CpuKernel::Portable,
         Some(&nodes),

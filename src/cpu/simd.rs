@@ -25,6 +25,13 @@ pub(super) fn check_runs(kernel: CpuKernel) {
     }
 }
 
+/// `LAMBERT_CPU_KERNEL`: a narrower CPU kernel than the CPU's widest, by
+/// name (`CpuKernel::select`); read by the front ends, not the library.
+pub const CPU_KERNEL_ENV: &str = "LAMBERT_CPU_KERNEL";
+
+/// The kernel of this process (`CpuKernel::active`).
+static ACTIVE: std::sync::OnceLock<CpuKernel> = std::sync::OnceLock::new();
+
 /// The CPU kernels: the same functions compiled for different vector
 /// instructions. Each runs the same IEEE operations, so each gives the
 /// portable kernel's results bit for bit (tests/cpu_kernels.rs checks that
@@ -46,7 +53,7 @@ pub enum CpuKernel {
 impl CpuKernel {
     pub const ALL: [CpuKernel; 3] = [CpuKernel::Portable, CpuKernel::Avx2Fma, CpuKernel::Avx512];
 
-    /// The name `LAMBERT_CPU_KERNEL` and `lambert info` use.
+    /// The name `CPU_KERNEL_ENV` and `lambert info` use.
     pub fn name(self) -> &'static str {
         match self {
             CpuKernel::Portable => "portable",
@@ -89,22 +96,32 @@ impl CpuKernel {
             .unwrap_or(&CpuKernel::Portable)
     }
 
-    /// The kernel this process uses: `detect`'s, or a narrower one named by
-    /// `LAMBERT_CPU_KERNEL` (portable, avx2+fma or avx-512; one the CPU
-    /// lacks falls back to the widest it has). Decided once.
+    /// The kernel this process uses: the one `select` chose, else
+    /// `detect`'s. Decided once, at `select` or at the first use.
     pub fn active() -> CpuKernel {
-        static ACTIVE: std::sync::OnceLock<CpuKernel> = std::sync::OnceLock::new();
-        *ACTIVE.get_or_init(|| {
-            let best = CpuKernel::detect();
-            std::env::var("LAMBERT_CPU_KERNEL")
-                .ok()
-                .and_then(|name| {
-                    CpuKernel::ALL
-                        .into_iter()
-                        .find(|k| k.name() == name.to_lowercase())
-                })
-                .map_or(best, |asked| asked.min(best))
-        })
+        *ACTIVE.get_or_init(CpuKernel::detect)
+    }
+
+    /// The kernel `asked` names (portable, avx2+fma or avx-512, any case;
+    /// what a front end read from `CPU_KERNEL_ENV`) where the CPU runs it,
+    /// else the widest it has at most that wide; `detect`'s where `asked`
+    /// is None or no kernel's name.
+    pub fn narrowed_to(asked: Option<&str>) -> CpuKernel {
+        let best = CpuKernel::detect();
+        asked
+            .and_then(|name| {
+                CpuKernel::ALL
+                    .into_iter()
+                    .find(|k| k.name() == name.to_lowercase())
+            })
+            .map_or(best, |asked| asked.min(best))
+    }
+
+    /// Makes `narrowed_to(asked)` the kernel of this process (`active`),
+    /// unless one was decided already; returns the active kernel. The front
+    /// ends call it first thing, with the environment's `CPU_KERNEL_ENV`.
+    pub fn select(asked: Option<&str>) -> CpuKernel {
+        *ACTIVE.get_or_init(|| CpuKernel::narrowed_to(asked))
     }
 
     /// Whether node visits take `f32::intersect_boxes_ymm`.

@@ -29,7 +29,7 @@ pub use adapter::{AdapterRequest, enumerate_adapters};
 pub use device::{Gpu, GpuOptions, MAX_BUFFER_ENV, SHADOW_DISPATCH_ENV};
 pub use readback::padded_bytes_per_row;
 pub use render::ShadowDispatch;
-pub use renderer::{GpuRenderer, params_for};
+pub use renderer::GpuRenderer;
 pub use shader::{SHADER_SOURCE, specialisation};
 pub use timer::GpuTimings;
 pub use upload::{BvhStorage, TEXELS_PER_ROW};

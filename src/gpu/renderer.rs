@@ -3,6 +3,7 @@
 
 use std::time::{Duration, Instant};
 
+use glam::DVec3;
 use wgpu::util::DeviceExt;
 
 use crate::camera::f32::CameraBasis;
@@ -24,7 +25,9 @@ use super::timer::Timer;
 use super::upload::{BvhStorage, SceneBuffers};
 
 /// A scene resident on the device: buffers and pipeline are built once;
-/// a new camera only rewrites the uniform.
+/// a new view only rewrites the uniform. It keeps all it renders with (the
+/// scene's uniform, its placement), so the host's scene may go once it is
+/// built; it starts at the scene's default view (`Scene::view`).
 pub struct GpuRenderer {
     pub(super) gpu: Gpu,
     pub(super) pipelines: Pipelines,
@@ -61,10 +64,25 @@ pub(super) struct Resident {
     pub loop_status: LoopStatus,
 }
 
-/// The uniform for `scene` seen from `view`: the f32 reference's basis, so
-/// both paths shoot the very same rays.
-pub fn params_for(scene: &Scene, view: &View) -> Params {
-    let basis = CameraBasis::new(&scene.local_camera(&view.camera));
+/// The uniform for `scene` seen from `view`.
+fn params_for(scene: &Scene, view: &View) -> Params {
+    let scene_params = Params {
+        background: scene.background,
+        num_triangles: scene.triangles.len() as u32,
+        ambient: scene.ambient,
+        num_spheres: scene.spheres.len() as u32,
+        num_lights: scene.lights.len() as u32,
+        shadows: scene.shadows as u32,
+        canary_loops: 2,
+        ..bytemuck::Zeroable::zeroed()
+    };
+    with_view(scene_params, scene.offset, view)
+}
+
+/// `params` seen from `view` (the geometry relative to `offset`): the f32
+/// reference's basis, so both paths shoot the very same rays.
+fn with_view(params: Params, offset: DVec3, view: &View) -> Params {
+    let basis = CameraBasis::new(&view.camera.relative_to(offset));
     Params {
         eye: basis.eye.to_array(),
         width: basis.width,
@@ -74,21 +92,13 @@ pub fn params_for(scene: &Scene, view: &View) -> Params {
         tan_half_x: basis.tan_half_x,
         forward: basis.forward.to_array(),
         tan_half_y: basis.tan_half_y,
-        background: scene.background,
-        num_triangles: scene.triangles.len() as u32,
-        ambient: scene.ambient,
-        num_spheres: scene.spheres.len() as u32,
         tile_origin: [0, 0],
-        num_lights: scene.lights.len() as u32,
-        shadows: scene.shadows as u32,
         spp: view.spp,
         seed: view.seed,
         strata_x: strata_columns(view.spp),
         sample_begin: 0,
         sample_end: view.spp,
-        canary_loops: 2,
-        _pad0: 0,
-        _pad1: 0,
+        ..params
     }
 }
 
@@ -125,7 +135,7 @@ impl GpuRenderer {
     ) -> Result<GpuRenderer> {
         let start = Instant::now();
         let device = &gpu.device;
-        let params = params_for(scene, &scene.view());
+        let params = params_for(scene, &scene.view);
         let params_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("params"),
             contents: bytemuck::bytes_of(&params),
@@ -201,15 +211,10 @@ impl GpuRenderer {
     }
 
     /// Sets the view (camera, size, spp, seed) the resident scene is
-    /// rendered from; uploads nothing else.
-    pub fn set_view(&mut self, scene: &Scene, view: &View) {
-        // The counts are the uploaded scene's: the host's copy may have
-        // released its geometry (`Scene::release_geometry`).
-        self.params = Params {
-            num_triangles: self.params.num_triangles,
-            num_spheres: self.params.num_spheres,
-            ..params_for(scene, view)
-        };
+    /// rendered from; uploads nothing else (the scene's own part of the
+    /// uniform stays the one uploaded).
+    pub fn set_view(&mut self, view: &View) {
+        self.params = with_view(self.params, self.placement.offset, view);
     }
 }
 

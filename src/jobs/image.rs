@@ -3,9 +3,10 @@
 //! written to a file, with a report of where the time went.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use super::{open, release_on_gpu, say};
+use super::{open, say};
 use crate::adaptive::{AdaptiveReport, AdaptiveSettings, render_adaptive};
 use crate::bvh::Bvh;
 use crate::camera::View;
@@ -59,17 +60,12 @@ pub struct BudgetPlan {
 
 /// Samples per pixel that fit in `budget` seconds, from a timed 1-spp pilot
 /// render (whose time counts against the budget).
-fn spp_for_budget(
-    renderer: &mut Renderer,
-    scene: &Scene,
-    view: &View,
-    budget: f64,
-) -> Result<BudgetPlan> {
+fn spp_for_budget(renderer: &mut Renderer, view: &View, budget: f64) -> Result<BudgetPlan> {
     let pilot = View {
         spp: 1,
         ..view.clone()
     };
-    let (_, t) = renderer.render(scene, &pilot, None)?;
+    let (_, t) = renderer.render(&pilot, None)?;
     let per_sample = (t.render + t.readback).as_secs_f64().max(1e-6);
     let spp = ((budget - per_sample) / per_sample)
         .floor()
@@ -77,11 +73,10 @@ fn spp_for_budget(
     Ok(BudgetPlan { per_sample, spp })
 }
 
-/// Renders `scene` as `view` sees it on `renderer` (opened for `scene`),
-/// with `sampling`'s samples; progress and the budget's choice on `sink`.
+/// Renders `renderer`'s scene as `view` sees it, with `sampling`'s
+/// samples; progress and the budget's choice on `sink`.
 pub fn render_view(
     renderer: &mut Renderer,
-    scene: &Scene,
     view: &View,
     sampling: Sampling,
     sink: Option<&dyn ProgressSink>,
@@ -89,7 +84,7 @@ pub fn render_view(
     let mut view = view.clone();
     let mut budget = None;
     if let Sampling::Budget(seconds) = sampling {
-        let plan = spp_for_budget(renderer, scene, &view, seconds)?;
+        let plan = spp_for_budget(renderer, &view, seconds)?;
         say(
             sink,
             &format!(
@@ -106,7 +101,7 @@ pub fn render_view(
         max_spp,
     } = sampling
     else {
-        let (rendered, timings) = renderer.render(scene, &view, sink)?;
+        let (rendered, timings) = renderer.render(&view, sink)?;
         let budget = budget.map(|(budget, plan)| BudgetReport {
             budget,
             plan,
@@ -127,7 +122,7 @@ pub fn render_view(
         max_spp,
     };
     let start = Instant::now();
-    let (rendered, report) = render_adaptive(renderer, scene, &view, settings)?;
+    let (rendered, report) = render_adaptive(renderer, &view, settings)?;
     Ok(Sampled {
         rendered,
         timings: RenderTimings {
@@ -211,18 +206,18 @@ impl ImageReport {
 
 /// Renders `scene` from its own view as `job` asks and writes the image.
 pub fn render_image(
-    mut scene: Scene,
+    scene: Scene,
     job: &ImageJob,
     sink: Option<&dyn ProgressSink>,
 ) -> Result<ImageReport> {
-    let (mut renderer, upload) = open(&scene, job.device, job.adapter, sink)?;
-    let device = renderer.describe();
-    say(sink, &format!("rendering on {device}"));
+    // Taken before a GPU lets the host's geometry go.
     let primitives = scene.primitive_count();
     let bvh = BvhSummary::of(&scene.bvh);
-    release_on_gpu(&renderer, &mut scene);
-    let view = scene.view();
-    let sampled = render_view(&mut renderer, &scene, &view, job.sampling, sink)?;
+    let view = scene.view.clone();
+    let (mut renderer, upload) = open(Arc::new(scene), job.device, job.adapter, sink)?;
+    let device = renderer.describe();
+    say(sink, &format!("rendering on {device}"));
+    let sampled = render_view(&mut renderer, &view, job.sampling, sink)?;
     let start = Instant::now();
     sampled.rendered.image.save(job.output)?;
     Ok(ImageReport {

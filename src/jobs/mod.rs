@@ -6,13 +6,15 @@
 //! caller parses options and loads the scene. Also the f64 oracle's scene
 //! and a plain GPU render, which `diff` and the benchmarks share.
 
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+use crate::camera::View;
 use crate::error::Result;
-use crate::gpu::{AdapterRequest, Gpu, GpuRenderer};
+use crate::gpu::AdapterRequest;
 use crate::output::Rendered;
 use crate::progress::{Progress, ProgressSink};
-use crate::render::{DeviceChoice, Renderer};
+use crate::render::{DeviceChoice, Renderer, open_gpu};
 use crate::scene::{Intersect, Scene};
 
 mod image;
@@ -34,9 +36,11 @@ pub fn oracle_scene(scene: &Scene) -> Scene {
     oracle
 }
 
-/// Renders on the GPU (any adapter, lavapipe included), showing no progress.
-pub fn render_gpu(scene: &Scene, request: &AdapterRequest) -> Result<Rendered> {
-    let mut renderer = GpuRenderer::new(Gpu::open(request, false)?, scene)?;
+/// Renders `scene` as `view` sees it on the GPU (any adapter, lavapipe
+/// included), showing no progress.
+pub fn render_gpu(scene: &Scene, view: &View, request: &AdapterRequest) -> Result<Rendered> {
+    let mut renderer = open_gpu(scene, request)?;
+    renderer.set_view(view);
     Ok(renderer.render(&Progress::hidden())?.0)
 }
 
@@ -54,8 +58,10 @@ fn say(sink: Option<&dyn ProgressSink>, text: &str) {
 
 /// A renderer for `scene` on the device `choice` asks for, the note of a
 /// fallback to the CPU path said; and how long opening took (the upload).
+/// A GPU keeps its own copy of the scene: the host's goes with the last
+/// `Arc` the caller holds.
 fn open(
-    scene: &Scene,
+    scene: Arc<Scene>,
     choice: DeviceChoice,
     request: &AdapterRequest,
     sink: Option<&dyn ProgressSink>,
@@ -67,12 +73,4 @@ fn open(
         say(sink, &note);
     }
     Ok((renderer, upload))
-}
-
-/// Once the scene is on a GPU its host copy of the geometry can go: the
-/// renders to come read the device's.
-fn release_on_gpu(renderer: &Renderer, scene: &mut Scene) {
-    if !renderer.is_cpu() {
-        scene.release_geometry();
-    }
 }

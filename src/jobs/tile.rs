@@ -4,9 +4,10 @@
 
 use std::ops::Range;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use super::{open, release_on_gpu};
+use super::open;
 use crate::error::Result;
 use crate::gpu::AdapterRequest;
 use crate::parts::{Tile, settings_hash, write_part};
@@ -38,19 +39,20 @@ pub struct TileReport {
 
 /// Renders `job.tile`'s rows of `scene` from its own view and writes them.
 pub fn render_tile(
-    mut scene: Scene,
+    scene: Scene,
     job: &TileJob,
     sink: Option<&dyn ProgressSink>,
 ) -> Result<TileReport> {
-    let view = scene.view();
+    let view = scene.view.clone();
     let rows = job.tile.rows(view.camera.height)?;
-    let (mut renderer, _) = open(&scene, job.device, job.adapter, sink)?;
+    let scene = Arc::new(scene);
+    let (mut renderer, _) = open(Arc::clone(&scene), job.device, job.adapter, sink)?;
     let device = if renderer.is_cpu() { "cpu" } else { "gpu" };
-    // Fingerprinted before a GPU render lets the host's geometry go.
-    let hash = settings_hash(&scene, device);
-    release_on_gpu(&renderer, &mut scene);
+    let hash = settings_hash(&scene, &view, device);
+    // A GPU has its own copy of the geometry now: the host's can go.
+    drop(scene);
     let start = Instant::now();
-    let (rendered, _) = renderer.render_rows(&scene, &view, rows.clone(), sink)?;
+    let (rendered, _) = renderer.render_rows(&view, rows.clone(), sink)?;
     write_part(
         job.output,
         &rendered.image,

@@ -4,9 +4,10 @@
 
 use std::ops::RangeInclusive;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use super::{open, release_on_gpu, say, seconds};
+use super::{open, say, seconds};
 use crate::camera::orbit;
 use crate::error::{Error, Result};
 use crate::gpu::AdapterRequest;
@@ -54,23 +55,23 @@ impl TurntableReport {
 /// Renders `job`'s frames of `scene`, orbiting its camera, and writes
 /// each; says each frame on `sink` as it is written.
 pub fn render_turntable(
-    mut scene: Scene,
+    scene: Scene,
     job: &TurntableJob,
     sink: Option<&dyn ProgressSink>,
 ) -> Result<TurntableReport> {
-    let (mut renderer, _) = open(&scene, job.device, job.adapter, sink)?;
+    let mut view = scene.view.clone();
+    let (mut renderer, _) = open(Arc::new(scene), job.device, job.adapter, sink)?;
     let device = renderer.describe();
     say(
         sink,
         &format!("rendering {} frames on {device}", job.frames),
     );
-    release_on_gpu(&renderer, &mut scene);
-    let mut view = scene.view();
+    let camera = view.camera.clone();
     let mut written = Vec::new();
     for frame in job.range.clone() {
-        view.camera = orbit(&scene.camera, frame, job.frames);
+        view.camera = orbit(&camera, frame, job.frames);
         let start = Instant::now();
-        let (rendered, _) = renderer.render(&scene, &view, None)?;
+        let (rendered, _) = renderer.render(&view, None)?;
         let elapsed = start.elapsed();
         let path = frame_path(job.pattern, frame)?;
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {

@@ -7,7 +7,7 @@ use glam::{DMat3, DVec3};
 use serde::Deserialize;
 
 use super::{Intersect, Rgb, Scene, Transform, colour, directional_light, point, point_light};
-use crate::camera::{Camera, validate_camera};
+use crate::camera::{Camera, View, validate_camera};
 use crate::error::{Error, Result};
 use crate::layout::Sphere;
 use crate::limits::{MAX_SPHERE_RADIUS, checked_point, validate_spp, vector_text};
@@ -123,13 +123,15 @@ impl Scene {
         validate_spp(file.render.spp).map_err(|e| fail(format!("render.{e}")))?;
 
         let mut scene = Scene {
-            camera: file.camera,
+            view: View {
+                camera: file.camera,
+                spp: file.render.spp,
+                seed: file.render.seed,
+            },
             background,
             ambient,
             shadows: file.render.shadows,
             intersect: file.render.intersect,
-            spp: file.render.spp,
-            seed: file.render.seed,
             ..Scene::bare()
         };
 

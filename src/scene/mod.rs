@@ -27,7 +27,9 @@ mod model;
 /// (polygons fan-triangulated), then spheres.
 #[derive(Clone, Debug)]
 pub struct Scene {
-    pub camera: Camera,
+    /// The view the scene's file asks for (its camera, spp and seed): the
+    /// default of the front ends, which render any other view as well.
+    pub view: View,
     pub background: [f32; 3],
     pub ambient: [f32; 3],
     pub shadows: bool,
@@ -43,10 +45,6 @@ pub struct Scene {
     pub accel: Accel,
     /// The ray/triangle test both paths use.
     pub intersect: Intersect,
-    /// Samples per pixel (1: the pixel centre).
-    pub spp: u32,
-    /// Seed of the sample jitter.
-    pub seed: u32,
     /// What loading read but ignored or could not find (each names its
     /// file); the CLI prints them.
     pub warnings: Vec<String>,
@@ -175,13 +173,17 @@ impl Scene {
     /// No geometry, no lights, and a camera that nothing uses yet.
     fn bare() -> Scene {
         Scene {
-            camera: Camera {
-                eye: [0.0, 0.0, 1.0],
-                look_at: [0.0; 3],
-                up: default_up(),
-                vfov: 60.0,
-                width: 1,
-                height: 1,
+            view: View {
+                camera: Camera {
+                    eye: [0.0, 0.0, 1.0],
+                    look_at: [0.0; 3],
+                    up: default_up(),
+                    vfov: 60.0,
+                    width: 1,
+                    height: 1,
+                },
+                spp: 1,
+                seed: 0,
             },
             background: [0.0; 3],
             ambient: [0.0; 3],
@@ -194,8 +196,6 @@ impl Scene {
             bvh: Bvh::default(),
             accel: Accel::default(),
             intersect: Intersect::default(),
-            spp: 1,
-            seed: 0,
             warnings: Vec::new(),
             offset: DVec3::ZERO,
         }
@@ -334,16 +334,6 @@ impl Scene {
         Ok(())
     }
 
-    /// Drops the triangles, their normals, the spheres and the BVH: what a
-    /// render on a GPU, which has its own copy once the scene is uploaded,
-    /// no longer needs on the host (materials, lights and the camera stay).
-    pub fn release_geometry(&mut self) {
-        self.triangles = Vec::new();
-        self.normals = Vec::new();
-        self.spheres = Vec::new();
-        self.bvh = Bvh::default();
-    }
-
     /// Rebuilds the BVH after the geometry changed.
     pub fn rebuild_bvh(&mut self) {
         self.bvh = Bvh::build(&self.triangles, &self.spheres);
@@ -427,30 +417,17 @@ fn colour(field: &str, rgb: Rgb) -> Result<[f32; 3], String> {
 }
 
 impl Scene {
-    /// The view the scene's file asks for (its camera, spp and seed).
-    pub fn view(&self) -> View {
-        View {
-            camera: self.camera.clone(),
-            spp: self.spp,
-            seed: self.seed,
-        }
-    }
-
     /// `camera` relative to the scene's offset (in f64): what the kernels'
     /// camera basis is built from.
     pub fn local_camera(&self, camera: &Camera) -> Camera {
-        let local = |p: [f64; 3]| (DVec3::from(p) - self.offset).to_array();
-        Camera {
-            eye: local(camera.eye),
-            look_at: local(camera.look_at),
-            ..camera.clone()
-        }
+        camera.relative_to(self.offset)
     }
 
-    /// The camera's eye and look_at within MAX_LOCAL_COORDINATE of the
-    /// offset, as the geometry is.
+    /// The default view's eye and look_at within MAX_LOCAL_COORDINATE of
+    /// the offset, as the geometry is.
     pub(crate) fn check_camera_placement(&self) -> Result<(), String> {
-        for (name, world) in [("eye", self.camera.eye), ("look_at", self.camera.look_at)] {
+        let camera = &self.view.camera;
+        for (name, world) in [("eye", camera.eye), ("look_at", camera.look_at)] {
             checked_local(&format!("camera.{name}"), DVec3::from(world), self.offset)?;
         }
         Ok(())

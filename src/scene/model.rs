@@ -64,7 +64,7 @@ impl Scene {
             ),
             None => cameras.first(),
         };
-        scene.camera = match chosen {
+        scene.view.camera = match chosen {
             Some(c) => {
                 let width = DEFAULT_WIDTH;
                 let aspect = c.aspect_ratio.filter(|a| a.is_finite() && *a > 0.0);
@@ -82,7 +82,7 @@ impl Scene {
             }
             None => frame_camera(&bounds),
         };
-        validate_camera(&scene.camera)
+        validate_camera(&scene.view.camera)
             .and_then(|()| scene.check_camera_placement())
             .map_err(|e| Error::scene(path, format!("its camera: {e}")))?;
         for (i, light) in lights.iter().enumerate() {
@@ -107,7 +107,7 @@ impl Scene {
         // A file's lights are the scene's lights: the default light and
         // ambient belong only to a model with no light of its own.
         if scene.lights.is_empty() {
-            scene.lights.push(default_light(&scene.camera));
+            scene.lights.push(default_light(&scene.view.camera));
         } else {
             scene.ambient = [0.0; 3];
         }
@@ -161,7 +161,7 @@ impl Scene {
         };
         let mut scene = Scene::model_bare();
         let bounds = mesh_bounds(&mesh);
-        scene.camera = frame_camera(&bounds);
+        scene.view.camera = frame_camera(&bounds);
         scene.offset = centring_offset(bounds.0, bounds.1);
         for (row, &p) in mesh.positions.iter().enumerate() {
             checked_local(&format!("vertices row {row}"), p, scene.offset).map_err(Error::Usage)?;
@@ -173,7 +173,7 @@ impl Scene {
             &Transform::IDENTITY,
             albedo,
         )?;
-        scene.lights.push(default_light(&scene.camera));
+        scene.lights.push(default_light(&scene.view.camera));
         scene.rebuild_bvh();
         Ok(scene)
     }

@@ -48,11 +48,11 @@ pub fn render_gpu(scene: &Scene) -> Rendered {
 }
 
 pub fn render_cpu(scene: &Scene) -> Rendered {
-    cpu::render(scene, Precision::F32, &Progress::hidden())
+    cpu::render(scene, &scene.view, Precision::F32, &Progress::hidden())
 }
 
 pub fn render_oracle(scene: &Scene) -> Rendered {
-    cpu::render(scene, Precision::F64, &Progress::hidden())
+    cpu::render(scene, &scene.view, Precision::F64, &Progress::hidden())
 }
 
 /// An image's values as bits, for bit-for-bit comparisons.

@@ -2,6 +2,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
@@ -510,16 +511,20 @@ fn diff(args: &DiffArgs, quiet: bool) -> Result<ExitCode> {
         max_prim_mismatch_fraction: args.max_prim_mismatch,
     };
     let request = args.adapter.request();
-    let cpu = || cpu::render(&scene, Precision::F32, &Progress::hidden());
-    let oracle = || cpu::render(&oracle_scene(&scene), Precision::F64, &Progress::hidden());
+    let view = &scene.view;
+    let cpu = || cpu::render(&scene, view, Precision::F32, &Progress::hidden());
+    let oracle = || {
+        let oracle = oracle_scene(&scene);
+        cpu::render(&oracle, view, Precision::F64, &Progress::hidden())
+    };
     let (a, b) = match args.compare {
         // The CPU side traces the GPU's own BVH layout (its twin), so that
         // the two differ only where their arithmetic does.
         Comparison::GpuCpu => (
-            render_gpu(&scene, &request)?,
-            cpu::render_gpu_twin(&scene, &Progress::hidden()),
+            render_gpu(&scene, view, &request)?,
+            cpu::render_gpu_twin(&scene, view, &Progress::hidden()),
         ),
-        Comparison::GpuOracle => (render_gpu(&scene, &request)?, oracle()),
+        Comparison::GpuOracle => (render_gpu(&scene, view, &request)?, oracle()),
         Comparison::CpuOracle => (cpu(), oracle()),
     };
     let stats = diff::compare(&a, &b, &tolerance)?;
@@ -582,20 +587,22 @@ fn trace(args: &TraceArgs, quiet: bool) -> Result<ExitCode> {
             eprintln!("warning: {warning}");
         }
     }
-    let (mut renderer, note) = Renderer::open(&scene, args.device.into(), &args.adapter.request())?;
+    let scene = Arc::new(scene);
+    let device = args.device.into();
+    let (mut renderer, note) = Renderer::open(Arc::clone(&scene), device, &args.adapter.request())?;
     if let Some(note) = note.filter(|_| !quiet) {
         eprintln!("{note}");
     }
     renderer.prepare_trace(args.any_hit, scene.intersect)?;
     let warmup_seconds = if args.warmup {
         let start = Instant::now();
-        renderer.trace(&scene, &rays, args.any_hit, scene.intersect)?;
+        renderer.trace(&rays, args.any_hit, scene.intersect)?;
         Some(start.elapsed().as_secs_f64())
     } else {
         None
     };
     let start = Instant::now();
-    let hits = renderer.trace(&scene, &rays, args.any_hit, scene.intersect)?;
+    let hits = renderer.trace(&rays, args.any_hit, scene.intersect)?;
     let elapsed = start.elapsed();
     let start = Instant::now();
     rays::write_hits(&args.output, &hits)?;

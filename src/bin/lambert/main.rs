@@ -18,6 +18,9 @@ fn main() -> ExitCode {
         // SAFETY: no other thread exists yet to read the environment.
         unsafe { std::env::set_var("NODEVICE_SELECT", "1") };
     }
+    // The CPU kernel the user asks for, decided before any work.
+    let asked = std::env::var(lambert::cpu::CPU_KERNEL_ENV).ok();
+    lambert::cpu::CpuKernel::select(asked.as_deref());
     // Ctrl-C, SIGTERM or SIGHUP mid-write: no temporary file stays behind
     // (the previous output is untouched: it is only ever replaced whole).
     if let Err(e) = ctrlc::set_handler(|| lambert::output::remove_temporaries_and_exit(130)) {

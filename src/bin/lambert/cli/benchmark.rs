@@ -40,7 +40,7 @@ pub(super) fn bench(args: &BenchArgs, quiet: bool) -> Result<ExitCode> {
         "", "", "Mrays/s", "Mrays/s", "s", "", "", "MiB", ""
     );
     for input in &inputs {
-        let scene = bench::load_input(input, args.size)?;
+        let scene = std::sync::Arc::new(bench::load_input(input, args.size)?);
         let name = input_name(input);
         for row in bench::ladder_rows(&name, &scene, args.device.into(), &request, args.runs)? {
             println!(
@@ -148,7 +148,7 @@ fn bench_time_vs_error(args: &BenchArgs, quiet: bool) -> Result<ExitCode> {
     };
     let mut all = Vec::new();
     for input in &inputs {
-        let scene = bench::load_input(input, args.size)?;
+        let scene = std::sync::Arc::new(bench::load_input(input, args.size)?);
         let name = input_name(input);
         let points = bench::time_vs_error(&name, &scene, &knobs, &request, &mut |line| {
             if !quiet {

@@ -49,7 +49,7 @@ pub(super) fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> 
         let [r, g, b] = m.albedo;
         println!("    {i}: albedo [{r}, {g}, {b}]");
     }
-    let c = &scene.camera;
+    let c = &scene.view.camera;
     let v = |a: [f64; 3]| lambert::limits::vector_text(glam::DVec3::from(a));
     println!(
         "  camera: eye {}, look_at {}, up {}, vfov {:.4}°, {}×{}",

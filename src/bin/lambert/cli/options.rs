@@ -158,7 +158,8 @@ impl ViewOptions {
     }
 
     pub(super) fn apply(&self, scene: &mut Scene) -> Result<()> {
-        scene.camera = scene
+        scene.view.camera = scene
+            .view
             .camera
             .resized(self.width, self.height)
             .map_err(|e| Error::Usage(format!("--width/--height: {e}")))?;
@@ -180,10 +181,10 @@ impl SceneOptions {
         }
         if let Some(spp) = self.spp {
             validate_spp(spp).map_err(|e| Error::Usage(format!("--{e}")))?;
-            scene.spp = spp;
+            scene.view.spp = spp;
         }
         if let Some(seed) = self.seed {
-            scene.seed = seed;
+            scene.view.seed = seed;
         }
         self.view.apply(scene)
     }
