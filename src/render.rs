@@ -44,42 +44,40 @@ fn fallback_note(error: &crate::Error) -> String {
 
 /// What `open_device` opened.
 enum Opened {
-    Gpu(GpuRenderer),
+    Gpu(Box<GpuRenderer>),
     /// The CPU path, with the note of `auto`'s fallback, if it fell back.
     Cpu(Option<String>),
 }
 
 /// The one policy of where a scene renders: `cpu` the CPU path; `gpu` any
-/// adapter (software ones included), failing if none opens or the scene
-/// does not fit; `auto` a hardware adapter (or the one named), else the
-/// CPU path with a note, as for a scene too large for the adapter.
+/// adapter (`open_gpu`); `auto` a hardware adapter (or the one named),
+/// else the CPU path with a note, as for a scene too large for the
+/// adapter.
 fn open_device(scene: &Scene, choice: DeviceChoice, request: &AdapterRequest) -> Result<Opened> {
-    let gpu = match choice {
-        DeviceChoice::Cpu => return Ok(Opened::Cpu(None)),
-        DeviceChoice::Gpu => Gpu::open(request, false)?,
-        DeviceChoice::Auto => match Gpu::open(request, !request.names_adapter()) {
-            Ok(gpu) => gpu,
-            Err(e) => return Ok(Opened::Cpu(Some(fallback_note(&e)))),
-        },
-    };
-    match GpuRenderer::new(gpu, scene) {
-        Ok(renderer) => Ok(Opened::Gpu(renderer)),
-        // A scene too large for the adapter still renders with auto.
-        Err(Error::GpuLimit(e)) if choice == DeviceChoice::Auto => Ok(Opened::Cpu(Some(format!(
-            "GPU: {e}\nnote: using the CPU path instead"
-        )))),
-        Err(e) => Err(e),
+    match choice {
+        DeviceChoice::Cpu => Ok(Opened::Cpu(None)),
+        DeviceChoice::Gpu => Ok(Opened::Gpu(Box::new(open_gpu(scene, request)?))),
+        DeviceChoice::Auto => {
+            let gpu = match Gpu::open(request, !request.names_adapter()) {
+                Ok(gpu) => gpu,
+                Err(e) => return Ok(Opened::Cpu(Some(fallback_note(&e)))),
+            };
+            match GpuRenderer::new(gpu, scene) {
+                Ok(renderer) => Ok(Opened::Gpu(Box::new(renderer))),
+                Err(Error::GpuLimit(e)) => Ok(Opened::Cpu(Some(format!(
+                    "GPU: {e}\nnote: using the CPU path instead"
+                )))),
+                Err(e) => Err(e),
+            }
+        }
     }
 }
 
-/// `scene` uploaded to a GPU as `--device gpu` opens one (any adapter,
-/// software ones included): for the measurements and comparisons that
-/// need the GPU itself.
+/// `scene` uploaded to a GPU as `--device gpu` opens one: any adapter,
+/// software ones included, failing if none opens or the scene does not fit.
+/// Also what the measurements and comparisons of the GPU itself use.
 pub fn open_gpu(scene: &Scene, request: &AdapterRequest) -> Result<GpuRenderer> {
-    match open_device(scene, DeviceChoice::Gpu, request)? {
-        Opened::Gpu(renderer) => Ok(renderer),
-        Opened::Cpu(_) => unreachable!("`gpu` never takes the CPU path"),
-    }
+    GpuRenderer::new(Gpu::open(request, false)?, scene)
 }
 
 /// The renderers of one scene, each opened (and the scene uploaded to it)
@@ -125,7 +123,7 @@ impl Renderers {
                 match open_device(&self.scene, choice, &self.request)? {
                     Opened::Gpu(renderer) => {
                         self.gpu_is_hardware = !renderer.gpu().is_software();
-                        let gpu = self.gpu.insert(Renderer::Gpu(Box::new(renderer)));
+                        let gpu = self.gpu.insert(Renderer::Gpu(renderer));
                         Ok((gpu, None))
                     }
                     Opened::Cpu(note) => {
@@ -157,7 +155,7 @@ impl Renderer {
         request: &AdapterRequest,
     ) -> Result<(Renderer, Option<String>)> {
         Ok(match open_device(&scene, choice, request)? {
-            Opened::Gpu(renderer) => (Renderer::Gpu(Box::new(renderer)), None),
+            Opened::Gpu(renderer) => (Renderer::Gpu(renderer), None),
             Opened::Cpu(note) => (Renderer::Cpu(scene), note),
         })
     }
