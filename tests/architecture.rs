@@ -538,16 +538,21 @@ fn layer_violations(files: &[(PathBuf, String)]) -> Vec<String> {
     problems
 }
 
-/// Every module of src/ imports only what its layer allows.
-#[test]
-fn every_import_keeps_to_the_layers() {
-    let files: Vec<(PathBuf, String)> = files("src", ".rs")
+/// Every Rust file of src/, with its text.
+fn source_files() -> Vec<(PathBuf, String)> {
+    files("src", ".rs")
         .into_iter()
         .map(|path| {
             let text = std::fs::read_to_string(Path::new(ROOT).join(&path)).unwrap();
             (path, text)
         })
-        .collect();
+        .collect()
+}
+
+/// Every module of src/ imports only what its layer allows.
+#[test]
+fn every_import_keeps_to_the_layers() {
+    let files = source_files();
     assert!(files.len() > 20, "found only {} files", files.len());
     let problems = layer_violations(&files);
     assert!(
@@ -630,13 +635,7 @@ fn environment_reads(files: &[(PathBuf, String)]) -> Vec<String> {
 /// docs/architecture.md's rule.
 #[test]
 fn the_library_reads_no_environment_variable() {
-    let files: Vec<(PathBuf, String)> = files("src", ".rs")
-        .into_iter()
-        .map(|path| {
-            let text = std::fs::read_to_string(Path::new(ROOT).join(&path)).unwrap();
-            (path, text)
-        })
-        .collect();
+    let files = source_files();
     let reads = environment_reads(&files);
     assert!(
         reads.is_empty(),
