@@ -149,17 +149,16 @@ fn binary_by_size(bytes: &[u8], path: &Path) -> Result<Mesh> {
     let body = bytes.len() - HEADER_BYTES;
     let (fits, rest) = (body / FACET_BYTES, body % FACET_BYTES);
     let said = format!(
-        "its binary STL header declares {declared} triangles (84 + 50 × {declared} bytes), but the file has {} bytes",
+        "its binary STL header declares {declared} triangles ({} bytes in all), but the file has {} bytes",
+        HEADER_BYTES as u64 + FACET_BYTES as u64 * declared as u64,
         bytes.len()
     );
     let (count, reading) = if rest == 0 {
-        (
-            fits,
-            format!("{fits} whole facets: read {fits}, as the size says"),
-        )
+        let reading = format!(", which hold {fits} facets exactly: read {fits}, as the size says");
+        (fits, reading)
     } else if declared <= fits {
         let ignored = body - declared * FACET_BYTES;
-        let reading = format!("read {declared}; the {ignored} bytes after them are ignored");
+        let reading = format!(": read {declared}; the {ignored} bytes after them are ignored");
         (declared, reading)
     } else {
         return Err(Error::scene(
@@ -171,7 +170,7 @@ fn binary_by_size(bytes: &[u8], path: &Path) -> Result<Mesh> {
         ));
     };
     let mut mesh = binary(bytes, path, count)?;
-    let warning = format!("{}: {said}, {reading}", path.display());
+    let warning = format!("{}: {said}{reading}", path.display());
     mesh.warnings.push(warning);
     Ok(mesh)
 }
