@@ -468,3 +468,43 @@ fn the_extension_in_any_case() {
         assert_eq!(Scene::load(&path).unwrap().triangles.len(), 2, "{name}");
     }
 }
+
+/// The malformed-file corpus (`fuzz/regressions/stl/`, replayed by the
+/// fuzz harness and tests/reliability.rs): each `malformed-*` is an error
+/// naming the file and a byte or line; each `accepted-*` loads, with a
+/// warning.
+#[test]
+fn the_malformed_corpus_names_bytes_and_lines() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/regressions/stl");
+    let mut seen = [0, 0];
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_name().unwrap().to_string_lossy().to_string();
+        let result = lambert::inputs::Input::Stl.parse(&std::fs::read(&path).unwrap(), &path);
+        if name.starts_with("accepted-") {
+            let mesh = load_mesh(&path, NormalMode::Face).unwrap();
+            assert!(!mesh.triangles.is_empty(), "{name}");
+            // A warning for each but the facet normals, which are not read.
+            let warned = !mesh.warnings.is_empty();
+            assert_eq!(
+                warned,
+                !name.contains("nan-normals"),
+                "{name}: {:?}",
+                mesh.warnings
+            );
+            result.unwrap();
+            seen[0] += 1;
+        } else {
+            let message = result.unwrap_err().to_string();
+            let at = format!("{}:", path.display());
+            let located = message.starts_with(&at)
+                && (message[at.len()..].starts_with(|c: char| c.is_ascii_digit())
+                    || message.contains(": byte ")
+                    || message.contains("not an STL file")
+                    || message.contains("ending at byte"));
+            assert!(located, "{name}: {message}");
+            seen[1] += 1;
+        }
+    }
+    assert!(seen[0] >= 5 && seen[1] >= 10, "{seen:?}");
+}
