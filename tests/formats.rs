@@ -26,17 +26,6 @@ fn only_warning(mesh: &lambert::loading::Mesh) -> &str {
     &mesh.warnings[0]
 }
 
-fn error_of(path: &Path) -> String {
-    match load_mesh(path, NormalMode::Face) {
-        Ok(m) => panic!(
-            "{} loaded ({} triangles)",
-            path.display(),
-            m.triangles.len()
-        ),
-        Err(e) => e.to_string(),
-    }
-}
-
 /// The bunny scene with its mesh read from `file` (relative to
 /// assets/scenes), through the `file` key.
 fn bunny_from(file: &str) -> Scene {

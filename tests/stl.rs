@@ -89,17 +89,6 @@ fn scene_of_file(dir: &Path, file: &str) -> Scene {
     Scene::from_toml(&toml, &dir.join("scene.toml")).unwrap()
 }
 
-fn error_of(path: &Path) -> String {
-    match load_mesh(path, NormalMode::Face) {
-        Ok(m) => panic!(
-            "{} loaded ({} triangles)",
-            path.display(),
-            m.triangles.len()
-        ),
-        Err(e) => e.to_string(),
-    }
-}
-
 /// The bunny as binary STL, ASCII STL and OBJ (the same f32 coordinates):
 /// the same scene triangles and smooth normals bit for bit, and the same
 /// image on both paths.
