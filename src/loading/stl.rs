@@ -53,8 +53,7 @@ pub fn load_stl(path: &Path, mode: NormalMode) -> Result<Mesh> {
 
 /// Parses STL bytes; `path` names them in errors.
 pub fn parse_stl(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<Mesh> {
-    let declared = (bytes.len() >= HEADER_BYTES)
-        .then(|| u32::from_le_bytes(bytes[80..84].try_into().unwrap()) as usize);
+    let declared = declared_count(bytes);
     let whole = |n: usize| {
         n.checked_mul(FACET_BYTES)
             .is_some_and(|b| b == bytes.len() - HEADER_BYTES)
@@ -66,13 +65,12 @@ pub fn parse_stl(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<Mesh> {
             // A binary file with a `solid` header and a wrong count: the
             // ASCII reading fails, or finds nothing (no line ends).
             let found = text.as_ref().is_ok_and(|m| !m.triangles.is_empty());
-            if !found && declared.is_some() && !is_text(bytes) {
-                binary_by_size(bytes, path)?
-            } else {
-                text?
+            match declared {
+                Some(n) if !found && !is_text(bytes) => binary_by_size(bytes, path, n)?,
+                _ => text?,
             }
         }
-        Some(_) if !is_text(bytes) => binary_by_size(bytes, path)?,
+        Some(n) if !is_text(bytes) => binary_by_size(bytes, path, n)?,
         _ => {
             return Err(Error::scene(
                 path,
@@ -96,23 +94,27 @@ pub fn parse_stl(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<Mesh> {
     Ok(mesh)
 }
 
+/// The triangle count at bytes 80..84, if the file is that long.
+fn declared_count(bytes: &[u8]) -> Option<usize> {
+    let count = bytes.get(80..HEADER_BYTES)?;
+    Some(u32::from_le_bytes(count.try_into().unwrap()) as usize)
+}
+
 /// Whether the file begins (after a UTF-8 byte-order mark and blanks) with
 /// the word `solid`, in any case.
 fn begins_with_solid(bytes: &[u8]) -> bool {
     let text = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
-    let start = text.iter().position(|b| !b.is_ascii_whitespace());
+    let start = text.iter().position(|b| !is_blank(*b));
     let rest = &text[start.unwrap_or(text.len())..];
     rest.len() >= 5
         && rest[..5].eq_ignore_ascii_case(b"solid")
-        && rest.get(5).is_none_or(u8::is_ascii_whitespace)
+        && rest.get(5).is_none_or(|b| is_blank(*b))
 }
 
 /// Whether every byte could be text: no control bytes but whitespace.
 /// Binary STL has them (a count's top byte is 0 below 2^24 facets).
 fn is_text(bytes: &[u8]) -> bool {
-    !bytes
-        .iter()
-        .any(|&b| b < 0x20 && !b.is_ascii_whitespace() && b != 0x0b)
+    !bytes.iter().any(|&b| b < 0x20 && !is_blank(b))
 }
 
 /// Positions welded as they are read: each distinct point once.
@@ -143,9 +145,9 @@ impl Welder {
     }
 }
 
-/// A binary file whose count disagrees with its size (the size rule).
-fn binary_by_size(bytes: &[u8], path: &Path) -> Result<Mesh> {
-    let declared = u32::from_le_bytes(bytes[80..84].try_into().unwrap()) as usize;
+/// A binary file whose count, `declared`, disagrees with its size (the
+/// size rule).
+fn binary_by_size(bytes: &[u8], path: &Path, declared: usize) -> Result<Mesh> {
     let body = bytes.len() - HEADER_BYTES;
     let (fits, rest) = (body / FACET_BYTES, body % FACET_BYTES);
     let said = format!(
@@ -242,6 +244,7 @@ impl<'a> Words<'a> {
     }
 }
 
+/// ASCII whitespace, and the vertical tab (which C's isspace counts).
 fn is_blank(b: u8) -> bool {
     b.is_ascii_whitespace() || b == 0x0b
 }
