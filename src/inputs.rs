@@ -19,6 +19,8 @@ pub enum Input {
     Ply,
     /// glTF JSON or GLB.
     Gltf,
+    /// STL, binary or ASCII.
+    Stl,
     /// A ray file of `lambert trace`.
     Rays,
     /// An EXR part file of `lambert merge`.
@@ -26,12 +28,13 @@ pub enum Input {
 }
 
 impl Input {
-    pub const ALL: [Input; 7] = [
+    pub const ALL: [Input; 8] = [
         Input::Toml,
         Input::Obj,
         Input::Mtl,
         Input::Ply,
         Input::Gltf,
+        Input::Stl,
         Input::Rays,
         Input::Part,
     ];
@@ -51,6 +54,7 @@ impl Input {
             Input::Mtl => "mtl",
             Input::Ply => "ply",
             Input::Gltf => "gltf",
+            Input::Stl => "stl",
             Input::Rays => "rays",
             Input::Part => "part",
         }
@@ -67,7 +71,7 @@ impl Input {
         let modes = [NormalMode::Face, NormalMode::Smooth];
         match self {
             Input::Toml => crate::Scene::from_toml(&String::from_utf8_lossy(bytes), path).map(drop),
-            Input::Obj | Input::Ply | Input::Gltf => modes
+            Input::Obj | Input::Ply | Input::Gltf | Input::Stl => modes
                 .into_iter()
                 .try_for_each(|m| self.mesh(bytes, path, m).map(drop)),
             Input::Mtl => loading::obj::parse_mtl(
@@ -80,7 +84,7 @@ impl Input {
         }
     }
 
-    /// A model input (OBJ, PLY, glTF) as a scene of its triangles alone
+    /// A model input (OBJ, PLY, glTF, STL) as a scene of its triangles alone
     /// (`Scene::from_arrays`, its BVH built), for the fuzz harness to
     /// validate the tree; None for other formats and models without
     /// triangles.
@@ -102,6 +106,7 @@ impl Input {
             Input::Obj => loading::parse_obj(&String::from_utf8_lossy(bytes), path, mode)?,
             Input::Ply => loading::ply::parse_ply(bytes, path, mode)?,
             Input::Gltf => loading::gltf::parse_scene(bytes, path, mode)?.mesh,
+            Input::Stl => loading::stl::parse_stl(bytes, path, mode)?,
             _ => return Ok(None),
         }))
     }

@@ -347,6 +347,20 @@ fn dictionary(input: Input) -> &'static [&'static str] {
             ",",
             ":",
         ],
+        Input::Stl => &[
+            "solid ",
+            "endsolid",
+            "facet normal 0 0 1\n",
+            "outer loop\n",
+            "vertex 0 0 0\n",
+            "vertex ",
+            "endloop\n",
+            "endfacet\n",
+            "\n",
+            "\r\n",
+            " ",
+            "\0\0\0\0",
+        ],
         Input::Rays | Input::Part => &[],
     }
 }

@@ -162,7 +162,7 @@ class Scene:
     @classmethod
     def load(cls, path):
         """A scene TOML file, or any model file the CLI reads alone (.obj,
-        .ply, .ply.gz, .gltf, .glb). Raises OSError for a file that cannot
+        .ply, .ply.gz, .gltf, .glb, .stl). Raises OSError for a file that cannot
         be read, ValueError (naming file and line or field) for bad content."""
         return cls(_lambert.NativeScene.load(os.fspath(path)))
 

@@ -132,8 +132,13 @@ def test_malformed_files_are_value_errors_with_file_and_line(tmp_path):
     toml.write_text("[camera]\neye = [0, 0, 1]\n")
     with pytest.raises(ValueError, match="bad.toml"):
         lambert.Scene.load(toml)
+    stl = tmp_path / "bad.stl"
+    stl.write_text("solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 x 0\n")
+    with pytest.raises(ValueError, match=r"bad.stl:5: facet 0, vertex 1: 'x' is not a number"):
+        lambert.Scene.load(stl)
+    # STL is read since issue 30; a 3DS file is not.
     with pytest.raises(ValueError, match="not a scene"):
-        lambert.Scene.load(tmp_path / "model.stl")
+        lambert.Scene.load(tmp_path / "model.3ds")
 
 
 def test_write_image_errors_leave_the_previous_file(tmp_path):
@@ -282,6 +287,7 @@ def test_lambert_trimesh_is_there_after_import_lambert_even_without_trimesh():
         ("points.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
          "property float z\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n"
          "0 0 0\n1 0 0\n0 1 0\n", "no triangles (3 points"),
+        ("empty.stl", "solid Empty\nendsolid Empty\n", "no triangles (0 points"),
     ],
 )
 def test_a_model_file_without_triangles_is_a_value_error_naming_it(tmp_path, name, text, expected):

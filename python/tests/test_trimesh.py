@@ -123,3 +123,26 @@ def test_an_empty_mesh_misses_every_ray_as_in_trimesh(vertices, device):
         assert loc.shape == (0, 3) and ray.shape == tri.shape == (0,)
     inside = ours.contains_points(o)
     assert inside.dtype == bool and inside.shape == (3,) and not inside.any()
+
+
+@pytest.mark.parametrize("index", range(3))
+def test_stl_files_load_as_trimesh_reads_them(index, tmp_path):
+    # Binary and ASCII STL as trimesh writes them: trimesh's triangle count
+    # and bounds, and, binary STL holding float32 as lambert's scenes do,
+    # the very hits of the same triangles given as arrays.
+    mesh = list(meshes())[index]
+    for kind in ["stl", "stl_ascii"]:
+        path = tmp_path / f"{kind}.stl"
+        path.write_bytes(mesh.export(file_type=kind) if kind == "stl" else
+                         mesh.export(file_type=kind).encode())
+        scene = lambert.Scene.load(path)
+        theirs = trimesh.load(path)
+        assert scene.triangle_count == len(theirs.faces) == len(mesh.faces)
+        assert np.allclose(scene.bounds, theirs.bounds, atol=1e-6)
+    vertices = mesh.vertices.astype(np.float32).astype(np.float64)
+    arrays = lambert.Scene.from_arrays(vertices, mesh.faces)
+    o, d = rays(mesh, 500, seed=index)
+    mine = lambert.Scene.load(tmp_path / "stl.stl").intersect(o, d, device="cpu")
+    same = arrays.intersect(o, d, device="cpu")
+    for column in ["t", "prim_id", "u", "v"]:
+        assert np.array_equal(mine[column], same[column]), column

@@ -1,7 +1,7 @@
 //! Model files, one loader per format behind `load_mesh`: OBJ (with MTL
 //! materials), PLY (ascii and binary, optionally gzipped) and glTF 2.0
 //! (`.gltf` and `.glb`, whose cameras and lights `gltf::load_scene` also
-//! reads). Every loader numbers triangles in file order, polygons
+//! reads) and STL (binary and ASCII). Every loader numbers triangles in file order, polygons
 //! fan-triangulated as (v0,v1,v2), (v0,v2,v3), …, so that the same
 //! triangles from any format are the same primitives.
 
@@ -9,6 +9,7 @@ pub mod gltf;
 pub mod material;
 pub mod obj;
 pub mod ply;
+pub mod stl;
 
 use std::path::Path;
 
@@ -83,9 +84,11 @@ pub enum Format {
     PlyGz,
     Gltf,
     Glb,
+    /// Binary or ASCII STL.
+    Stl,
 }
 
-pub const SUPPORTED: &str = ".obj, .ply, .ply.gz, .gltf and .glb";
+pub const SUPPORTED: &str = ".obj, .ply, .ply.gz, .gltf, .glb and .stl";
 
 impl Format {
     pub fn of(path: &Path) -> Result<Format> {
@@ -103,6 +106,8 @@ impl Format {
             Format::Gltf
         } else if name.ends_with(".glb") {
             Format::Glb
+        } else if name.ends_with(".stl") {
+            Format::Stl
         } else {
             return Err(Error::Usage(format!(
                 "{}: not a model format lambert reads; use {SUPPORTED}",
@@ -125,6 +130,7 @@ pub fn load_mesh(path: &Path, mode: NormalMode) -> Result<Mesh> {
     let mesh = match Format::of(path)? {
         Format::Obj => load_obj(path, mode)?,
         Format::Ply | Format::PlyGz => ply::load_ply(path, mode)?,
+        Format::Stl => stl::load_stl(path, mode)?,
         // `gltf::load_scene` requires triangles itself: a model scene
         // reads glTF files through it alone.
         Format::Gltf | Format::Glb => return Ok(gltf::load_scene(path, mode)?.mesh),

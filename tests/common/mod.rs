@@ -30,6 +30,18 @@ pub fn scene(toml: &str) -> Scene {
     Scene::from_toml(toml, &asset("scenes/inline.toml")).expect("test scene is valid")
 }
 
+/// The error loading a model file gives (a panic if it loads).
+pub fn error_of(path: &Path) -> String {
+    match lambert::loading::load_mesh(path, lambert::loading::NormalMode::Face) {
+        Ok(m) => panic!(
+            "{} loaded ({} triangles)",
+            path.display(),
+            m.triangles.len()
+        ),
+        Err(e) => e.to_string(),
+    }
+}
+
 /// Opens a GPU adapter, software ones included. A GPU test never passes
 /// for lack of one: it fails and says what to install.
 pub fn open_gpu() -> Gpu {
