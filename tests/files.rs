@@ -81,7 +81,9 @@ fn every_input_must_be_a_regular_file() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let out = d.join("out.png");
-    for name in ["m.obj", "m.ply", "m.ply.gz", "m.gltf", "m.glb", "m.stl", "s.toml"] {
+    for name in [
+        "m.obj", "m.ply", "m.ply.gz", "m.gltf", "m.glb", "m.stl", "s.toml",
+    ] {
         let pipe = fifo(d, name);
         let what = format!("{name}: not a regular file (a FIFO)");
         fails(&["info", s(&pipe)], &what);
