@@ -597,3 +597,36 @@ fn ray_queries_pass_through_cut_outs() {
     );
     assert_ne!(cpu[0].prim, NO_HIT);
 }
+
+/// Item 7: `lambert info MODEL` lists vertex colours, each material's alpha
+/// mode, and the emissive materials.
+#[test]
+fn info_lists_colours_alpha_modes_and_emission() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = masked_scene(d, "MASK", 6.0);
+    assert_eq!(scene.colored_triangles, 2);
+    let colour = Attribute {
+        name: "COLOR_0",
+        bytes: floats(&[1.0; 12]),
+        component: 5126,
+        kind: "VEC3",
+        normalized: false,
+    };
+    let material = serde_json::json!({"emissiveFactor": [0.5, 0.25, 1.0]});
+    let path = write(d, "lamp.glb", quad_glb(1.0, 0.0, &[colour], material));
+    let info = lambert(&["info", s(&path)]);
+    let out = String::from_utf8_lossy(&info.stdout);
+    assert!(info.status.success(), "{}", stderr(&info));
+    for line in [
+        "vertex colours: yes, on 2 of 2 triangles",
+        "0: base colour [1, 1, 1], alpha 1, alpha mode OPAQUE, emissive [0.5, 0.25, 1]",
+        "emissive materials: 1",
+    ] {
+        assert!(out.contains(line), "lacks '{line}':\n{out}");
+    }
+    let info = lambert(&["info", s(&d.join("MASK.glb"))]);
+    let out = String::from_utf8_lossy(&info.stdout);
+    assert!(out.contains("alpha mode MASK (cut-off 0.5)"), "{out}");
+    assert!(out.contains("emissive materials: 0"), "{out}");
+}
