@@ -244,6 +244,7 @@ impl Scene {
         let (material, file_materials, fallback) = match uniform {
             Some(a) => (self.add_material(a), Vec::new(), 0),
             None => {
+                self.warnings.extend(untextured(path, &mesh.materials));
                 let ids: Vec<u32> = mesh
                     .materials
                     .iter()
@@ -410,6 +411,27 @@ impl Scene {
     pub fn primitive_count(&self) -> usize {
         self.triangles.len() + self.spheres.len()
     }
+}
+
+/// Until the kernels sample textures: one warning naming the materials
+/// whose textures are read but not rendered (they render their factors).
+fn untextured(path: &Path, materials: &[loading::MaterialDesc]) -> Option<String> {
+    let names: Vec<&str> = materials
+        .iter()
+        .filter(|m| {
+            m.base_color_texture.is_some()
+                || m.emissive_texture.is_some()
+                || m.alpha_texture.is_some()
+        })
+        .map(|m| m.name.as_str())
+        .collect();
+    (!names.is_empty()).then(|| {
+        format!(
+            "{}: the textures of materials {} are not rendered yet (their colour factors are)",
+            path.display(),
+            names.join(", ")
+        )
+    })
 }
 
 /// The kernels' material of a file's: BLEND is rendered as MASK at 0.5
