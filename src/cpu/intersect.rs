@@ -41,12 +41,54 @@ impl<'a> Kernel<'a> {
         (intersect_sphere(ray, vec3(sphere.center), sphere.radius as Real), 0.0, 0.0)
     }
 
+    /// The base colour at (u, v) of triangle `prim`: its material's, times
+    /// its corners' colours interpolated (FLAG_ATTRIBUTES).
+    #[inline(always)]
+    pub fn base_color_at(
+        &self,
+        tri: &crate::layout::Triangle,
+        prim: u32,
+        u: Real,
+        v: Real,
+    ) -> Vec4 {
+        let scene = self.scene;
+        let mut color = vec4(scene.materials[tri.material as usize].base_color);
+        if tri.flags & FLAG_ATTRIBUTES != 0 {
+            let a = &scene.attributes[prim as usize];
+            // Fused, as the shader's fma: the GPU's compiler may fuse an
+            // a·b + c of its own, so the shader fuses explicitly.
+            let w = Vec4::splat(1.0 - u - v);
+            let c = |k: usize| vec4(a.colors[k]);
+            color *= w.mul_add(c(0), Vec4::splat(u).mul_add(c(1), Vec4::splat(v) * c(2)));
+        }
+        color
+    }
+
+    /// Whether a hit at (u, v) of `prim` falls in an alpha-masked
+    /// triangle's cut-out: the shader's any-hit test, where hits are
+    /// recorded (opaque triangles pay a flag test; scenes without masks,
+    /// `alpha_mask` false, nothing).
+    #[inline(always)]
+    pub fn cut_out(&self, prim: u32, u: Real, v: Real) -> bool {
+        if !self.alpha_mask {
+            return false;
+        }
+        let Some(tri) = self.scene.triangles.get(prim as usize) else {
+            return false;
+        };
+        if tri.flags & FLAG_MASKED == 0 {
+            return false;
+        }
+        let cutoff = self.scene.materials[tri.material as usize].alpha_cutoff as Real;
+        self.base_color_at(tri, prim, u, v).w < cutoff
+    }
+
     /// Tests `prim`; if it is hit nearer than ray.tmax, makes it the hit and
     /// shortens the ray. Returns whether it did.
     #[inline(always)]
     pub fn record_hit(&self, ray: &mut Ray, shear: &Shear, hit: &mut Hit, prim: u32) -> bool {
         let (t, u, v) = self.intersect_primitive(ray, shear, prim);
-        if t < ray.tmax {
+        if t < ray.tmax && !self.cut_out(prim, u, v) {
             ray.tmax = t;
             *hit = Hit { t, prim, u, v };
             return true;
@@ -77,8 +119,11 @@ impl<'a> Kernel<'a> {
                 // GPU that fuses multiply-adds can see a hit in a lane of
                 // zero vertices.
                 if t < ray.tmax && block.prims[lane] < num_triangles {
-                    ray.tmax = t;
                     let (u, v) = lanes.uv(lane);
+                    if self.cut_out(block.prims[lane], u, v) {
+                        continue;
+                    }
+                    ray.tmax = t;
                     *hit = Hit {
                         t,
                         prim: block.prims[lane],

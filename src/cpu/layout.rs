@@ -5,7 +5,7 @@
 
 use crate::bvh::{MAX_DEPTH, STACK_SIZE};
 use crate::layout::{
-    BVH_WIDTH, BvhNode, CompressedNode, FLAG_SMOOTH, LEAF_BIT, LIGHT_POINT, META_LEAF, NO_HIT,
+    BVH_WIDTH, BvhNode, CompressedNode, FLAG_ATTRIBUTES, FLAG_MASKED, FLAG_SMOOTH, LEAF_BIT, LIGHT_POINT, META_LEAF, NO_HIT,
     PrimBlock, leaf_range,
 };
 use crate::camera::View;
@@ -80,6 +80,7 @@ pub struct Surface {
     pub geometric_normal: Vec3,
     pub shading_normal: Vec3,
     pub albedo: Vec3,
+    pub emission: Vec3,
 }
 
 fn vec3(v: [f32; 3]) -> Vec3 {
@@ -110,6 +111,8 @@ pub struct Kernel<'a> {
     /// traverses as the shader does (`trace_compressed`), the twin that
     /// GPU results are compared with.
     pub compressed: Option<&'a [CompressedNode]>,
+    /// Whether some triangle is alpha-masked (the shader's HAS_ALPHA_MASK).
+    alpha_mask: bool,
     /// The GPU's short stack: entries `trace_compressed` keeps before the
     /// oldest spill (`cwbvh::short_stack`; `MAX_DEPTH`, none spill).
     pub stack_entries: usize,
@@ -139,6 +142,7 @@ impl<'a> Kernel<'a> {
             strata_x: crate::camera::strata_columns(view.spp),
             intersect: scene.intersect,
             ymm_boxes,
+            alpha_mask: scene.has_alpha_mask(),
             compressed: None,
             stack_entries: MAX_DEPTH,
         }

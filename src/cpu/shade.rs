@@ -91,10 +91,12 @@ impl<'a> Kernel<'a> {
                 error,
                 geometric_normal: geometric,
                 shading_normal: shading,
-                albedo: vec3(scene.materials[tri.material as usize].albedo),
+                albedo: self.base_color_at(tri, hit.prim, hit.u, hit.v).truncate(),
+                emission: vec3(scene.materials[tri.material as usize].emission),
             };
         }
         let sphere = &scene.spheres[(hit.prim - num_triangles) as usize];
+        let material = &scene.materials[sphere.material as usize];
         let center = vec3(sphere.center);
         let outward = ((ray.origin - center) + hit.t * ray.dir).normalize();
         let position = center + (sphere.radius as Real) * outward;
@@ -105,11 +107,12 @@ impl<'a> Kernel<'a> {
             error,
             geometric_normal: normal,
             shading_normal: normal,
-            albedo: vec3(scene.materials[sphere.material as usize].albedo),
+            albedo: vec4(material.base_color).truncate(),
+            emission: vec3(material.emission),
         }
     }
 
-    /// Lambert: ambient·k + Σ k·E·max(0, n·l)·visible, linear RGB.
+    /// Lambert: ambient·k + Σ k·E·max(0, n·l)·visible + emission, linear RGB.
     #[inline(always)]
     pub fn shade(&self, ray: &Ray, hit: &Hit) -> Vec3 {
         if hit.prim == NO_HIT {
@@ -127,7 +130,9 @@ impl<'a> Kernel<'a> {
             }
             color += surface.albedo * sample.irradiance * sample.cos_theta;
         }
-        color
+        // Emission: the surface's own light, seen by the camera; it lights
+        // nothing else (no light is sampled from it).
+        color + surface.emission
     }
 }
 

@@ -247,6 +247,8 @@ fn scene_bind_group(
             ("bvh_nodes_hi", buffers.nodes.high_binding()),
             ("bvh_blocks_hi", buffers.blocks.high_binding()),
             ("loop_status", loop_status.buffer.as_entire_binding()),
+            ("triangle_attributes", buffers.attributes.low_binding()),
+            ("triangle_attributes_hi", buffers.attributes.high_binding()),
             (
                 "bvh_node_texels",
                 wgpu::BindingResource::TextureView(&node_view),
