@@ -232,6 +232,8 @@ struct Surface {
 // (t mod row, t / row).
 @group(0) @binding(13) var bvh_node_texels: texture_2d<u32>;
 @group(0) @binding(14) var bvh_block_texels: texture_2d<u32>;
+// The scene's textures, all in one array of words (src/texture/store.rs).
+@group(0) @binding(15) var<storage, read> textures: array<u32>;
 // Group 1 holds what one entry point reads and writes: an image tile for
 // `render`, a batch of rays for `trace_rays`.
 @group(1) @binding(0) var out_color: texture_storage_2d<rgba32float, write>;

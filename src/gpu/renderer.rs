@@ -242,6 +242,7 @@ fn scene_bind_group(
             ("bvh_nodes_hi", buffers.nodes.high_binding()),
             ("bvh_blocks_hi", buffers.blocks.high_binding()),
             ("loop_status", loop_status.buffer.as_entire_binding()),
+            ("textures", buffers.textures.as_entire_binding()),
             (
                 "bvh_node_texels",
                 wgpu::BindingResource::TextureView(&node_view),

@@ -37,6 +37,8 @@ pub struct Scene {
     pub spheres: Vec<Sphere>,
     pub materials: Vec<Material>,
     pub lights: Vec<Light>,
+    /// Every texture the materials use, as both paths read it.
+    pub textures: crate::texture::TextureStore,
     /// Over all primitives; built by `load`/`from_toml`.
     pub bvh: Bvh,
     /// How rays find their hits; both paths follow it.
@@ -191,6 +193,7 @@ impl Scene {
             spheres: Vec::new(),
             materials: Vec::new(),
             lights: Vec::new(),
+            textures: Default::default(),
             bvh: Bvh::default(),
             accel: Accel::default(),
             intersect: Intersect::default(),
