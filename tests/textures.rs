@@ -45,8 +45,9 @@ fn texture_use(sampler: Sampler) -> TextureUse {
 
 /// The store of `image` alone with one slot of `sampler`.
 fn store(image: DecodedImage, sampler: Sampler) -> (TextureStore, u32) {
-    let mut store = TextureStore::new(&[Some(image)]);
-    let slot = store.slot(&texture_use(sampler));
+    let mut store = TextureStore::default();
+    let index = store.add_image(&image);
+    let slot = store.slot(index, &texture_use(sampler));
     (store, slot)
 }
 
@@ -131,10 +132,13 @@ fn the_uv_transform_applies_before_wrapping() {
         sampler(Wrap::Repeat, Filter::Nearest),
     );
     // u' = 0.5·u + 0.5: u = 0.2 reads 0.6 (black), not 0.2 (white).
-    let slot = s.slot(&TextureUse {
-        transform: [[0.5, 0.0, 0.5], [0.0, 1.0, 0.0]],
-        ..texture_use(sampler(Wrap::Repeat, Filter::Nearest))
-    });
+    let slot = s.slot(
+        0,
+        &TextureUse {
+            transform: [[0.5, 0.0, 0.5], [0.0, 1.0, 0.0]],
+            ..texture_use(sampler(Wrap::Repeat, Filter::Nearest))
+        },
+    );
     assert_eq!(red_at(&s, slot, 0.2, 0.5, 0), 0.0);
 }
 
@@ -247,10 +251,6 @@ fn images_that_do_not_decode_say_which_and_why() {
             .chunks(4)
             .all(|p| p[0].abs_diff(128) <= 2 && p[3] == 255)
     );
-    // A use of an image that did not decode is no texture.
-    let mut s = TextureStore::new(&[None]);
-    assert_eq!(s.slot(&texture_use(Sampler::default())), NO_TEXTURE);
-    assert!(!s.has_slots());
 }
 
 /// What the GPU test runs: the texture stage with its one binding, and two
@@ -387,23 +387,27 @@ fn gpu_sampling_equals_the_twin_bit_for_bit() {
     let texels: Vec<[u8; 4]> = (0..width * height)
         .map(|_| std::array::from_fn(|_| (rng.unit() * 256.0) as u8))
         .collect();
-    let mut store = TextureStore::new(&[Some(image(width, height, &texels))]);
+    let mut store = TextureStore::default();
+    store.add_image(&image(width, height, &texels));
     let wraps = [Wrap::Repeat, Wrap::MirroredRepeat, Wrap::ClampToEdge];
     let mut slots = Vec::new();
     for (i, wrap_u) in wraps.into_iter().enumerate() {
         for wrap_v in wraps {
             for filter in [Filter::Linear, Filter::Nearest] {
-                slots.push(store.slot(&TextureUse {
-                    image: 0,
-                    sampler: Sampler {
-                        wrap_u,
-                        wrap_v,
-                        magnify: filter,
-                        minify: filter,
-                        mipmaps: i != 1,
+                slots.push(store.slot(
+                    0,
+                    &TextureUse {
+                        image: 0,
+                        sampler: Sampler {
+                            wrap_u,
+                            wrap_v,
+                            magnify: filter,
+                            minify: filter,
+                            mipmaps: i != 1,
+                        },
+                        transform: [[0.8, -0.6, 0.3], [0.6, 0.8, -0.1 * i as f32]],
                     },
-                    transform: [[0.8, -0.6, 0.3], [0.6, 0.8, -0.1 * i as f32]],
-                }));
+                ));
             }
         }
     }
@@ -467,4 +471,91 @@ fn gpu_sampling_equals_the_twin_bit_for_bit() {
             bytemuck::cast::<Footprint, [f32; 28]>(*fp)
         );
     }
+}
+
+/// A model's images: one decoded once for all its users; one missing, one
+/// not an image, one cut short: warnings that name the model, the image
+/// and the materials, which keep their factors (no slot).
+#[test]
+fn model_textures_warn_for_images_that_do_not_decode() {
+    use lambert::loading::material::MaterialDesc;
+    use lambert::texture::{add_model_textures, describe_images};
+    let dir = tempfile::tempdir().unwrap();
+    let good = dir.path().join("grid.png");
+    image::RgbaImage::from_pixel(4, 2, image::Rgba([10, 20, 30, 255]))
+        .save(&good)
+        .unwrap();
+    let png = std::fs::read(&good).unwrap();
+    let images = [
+        ImageSource::File(good.clone()),
+        ImageSource::File(dir.path().join("missing.png")),
+        ImageSource::Embedded {
+            bytes: b"<html>not found</html>".to_vec(),
+            name: "model.gltf image 2 (data URI)".into(),
+        },
+        ImageSource::Embedded {
+            bytes: png[..png.len() - 20].to_vec(),
+            name: "model.gltf image 3".into(),
+        },
+    ];
+    let uses = |image| {
+        Some(TextureUse {
+            image,
+            ..texture_use(Sampler::default())
+        })
+    };
+    let materials: Vec<MaterialDesc> =
+        [(0, None), (1, Some(0)), (2, None), (3, Some(1)), (1, None)]
+            .into_iter()
+            .map(|(base, emissive)| MaterialDesc {
+                base_color_texture: uses(base),
+                emissive_texture: emissive.and_then(uses),
+                ..Default::default()
+            })
+            .collect();
+    let mut store = TextureStore::default();
+    let mut warnings = Vec::new();
+    let model = std::path::Path::new("scenes/model.gltf");
+    let slots = add_model_textures(&mut store, model, &images, &materials, &mut warnings);
+    let none = NO_TEXTURE;
+    assert_ne!(slots[0].base_color, none);
+    assert_eq!(slots[0].emissive, none);
+    assert_eq!(slots[1].base_color, none);
+    assert_ne!(slots[1].emissive, none);
+    assert_eq!(slots[2].base_color, none);
+    assert_eq!(slots[3].base_color, none);
+    // Image 0 decoded once: 256 table words, 3 levels (4×2, 2×1, 1×1) of
+    // 4 words and 11 texels, and two slots of 10 words.
+    assert_eq!(store.words().len(), 256 + 12 + 11 + 20);
+    // Its texels read back as the image (linear of sRGB 10, 20, 30).
+    let c = Textures {
+        words: store.words(),
+    }
+    .sample_texture(slots[0].base_color, Vec2::new(0.5, 0.5), 0);
+    assert_eq!(c.x, linear_from_srgb(10) as f32 / 32768.0);
+    assert_eq!(warnings.len(), 3, "{warnings:#?}");
+    let missing = dir.path().join("missing.png").display().to_string();
+    assert!(
+        warnings[0].starts_with(&format!("scenes/model.gltf: {missing}"))
+            && warnings[0].ends_with("materials 1, 3, 4 keep their colour without it"),
+        "{}",
+        warnings[0]
+    );
+    assert_eq!(
+        warnings[1],
+        "scenes/model.gltf: model.gltf image 2 (data URI): not a PNG or JPEG image; material 2 \
+         keeps its colour without it"
+    );
+    assert!(
+        warnings[2].starts_with("scenes/model.gltf: model.gltf image 3: not a readable PNG image")
+            && warnings[2].ends_with("material 3 keeps its colour without it"),
+        "{}",
+        warnings[2]
+    );
+    // What `lambert info` lists.
+    let report = describe_images(&images, &materials);
+    assert_eq!(report[0].decoded, Ok((4, 2, "PNG")));
+    assert_eq!(report[0].materials, [0, 1]);
+    assert!(report[1].decoded.is_err());
+    assert_eq!(report[1].materials, [1, 3, 4]);
 }

@@ -5,9 +5,11 @@
 //! the layout, the filtering and the level of detail.
 
 mod decode;
+mod model;
 mod store;
 
 pub use decode::{DecodedImage, MAX_IMAGE_BYTES, MAX_TEXTURE_SIDE, decode_image};
+pub use model::{ImageReport, MaterialSlots, add_model_textures, describe_images};
 pub use store::{
     LINEAR_ONE, NO_TEXTURE, SLOT_WORDS, SRGB_TABLE_WORDS, TextureLevel, TextureSlot, TextureStore,
     linear_from_srgb, mip_chain,

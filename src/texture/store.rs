@@ -140,66 +140,47 @@ pub fn mip_chain(width: u32, height: u32, rgba: &[u8]) -> Vec<(u32, u32, Vec<u32
 #[derive(Clone, Debug)]
 pub struct TextureStore {
     words: Vec<u32>,
-    /// Per image: the word of its first level entry, its level count, its
-    /// size; None where it did not decode.
-    images: Vec<Option<(u32, u32, u32, u32)>>,
+    /// Per image added: the word of its first level entry, its level
+    /// count, its size.
+    images: Vec<(u32, u32, u32, u32)>,
     slots: usize,
 }
 
 /// No textures: the sRGB table alone (never an empty binding).
 impl Default for TextureStore {
     fn default() -> TextureStore {
-        TextureStore::new(&[])
+        TextureStore {
+            words: srgb_table().to_vec(),
+            images: Vec::new(),
+            slots: 0,
+        }
     }
 }
 
 impl TextureStore {
-    /// The store of `images` (None for one that did not decode), with no
-    /// slots yet.
-    pub fn new(images: &[Option<DecodedImage>]) -> TextureStore {
-        let chains: Vec<Option<Vec<(u32, u32, Vec<u32>)>>> = images
-            .iter()
-            .map(|image| {
-                image
-                    .as_ref()
-                    .map(|i| mip_chain(i.width, i.height, &i.rgba))
-            })
-            .collect();
-        let level_count: usize = chains.iter().flatten().map(Vec::len).sum();
-        let mut words = srgb_table().to_vec();
-        let mut texel_word = words.len() + 4 * level_count;
-        let mut placed = Vec::with_capacity(images.len());
-        for chain in &chains {
-            placed.push(chain.as_ref().map(|levels| {
-                let first = words.len() as u32;
-                for (w, h, texels) in levels {
-                    words.extend([texel_word as u32, *w, *h, 0]);
-                    texel_word += texels.len();
-                }
-                (first, levels.len() as u32, levels[0].0, levels[0].1)
-            }));
+    /// Adds `image` with its mip chain; returns its index for `slot`.
+    pub fn add_image(&mut self, image: &DecodedImage) -> u32 {
+        let levels = mip_chain(image.width, image.height, &image.rgba);
+        let first = self.words.len() as u32;
+        let mut texel_word = self.words.len() + 4 * levels.len();
+        for (w, h, texels) in &levels {
+            self.words.extend([texel_word as u32, *w, *h, 0]);
+            texel_word += texels.len();
         }
-        for levels in chains.into_iter().flatten() {
-            for (_, _, texels) in levels {
-                words.extend(texels);
-            }
+        for (_, _, texels) in levels.iter() {
+            self.words.extend(texels);
         }
-        TextureStore {
-            words,
-            images: placed,
-            slots: 0,
-        }
+        self.images
+            .push((first, levels.len() as u32, image.width, image.height));
+        self.images.len() as u32 - 1
     }
 
-    /// Adds a use of an image and returns the word where it starts, the
-    /// value a material's texture slot holds; `NO_TEXTURE` when its image
-    /// did not decode (the material keeps its factor) or is out of range.
-    pub fn slot(&mut self, texture: &TextureUse) -> u32 {
-        let Some(Some((levels, count, width, height))) =
-            self.images.get(texture.image as usize).copied()
-        else {
-            return NO_TEXTURE;
-        };
+    /// Adds a use of image `image` (an index `add_image` returned) with
+    /// `texture`'s sampler and transform (its `image` field, the model's
+    /// index, is not read); returns the word where it starts, the value a
+    /// material's texture slot holds.
+    pub fn slot(&mut self, image: u32, texture: &TextureUse) -> u32 {
+        let (levels, count, width, height) = self.images[image as usize];
         let [[a, b, c], [d, e, f]] = texture.transform;
         let wrap = |w: Wrap| match w {
             Wrap::Repeat => 0,
