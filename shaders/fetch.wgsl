@@ -18,6 +18,13 @@ fn triangle_normals_at(i: u32) -> TriangleNormals {
     return triangle_normals_hi[i - TRIANGLES_PER_BINDING];
 }
 
+fn triangle_attributes_at(i: u32) -> TriangleAttributes {
+    if i < ATTRIBUTES_PER_BINDING {
+        return triangle_attributes[i];
+    }
+    return triangle_attributes_hi[i - ATTRIBUTES_PER_BINDING];
+}
+
 // Nodes are stored as five vec4 words (`bvh_nodes`) and read as such: five
 // loads rather than one per field. lavapipe runs a load whose address
 // differs between invocations one invocation at a time, a loop per load

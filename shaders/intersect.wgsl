@@ -262,11 +262,65 @@ fn intersect_primitive(ray: Ray, shear: Shear, prim: u32) -> vec3<f32> {
     return no_triangle_hit();
 }
 
+// The texture in `slot` at (u, v) of triangle `prim` (which has
+// FLAG_ATTRIBUTES: slots are only filled for meshes with texture
+// coordinates), at the level of detail of a ray cone `cone_width` wide
+// there along `dir`; a cone of width 0 reads the base level (the any-hit
+// test's alpha).
+fn texture_at(slot: u32, tri: Triangle, prim: u32, u: f32, v: f32, dir: vec3<f32>, cone_width: f32) -> vec4<f32> {
+    let a = triangle_attributes_at(prim);
+    let uv = interpolate_uv(a.uvs[0], a.uvs[1], a.uvs[2], u, v);
+    var lod = 0;
+    if cone_width > 0.0 {
+        lod = texture_lod(slot, tri.v0, tri.v1, tri.v2, a.uvs[0], a.uvs[1], a.uvs[2], dir, cone_width);
+    }
+    return sample_texture(slot, uv, lod);
+}
+
+// The base colour at (u, v) of triangle `prim`: its material's, times its
+// corners' colours interpolated (FLAG_ATTRIBUTES), times its base colour
+// texture (RGBA) and its alpha texture's alpha, read as `texture_at` does.
+// Alpha and shading both read it.
+fn base_color_at(tri: Triangle, prim: u32, u: f32, v: f32, dir: vec3<f32>, cone_width: f32) -> vec4<f32> {
+    let material = materials[tri.material];
+    var color = material.base_color;
+    if (tri.flags & FLAG_ATTRIBUTES) != 0u {
+        let a = triangle_attributes_at(prim);
+        // fma, as the CPU's mul_add: the same bits whether or not the
+        // compiler would have fused a multiply-add of its own.
+        let w = 1.0 - u - v;
+        color *= fma(vec4<f32>(w), a.colors[0], fma(vec4<f32>(u), a.colors[1], v * a.colors[2]));
+        if material.base_color_texture != NO_TEXTURE {
+            color *= texture_at(material.base_color_texture, tri, prim, u, v, dir, cone_width);
+        }
+        if material.alpha_texture != NO_TEXTURE {
+            color.a *= texture_at(material.alpha_texture, tri, prim, u, v, dir, cone_width).a;
+        }
+    }
+    return color;
+}
+
+// Whether a hit at (u, v) of primitive `prim` falls in an alpha-masked
+// triangle's cut-out (alpha below its material's cut-off): the any-hit
+// test, made where a hit would be recorded, so a cut-out costs no extra
+// traversal; opaque triangles (no FLAG_MASKED) pay one flag test, and
+// scenes without masks nothing (HAS_ALPHA_MASK).
+fn cut_out(prim: u32, u: f32, v: f32) -> bool {
+    if !HAS_ALPHA_MASK || prim >= params.num_triangles {
+        return false;
+    }
+    let tri = triangle_at(prim);
+    if (tri.flags & FLAG_MASKED) == 0u {
+        return false;
+    }
+    return base_color_at(tri, prim, u, v, vec3<f32>(0.0), 0.0).a < materials[tri.material].alpha_cutoff;
+}
+
 // Tests `prim`; if it is hit nearer than ray.tmax, makes it the hit and
 // shortens the ray. Returns whether it did.
 fn record_hit(ray: ptr<function, Ray>, shear: Shear, hit: ptr<function, Hit>, prim: u32) -> bool {
     let tuv = intersect_primitive(*ray, shear, prim);
-    if tuv.x < (*ray).tmax {
+    if tuv.x < (*ray).tmax && !cut_out(prim, tuv.y, tuv.z) {
         (*ray).tmax = tuv.x;
         *hit = Hit(tuv.x, prim, tuv.y, tuv.z);
         return true;
@@ -294,10 +348,12 @@ fn record_block_hits(
             // GPU that fuses multiply-adds can see a hit in a lane of zero
             // vertices.
             if lanes.t[lane] < (*ray).tmax && prims[lane] < params.num_triangles {
-                (*ray).tmax = lanes.t[lane];
                 let uv = block_uv(lanes, lane);
-                *hit = Hit(lanes.t[lane], prims[lane], uv.x, uv.y);
-                recorded = true;
+                if !cut_out(prims[lane], uv.x, uv.y) {
+                    (*ray).tmax = lanes.t[lane];
+                    *hit = Hit(lanes.t[lane], prims[lane], uv.x, uv.y);
+                    recorded = true;
+                }
             }
         }
     }

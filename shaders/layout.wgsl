@@ -12,6 +12,9 @@ override HAS_SPHERES: bool = true;
 override HAS_SHADOWS: bool = true;
 override HAS_POINT_LIGHTS: bool = true;
 override HAS_DIRECTIONAL_LIGHTS: bool = true;
+// Some triangle is alpha-masked (FLAG_MASKED): traversal tests alpha at
+// its hits. False: the test is compiled out.
+override HAS_ALPHA_MASK: bool = true;
 // false: test every primitive (the reference that tests the BVH).
 override USE_BVH: bool = true;
 // Ray/triangle test: INTERSECT_SEED, INTERSECT_MOLLER_TRUMBORE or
@@ -21,9 +24,11 @@ override INTERSECT: u32 = 2u;
 // closest.
 override ANY_HIT: bool = false;
 // Arrays too large for one storage binding are split over two: the first
-// this many elements in `triangles` (and `triangle_normals`), `bvh_nodes`
+// this many elements in `triangles` (and `triangle_normals`),
+// `triangle_attributes`, `bvh_nodes`
 // or `bvh_blocks`, the rest in the `_hi` binding. Unsplit: all.
 override TRIANGLES_PER_BINDING: u32 = 0xffffffffu;
+override ATTRIBUTES_PER_BINDING: u32 = 0xffffffffu;
 override NODES_PER_BINDING: u32 = 0xffffffffu;
 override BLOCKS_PER_BINDING: u32 = 0xffffffffu;
 // Read the BVH's nodes and blocks from `bvh_node_texels` and
@@ -55,6 +60,11 @@ const FAR: f32 = 3.40282347e38;
 const LIGHT_POINT: u32 = 0u;
 const LIGHT_DIRECTIONAL: u32 = 1u;
 const FLAG_SMOOTH: u32 = 1u;
+const FLAG_ATTRIBUTES: u32 = 2u;
+const FLAG_MASKED: u32 = 4u;
+const ALPHA_OPAQUE: u32 = 0u;
+const ALPHA_MASK: u32 = 1u;
+const NO_TEXTURE: u32 = 0xffffffffu;
 const INTERSECT_SEED: u32 = 0u;
 const INTERSECT_MOLLER_TRUMBORE: u32 = 1u;
 const INTERSECT_WATERTIGHT: u32 = 2u;
@@ -106,7 +116,9 @@ struct Params {
     sample_end: u32,
     // How often `loops_completed`'s loop must run (2).
     canary_loops: u32,
-    _pad0: u32,
+    // A camera ray's cone's spread angle: its width at distance t is
+    // t · cone_spread (texture::cone_spread; docs/textures.md).
+    cone_spread: f32,
     _pad1: u32,
 }
 
@@ -135,9 +147,24 @@ struct Sphere {
     _pad2: u32,
 }
 
+// Corner colours (linear RGBA) and texture coordinates of a triangle; only
+// read for triangles with FLAG_ATTRIBUTES.
+struct TriangleAttributes {
+    colors: array<vec4<f32>, 3>,
+    uvs: array<vec2<f32>, 3>,
+    _pad: vec2<f32>,
+}
+
+// Base colour (linear RGBA), emission (linear RGB), alpha mode
+// (ALPHA_OPAQUE, ALPHA_MASK) and cut-off, texture slots (NO_TEXTURE: none).
 struct Material {
-    albedo: vec3<f32>,
-    _pad: u32,
+    base_color: vec4<f32>,
+    emission: vec3<f32>,
+    alpha_mode: u32,
+    alpha_cutoff: f32,
+    base_color_texture: u32,
+    emissive_texture: u32,
+    alpha_texture: u32,
 }
 
 // Point light: `vector` is its position and `color` its intensity I
@@ -210,6 +237,7 @@ struct Surface {
     geometric_normal: vec3<f32>,
     shading_normal: vec3<f32>,
     albedo: vec3<f32>,
+    emission: vec3<f32>,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
@@ -232,8 +260,10 @@ struct Surface {
 // (t mod row, t / row).
 @group(0) @binding(13) var bvh_node_texels: texture_2d<u32>;
 @group(0) @binding(14) var bvh_block_texels: texture_2d<u32>;
+@group(0) @binding(15) var<storage, read> triangle_attributes: array<TriangleAttributes>;
+@group(0) @binding(16) var<storage, read> triangle_attributes_hi: array<TriangleAttributes>;
 // The scene's textures, all in one array of words (src/texture/store.rs).
-@group(0) @binding(15) var<storage, read> textures: array<u32>;
+@group(0) @binding(17) var<storage, read> textures: array<u32>;
 // Group 1 holds what one entry point reads and writes: an image tile for
 // `render`, a batch of rays for `trace_rays`.
 @group(1) @binding(0) var out_color: texture_storage_2d<rgba32float, write>;

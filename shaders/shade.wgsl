@@ -37,7 +37,16 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
                 shading = face_forward(normalize(interpolated), ray.dir);
             }
         }
-        return Surface(position, error, geometric, shading, materials[tri.material].albedo);
+        // The camera ray's cone where it hits (docs/textures.md).
+        let cone_width = hit.t * params.cone_spread;
+        let base = base_color_at(tri, hit.prim, hit.u, hit.v, ray.dir, cone_width);
+        let material = materials[tri.material];
+        var emission = material.emission;
+        if material.emissive_texture != NO_TEXTURE && (tri.flags & FLAG_ATTRIBUTES) != 0u {
+            emission *= texture_at(material.emissive_texture, tri, hit.prim, hit.u, hit.v, ray.dir,
+                cone_width).rgb;
+        }
+        return Surface(position, error, geometric, shading, base.rgb, emission);
     }
     let sphere = spheres[hit.prim - params.num_triangles];
     // Relative to the centre first: o − c is exact when both are near each
@@ -47,7 +56,8 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
     let position = sphere.center + sphere.radius * outward;
     let error = self_hit_bound(abs(sphere.center) + sphere.radius);
     let normal = face_forward(outward, ray.dir);
-    return Surface(position, error, normal, normal, materials[sphere.material].albedo);
+    let material = materials[sphere.material];
+    return Surface(position, error, normal, normal, material.base_color.rgb, material.emission);
 }
 
 // The next f32 away from zero in the direction of `towards` (+1 or −1).
@@ -123,7 +133,7 @@ fn shadowed(ray: Ray, light: u32) -> bool {
     return trace_any(ray);
 }
 
-// Lambert: ambient·k + Σ k·E·max(0, n·l)·visible, linear RGB.
+// Lambert: ambient·k + Σ k·E·max(0, n·l)·visible + emission, linear RGB.
 fn shade(ray: Ray, hit: Hit) -> vec3<f32> {
     if hit.prim == NO_HIT {
         return params.background;
@@ -141,5 +151,7 @@ fn shade(ray: Ray, hit: Hit) -> vec3<f32> {
         }
         color += surface.albedo * sample.irradiance * sample.cos_theta;
     }
-    return color;
+    // Emission: the surface's own light, seen by the camera; it lights
+    // nothing else (no light is sampled from it).
+    return color + surface.emission;
 }

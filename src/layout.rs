@@ -18,6 +18,19 @@ pub const LIGHT_POINT: u32 = 0;
 pub const LIGHT_DIRECTIONAL: u32 = 1;
 /// `Triangle::flags` bit: interpolate `TriangleNormals` for shading.
 pub const FLAG_SMOOTH: u32 = 1;
+/// `Triangle::flags` bit: the triangle has `TriangleAttributes` (corner
+/// colours and texture coordinates).
+pub const FLAG_ATTRIBUTES: u32 = 2;
+/// `Triangle::flags` bit: its material is alpha-masked, so traversal tests
+/// its alpha at each hit (opaque triangles skip the test).
+pub const FLAG_MASKED: u32 = 4;
+/// `Material::alpha_mode`: opaque.
+pub const ALPHA_OPAQUE: u32 = 0;
+/// `Material::alpha_mode`: cut out where alpha < `alpha_cutoff` (glTF MASK,
+/// and BLEND rendered as MASK at 0.5).
+pub const ALPHA_MASK: u32 = 1;
+/// A `Material` texture slot that holds no texture.
+pub const NO_TEXTURE: u32 = u32::MAX;
 /// The shader's "no hit yet" distance (WGSL has no infinity literal).
 pub const FAR: f32 = f32::MAX;
 
@@ -54,7 +67,9 @@ pub struct Params {
     pub sample_end: u32,
     /// Trip count of the shader's `loops_completed` check: 2.
     pub canary_loops: u32,
-    pub _pad0: u32,
+    /// A camera ray's cone's spread angle: its width at distance t is
+    /// t · cone_spread (`texture::cone_spread`).
+    pub cone_spread: f32,
     pub _pad1: u32,
 }
 
@@ -78,6 +93,29 @@ pub struct TriangleNormals {
     pub n2: [f32; 4],
 }
 
+/// Corner colours (linear RGBA, multiplying the base colour) and texture
+/// coordinates (glTF's convention) of one triangle; only read for
+/// triangles with FLAG_ATTRIBUTES. 80 bytes a triangle, stored only when
+/// some mesh has colours or texture coordinates (as `TriangleNormals`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct TriangleAttributes {
+    pub colors: [[f32; 4]; 3],
+    pub uvs: [[f32; 2]; 3],
+    pub _pad: [f32; 2],
+}
+
+impl Default for TriangleAttributes {
+    /// White corners (the base colour unchanged), texture coordinates 0.
+    fn default() -> TriangleAttributes {
+        TriangleAttributes {
+            colors: [[1.0; 4]; 3],
+            uvs: [[0.0; 2]; 3],
+            _pad: [0.0; 2],
+        }
+    }
+}
+
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Sphere {
@@ -89,11 +127,50 @@ pub struct Sphere {
     pub _pad2: u32,
 }
 
+/// How a surface looks (docs/scene-format.md, "How colour reaches a
+/// pixel"): base colour (RGB: the albedo; A: its alpha), emission added to
+/// the radiance it sends back, alpha mode and cut-off, and texture slots
+/// (`NO_TEXTURE` where none).
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct Material {
-    pub albedo: [f32; 3],
-    pub _pad: u32,
+    /// Linear RGBA.
+    pub base_color: [f32; 4],
+    /// Linear RGB radiance.
+    pub emission: [f32; 3],
+    /// ALPHA_OPAQUE or ALPHA_MASK.
+    pub alpha_mode: u32,
+    pub alpha_cutoff: f32,
+    pub base_color_texture: u32,
+    pub emissive_texture: u32,
+    pub alpha_texture: u32,
+}
+
+impl Material {
+    /// An opaque, untextured, non-emissive material of this albedo.
+    pub fn from_albedo(albedo: [f32; 3]) -> Material {
+        let [r, g, b] = albedo;
+        Material {
+            base_color: [r, g, b, 1.0],
+            emission: [0.0; 3],
+            alpha_mode: ALPHA_OPAQUE,
+            alpha_cutoff: 0.5,
+            base_color_texture: NO_TEXTURE,
+            emissive_texture: NO_TEXTURE,
+            alpha_texture: NO_TEXTURE,
+        }
+    }
+
+    pub fn albedo(&self) -> [f32; 3] {
+        let [r, g, b, _] = self.base_color;
+        [r, g, b]
+    }
+}
+
+impl Default for Material {
+    fn default() -> Material {
+        Material::from_albedo([0.0; 3])
+    }
 }
 
 /// Point light: `vector` = position, `color` = intensity.

@@ -80,6 +80,7 @@ pub fn settings_hash(scene: &Scene, device: &str) -> String {
     let mut h = Fingerprint(0xcbf2_9ce4_8422_2325);
     h.add(bytemuck::cast_slice(&scene.triangles));
     h.add(bytemuck::cast_slice(&scene.normals));
+    h.add(bytemuck::cast_slice(&scene.attributes));
     h.add(bytemuck::cast_slice(&scene.spheres));
     h.add(bytemuck::cast_slice(&scene.materials));
     h.add(bytemuck::cast_slice(&scene.lights));

@@ -273,7 +273,7 @@ fn obj_materials_from_mtl_files() {
     );
     let mesh = load_mesh(&d.join("boxes.obj"), NormalMode::Face).unwrap();
     assert_eq!(mesh.face_materials, vec![None, Some(0), Some(1), None]);
-    assert_eq!(mesh.materials, vec![[0.8, 0.1, 0.1], [0.1, 0.1, 0.9]]);
+    assert_eq!(albedos(&mesh), vec![[0.8, 0.1, 0.1], [0.1, 0.1, 0.9]]);
     let warnings = mesh.warnings.join("\n");
     assert!(warnings.contains("missing.mtl"), "{warnings}");
     assert!(
@@ -287,7 +287,7 @@ fn obj_materials_from_mtl_files() {
         Scene::from_toml(&text, &d.join("s.toml")).unwrap()
     };
     let s = scene_at("");
-    let albedo = |t: usize| s.materials[s.triangles[t].material as usize].albedo;
+    let albedo = |t: usize| s.materials[s.triangles[t].material as usize].albedo();
     assert_eq!(
         [albedo(0), albedo(1), albedo(2), albedo(3)],
         [[0.8; 3], [0.8, 0.1, 0.1], [0.1, 0.1, 0.9], [0.8; 3]]
@@ -298,7 +298,7 @@ fn obj_materials_from_mtl_files() {
         overridden
             .triangles
             .iter()
-            .all(|t| overridden.materials[t.material as usize].albedo == [0.2, 0.3, 0.4])
+            .all(|t| overridden.materials[t.material as usize].albedo() == [0.2, 0.3, 0.4])
     );
     // Per-face materials on both paths: ambient 1 shows each face's albedo.
     let (gpu, cpu) = (render_gpu(&s), render_cpu(&s));
@@ -360,7 +360,7 @@ fn gltf_hierarchy_camera_lights_and_materials() {
             .any(|p| (*p - expected).length() < 1e-6),
         "no box corner at {expected}"
     );
-    assert_eq!(g.mesh.materials, vec![[0.8, 0.1, 0.1], [0.6, 0.6, 0.6]]);
+    assert_eq!(albedos(&g.mesh), vec![[0.8, 0.1, 0.1], [0.6, 0.6, 0.6]]);
     let camera = &g.cameras[0];
     assert_eq!(camera.name.as_deref(), Some("view"));
     let pitch = (2.0f64).atan2(7.0);
@@ -598,7 +598,8 @@ fn gltf_data_uris_external_buffers_and_malformed_files() {
     for expected in [
         "light spot: a spot light, skipped",
         "light lamp: its range is ignored",
-        "material painted: its baseColorTexture is ignored",
+        "image 0: ",
+        "paint.png is not found; the materials using it keep their factors",
         "mode Lines skipped",
     ] {
         assert!(
@@ -756,11 +757,11 @@ fn gltf_rotations_are_normalised_with_a_warning() {
 }
 
 /// Issue 28 items 5 and 18: a negative baseColorFactor component is
-/// clamped to 0 with a warning (it would be negative radiance); emission
-/// (emissiveFactor, KHR_materials_emissive_strength) gets one warning a
-/// file until it is rendered.
+/// clamped to 0 with a warning (it would be negative radiance). Issue 30
+/// item 4: emission (emissiveFactor × KHR_materials_emissive_strength) is
+/// read, and rendered, so it is no longer a warning.
 #[test]
-fn gltf_negative_colours_are_clamped_and_emission_is_named() {
+fn gltf_negative_colours_are_clamped_and_emission_is_read() {
     let dir = tempfile::tempdir().unwrap();
     let material =
         |m: u32| serde_json::json!({"attributes": {"POSITION": 0}, "indices": 1, "material": m});
@@ -779,23 +780,14 @@ fn gltf_negative_colours_are_clamped_and_emission_is_named() {
         })),
     );
     let mesh = load_mesh(&path, NormalMode::Face).unwrap();
-    assert_eq!(mesh.materials, vec![[0.0, 0.25, 2.0], [1.0; 3], [1.0; 3]]);
-    assert_eq!(mesh.warnings.len(), 2, "{:?}", mesh.warnings);
+    assert_eq!(albedos(&mesh), vec![[0.0, 0.25, 2.0], [1.0; 3], [1.0; 3]]);
+    let emissive: Vec<[f32; 3]> = mesh.materials.iter().map(|m| m.emissive).collect();
+    assert_eq!(emissive, vec![[0.0; 3], [5.0, 2.5, 0.0], [0.0, 0.0, 1.0]]);
+    assert_eq!(mesh.warnings.len(), 1, "{:?}", mesh.warnings);
     let clamped = &mesh.warnings[0];
     assert_has(
         clamped,
         &["lit.gltf", "material paint", "-0.5", "clamped to 0"],
-    );
-    let emission = &mesh.warnings[1];
-    assert_has(
-        emission,
-        &[
-            "lit.gltf",
-            "emission is ignored",
-            "material lamp emissiveFactor [1.0, 0.5, 0.0]",
-            "material glow emissiveFactor",
-            "KHR_materials_emissive_strength",
-        ],
     );
     // A material without emission or a negative colour: no warning.
     let plain = gltf_file(
@@ -1125,7 +1117,7 @@ fn mtl_grey_xyz_and_spectral_colours() {
         obj += &format!("usemtl {name}\nf 1 2 3\n");
     }
     let mesh = load_mesh(&write(d, "m.obj", obj), NormalMode::Face).unwrap();
-    let m = &mesh.materials;
+    let m = &albedos(&mesh);
     assert_eq!(m[0], [0.5; 3]);
     assert_eq!(m[1], [0.8; 3]);
     let close = |a: [f32; 3], b: [f32; 3]| (0..3).all(|i| (a[i] - b[i]).abs() < 1e-4);
@@ -1218,4 +1210,12 @@ fn toml_mirrored_meshes_keep_their_normals_facing_out() {
         );
         assert_eq!(s.normals.len(), 4, "{scale}: smooth normals kept");
     }
+}
+
+/// The RGB of each material's base colour.
+fn albedos(mesh: &lambert::loading::Mesh) -> Vec<[f32; 3]> {
+    mesh.materials
+        .iter()
+        .map(|m| [m.base_color[0], m.base_color[1], m.base_color[2]])
+        .collect()
 }

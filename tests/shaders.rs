@@ -98,7 +98,7 @@ fn host_structs_match_wgsl_layout() {
             sample_begin,
             sample_end,
             canary_loops,
-            _pad0,
+            cone_spread,
             _pad1,
         }
     );
@@ -125,7 +125,19 @@ fn host_structs_match_wgsl_layout() {
             _pad2
         }
     );
-    check_layout!(m, Material { albedo, _pad });
+    check_layout!(
+        m,
+        Material {
+            base_color,
+            emission,
+            alpha_mode,
+            alpha_cutoff,
+            base_color_texture,
+            emissive_texture,
+            alpha_texture,
+        }
+    );
+    check_layout!(m, TriangleAttributes { colors, uvs, _pad });
     check_layout!(
         m,
         Light {

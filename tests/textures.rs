@@ -10,7 +10,7 @@ use lambert::loading::material::{
     Filter, IDENTITY_UV_TRANSFORM, ImageSource, Sampler, TextureUse, Wrap,
 };
 use lambert::texture::{
-    DecodedImage, LINEAR_ONE, NO_TEXTURE, TextureStore, decode_image, linear_from_srgb, mip_chain,
+    DecodedImage, LINEAR_ONE, TextureStore, decode_image, linear_from_srgb, mip_chain,
 };
 
 const WHITE: [u8; 4] = [255, 255, 255, 255];
@@ -517,13 +517,14 @@ fn model_textures_warn_for_images_that_do_not_decode() {
     let mut warnings = Vec::new();
     let model = std::path::Path::new("scenes/model.gltf");
     let slots = add_model_textures(&mut store, model, &images, &materials, &mut warnings);
-    let none = NO_TEXTURE;
+    let none = lambert::layout::NO_TEXTURE;
     assert_ne!(slots[0].base_color, none);
     assert_eq!(slots[0].emissive, none);
     assert_eq!(slots[1].base_color, none);
     assert_ne!(slots[1].emissive, none);
     assert_eq!(slots[2].base_color, none);
     assert_eq!(slots[3].base_color, none);
+    assert!(slots.iter().all(|s| s.alpha == none));
     // Image 0 decoded once: 256 table words, 3 levels (4×2, 2×1, 1×1) of
     // 4 words and 11 texels, and two slots of 10 words.
     assert_eq!(store.words().len(), 256 + 12 + 11 + 20);

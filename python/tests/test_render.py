@@ -28,6 +28,20 @@ def test_render_equals_the_cli(device, cli, tmp_path):
     np.testing.assert_array_equal(image, read_pfm(tmp_path / "cli.pfm"))
 
 
+@pytest.mark.parametrize("device", ["cpu", "gpu"])
+def test_a_vertex_coloured_model_renders_as_the_cli_does(device, cli, tmp_path):
+    # A quad whose corners are red, green, blue and white (OBJ `v x y z r g b`).
+    path = tmp_path / "coloured.obj"
+    path.write_text("v -1 -1 0 1 0 0\nv 1 -1 0 0 1 0\nv 1 1 0 0 0 1\nv -1 1 0 1 1 1\nf 1 2 3 4\n")
+    cli("render", str(path), "-o", str(tmp_path / "cli.pfm"), "--device", device, "--width", "32", "--height", "24",
+        "-q")
+    scene = lambert.Scene.load(str(path))
+    image = scene.render(32, 24, device=device)
+    np.testing.assert_array_equal(image, read_pfm(tmp_path / "cli.pfm"))
+    # Its colours, not grey: some pixel is much redder than it is green.
+    assert (image[..., 0] - image[..., 1]).max() > 0.2
+
+
 def test_gpu_and_cpu_renders_agree():
     scene = lambert.Scene.load(os.path.join(MESHES, "bunny_lowres.obj"))
     cpu = scene.render(64, 48, device="cpu")

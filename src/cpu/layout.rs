@@ -5,7 +5,7 @@
 
 use crate::bvh::{MAX_DEPTH, STACK_SIZE};
 use crate::layout::{
-    BVH_WIDTH, BvhNode, CompressedNode, FLAG_SMOOTH, LEAF_BIT, LIGHT_POINT, META_LEAF, NO_HIT,
+    BVH_WIDTH, BvhNode, CompressedNode, FLAG_ATTRIBUTES, FLAG_MASKED, FLAG_SMOOTH, LEAF_BIT, LIGHT_POINT, META_LEAF, NO_HIT, NO_TEXTURE,
     PrimBlock, leaf_range,
 };
 use crate::camera::View;
@@ -80,6 +80,7 @@ pub struct Surface {
     pub geometric_normal: Vec3,
     pub shading_normal: Vec3,
     pub albedo: Vec3,
+    pub emission: Vec3,
 }
 
 fn vec3(v: [f32; 3]) -> Vec3 {
@@ -110,6 +111,12 @@ pub struct Kernel<'a> {
     /// traverses as the shader does (`trace_compressed`), the twin that
     /// GPU results are compared with.
     pub compressed: Option<&'a [CompressedNode]>,
+    /// Whether some triangle is alpha-masked (the shader's HAS_ALPHA_MASK).
+    alpha_mask: bool,
+    /// The scene's texture store (the shader's `textures`).
+    textures: crate::cpu::texture::Textures<'a>,
+    /// The camera rays' cone spread (the shader's `params.cone_spread`).
+    cone_spread: f32,
     /// The GPU's short stack: entries `trace_compressed` keeps before the
     /// oldest spill (`cwbvh::short_stack`; `MAX_DEPTH`, none spill).
     pub stack_entries: usize,
@@ -128,8 +135,11 @@ impl<'a> Kernel<'a> {
 
     /// `scene` seen from `view` rather than its file's own.
     pub fn with_view(scene: &'a Scene, view: &View, ymm_boxes: bool) -> Kernel<'a> {
+        let camera = scene.local_camera(&view.camera);
+        // From the f32 basis in both precisions, as the GPU's is.
+        let basis = crate::camera::f32::CameraBasis::new(&camera);
         Kernel {
-            camera: CameraBasis::new(&scene.local_camera(&view.camera)),
+            camera: CameraBasis::new(&camera),
             scene,
             spp: view.spp,
             seed: view.seed,
@@ -138,6 +148,11 @@ impl<'a> Kernel<'a> {
             strata_x: crate::camera::strata_columns(view.spp),
             intersect: scene.intersect,
             ymm_boxes,
+            alpha_mask: scene.has_alpha_mask(),
+            textures: crate::cpu::texture::Textures {
+                words: scene.textures.words(),
+            },
+            cone_spread: crate::texture::cone_spread(basis.tan_half_y, basis.height, view.spp),
             compressed: None,
             stack_entries: MAX_DEPTH,
         }

@@ -76,6 +76,23 @@ impl<'a> Kernel<'a> {
             let position = w * v0 + hit.u * v1 + hit.v * v2;
             let error = self_hit_bound(v0.abs().max(v1.abs()).max(v2.abs()));
             let geometric = face_forward((v1 - v0).cross(v2 - v0).normalize(), ray.dir);
+            // The camera ray's cone where it hits (docs/textures.md).
+            let cone_width = hit.t as f32 * self.cone_spread;
+            let material = &scene.materials[tri.material as usize];
+            let mut emission = vec3(material.emission);
+            if material.emissive_texture != NO_TEXTURE && tri.flags & FLAG_ATTRIBUTES != 0 {
+                emission *= self
+                    .texture_at(
+                        material.emissive_texture,
+                        tri,
+                        hit.prim,
+                        hit.u,
+                        hit.v,
+                        ray.dir,
+                        cone_width,
+                    )
+                    .truncate();
+            }
             let mut shading = geometric;
             if tri.flags & FLAG_SMOOTH != 0 {
                 let ns = &scene.normals[hit.prim as usize];
@@ -91,10 +108,14 @@ impl<'a> Kernel<'a> {
                 error,
                 geometric_normal: geometric,
                 shading_normal: shading,
-                albedo: vec3(scene.materials[tri.material as usize].albedo),
+                albedo: self
+                    .base_color_at(tri, hit.prim, hit.u, hit.v, ray.dir, cone_width)
+                    .truncate(),
+                emission,
             };
         }
         let sphere = &scene.spheres[(hit.prim - num_triangles) as usize];
+        let material = &scene.materials[sphere.material as usize];
         let center = vec3(sphere.center);
         let outward = ((ray.origin - center) + hit.t * ray.dir).normalize();
         let position = center + (sphere.radius as Real) * outward;
@@ -105,11 +126,12 @@ impl<'a> Kernel<'a> {
             error,
             geometric_normal: normal,
             shading_normal: normal,
-            albedo: vec3(scene.materials[sphere.material as usize].albedo),
+            albedo: vec4(material.base_color).truncate(),
+            emission: vec3(material.emission),
         }
     }
 
-    /// Lambert: ambient·k + Σ k·E·max(0, n·l)·visible, linear RGB.
+    /// Lambert: ambient·k + Σ k·E·max(0, n·l)·visible + emission, linear RGB.
     #[inline(always)]
     pub fn shade(&self, ray: &Ray, hit: &Hit) -> Vec3 {
         if hit.prim == NO_HIT {
@@ -127,7 +149,9 @@ impl<'a> Kernel<'a> {
             }
             color += surface.albedo * sample.irradiance * sample.cos_theta;
         }
-        color
+        // Emission: the surface's own light, seen by the camera; it lights
+        // nothing else (no light is sampled from it).
+        color + surface.emission
     }
 }
 

@@ -64,7 +64,9 @@ pub const SCENE: BindingTable = BindingTable {
         bind("loop_status", 12, StorageWrite),
         bind("bvh_node_texels", 13, Texels),
         bind("bvh_block_texels", 14, Texels),
-        bind("textures", 15, Storage),
+        bind("triangle_attributes", 15, Storage),
+        bind("triangle_attributes_hi", 16, Storage),
+        bind("textures", 17, Storage),
     ],
 };
 

@@ -117,6 +117,10 @@ pub(super) fn resident_constants(
         "TRIANGLES_PER_BINDING",
         buffers.triangles.per_binding as f64,
     ));
+    constants.push((
+        "ATTRIBUTES_PER_BINDING",
+        buffers.attributes.per_binding as f64,
+    ));
     constants.push(("NODES_PER_BINDING", buffers.nodes.per_binding as f64));
     constants.push(("BLOCKS_PER_BINDING", buffers.blocks.per_binding as f64));
     constants.push(("BVH_TEXELS", (storage == BvhStorage::Texels) as u32 as f64));

@@ -87,7 +87,7 @@ pub fn params_for(scene: &Scene, view: &View) -> Params {
         sample_begin: 0,
         sample_end: view.spp,
         canary_loops: 2,
-        _pad0: 0,
+        cone_spread: crate::texture::cone_spread(basis.tan_half_y, basis.height, view.spp),
         _pad1: 0,
     }
 }
@@ -242,6 +242,8 @@ fn scene_bind_group(
             ("bvh_nodes_hi", buffers.nodes.high_binding()),
             ("bvh_blocks_hi", buffers.blocks.high_binding()),
             ("loop_status", loop_status.buffer.as_entire_binding()),
+            ("triangle_attributes", buffers.attributes.low_binding()),
+            ("triangle_attributes_hi", buffers.attributes.high_binding()),
             ("textures", buffers.textures.as_entire_binding()),
             (
                 "bvh_node_texels",

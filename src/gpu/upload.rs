@@ -6,7 +6,9 @@ use std::borrow::Cow;
 use wgpu::util::DeviceExt;
 
 use crate::error::{Error, Result};
-use crate::layout::{CompressedNode, PrimBlock, Sphere, Triangle, TriangleNormals};
+use crate::layout::{
+    CompressedNode, PrimBlock, Sphere, Triangle, TriangleAttributes, TriangleNormals,
+};
 use crate::scene::Scene;
 
 use super::adapter::is_llvmpipe;
@@ -55,6 +57,7 @@ pub const TEXELS_PER_ROW: u32 = 4096;
 pub(super) struct SceneBuffers {
     pub triangles: SplitBuffer,
     pub normals: SplitBuffer,
+    pub attributes: SplitBuffer,
     pub nodes: SplitBuffer,
     pub blocks: SplitBuffer,
     pub spheres: wgpu::Buffer,
@@ -80,6 +83,11 @@ impl SceneBuffers {
             gpu.split_buffer("triangles", &non_empty::<Triangle>(&scene.triangles), 48)?;
         let normals =
             gpu.split_buffer("normals", &non_empty::<TriangleNormals>(&scene.normals), 48)?;
+        let attributes = gpu.split_buffer(
+            "triangle attributes",
+            &non_empty::<TriangleAttributes>(&scene.attributes),
+            size_of::<TriangleAttributes>() as u64,
+        )?;
         let compressed = crate::cwbvh::compress(&scene.bvh);
         let texels = storage == BvhStorage::Texels;
         let (buffer_nodes, buffer_blocks): (&[CompressedNode], &[PrimBlock]) = if texels {
@@ -119,6 +127,7 @@ impl SceneBuffers {
         let device_bytes = [
             &triangles.buffer,
             &normals.buffer,
+            &attributes.buffer,
             &nodes.buffer,
             &spheres,
             &materials,
@@ -146,6 +155,7 @@ impl SceneBuffers {
         Ok(SceneBuffers {
             triangles,
             normals,
+            attributes,
             nodes,
             blocks,
             spheres,
@@ -163,6 +173,7 @@ impl SceneBuffers {
     pub fn split_arrays(&self) -> Vec<&'static str> {
         [
             ("triangles", &self.triangles),
+            ("triangle attributes", &self.attributes),
             ("BVH nodes", &self.nodes),
             ("BVH leaf blocks", &self.blocks),
         ]

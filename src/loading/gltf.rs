@@ -7,11 +7,19 @@ use std::path::Path;
 
 use glam::{DMat4, DQuat, DVec3};
 
-use super::{Mesh, NormalMode, check_coordinate, vertex_normals};
+use super::material::MaterialDesc;
+use super::{Mesh, NormalMode, check_coordinate, corner_values, vertex_normals};
 use crate::error::{Error, Result};
 
+mod materials;
+use materials::{Images, material_desc, texture_coordinate_set};
+
 /// Extensions lambert implements, so a file may require them.
-const IMPLEMENTED: &[&str] = &["KHR_lights_punctual"];
+const IMPLEMENTED: &[&str] = &[
+    "KHR_lights_punctual",
+    "KHR_materials_emissive_strength",
+    "KHR_texture_transform",
+];
 
 /// A perspective camera of the file, in world space.
 #[derive(Clone, Debug)]
@@ -132,7 +140,12 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
     let mut all_normals = true;
     let mut default_material: Option<u32> = None;
     let mut material_ids: Vec<Option<u32>> = vec![None; document.materials().len()];
-    let mut emission = Emission::default();
+    let mut images = Images::new(&buffers, path, document.images().len());
+    // Per vertex (parallel to positions): COLOR_0 (white where a primitive
+    // has none) and the texture coordinates its material's textures read.
+    let mut vertex_colors: Vec<[f32; 4]> = Vec::new();
+    let mut vertex_uvs: Vec<[f32; 2]> = Vec::new();
+    let (mut any_colors, mut any_uvs) = (false, false);
     let mut stack: Vec<(gltf::Node, DMat4)> = root.nodes().map(|n| (n, DMat4::IDENTITY)).collect();
     // Nodes in document order within each level, as the file lists them.
     stack.reverse();
@@ -201,6 +214,24 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
                 check_accessor(&indices, &buffers, Dimensions::Scalar, &types)
                     .map_err(|m| fail(format!("{what}: indices {m}")))?;
             }
+            let material = primitive.material();
+            let uv_set = texture_coordinate_set(&material, path, &mut scene.mesh.warnings);
+            let color_accessor = primitive.get(&gltf::Semantic::Colors(0));
+            if let Some(c) = &color_accessor {
+                let dimensions = match c.dimensions() {
+                    Dimensions::Vec4 => Dimensions::Vec4,
+                    _ => Dimensions::Vec3,
+                };
+                let types = [DataType::F32, DataType::U8, DataType::U16];
+                check_accessor(c, &buffers, dimensions, &types)
+                    .map_err(|m| fail(format!("{what}: COLOR_0 {m}")))?;
+            }
+            let uv_accessor = uv_set.and_then(|n| primitive.get(&gltf::Semantic::TexCoords(n)));
+            if let Some(t) = &uv_accessor {
+                let types = [DataType::F32, DataType::U8, DataType::U16];
+                check_accessor(t, &buffers, Dimensions::Vec2, &types)
+                    .map_err(|m| fail(format!("{what}: TEXCOORD_{} {m}", uv_set.unwrap_or(0))))?;
+            }
             let normal_accessor = primitive.get(&gltf::Semantic::Normals);
             if let Some(n) = &normal_accessor {
                 check_accessor(n, &buffers, Dimensions::Vec3, &vec3)
@@ -233,6 +264,34 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
                 }
             }
             let count = positions.len() as u32;
+            let same_count = |accessor: &gltf::Accessor, name: &str| {
+                if accessor.count() == positions.len() {
+                    Ok(())
+                } else {
+                    Err(fail(format!(
+                        "{what}: {name} accessor {} has {} elements, POSITION {}",
+                        accessor.index(),
+                        accessor.count(),
+                        positions.len()
+                    )))
+                }
+            };
+            match (reader.read_colors(0), &color_accessor) {
+                (Some(colors), Some(accessor)) => {
+                    same_count(accessor, "COLOR_0")?;
+                    any_colors = true;
+                    vertex_colors.extend(colors.into_rgba_f32());
+                }
+                _ => vertex_colors.extend(std::iter::repeat_n([1.0; 4], positions.len())),
+            }
+            match (uv_set.and_then(|n| reader.read_tex_coords(n)), &uv_accessor) {
+                (Some(uvs), Some(accessor)) => {
+                    same_count(accessor, "TEXCOORD")?;
+                    any_uvs = true;
+                    vertex_uvs.extend(uvs.into_f32());
+                }
+                _ => vertex_uvs.extend(std::iter::repeat_n([0.0; 2], positions.len())),
+            }
             let indices: Vec<u32> = match reader.read_indices() {
                 Some(i) => i.into_u32().collect(),
                 None => (0..count).collect(),
@@ -270,34 +329,22 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
                     }
                 }
             }
-            let material = primitive.material();
             let id = match material.index() {
                 Some(m) => *material_ids[m].get_or_insert_with(|| {
-                    let albedo = base_colour(&material, path, &mut scene.mesh.warnings);
-                    emission.note(&material);
-                    scene.mesh.materials.push(albedo);
+                    let desc =
+                        material_desc(&material, path, &mut images, &mut scene.mesh.warnings);
+                    scene.mesh.materials.push(desc);
                     (scene.mesh.materials.len() - 1) as u32
                 }),
                 None => *default_material.get_or_insert_with(|| {
-                    // glTF's default material: base colour 1.
-                    scene.mesh.materials.push([1.0; 3]);
+                    // glTF's default material: base colour 1, opaque.
+                    scene.mesh.materials.push(MaterialDesc {
+                        name: "(default)".into(),
+                        ..MaterialDesc::default()
+                    });
                     (scene.mesh.materials.len() - 1) as u32
                 }),
             };
-            if material
-                .pbr_metallic_roughness()
-                .base_color_texture()
-                .is_some()
-            {
-                let warning = format!(
-                    "{}: material {}: its baseColorTexture is ignored (textures are not supported; baseColorFactor is used)",
-                    path.display(),
-                    material_name(&material)
-                );
-                if !scene.mesh.warnings.contains(&warning) {
-                    scene.mesh.warnings.push(warning);
-                }
-            }
             scene
                 .mesh
                 .face_materials
@@ -305,11 +352,14 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
             scene.mesh.triangles.extend(triangles);
         }
     }
-    scene
-        .mesh
-        .warnings
-        .extend(emission.warning(&document, path));
     super::require_triangles(&scene.mesh, path)?;
+    scene.mesh.images = images.sources;
+    if any_colors {
+        scene.mesh.colors = Some(corner_values(&scene.mesh.triangles, &vertex_colors));
+    }
+    if any_uvs {
+        scene.mesh.uvs = Some(corner_values(&scene.mesh.triangles, &vertex_uvs));
+    }
     if mode == NormalMode::Smooth {
         let given = all_normals.then_some(&normals[..]);
         scene.mesh.file_normals = all_normals;
@@ -373,72 +423,6 @@ fn material_name(material: &gltf::Material) -> String {
         || format!("{}", material.index().unwrap_or(0)),
         str::to_string,
     )
-}
-
-/// A material's albedo: its baseColorFactor's RGB. Negative components
-/// (outside the spec's [0, 1], and negative radiance in the image) are
-/// clamped to 0 with a warning, as trimesh and Blender read such files;
-/// above 1 is kept, as a TOML or MTL albedo may be.
-fn base_colour(material: &gltf::Material, path: &Path, warnings: &mut Vec<String>) -> [f32; 3] {
-    let [r, g, b, a] = material.pbr_metallic_roughness().base_color_factor();
-    let rgb = [r, g, b];
-    if rgb.iter().any(|c| *c < 0.0) {
-        warnings.push(format!(
-            "{}: material {}: baseColorFactor {:?} has a negative component, clamped to 0",
-            path.display(),
-            material_name(material),
-            [r, g, b, a]
-        ));
-    }
-    rgb.map(|c| c.max(0.0))
-}
-
-/// Emission the file's materials give, which lambert does not render yet:
-/// gathered over the materials the scene uses, for one warning a file.
-#[derive(Default)]
-struct Emission {
-    /// `'lamp' emissiveFactor [1.0, 0.5, 0.0]`, one per material.
-    ignored: Vec<String>,
-}
-
-impl Emission {
-    fn note(&mut self, material: &gltf::Material) {
-        let factor = material.emissive_factor();
-        let mut what = Vec::new();
-        if factor.iter().any(|c| *c != 0.0) {
-            what.push(format!("emissiveFactor {factor:?}"));
-        }
-        if material.emissive_texture().is_some() {
-            what.push("emissiveTexture".to_string());
-        }
-        if !what.is_empty() {
-            self.ignored.push(format!(
-                "material {} {}",
-                material_name(material),
-                what.join(" and ")
-            ));
-        }
-    }
-
-    fn warning(self, document: &gltf::Document, path: &Path) -> Option<String> {
-        let mut ignored = self.ignored;
-        // The crate drops the extension's value; the file lists it in
-        // extensionsUsed.
-        if document
-            .extensions_used()
-            .any(|e| e == "KHR_materials_emissive_strength")
-        {
-            ignored.push("KHR_materials_emissive_strength".to_string());
-        }
-        (!ignored.is_empty()).then(|| {
-            format!(
-                "{}: emission is ignored (not implemented yet; the surfaces are lit, not \
-                 glowing): {}",
-                path.display(),
-                ignored.join(", ")
-            )
-        })
-    }
 }
 
 /// The file's buffers, read as `gltf::import_buffers` reads them, with

@@ -99,6 +99,12 @@ pub struct MaterialDesc {
     pub emissive_texture: Option<TextureUse>,
     pub alpha_mode: AlphaMode,
     pub alpha_cutoff: f32,
+    /// An image whose own alpha (MTL `map_d`) scales the alpha, apart from
+    /// the base colour texture's (glTF has none: its alpha is the base
+    /// colour texture's).
+    pub alpha_texture: Option<TextureUse>,
+    /// The file's name for it, for messages (else its index).
+    pub name: String,
 }
 
 impl Default for MaterialDesc {
@@ -110,6 +116,8 @@ impl Default for MaterialDesc {
             emissive_texture: None,
             alpha_mode: AlphaMode::Opaque,
             alpha_cutoff: 0.5,
+            alpha_texture: None,
+            name: String::new(),
         }
     }
 }

@@ -16,6 +16,7 @@ use glam::DVec3;
 use serde::Deserialize;
 
 use crate::error::{Error, Result};
+pub use material::{AlphaMode, ImageSource, MaterialDesc, TextureUse};
 
 pub use obj::{load_obj, parse_obj};
 
@@ -43,8 +44,17 @@ pub struct Mesh {
     /// Per triangle, an index into `materials`, or None for the format's
     /// default; empty when the file names no materials.
     pub face_materials: Vec<Option<u32>>,
-    /// Linear RGB albedo of each material the file defines.
-    pub materials: Vec<[f32; 3]>,
+    /// The materials the file defines.
+    pub materials: Vec<MaterialDesc>,
+    /// The images the materials' textures name (`TextureUse::image`).
+    pub images: Vec<ImageSource>,
+    /// Per triangle, its corners' texture coordinates (glTF's convention,
+    /// see `material`), when the file gives them.
+    pub uvs: Option<Vec<[[f32; 2]; 3]>>,
+    /// Per triangle, its corners' linear RGBA colours (glTF COLOR_0, PLY
+    /// `red green blue [alpha]`, OBJ `v x y z r g b`), when the file gives
+    /// them; they multiply the base colour.
+    pub colors: Option<Vec<[[f32; 4]; 3]>>,
     /// What was read but ignored or not found, each naming the file.
     pub warnings: Vec<String>,
     /// Whether `normals` are the file's own at every corner (not computed).
@@ -145,10 +155,7 @@ pub fn vertex_normals(mesh: &Mesh, vertex_normals: Option<&[DVec3]>) -> Vec<[DVe
             &computed
         }
     };
-    mesh.triangles
-        .iter()
-        .map(|tri| tri.map(|i| per_vertex[i as usize]))
-        .collect()
+    corner_values(&mesh.triangles, per_vertex)
 }
 
 /// Per position, the sum of its triangles' unnormalised normals (twice
@@ -176,4 +183,21 @@ pub fn check_coordinate(x: f64, text: &str) -> std::result::Result<f64, String> 
         ));
     }
     Ok(x)
+}
+
+/// A per-vertex attribute at each triangle's corners.
+pub fn corner_values<T: Copy>(triangles: &[[u32; 3]], per_vertex: &[T]) -> Vec<[T; 3]> {
+    triangles
+        .iter()
+        .map(|tri| tri.map(|i| per_vertex[i as usize]))
+        .collect()
+}
+
+/// An sRGB-encoded value in [0, 1] decoded to linear (IEC 61966-2-1).
+pub fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
 }

@@ -1,4 +1,6 @@
-//! Wavefront OBJ loading, with the `Kd` of its MTL materials.
+//! Wavefront OBJ loading, with its MTL materials (`Kd`, `Ke`, `d`/`Tr`
+//! and their `map_` images), texture coordinates (`vt`, v flipped to glTF's
+//! convention) and vertex colours (`v x y z r g b`).
 //!
 //! A small parser of our own rather than tobj: errors must name the file and
 //! line at fault, and the triangle order must be exactly the file's (polygons
@@ -11,7 +13,8 @@ use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 
-use super::{Mesh, NormalMode, area_weighted_normals, check_coordinate};
+use super::material::{AlphaMode, IDENTITY_UV_TRANSFORM, ImageSource, MaterialDesc, TextureUse};
+use super::{Mesh, NormalMode, area_weighted_normals, check_coordinate, corner_values};
 use crate::error::{Error, Result};
 
 /// Reads an OBJ file and the MTL files it names.
@@ -24,7 +27,9 @@ pub fn load_obj(path: &Path, mode: NormalMode) -> Result<Mesh> {
 #[derive(Default)]
 pub struct Materials {
     index: HashMap<String, u32>,
-    albedo: Vec<[f32; 3]>,
+    materials: Vec<MaterialDesc>,
+    /// The images `map_Kd`, `map_Ke` and `map_d` name, each once.
+    images: Vec<ImageSource>,
     /// What was read but not understood, each naming its file and line.
     warnings: Vec<String>,
 }
@@ -52,9 +57,9 @@ fn statements(text: &str) -> impl Iterator<Item = (usize, Cow<'_, str>)> {
 }
 
 /// Reads `mtl` (relative to the OBJ's folder) into `materials`: `newmtl
-/// NAME` and its `Kd` (`parse_mtl`); everything else is ignored. A file
-/// that cannot be read (missing, not a regular file, too large) is a
-/// warning; a malformed `Kd` an error at its line.
+/// NAME` and its colours, alpha and images (`parse_mtl`); everything else
+/// is ignored. A file that cannot be read (missing, not a regular file, too
+/// large) is a warning; a malformed value an error at its line.
 fn load_mtl(mtl: &Path, materials: &mut Materials) -> Result<()> {
     let bytes = match crate::files::read_capped(mtl, crate::files::MAX_TEXT_BYTES) {
         Ok(b) => b,
@@ -75,10 +80,14 @@ fn load_mtl(mtl: &Path, materials: &mut Materials) -> Result<()> {
 }
 
 /// Parses MTL text into `materials` (`load_mtl`'s rules); `mtl` names it
-/// in errors. `Kd r [g b]` is linear RGB (g and b repeat r if omitted, as
-/// the spec says), `Kd xyz X [Y Z]` CIE XYZ; `Kd spectral` is a warning.
+/// in errors. `Kd` (base colour) and `Ke` (emission) as `mtl_colour`
+/// reads them; `d` (alpha) in [0, 1], below 1 a blend
+/// (rendered as a mask at 0.5, with a warning); `Tr` skipped with a
+/// warning; `map_Kd`, `map_Ke`, `map_d`
+/// (its image's alpha: a blend too) as `texture_use` reads them.
 pub fn parse_mtl(text: &str, mtl: &Path, materials: &mut Materials) -> Result<()> {
     let mut current: Option<u32> = None;
+    let first = materials.materials.len();
     for (line_number, line) in statements(text) {
         let fail = |message: String| Error::Line {
             path: mtl.to_path_buf(),
@@ -92,54 +101,207 @@ pub fn parse_mtl(text: &str, mtl: &Path, materials: &mut Materials) -> Result<()
                 let name = tokens
                     .next()
                     .ok_or_else(|| fail("newmtl needs a material name".into()))?;
-                let id = materials.albedo.len() as u32;
-                materials.albedo.push([0.8; 3]);
+                let id = materials.materials.len() as u32;
+                materials.materials.push(MaterialDesc {
+                    base_color: [0.8, 0.8, 0.8, 1.0],
+                    name: name.to_string(),
+                    ..MaterialDesc::default()
+                });
                 // A later definition of a name wins, as in most readers.
                 materials.index.insert(name.to_string(), id);
                 current = Some(id);
             }
-            Some("Kd") => {
-                let id = current.ok_or_else(|| fail("Kd before any newmtl".into()))?;
-                let mut tokens = tokens.peekable();
-                let space = tokens.next_if(|t| matches!(*t, "xyz" | "spectral"));
-                if space == Some("spectral") {
-                    materials.warnings.push(format!(
-                        "{}:{line_number}: Kd spectral is not supported; the material gets \
-                         the default albedo",
-                        mtl.display()
-                    ));
-                    continue;
-                }
-                let kd = parse_colour(tokens).map_err(fail)?;
-                materials.albedo[id as usize] = if space == Some("xyz") {
-                    let (rgb, clamped) = xyz_to_linear_srgb(kd);
-                    if clamped {
-                        materials.warnings.push(format!(
-                            "{}:{line_number}: Kd xyz {kd:?} lies outside sRGB; its negative \
-                             components are clamped to 0",
-                            mtl.display()
-                        ));
-                    }
-                    rgb
+            // Exporters disagree on what Tr means (MeshLab writes `Tr 1` for
+            // opaque, others 1 − d): skipped, as Blender skips it.
+            Some("Tr") => materials.warnings.push(format!(
+                "{}:{line_number}: Tr is skipped (tools disagree whether it is transparency or \
+                 opacity; d is read)",
+                mtl.display()
+            )),
+            Some(keyword @ ("Kd" | "Ke" | "d" | "map_Kd" | "map_Ke" | "map_d")) => {
+                let id = current.ok_or_else(|| fail(format!("{keyword} before any newmtl")))?;
+                let at = format!("{}:{line_number}", mtl.display());
+                let rest: Vec<&str> = tokens.collect();
+                let texture = if keyword.starts_with("map_") {
+                    texture_use(&rest, mtl, &at, materials)
                 } else {
-                    kd.map(|c| c as f32)
+                    None
+                };
+                let colour = match keyword {
+                    "Kd" | "Ke" => {
+                        match mtl_colour(keyword, &rest, &at, &mut materials.warnings)
+                            .map_err(fail)?
+                        {
+                            Some(rgb) => Some(rgb),
+                            None => continue,
+                        }
+                    }
+                    _ => None,
+                };
+                let material = &mut materials.materials[id as usize];
+                match (keyword, colour) {
+                    ("Kd", Some(rgb)) => material.base_color[..3].copy_from_slice(&rgb),
+                    ("Ke", Some(rgb)) => material.emissive = rgb,
+                    ("d", _) => {
+                        // `d -halo f`: the halo is not modelled; f is.
+                        let value = rest
+                            .iter()
+                            .find(|t| **t != "-halo")
+                            .ok_or_else(|| fail(format!("{keyword} needs a number")))?;
+                        let x: f32 = value
+                            .parse()
+                            .ok()
+                            .filter(|x: &f32| (0.0..=1.0).contains(x))
+                            .ok_or_else(|| {
+                                fail(format!("{keyword}: '{value}' is not a number in [0, 1]"))
+                            })?;
+                        material.base_color[3] = x;
+                    }
+                    ("map_Kd", _) => material.base_color_texture = texture,
+                    ("map_Ke", _) => material.emissive_texture = texture,
+                    _ => material.alpha_texture = texture,
+                }
+                let material = &mut materials.materials[id as usize];
+                let blend = material.base_color[3] < 1.0 || material.alpha_texture.is_some();
+                material.alpha_mode = if blend {
+                    AlphaMode::Blend
+                } else {
+                    AlphaMode::Opaque
                 };
             }
             _ => {}
         }
     }
+    for material in &materials.materials[first..] {
+        if material.alpha_mode == AlphaMode::Blend {
+            materials.warnings.push(format!(
+                "{}: material {}: its transparency (d < 1 or map_d) is rendered as an alpha \
+                 mask with cut-off 0.5 (lambert has no partial transparency)",
+                mtl.display(),
+                material.name
+            ));
+        }
+    }
     Ok(())
 }
 
+/// `Kd`/`Ke`: `r [g b]` linear RGB (g and b repeat r if omitted, as the
+/// spec says), `xyz X [Y Z]` CIE XYZ; `spectral` is a warning (None).
+fn mtl_colour(
+    keyword: &str,
+    tokens: &[&str],
+    at: &str,
+    warnings: &mut Vec<String>,
+) -> Result<Option<[f32; 3]>, String> {
+    let (space, values) = match tokens.first() {
+        Some(&s @ ("xyz" | "spectral")) => (Some(s), &tokens[1..]),
+        _ => (None, tokens),
+    };
+    if space == Some("spectral") {
+        warnings.push(format!(
+            "{at}: {keyword} spectral is not supported; the material keeps its default"
+        ));
+        return Ok(None);
+    }
+    let c = parse_colour(keyword, values.iter().copied())?;
+    if space != Some("xyz") {
+        return Ok(Some(c.map(|c| c as f32)));
+    }
+    let (rgb, clamped) = xyz_to_linear_srgb(c);
+    if clamped {
+        warnings.push(format!(
+            "{at}: {keyword} xyz {c:?} lies outside sRGB; its negative components are clamped to 0"
+        ));
+    }
+    Ok(Some(rgb))
+}
+
+/// A `map_` statement's image and its `-o`/`-s` options (other options
+/// skipped with a warning): None, with a warning, where the image is not
+/// found; the material then keeps its factor.
+fn texture_use(
+    tokens: &[&str],
+    mtl: &Path,
+    at: &str,
+    materials: &mut Materials,
+) -> Option<TextureUse> {
+    // Arguments each option takes: at most (numbers, -o/-s/-t 1 to 3).
+    let arguments = |option: &str| match option {
+        "-o" | "-s" | "-t" => 3,
+        "-mm" => 2,
+        _ => 1,
+    };
+    let (mut offset, mut scale) = ([0.0f32; 2], [1.0f32; 2]);
+    let mut skipped = Vec::new();
+    let mut i = 0;
+    while i < tokens.len() && tokens[i].starts_with('-') {
+        let option = tokens[i];
+        let mut values = Vec::new();
+        i += 1;
+        while values.len() < arguments(option) && i < tokens.len() {
+            match tokens[i].parse::<f32>() {
+                Ok(x) if x.is_finite() => values.push(x),
+                // -o/-s/-t take 1 to 3 numbers; a word ends them.
+                _ if matches!(option, "-o" | "-s" | "-t") => break,
+                _ => values.push(f32::NAN),
+            }
+            i += 1;
+        }
+        match option {
+            "-o" if !values.is_empty() => offset = [values[0], *values.get(1).unwrap_or(&0.0)],
+            "-s" if !values.is_empty() => scale = [values[0], *values.get(1).unwrap_or(&1.0)],
+            _ => skipped.push(option),
+        }
+    }
+    if !skipped.is_empty() {
+        materials.warnings.push(format!(
+            "{at}: texture options {} skipped (lambert reads -o and -s)",
+            skipped.join(" ")
+        ));
+    }
+    let name = tokens[i.min(tokens.len())..].join(" ");
+    let file = mtl.parent().unwrap_or(Path::new(".")).join(&name);
+    if name.is_empty() || !file.is_file() {
+        materials.warnings.push(format!(
+            "{at}: image '{name}' not found ({}); the material keeps its colour",
+            file.display()
+        ));
+        return None;
+    }
+    let source = ImageSource::File(file);
+    let image = match materials.images.iter().position(|s| *s == source) {
+        Some(i) => i,
+        None => {
+            materials.images.push(source);
+            materials.images.len() - 1
+        }
+    } as u32;
+    // -o/-s act on OBJ coordinates (v up); stored ones are (u, 1 − v), so
+    // v' = s·v + o becomes 1 − v' = s·(1 − v) + (1 − s − o).
+    let mut transform = IDENTITY_UV_TRANSFORM;
+    transform[0] = [scale[0], 0.0, offset[0]];
+    transform[1] = [0.0, scale[1], 1.0 - scale[1] - offset[1]];
+    Some(TextureUse {
+        image,
+        sampler: Default::default(),
+        transform,
+    })
+}
+
 /// `r [g b]`: one number repeated, or three; each finite and non-negative.
-fn parse_colour<'a>(tokens: impl Iterator<Item = &'a str>) -> Result<[f64; 3], String> {
+fn parse_colour<'a>(
+    keyword: &str,
+    tokens: impl Iterator<Item = &'a str>,
+) -> Result<[f64; 3], String> {
     let mut values = Vec::with_capacity(3);
     for token in tokens.take(3) {
         let v: f64 = token
             .parse()
-            .map_err(|_| format!("Kd: '{token}' is not a number"))?;
+            .map_err(|_| format!("{keyword}: '{token}' is not a number"))?;
         if !v.is_finite() || v < 0.0 {
-            return Err(format!("Kd: {token} must be finite and non-negative"));
+            return Err(format!(
+                "{keyword}: {token} must be finite and non-negative"
+            ));
         }
         values.push(v);
     }
@@ -147,7 +309,7 @@ fn parse_colour<'a>(tokens: impl Iterator<Item = &'a str>) -> Result<[f64; 3], S
         [v] => Ok([v; 3]),
         [r, g, b] => Ok([r, g, b]),
         _ => Err(format!(
-            "Kd needs 1 or 3 numbers (r [g b]), found {}",
+            "{keyword} needs 1 or 3 numbers (r [g b]), found {}",
             values.len()
         )),
     }
@@ -175,9 +337,10 @@ fn mtl_paths<'a>(obj: &Path, tokens: impl Iterator<Item = &'a str>) -> Vec<PathB
     tokens.map(|t| folder.join(t)).collect()
 }
 
-/// A face corner: position index and, if given, normal index (None
-/// inside where it names a normal that is not defined).
-type Corner = (u32, Option<Option<u32>>);
+/// A face corner: position index, texture coordinate index if given, and
+/// normal index if given (None inside where it names a normal that is not
+/// defined).
+type Corner = (u32, Option<u32>, Option<Option<u32>>);
 
 /// Faces of one kind skipped or changed: how many, and the first's line.
 #[derive(Default)]
@@ -192,6 +355,20 @@ impl Skipped {
             self.first_line = line;
         }
         self.count += 1;
+    }
+
+    /// One warning for vertices whose colours are not finite and
+    /// non-negative.
+    fn warn_vertices(&self, path: &Path, warnings: &mut Vec<String>) {
+        if self.count > 0 {
+            warnings.push(format!(
+                "{}:{}: {} vertex colours not finite and non-negative, read as white (the \
+                 first on this line)",
+                path.display(),
+                self.first_line,
+                self.count
+            ));
+        }
     }
 
     /// One warning for the kind, `what` saying what the faces were.
@@ -218,6 +395,11 @@ pub fn parse_obj(text: &str, path: &Path, mode: NormalMode) -> Result<Mesh> {
     let mut vertex_normals: Vec<DVec3> = Vec::new();
     let mut corner_normals: Vec<[Option<u32>; 3]> = Vec::new();
     let mut corners: Vec<Corner> = Vec::new();
+    // `vt` (stored as (u, 1 − v)), each face corner's, and `v x y z r g b`.
+    let mut texture_coordinates: Vec<[f32; 2]> = Vec::new();
+    let mut corner_uvs: Vec<[[f32; 2]; 3]> = Vec::new();
+    let mut vertex_colors: Vec<[f32; 4]> = Vec::new();
+    let mut bad_colors = Skipped::default();
     let mut short_faces = Skipped::default();
     let mut unknown_normals = Skipped::default();
     for (line_number, line) in statements(text) {
@@ -229,9 +411,47 @@ pub fn parse_obj(text: &str, path: &Path, mode: NormalMode) -> Result<Mesh> {
         let line = line.split('#').next().unwrap_or("");
         let mut tokens = line.split_whitespace();
         match tokens.next() {
-            Some("v") => mesh
-                .positions
-                .push(parse_vector(&mut tokens).map_err(fail)?),
+            Some("v") => {
+                mesh.positions
+                    .push(parse_vector(&mut tokens).map_err(fail)?);
+                let rest: Vec<&str> = tokens.collect();
+                // `v x y z r g b`: a colour, linear as given (`v x y z w`
+                // has a weight, which a renderer ignores).
+                if rest.len() == 3 {
+                    let mut c = [1.0f32; 4];
+                    for (k, token) in rest.iter().enumerate() {
+                        c[k] = token.parse().map_err(|_| {
+                            fail(format!("vertex colour: '{token}' is not a number"))
+                        })?;
+                    }
+                    if !c.iter().all(|x| x.is_finite() && *x >= 0.0) {
+                        bad_colors.add(line_number);
+                        c = [1.0; 4];
+                    }
+                    vertex_colors.resize(mesh.positions.len() - 1, [1.0; 4]);
+                    vertex_colors.push(c);
+                }
+            }
+            Some("vt") => {
+                let mut uv = [0.0f32; 2];
+                for (k, slot) in uv.iter_mut().enumerate() {
+                    match tokens.next() {
+                        Some(token) => {
+                            let x: f32 = token
+                                .parse()
+                                .ok()
+                                .filter(|x: &f32| x.is_finite())
+                                .ok_or_else(|| {
+                                    fail(format!("vt: '{token}' is not a finite number"))
+                                })?;
+                            *slot = x;
+                        }
+                        None if k == 0 => return Err(fail("vt needs u [v [w]]".into())),
+                        None => {}
+                    }
+                }
+                texture_coordinates.push([uv[0], 1.0 - uv[1]]);
+            }
             Some("vn") => vertex_normals.push(parse_vector(&mut tokens).map_err(fail)?),
             Some("mtllib") => {
                 for mtl in mtl_paths(path, tokens) {
@@ -254,22 +474,34 @@ pub fn parse_obj(text: &str, path: &Path, mode: NormalMode) -> Result<Mesh> {
                 corners.clear();
                 for token in tokens {
                     corners.push(
-                        parse_corner(token, mesh.positions.len(), vertex_normals.len())
-                            .map_err(fail)?,
+                        parse_corner(
+                            token,
+                            mesh.positions.len(),
+                            texture_coordinates.len(),
+                            vertex_normals.len(),
+                        )
+                        .map_err(fail)?,
                     );
                 }
                 if corners.len() < 3 {
                     short_faces.add(line_number);
                     continue;
                 }
-                if corners.iter().any(|c| c.1 == Some(None)) {
+                if corners.iter().any(|c| c.2 == Some(None)) {
                     unknown_normals.add(line_number);
-                    corners.iter_mut().for_each(|c| c.1 = None);
+                    corners.iter_mut().for_each(|c| c.2 = None);
                 }
+                // A face's texture coordinates count where every corner
+                // has one; else its corners read (0, 0).
+                let textured = corners.iter().all(|c| c.1.is_some());
                 for k in 1..corners.len() - 1 {
                     let fan = [corners[0], corners[k], corners[k + 1]];
                     mesh.triangles.push(fan.map(|c| c.0));
-                    corner_normals.push(fan.map(|c| c.1.flatten()));
+                    corner_normals.push(fan.map(|c| c.2.flatten()));
+                    if textured {
+                        corner_uvs.resize(mesh.triangles.len() - 1, [[0.0; 2]; 3]);
+                        corner_uvs.push(fan.map(|c| texture_coordinates[c.1.unwrap() as usize]));
+                    }
                     mesh.face_materials.push(current);
                 }
             }
@@ -297,8 +529,22 @@ pub fn parse_obj(text: &str, path: &Path, mode: NormalMode) -> Result<Mesh> {
             && corner_normals.iter().all(|c| c.iter().all(Option::is_some));
         mesh.normals = Some(smooth_normals(&mesh, &vertex_normals, &corner_normals));
     }
+    bad_colors.warn_vertices(path, &mut mesh.warnings);
+    if !corner_uvs.is_empty() {
+        corner_uvs.resize(mesh.triangles.len(), [[0.0; 2]; 3]);
+        mesh.uvs = Some(corner_uvs);
+    }
+    if !vertex_colors.is_empty() {
+        vertex_colors.resize(mesh.positions.len(), [1.0; 4]);
+        mesh.colors = Some(corner_values(&mesh.triangles, &vertex_colors));
+    }
     if uses_materials {
-        mesh.materials = materials.albedo;
+        mesh.materials = materials.materials;
+        mesh.images = materials.images;
+    } else if mesh.colors.is_some() {
+        // Colours as given: a white material rather than the default grey.
+        mesh.materials = vec![MaterialDesc::default()];
+        mesh.face_materials = vec![Some(0); mesh.triangles.len()];
     } else {
         mesh.face_materials.clear();
     }
@@ -320,21 +566,40 @@ fn parse_vector<'a>(tokens: &mut impl Iterator<Item = &'a str>) -> Result<DVec3,
 }
 
 /// `i`, `i/t`, `i//n` or `i/t/n`, with 1-based or negative (relative) indices.
-fn parse_corner(token: &str, positions: usize, normals: usize) -> Result<Corner, String> {
+fn parse_corner(
+    token: &str,
+    positions: usize,
+    texture_coordinates: usize,
+    normals: usize,
+) -> Result<Corner, String> {
     let mut parts = token.split('/');
     let i = parse_index(parts.next().unwrap_or(""), "vertex")?;
     let position = resolve_index(i, positions).ok_or_else(|| {
         let defined = if positions == 1 { "vertex" } else { "vertices" };
         format!("vertex index {i} is out of range: {positions} {defined} defined before this line")
     })?;
-    let _texture = parts.next();
+    let texture = match parts.next() {
+        Some(t) if !t.is_empty() => Some(parse_index(t, "texture coordinate")?),
+        _ => None,
+    };
     // A normal index past the normals is a quirk, not broken geometry:
     // the face is shaded with computed normals instead.
     let normal = match parts.next() {
         Some(n) if !n.is_empty() => Some(resolve_index(parse_index(n, "normal")?, normals)),
         _ => None,
     };
-    Ok((position, normal))
+    // Checked after the normal parses, so a malformed corner names its
+    // first malformed part.
+    let texture = match texture {
+        Some(t) => Some(resolve_index(t, texture_coordinates).ok_or_else(|| {
+            format!(
+                "texture coordinate index {t} is out of range: {texture_coordinates} vt \
+                 defined before this line"
+            )
+        })?),
+        None => None,
+    };
+    Ok((position, texture, normal))
 }
 
 /// `what`: the element's name.

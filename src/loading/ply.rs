@@ -17,8 +17,12 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use super::{Mesh, NormalMode, check_coordinate, vertex_normals};
+use super::material::{ImageSource, MaterialDesc, TextureUse};
+use super::{Mesh, NormalMode, check_coordinate, corner_values, vertex_normals};
 use crate::error::{Error, Result};
+
+mod attributes;
+use attributes::{Attributes, COLOUR_NAMES, colour};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Encoding {
@@ -116,7 +120,7 @@ pub fn load_ply(path: &Path, mode: NormalMode) -> Result<Mesh> {
 
 /// Parses PLY bytes; `path` names them in errors.
 pub fn parse_ply(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<Mesh> {
-    let (encoding, elements, body, header_lines) = parse_header(bytes, path)?;
+    let (encoding, elements, body, header_lines, texture_file) = parse_header(bytes, path)?;
     let vertex = elements
         .iter()
         .position(|e| e.name == "vertex")
@@ -154,6 +158,7 @@ pub fn parse_ply(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<Mesh> {
         }
         None => None,
     };
+    let attributes = Attributes::of(&elements, vertex, face).map_err(fail)?;
     // Every count checked against what the rest of the file can hold,
     // before anything is allocated for it.
     match encoding {
@@ -209,6 +214,15 @@ pub fn parse_ply(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<Mesh> {
     let xyz = ["x", "y", "z"].map(|n| elements[vertex].property(n).unwrap());
     let mut values: Vec<f64> = Vec::new();
     let mut list: Vec<i64> = Vec::new();
+    let mut face_uvs: Vec<f32> = Vec::new();
+    // The first face whose texcoord list does not fit its corners.
+    let mut bad_texcoord: Option<(usize, usize, usize)> = None;
+    // Per vertex: colours and texture coordinates; per triangle: the
+    // face's colours and texture coordinates.
+    let mut vertex_colors: Vec<[f32; 4]> = Vec::new();
+    let mut vertex_uvs: Vec<[f32; 2]> = Vec::new();
+    let mut triangle_colors: Vec<[[f32; 4]; 3]> = Vec::new();
+    let mut triangle_uvs: Vec<[[f32; 2]; 3]> = Vec::new();
     // Faces read before the vertices (a header may declare them first):
     // the largest index among them, the face and where it was, checked
     // once the vertices are counted.
@@ -228,6 +242,7 @@ pub fn parse_ply(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<Mesh> {
             let what = || format!("{} {i}", element.name);
             values.clear();
             list.clear();
+            face_uvs.clear();
             for (p, property) in element.properties.iter().enumerate() {
                 match property.count {
                     None => values.push(reader.scalar(property.value, &what)?),
@@ -238,10 +253,13 @@ pub fn parse_ply(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<Mesh> {
                                 .error(format!("{}: list length {count} is not a count", what())));
                         }
                         let keep = Some(e) == face && Some(p) == indices;
+                        let keep_uvs = Some(e) == face && Some(p) == attributes.face_uvs;
                         for _ in 0..count as usize {
                             let v = reader.scalar(property.value, &what)?;
                             if keep {
                                 list.push(v as i64);
+                            } else if keep_uvs {
+                                face_uvs.push(v as f32);
                             }
                         }
                         values.push(f64::NAN);
@@ -259,6 +277,12 @@ pub fn parse_ply(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<Mesh> {
                 mesh.positions.push(DVec3::from(p));
                 if has_normals {
                     normals.push(DVec3::from(normal_slots.map(|s| values[s.unwrap()])));
+                }
+                if let Some(slots) = &attributes.vertex_colors {
+                    vertex_colors.push(colour(slots, &values));
+                }
+                if let Some([u, v]) = attributes.vertex_uvs {
+                    vertex_uvs.push([values[u] as f32, 1.0 - values[v] as f32]);
                 }
             } else if Some(e) == face {
                 if list.len() < 3 {
@@ -280,9 +304,22 @@ pub fn parse_ply(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<Mesh> {
                 if !read_vertices && unresolved.is_none_or(|(v, _, _)| largest > v) {
                     unresolved = Some((largest, i, reader.location()));
                 }
+                if attributes.face_uvs.is_some() && face_uvs.len() != 2 * list.len() {
+                    bad_texcoord.get_or_insert((i, face_uvs.len(), list.len()));
+                    face_uvs.clear();
+                    face_uvs.resize(2 * list.len(), 0.0);
+                }
+                let uv = |k: usize| [face_uvs[2 * k], 1.0 - face_uvs[2 * k + 1]];
+                let face_colour = attributes.face_colors.as_ref().map(|s| colour(s, &values));
                 for k in 1..list.len() - 1 {
                     mesh.triangles
                         .push([list[0], list[k], list[k + 1]].map(|v| v as u32));
+                    if attributes.face_uvs.is_some() {
+                        triangle_uvs.push([uv(0), uv(k), uv(k + 1)]);
+                    }
+                    if let Some(c) = face_colour {
+                        triangle_colors.push([c; 3]);
+                    }
                 }
             }
         }
@@ -297,7 +334,53 @@ pub fn parse_ply(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<Mesh> {
         .map(|e| e.count)
         .sum();
     mesh.warnings.extend(reader.surplus_warning());
-    mesh.warnings.extend(ignored(&elements, vertex, face, path));
+    mesh.warnings
+        .extend(ignored(&elements, vertex, face, &attributes, path));
+    if let Some((i, count, corners)) = bad_texcoord {
+        mesh.warnings.push(format!(
+            "{}: face {i}: texcoord holds {count} numbers for {corners} corners (2 a corner); \
+             such faces read texture coordinates (0, 0)",
+            path.display()
+        ));
+    }
+    // Vertex colours win over face colours (as MeshLab shows them).
+    if attributes.vertex_colors.is_some() {
+        mesh.colors = Some(corner_values(&mesh.triangles, &vertex_colors));
+    } else if attributes.face_colors.is_some() {
+        mesh.colors = Some(triangle_colors);
+    }
+    if attributes.vertex_uvs.is_some() {
+        mesh.uvs = Some(corner_values(&mesh.triangles, &vertex_uvs));
+    } else if attributes.face_uvs.is_some() {
+        mesh.uvs = Some(triangle_uvs);
+    }
+    let texture = texture_file.and_then(|name| {
+        let file = path.parent().unwrap_or(Path::new(".")).join(&name);
+        if file.is_file() {
+            mesh.images.push(ImageSource::File(file));
+            Some(TextureUse {
+                image: 0,
+                sampler: Default::default(),
+                transform: super::material::IDENTITY_UV_TRANSFORM,
+            })
+        } else {
+            mesh.warnings.push(format!(
+                "{}: its TextureFile '{name}' is not found ({}); the faces keep their colours",
+                path.display(),
+                file.display()
+            ));
+            None
+        }
+    });
+    // Colours or a texture as given: one white material, not the default
+    // grey.
+    if mesh.colors.is_some() || texture.is_some() {
+        mesh.materials = vec![MaterialDesc {
+            base_color_texture: texture,
+            ..MaterialDesc::default()
+        }];
+        mesh.face_materials = vec![Some(0); mesh.triangles.len()];
+    }
     if mode == NormalMode::Smooth {
         let given = has_normals.then_some(&normals[..]);
         mesh.file_normals = has_normals;
@@ -318,14 +401,29 @@ fn ignored(
     elements: &[Element],
     vertex: usize,
     face: Option<usize>,
+    attributes: &Attributes,
     path: &Path,
 ) -> Option<String> {
     let mut skipped = Vec::new();
     for (e, element) in elements.iter().enumerate() {
-        let used: &[&str] = if e == vertex {
-            &["x", "y", "z", "nx", "ny", "nz"]
+        let used: Vec<&str> = if e == vertex {
+            let mut used = vec!["x", "y", "z", "nx", "ny", "nz"];
+            if attributes.vertex_colors.is_some() {
+                used.extend(COLOUR_NAMES);
+            }
+            if let Some(slots) = attributes.vertex_uvs {
+                used.extend(slots.map(|p| element.properties[p].name.as_str()));
+            }
+            used
         } else if Some(e) == face {
-            &["vertex_indices", "vertex_index"]
+            let mut used = vec!["vertex_indices", "vertex_index"];
+            if attributes.face_colors.is_some() {
+                used.extend(COLOUR_NAMES);
+            }
+            if attributes.face_uvs.is_some() {
+                used.push("texcoord");
+            }
+            used
         } else {
             skipped.push(format!("element {}", element.name));
             continue;
@@ -342,20 +440,24 @@ fn ignored(
     }
     (!skipped.is_empty()).then(|| {
         format!(
-            "{}: ignored (lambert reads vertex x y z nx ny nz and face vertex_indices): {}",
+            "{}: ignored (lambert reads vertex x y z nx ny nz, colours and texture coordinates, \
+             and face vertex_indices, texcoord and colours): {}",
             path.display(),
             skipped.join(", ")
         )
     })
 }
 
-type Header<'a> = (Encoding, Vec<Element>, &'a [u8], usize);
+/// The encoding, the elements, the body, the header's line count, and the
+/// image a `comment TextureFile NAME` line names.
+type Header<'a> = (Encoding, Vec<Element>, &'a [u8], usize, Option<String>);
 
 fn parse_header<'a>(bytes: &'a [u8], path: &Path) -> Result<Header<'a>> {
     let mut at = 0;
     let mut line_number = 0;
     let mut encoding = None;
     let mut elements: Vec<Element> = Vec::new();
+    let mut texture_file = None;
     loop {
         let end = bytes[at..]
             .iter()
@@ -438,12 +540,17 @@ fn parse_header<'a>(bytes: &'a [u8], path: &Path) -> Result<Header<'a>> {
                 element.properties.push(property);
             }
             Some("end_header") => break,
+            // MeshLab's convention; the name may hold spaces.
+            Some("comment") if tokens.next() == Some("TextureFile") => {
+                let name = text.trim().splitn(3, char::is_whitespace).nth(2);
+                texture_file = name.map(|n| n.trim().to_string()).filter(|n| !n.is_empty());
+            }
             Some("comment" | "obj_info") | None => {}
             Some(other) => return Err(fail(format!("unknown header line '{other}'"))),
         }
     }
     let encoding = encoding.ok_or_else(|| Error::scene(path, "the header has no format line"))?;
-    Ok((encoding, elements, &bytes[at..], line_number))
+    Ok((encoding, elements, &bytes[at..], line_number, texture_file))
 }
 
 /// Reads values from the body: whitespace-separated numbers, one element

@@ -12,7 +12,8 @@ use crate::bvh::{Bvh, MAX_PRIMITIVES};
 use crate::camera::{Camera, View, default_up};
 use crate::error::{Error, Result};
 use crate::layout::{
-    FLAG_SMOOTH, Hit, LIGHT_POINT, Light, Material, NO_HIT, Ray, Sphere, Triangle, TriangleNormals,
+    ALPHA_MASK, ALPHA_OPAQUE, FLAG_ATTRIBUTES, FLAG_MASKED, FLAG_SMOOTH, Hit, LIGHT_POINT, Light,
+    Material, NO_HIT, Ray, Sphere, Triangle, TriangleAttributes, TriangleNormals,
 };
 use crate::limits::{MAX_COORDINATE, MAX_LOCAL_COORDINATE, checked_point, vector_text};
 use crate::loading;
@@ -34,6 +35,11 @@ pub struct Scene {
     pub triangles: Vec<Triangle>,
     /// One entry per triangle when any mesh is smooth, else empty.
     pub normals: Vec<TriangleNormals>,
+    /// One entry per triangle when any mesh has vertex colours or texture
+    /// coordinates, else empty.
+    pub attributes: Vec<TriangleAttributes>,
+    /// Triangles whose file gave them vertex colours (for `lambert info`).
+    pub colored_triangles: usize,
     pub spheres: Vec<Sphere>,
     pub materials: Vec<Material>,
     pub lights: Vec<Light>,
@@ -190,6 +196,8 @@ impl Scene {
             shadows: false,
             triangles: Vec::new(),
             normals: Vec::new(),
+            attributes: Vec::new(),
+            colored_triangles: 0,
             spheres: Vec::new(),
             materials: Vec::new(),
             lights: Vec::new(),
@@ -205,8 +213,18 @@ impl Scene {
     }
 
     fn add_material(&mut self, albedo: [f32; 3]) -> u32 {
-        self.materials.push(Material { albedo, _pad: 0 });
+        self.push_material(Material::from_albedo(albedo))
+    }
+
+    fn push_material(&mut self, material: Material) -> u32 {
+        self.materials.push(material);
         (self.materials.len() - 1) as u32
+    }
+
+    /// Whether some material is alpha-masked (the shader's HAS_ALPHA_MASK:
+    /// without one, traversal skips the alpha test altogether).
+    pub fn has_alpha_mask(&self) -> bool {
+        self.materials.iter().any(|m| m.alpha_mode == ALPHA_MASK)
     }
 
     /// Adds `mesh` (called `what` in errors about the file at `path`),
@@ -229,10 +247,32 @@ impl Scene {
         let (material, file_materials, fallback) = match uniform {
             Some(a) => (self.add_material(a), Vec::new(), 0),
             None => {
+                // Textures only where the mesh has texture coordinates to
+                // read them with (a loader warns of a texture without).
+                let slots = if mesh.uvs.is_some() {
+                    crate::texture::add_model_textures(
+                        &mut self.textures,
+                        path,
+                        &mesh.images,
+                        &mesh.materials,
+                        &mut self.warnings,
+                    )
+                } else {
+                    Vec::new()
+                };
                 let ids: Vec<u32> = mesh
                     .materials
                     .iter()
-                    .map(|&a| self.add_material(a))
+                    .enumerate()
+                    .map(|(i, m)| {
+                        let mut material = material_of(m);
+                        if let Some(s) = slots.get(i) {
+                            material.base_color_texture = s.base_color;
+                            material.emissive_texture = s.emissive;
+                            material.alpha_texture = s.alpha;
+                        }
+                        self.push_material(material)
+                    })
                     .collect();
                 let fallback = if mesh.face_materials.iter().any(Option::is_none) {
                     self.add_material(DEFAULT_ALBEDO)
@@ -285,6 +325,21 @@ impl Scene {
             self.normals
                 .resize(self.triangles.len(), TriangleNormals::default());
         }
+        // A scene's `albedo` replaces the file's colours, its vertex
+        // colours too.
+        let (colors, uvs) = if albedo.is_some() {
+            (None, None)
+        } else {
+            (mesh.colors.as_deref(), mesh.uvs.as_deref())
+        };
+        let attributed = colors.is_some() || uvs.is_some();
+        if colors.is_some() {
+            self.colored_triangles += mesh.triangles.len();
+        }
+        if attributed && self.attributes.len() < self.triangles.len() {
+            self.attributes
+                .resize(self.triangles.len(), TriangleAttributes::default());
+        }
         // A mirroring transform (negative determinant) would turn every
         // face inside out; two corners swapped keep them facing out, as a
         // glTF node's mirror does.
@@ -296,14 +351,38 @@ impl Scene {
             } else {
                 *tri
             };
+            let material = face_material(i);
+            let masked = self.materials[material as usize].alpha_mode == ALPHA_MASK;
+            let flags = [
+                (smooth, FLAG_SMOOTH),
+                (attributed, FLAG_ATTRIBUTES),
+                (masked, FLAG_MASKED),
+            ]
+            .iter()
+            .filter(|(on, _)| *on)
+            .fold(0, |flags, (_, flag)| flags | flag);
             self.triangles.push(Triangle {
                 v0: to_f32(a)?,
-                material: face_material(i),
+                material,
                 v1: to_f32(b)?,
-                flags: if smooth { FLAG_SMOOTH } else { 0 },
+                flags,
                 v2: to_f32(c)?,
                 _pad: 0,
             });
+            let swap = |[x, y, z]: [[f32; 4]; 3]| if mirrored { [x, z, y] } else { [x, y, z] };
+            if attributed {
+                let mut entry = TriangleAttributes::default();
+                if let Some(colors) = colors {
+                    entry.colors = swap(colors[i]);
+                }
+                if let Some(uvs) = uvs {
+                    let [p, q, r] = uvs[i];
+                    entry.uvs = if mirrored { [p, r, q] } else { [p, q, r] };
+                }
+                self.attributes.push(entry);
+            } else if !self.attributes.is_empty() {
+                self.attributes.push(TriangleAttributes::default());
+            }
             if let Some(normals) = &mesh.normals {
                 let [na, nb, nc] = normals[i];
                 let corners = if mirrored { [na, nc, nb] } else { [na, nb, nc] };
@@ -343,6 +422,7 @@ impl Scene {
     pub fn release_geometry(&mut self) {
         self.triangles = Vec::new();
         self.normals = Vec::new();
+        self.attributes = Vec::new();
         self.spheres = Vec::new();
         self.bvh = Bvh::default();
     }
@@ -355,6 +435,21 @@ impl Scene {
     pub fn primitive_count(&self) -> usize {
         self.triangles.len() + self.spheres.len()
     }
+}
+
+/// The kernels' material of a file's: BLEND is rendered as MASK at 0.5
+/// (the loader warns); texture slots are filled by `add_mesh`.
+fn material_of(desc: &loading::MaterialDesc) -> Material {
+    let [r, g, b, a] = desc.base_color;
+    let mut material = Material::from_albedo([r, g, b]);
+    material.base_color[3] = a;
+    material.emission = desc.emissive;
+    (material.alpha_mode, material.alpha_cutoff) = match desc.alpha_mode {
+        loading::AlphaMode::Opaque => (ALPHA_OPAQUE, desc.alpha_cutoff),
+        loading::AlphaMode::Mask => (ALPHA_MASK, desc.alpha_cutoff),
+        loading::AlphaMode::Blend => (ALPHA_MASK, 0.5),
+    };
+    material
 }
 
 /// Object-to-world transform of a mesh: scale, then rotate about X, Y, Z (in

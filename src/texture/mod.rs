@@ -5,12 +5,14 @@
 //! the layout, the filtering and the level of detail.
 
 mod decode;
+mod lod;
 mod model;
 mod store;
 
 pub use decode::{DecodedImage, MAX_IMAGE_BYTES, MAX_TEXTURE_SIDE, decode_image};
+pub use lod::cone_spread;
 pub use model::{ImageReport, MaterialSlots, add_model_textures, describe_images};
 pub use store::{
-    LINEAR_ONE, NO_TEXTURE, SLOT_WORDS, SRGB_TABLE_WORDS, TextureLevel, TextureSlot, TextureStore,
+    LINEAR_ONE, SLOT_WORDS, SRGB_TABLE_WORDS, TextureLevel, TextureSlot, TextureStore,
     linear_from_srgb, mip_chain,
 };

@@ -6,7 +6,8 @@
 use std::path::Path;
 
 use super::decode::{DecodedImage, decode_image};
-use super::store::{NO_TEXTURE, TextureStore};
+use super::store::TextureStore;
+use crate::layout::NO_TEXTURE;
 use crate::loading::material::{ImageSource, MaterialDesc, TextureUse};
 
 /// A material's texture slots (words in the store, or `NO_TEXTURE`).
@@ -14,6 +15,7 @@ use crate::loading::material::{ImageSource, MaterialDesc, TextureUse};
 pub struct MaterialSlots {
     pub base_color: u32,
     pub emissive: u32,
+    pub alpha: u32,
 }
 
 /// One image of a model as `lambert info` lists it.
@@ -23,7 +25,7 @@ pub struct ImageReport {
     pub name: String,
     /// (width, height, format), or why it did not decode.
     pub decoded: Result<(u32, u32, &'static str), String>,
-    /// The materials that use it (base colour or emissive).
+    /// The materials that use it (base colour, emissive or alpha).
     pub materials: Vec<usize>,
 }
 
@@ -37,10 +39,14 @@ fn image_name(source: &ImageSource) -> String {
 /// The uses of each material: (material, base colour or emissive).
 fn uses(materials: &[MaterialDesc]) -> impl Iterator<Item = (usize, &TextureUse)> {
     materials.iter().enumerate().flat_map(|(m, desc)| {
-        [&desc.base_color_texture, &desc.emissive_texture]
-            .into_iter()
-            .flatten()
-            .map(move |t| (m, t))
+        [
+            &desc.base_color_texture,
+            &desc.emissive_texture,
+            &desc.alpha_texture,
+        ]
+        .into_iter()
+        .flatten()
+        .map(move |t| (m, t))
     })
 }
 
@@ -81,7 +87,7 @@ pub fn add_model_textures(
                     "{}: {why}; material{} {} keep{} {} colour without it",
                     model.display(),
                     if users.len() == 1 { "" } else { "s" },
-                    list(users),
+                    list(users, materials),
                     if users.len() == 1 { "s" } else { "" },
                     if users.len() == 1 { "its" } else { "their" },
                 ));
@@ -98,9 +104,10 @@ pub fn add_model_textures(
             Some(None) => NO_TEXTURE,
             None => {
                 warnings.push(format!(
-                    "{}: material {m} names image {}, and the model has {}; it keeps its colour \
+                    "{}: material {} names image {}, and the model has {}; it keeps its colour \
                      without it",
                     model.display(),
+                    name(m, materials),
                     texture.image,
                     images.len()
                 ));
@@ -114,14 +121,23 @@ pub fn add_model_textures(
         .map(|(m, desc)| MaterialSlots {
             base_color: slot(m, &desc.base_color_texture),
             emissive: slot(m, &desc.emissive_texture),
+            alpha: slot(m, &desc.alpha_texture),
         })
         .collect()
 }
 
-fn list(items: &[usize]) -> String {
+/// A material as messages name it: its file's name, else its index.
+fn name(m: usize, materials: &[MaterialDesc]) -> String {
+    match materials[m].name.as_str() {
+        "" => m.to_string(),
+        name => format!("'{name}'"),
+    }
+}
+
+fn list(items: &[usize], materials: &[MaterialDesc]) -> String {
     items
         .iter()
-        .map(usize::to_string)
+        .map(|&m| name(m, materials))
         .collect::<Vec<_>>()
         .join(", ")
 }

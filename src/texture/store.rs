@@ -8,7 +8,7 @@
 //!   top first;
 //! - per texture use (`TextureSlot`), `SLOT_WORDS` words: the UV transform,
 //!   texel area, where its image's levels are, its sampler. A material
-//!   names a use by the word where it starts (`NO_TEXTURE` for none).
+//!   names a use by the word where it starts (`layout::NO_TEXTURE` for none).
 
 use bytemuck::{Pod, Zeroable};
 
@@ -22,8 +22,6 @@ pub const LINEAR_ONE: u32 = 1 << 15;
 pub const SRGB_TABLE_WORDS: u32 = 256;
 /// Words of one `TextureSlot`.
 pub const SLOT_WORDS: u32 = (std::mem::size_of::<TextureSlot>() / 4) as u32;
-/// A material's texture slot when it has no texture.
-pub const NO_TEXTURE: u32 = u32::MAX;
 
 /// One use of an image, as the shader reads it (shaders/texture.wgsl,
 /// `texture_slot` word offsets).

@@ -44,11 +44,34 @@ pub(super) fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> 
             "face"
         }
     );
+    println!(
+        "  vertex colours: {}",
+        match scene.colored_triangles {
+            0 => "none".to_string(),
+            n => format!("yes, on {n} of {} triangles", scene.triangles.len()),
+        }
+    );
     println!("  materials: {}", scene.materials.len());
     for (i, m) in scene.materials.iter().enumerate().take(32) {
-        let [r, g, b] = m.albedo;
-        println!("    {i}: albedo [{r}, {g}, {b}]");
+        let [r, g, b, a] = m.base_color;
+        let mut line = format!("    {i}: base colour [{r}, {g}, {b}], alpha {a}");
+        if m.alpha_mode == lambert::layout::ALPHA_MASK {
+            line += &format!(", alpha mode MASK (cut-off {})", m.alpha_cutoff);
+        } else {
+            line += ", alpha mode OPAQUE";
+        }
+        if m.emission != [0.0; 3] {
+            let [r, g, b] = m.emission;
+            line += &format!(", emissive [{r}, {g}, {b}]");
+        }
+        println!("{line}");
     }
+    let emissive = scene
+        .materials
+        .iter()
+        .filter(|m| m.emission != [0.0; 3])
+        .count();
+    println!("  emissive materials: {emissive}");
     let c = &scene.camera;
     let v = |a: [f64; 3]| lambert::limits::vector_text(glam::DVec3::from(a));
     println!(

@@ -1,0 +1,246 @@
+//! glTF materials: base colour, emission and alpha, their textures (the
+//! images they name, samplers, KHR_texture_transform) and which texture
+//! coordinate set a primitive's material reads.
+
+use std::path::Path;
+
+use super::material_name;
+use super::percent_decoded;
+use crate::loading::material::{
+    AlphaMode, Filter, IDENTITY_UV_TRANSFORM, ImageSource, MaterialDesc, Sampler, TextureUse, Wrap,
+};
+
+/// A material as lambert renders it: baseColorFactor (negative components,
+/// outside the spec's [0, 1] and negative radiance in the image, clamped to
+/// 0 with a warning, as trimesh and Blender read such files; above 1 kept,
+/// as a TOML or MTL albedo may be), its texture, emissiveFactor ×
+/// KHR_materials_emissive_strength and its texture, alphaMode and
+/// alphaCutoff (BLEND with a warning: it is rendered as MASK at 0.5).
+pub(super) fn material_desc(
+    material: &gltf::Material,
+    path: &Path,
+    images: &mut Images,
+    warnings: &mut Vec<String>,
+) -> MaterialDesc {
+    let name = material_name(material);
+    let pbr = material.pbr_metallic_roughness();
+    let factor = pbr.base_color_factor();
+    if factor.iter().any(|c| *c < 0.0) {
+        warnings.push(format!(
+            "{}: material {name}: baseColorFactor {factor:?} has a negative component, clamped to 0",
+            path.display(),
+        ));
+    }
+    let strength = material.emissive_strength().unwrap_or(1.0);
+    let alpha_mode = match material.alpha_mode() {
+        gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
+        gltf::material::AlphaMode::Mask => AlphaMode::Mask,
+        gltf::material::AlphaMode::Blend => {
+            warnings.push(format!(
+                "{}: material {name}: alphaMode BLEND is rendered as MASK with alphaCutoff 0.5 \
+                 (lambert has no partial transparency)",
+                path.display()
+            ));
+            AlphaMode::Blend
+        }
+    };
+    MaterialDesc {
+        base_color: factor.map(|c| c.max(0.0)),
+        base_color_texture: pbr
+            .base_color_texture()
+            .and_then(|info| images.texture_use(&info, warnings)),
+        emissive: material.emissive_factor().map(|c| (c * strength).max(0.0)),
+        emissive_texture: material
+            .emissive_texture()
+            .and_then(|info| images.texture_use(&info, warnings)),
+        alpha_mode,
+        alpha_cutoff: material.alpha_cutoff().unwrap_or(0.5),
+        alpha_texture: None,
+        name,
+    }
+}
+
+/// Which TEXCOORD_n a primitive's material reads: its base colour
+/// texture's set (KHR_texture_transform may name another), else its
+/// emissive texture's; a material whose textures read two sets gets the
+/// base colour's, with a warning. None without textures.
+pub(super) fn texture_coordinate_set(
+    material: &gltf::Material,
+    path: &Path,
+    warnings: &mut Vec<String>,
+) -> Option<u32> {
+    let set = |info: gltf::texture::Info| {
+        info.texture_transform()
+            .and_then(|t| t.tex_coord())
+            .unwrap_or(info.tex_coord())
+    };
+    let base = material
+        .pbr_metallic_roughness()
+        .base_color_texture()
+        .map(set);
+    let emissive = material.emissive_texture().map(set);
+    if let (Some(b), Some(e)) = (base, emissive)
+        && b != e
+    {
+        let warning = format!(
+            "{}: material {}: its emissiveTexture reads TEXCOORD_{e}, its baseColorTexture \
+             TEXCOORD_{b}; both read TEXCOORD_{b}",
+            path.display(),
+            material_name(material)
+        );
+        if !warnings.contains(&warning) {
+            warnings.push(warning);
+        }
+    }
+    base.or(emissive)
+}
+
+/// The file's images as materials use them: each read once, in the order
+/// first used (`Mesh::images`).
+pub(super) struct Images<'a> {
+    buffers: &'a [gltf::buffer::Data],
+    path: &'a Path,
+    /// Per image of the file, its index in `sources` (None: not yet).
+    ids: Vec<Option<Option<u32>>>,
+    pub(super) sources: Vec<ImageSource>,
+}
+
+impl<'a> Images<'a> {
+    pub(super) fn new(
+        buffers: &'a [gltf::buffer::Data],
+        path: &'a Path,
+        count: usize,
+    ) -> Images<'a> {
+        Images {
+            buffers,
+            path,
+            ids: vec![None; count],
+            sources: Vec::new(),
+        }
+    }
+
+    /// A texture reference as lambert keeps it: its image (None, with a
+    /// warning, where the image cannot be found), sampler and transform.
+    fn texture_use(
+        &mut self,
+        info: &gltf::texture::Info,
+        warnings: &mut Vec<String>,
+    ) -> Option<TextureUse> {
+        let texture = info.texture();
+        let image = texture.source();
+        let id = match self.ids[image.index()] {
+            Some(id) => id,
+            None => {
+                let id = match self.source(&image) {
+                    Ok(source) => {
+                        self.sources.push(source);
+                        Some((self.sources.len() - 1) as u32)
+                    }
+                    Err(why) => {
+                        warnings.push(format!(
+                            "{}: image {}: {why}; the materials using it keep their factors",
+                            self.path.display(),
+                            image.index()
+                        ));
+                        None
+                    }
+                };
+                self.ids[image.index()] = Some(id);
+                id
+            }
+        }?;
+        Some(TextureUse {
+            image: id,
+            sampler: sampler(&texture.sampler()),
+            transform: info.texture_transform().map_or(IDENTITY_UV_TRANSFORM, |t| {
+                uv_transform(t.offset(), t.rotation(), t.scale())
+            }),
+        })
+    }
+
+    fn source(&self, image: &gltf::Image) -> std::result::Result<ImageSource, String> {
+        let name = format!("{} image {}", self.path.display(), image.index());
+        match image.source() {
+            gltf::image::Source::View { view, .. } => {
+                let buffer = &self.buffers[view.buffer().index()].0;
+                let bytes = view
+                    .offset()
+                    .checked_add(view.length())
+                    .and_then(|end| buffer.get(view.offset()..end))
+                    .ok_or_else(|| {
+                        format!(
+                            "its buffer view {} ends beyond its buffer ({} bytes)",
+                            view.index(),
+                            buffer.len()
+                        )
+                    })?;
+                Ok(ImageSource::Embedded {
+                    bytes: bytes.to_vec(),
+                    name,
+                })
+            }
+            gltf::image::Source::Uri { uri, .. } if uri.starts_with("data:") => {
+                let data = gltf::buffer::Data::from_source_and_blob(
+                    gltf::buffer::Source::Uri(uri),
+                    None,
+                    &mut None,
+                )
+                .map_err(|e| format!("its data URI cannot be decoded: {e}"))?;
+                Ok(ImageSource::Embedded {
+                    bytes: data.0,
+                    name,
+                })
+            }
+            gltf::image::Source::Uri { uri, .. } => {
+                let file = percent_decoded(uri)
+                    .ok_or_else(|| format!("its uri {uri:?} is not percent-encoded UTF-8"))?;
+                let file = self.path.parent().unwrap_or(Path::new(".")).join(file);
+                if !file.is_file() {
+                    return Err(format!("{} is not found", file.display()));
+                }
+                Ok(ImageSource::File(file))
+            }
+        }
+    }
+}
+
+/// A glTF sampler as lambert's (no minFilter: mipmapped, as viewers do).
+fn sampler(s: &gltf::texture::Sampler) -> Sampler {
+    use gltf::texture::{MagFilter, MinFilter, WrappingMode};
+    let wrap = |w: WrappingMode| match w {
+        WrappingMode::Repeat => Wrap::Repeat,
+        WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
+        WrappingMode::ClampToEdge => Wrap::ClampToEdge,
+    };
+    let (minify, mipmaps) = match s.min_filter() {
+        None => (Filter::Linear, true),
+        Some(MinFilter::Nearest) => (Filter::Nearest, false),
+        Some(MinFilter::Linear) => (Filter::Linear, false),
+        Some(MinFilter::NearestMipmapNearest | MinFilter::NearestMipmapLinear) => {
+            (Filter::Nearest, true)
+        }
+        Some(MinFilter::LinearMipmapNearest | MinFilter::LinearMipmapLinear) => {
+            (Filter::Linear, true)
+        }
+    };
+    Sampler {
+        wrap_u: wrap(s.wrap_s()),
+        wrap_v: wrap(s.wrap_t()),
+        magnify: match s.mag_filter() {
+            Some(MagFilter::Nearest) => Filter::Nearest,
+            _ => Filter::Linear,
+        },
+        minify,
+        mipmaps,
+    }
+}
+
+/// KHR_texture_transform's T · R · S as a row-major 2×3 matrix (the
+/// extension's rotation turns counter-clockwise in UV space).
+fn uv_transform(offset: [f32; 2], rotation: f32, scale: [f32; 2]) -> [[f32; 3]; 2] {
+    let (sin, cos) = rotation.sin_cos();
+    [
+        [cos * scale[0], sin * scale[1], offset[0]],
+        [-sin * scale[0], cos * scale[1], offset[1]],
+    ]
+}
