@@ -286,10 +286,12 @@ fn base_color_at(tri: Triangle, prim: u32, u: f32, v: f32, dir: vec3<f32>, cone_
     var color = material.base_color;
     if (tri.flags & FLAG_ATTRIBUTES) != 0u {
         let a = triangle_attributes_at(prim);
-        // fma, as the CPU's mul_add: the same bits whether or not the
-        // compiler would have fused a multiply-add of its own.
-        let w = 1.0 - u - v;
-        color *= fma(vec4<f32>(w), a.colors[0], fma(vec4<f32>(u), a.colors[1], v * a.colors[2]));
+        // Each product and sum rounded on its own (`rounded`), as the
+        // CPU's: lavapipe neither fuses an explicit `fma` reliably nor
+        // keeps a sum's order unless told (docs/textures.md).
+        let w = rounded(rounded(1.0 - u) - v);
+        color *= rounded4(rounded4(w * a.colors[0])
+            + rounded4(rounded4(u * a.colors[1]) + rounded4(v * a.colors[2])));
         if material.base_color_texture != NO_TEXTURE {
             color *= texture_at(material.base_color_texture, tri, prim, u, v, dir, cone_width);
         }

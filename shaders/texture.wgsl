@@ -84,6 +84,11 @@ fn rounded(x: f32) -> f32 {
     return select(x, 0.0, textures[0] != 0u);
 }
 
+// `rounded` for a vector (no twin: Rust needs neither).
+fn rounded4(x: vec4<f32>) -> vec4<f32> {
+    return select(x, vec4<f32>(0.0), textures[0] != 0u);
+}
+
 // The slot's UV transform: uv' = M · (u, v, 1).
 fn transform_uv(slot: u32, uv: vec2<f32>) -> vec2<f32> {
     let m = array<f32, 6>(bitcast<f32>(textures[slot]), bitcast<f32>(textures[slot + 1u]),

@@ -100,11 +100,12 @@ impl<'a> Kernel<'a> {
         let mut color = vec4(material.base_color);
         if tri.flags & FLAG_ATTRIBUTES != 0 {
             let a = &scene.attributes[prim as usize];
-            // Fused, as the shader's fma: the GPU's compiler may fuse an
-            // a·b + c of its own, so the shader fuses explicitly.
-            let w = Vec4::splat(1.0 - u - v);
+            // Each product and sum rounded on its own, in this order, as
+            // the shader's (`rounded` there stops its compiler fusing or
+            // reordering them).
+            let w = Vec4::splat((1.0 - u) - v);
             let c = |k: usize| vec4(a.colors[k]);
-            color *= w.mul_add(c(0), Vec4::splat(u).mul_add(c(1), Vec4::splat(v) * c(2)));
+            color *= w * c(0) + (Vec4::splat(u) * c(1) + Vec4::splat(v) * c(2));
             if material.base_color_texture != NO_TEXTURE {
                 color *= self.texture_at(material.base_color_texture, tri, prim, u, v, dir, cone_width);
             }
