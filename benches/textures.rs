@@ -26,7 +26,7 @@ fn textures(c: &mut Criterion) {
         format: "PNG",
     };
     let mut store = TextureStore::default();
-    let index = store.add_image(&image);
+    let index = store.add_image(&image, "random".into());
     let slot = store.slot(
         index,
         &TextureUse {

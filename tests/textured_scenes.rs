@@ -302,3 +302,27 @@ fn the_bundled_textured_model_renders_alike_from_obj_and_gltf() {
         assert_agree(&gpu_twin(scene), &render_gpu(scene), name);
     }
 }
+
+/// `lambert info MODEL` lists each texture: where it is from, its size and
+/// format, its mip levels, and which materials read it as what.
+#[test]
+fn info_lists_the_textures_and_their_materials() {
+    let obj = asset("scenes/meshes/textured.obj");
+    let output = common::lambert(&["info", common::s(&obj)]);
+    let out = String::from_utf8_lossy(&output.stdout);
+    assert!(output.status.success(), "{}", common::stderr(&output));
+    let dir = asset("scenes/meshes");
+    for line in [
+        "  textures: 3".to_string(),
+        format!(
+            "    0: {}, 64×64 PNG, 7 mip levels, used by material 0 (base colour)",
+            dir.join("textured_grid.png").display()
+        ),
+        format!(
+            "    2: {}, 32×32 PNG, 6 mip levels, used by material 1 (alpha)",
+            dir.join("textured_leaf.png").display()
+        ),
+    ] {
+        assert!(out.lines().any(|l| l == line), "no line {line:?} in\n{out}");
+    }
+}

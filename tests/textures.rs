@@ -46,7 +46,7 @@ fn texture_use(sampler: Sampler) -> TextureUse {
 /// The store of `image` alone with one slot of `sampler`.
 fn store(image: DecodedImage, sampler: Sampler) -> (TextureStore, u32) {
     let mut store = TextureStore::default();
-    let index = store.add_image(&image);
+    let index = store.add_image(&image, "test".into());
     let slot = store.slot(index, &texture_use(sampler));
     (store, slot)
 }
@@ -388,7 +388,7 @@ fn gpu_sampling_equals_the_twin_bit_for_bit() {
         .map(|_| std::array::from_fn(|_| (rng.unit() * 256.0) as u8))
         .collect();
     let mut store = TextureStore::default();
-    store.add_image(&image(width, height, &texels));
+    store.add_image(&image(width, height, &texels), "random".into());
     let wraps = [Wrap::Repeat, Wrap::MirroredRepeat, Wrap::ClampToEdge];
     let mut slots = Vec::new();
     for (i, wrap_u) in wraps.into_iter().enumerate() {

@@ -81,7 +81,7 @@ pub fn add_model_textures(
             continue;
         }
         stored.push(match decode_image(source) {
-            Ok(image) => Some(store.add_image(&image)),
+            Ok(image) => Some(store.add_image(&image, image_name(source))),
             Err(why) => {
                 warnings.push(format!(
                     "{}: {why}; material{} {} keep{} {} colour without it",

@@ -134,13 +134,25 @@ pub fn mip_chain(width: u32, height: u32, rgba: &[u8]) -> Vec<(u32, u32, Vec<u32
     levels
 }
 
+/// One image of the store, as `lambert info` lists it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StoredImage {
+    /// The file, or where embedded bytes came from.
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    /// "PNG" or "JPEG".
+    pub format: &'static str,
+    /// The word of its first level entry.
+    pub levels: u32,
+    pub level_count: u32,
+}
+
 /// A scene's textures as the shader reads them (see the module's words).
 #[derive(Clone, Debug)]
 pub struct TextureStore {
     words: Vec<u32>,
-    /// Per image added: the word of its first level entry, its level
-    /// count, its size.
-    images: Vec<(u32, u32, u32, u32)>,
+    images: Vec<StoredImage>,
     slots: usize,
 }
 
@@ -156,8 +168,9 @@ impl Default for TextureStore {
 }
 
 impl TextureStore {
-    /// Adds `image` with its mip chain; returns its index for `slot`.
-    pub fn add_image(&mut self, image: &DecodedImage) -> u32 {
+    /// Adds `image` (called `name`) with its mip chain; returns its index
+    /// for `slot`.
+    pub fn add_image(&mut self, image: &DecodedImage, name: String) -> u32 {
         let levels = mip_chain(image.width, image.height, &image.rgba);
         let first = self.words.len() as u32;
         let mut texel_word = self.words.len() + 4 * levels.len();
@@ -168,8 +181,14 @@ impl TextureStore {
         for (_, _, texels) in levels.iter() {
             self.words.extend(texels);
         }
-        self.images
-            .push((first, levels.len() as u32, image.width, image.height));
+        self.images.push(StoredImage {
+            name,
+            width: image.width,
+            height: image.height,
+            format: image.format,
+            levels: first,
+            level_count: levels.len() as u32,
+        });
         self.images.len() as u32 - 1
     }
 
@@ -178,7 +197,13 @@ impl TextureStore {
     /// index, is not read); returns the word where it starts, the value a
     /// material's texture slot holds.
     pub fn slot(&mut self, image: u32, texture: &TextureUse) -> u32 {
-        let (levels, count, width, height) = self.images[image as usize];
+        let stored = &self.images[image as usize];
+        let (levels, count, width, height) = (
+            stored.levels,
+            stored.level_count,
+            stored.width,
+            stored.height,
+        );
         let [[a, b, c], [d, e, f]] = texture.transform;
         let wrap = |w: Wrap| match w {
             Wrap::Repeat => 0,
@@ -215,5 +240,17 @@ impl TextureStore {
     /// Whether any material uses a texture.
     pub fn has_slots(&self) -> bool {
         self.slots > 0
+    }
+
+    /// The images added, in order.
+    pub fn images(&self) -> &[StoredImage] {
+        &self.images
+    }
+
+    /// The image (an index into `images`) the slot starting at word `slot`
+    /// reads.
+    pub fn image_of_slot(&self, slot: u32) -> Option<usize> {
+        let levels = *self.words.get(slot as usize + 7)?;
+        self.images.iter().position(|i| i.levels == levels)
     }
 }
