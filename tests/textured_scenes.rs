@@ -326,3 +326,86 @@ fn info_lists_the_textures_and_their_materials() {
         assert!(out.lines().any(|l| l == line), "no line {line:?} in\n{out}");
     }
 }
+
+/// The malformed corpus's texture cases load with a warning each, naming
+/// the model, the image and what is wrong, and render with the factor
+/// alone; the well-formed one (a PNG data URI) loads without.
+#[test]
+fn broken_images_are_warnings_and_the_model_renders() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/corpus/gltf");
+    for (name, warning) in [
+        ("texture-missing-image-file.gltf", "no-such-image.png"),
+        (
+            "texture-truncated-png.gltf",
+            "image 0: not a readable PNG image: unexpected end of file; material 'm' keeps its \
+             colour without it",
+        ),
+        (
+            "texture-wrong-mime-data-uri.gltf",
+            "image 0: a Gif image (lambert reads PNG and JPEG); material 'm' keeps its colour \
+             without it",
+        ),
+        ("texture-png-data-uri.gltf", ""),
+    ] {
+        let scene = Scene::load(&dir.join(name)).unwrap();
+        if warning.is_empty() {
+            assert!(scene.warnings.is_empty(), "{name}: {:?}", scene.warnings);
+            assert_eq!(scene.textures.images().len(), 1, "{name}");
+        } else {
+            assert!(
+                scene
+                    .warnings
+                    .iter()
+                    .any(|w| w.contains(name) && w.contains(warning)),
+                "{name}: {:?}",
+                scene.warnings
+            );
+            assert!(scene.textures.images().is_empty(), "{name}");
+            assert_eq!(
+                scene.materials[0].base_color_texture,
+                lambert::layout::NO_TEXTURE
+            );
+        }
+        render_cpu(&scene);
+    }
+}
+
+/// Textures beyond the device's storage binding are the GpuLimit error,
+/// naming them and by how much, as geometry is; `--device auto` then
+/// renders on the CPU path.
+#[test]
+fn textures_beyond_the_gpu_limits_are_a_gpu_limit_error() {
+    use lambert::gpu::{AdapterRequest, Gpu, GpuRenderer};
+    const SMALL_GPU: u64 = 1 << 16;
+    let dir = tempfile::tempdir().unwrap();
+    let big = image::RgbaImage::from_fn(256, 256, |x, y| image::Rgba([x as u8, y as u8, 0, 255]));
+    let scene = textured_plane(dir.path(), "big", &big, &sampler(LINEAR, REPEAT));
+    let bytes = 4 * scene.textures.words().len() as u64;
+    assert!(bytes > 4 * 256 * 256, "{bytes}");
+    let gpu = Gpu::open_limited(&AdapterRequest::default(), false, Some(SMALL_GPU)).unwrap();
+    let Err(error) = GpuRenderer::new(gpu, &scene) else {
+        panic!("{bytes} bytes of textures fit in 64 KiB");
+    };
+    assert!(matches!(error, lambert::Error::GpuLimit(_)), "{error:?}");
+    let expected = format!(
+        "the scene's textures take {bytes} bytes, {} more than the {SMALL_GPU} bytes",
+        bytes - SMALL_GPU
+    );
+    assert!(error.to_string().contains(&expected), "{error}");
+    let output = dir.path().join("out.pfm");
+    let out = common::lambert_command()
+        .args(["render", common::s(&dir.path().join("big.gltf.toml"))])
+        .args([
+            "-o",
+            common::s(&output),
+            "--device",
+            "auto",
+            "--adapter",
+            "llvmpipe",
+        ])
+        .env(lambert::gpu::MAX_BUFFER_ENV, SMALL_GPU.to_string())
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", common::stderr(&out));
+    assert!(output.exists());
+}
