@@ -362,6 +362,17 @@ fn texture_coordinates_of_every_format_are_read() {
             }
         }
         let texture = mesh.materials[0].base_color_texture.expect("its texture");
+        let scene = Scene::load(&path).unwrap();
+        let warnings = scene.warnings.join("\n");
+        // Textures render now: this one's bytes are no image, which the
+        // scene says, naming the image and the material (it keeps its
+        // factor).
+        assert!(
+            warnings.contains(
+                "present.png: not a PNG or JPEG image; material 'tex' keeps its colour without it"
+            ),
+            "{warnings}"
+        );
         assert_eq!(
             mesh.images[texture.image as usize],
             lambert::loading::ImageSource::File(d.join("present.png"))
@@ -596,4 +607,37 @@ fn ray_queries_pass_through_cut_outs() {
         "the floor through the cut-out, the quad beside it"
     );
     assert_ne!(cpu[0].prim, NO_HIT);
+}
+
+/// Item 7: `lambert info MODEL` lists vertex colours, each material's alpha
+/// mode, and the emissive materials.
+#[test]
+fn info_lists_colours_alpha_modes_and_emission() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = masked_scene(d, "MASK", 6.0);
+    assert_eq!(scene.colored_triangles, 2);
+    let colour = Attribute {
+        name: "COLOR_0",
+        bytes: floats(&[1.0; 12]),
+        component: 5126,
+        kind: "VEC3",
+        normalized: false,
+    };
+    let material = serde_json::json!({"emissiveFactor": [0.5, 0.25, 1.0]});
+    let path = write(d, "lamp.glb", quad_glb(1.0, 0.0, &[colour], material));
+    let info = lambert(&["info", s(&path)]);
+    let out = String::from_utf8_lossy(&info.stdout);
+    assert!(info.status.success(), "{}", stderr(&info));
+    for line in [
+        "vertex colours: yes, on 2 of 2 triangles",
+        "0: base colour [1, 1, 1], alpha 1, alpha mode OPAQUE, emissive [0.5, 0.25, 1]",
+        "emissive materials: 1",
+    ] {
+        assert!(out.contains(line), "lacks '{line}':\n{out}");
+    }
+    let info = lambert(&["info", s(&d.join("MASK.glb"))]);
+    let out = String::from_utf8_lossy(&info.stdout);
+    assert!(out.contains("alpha mode MASK (cut-off 0.5)"), "{out}");
+    assert!(out.contains("emissive materials: 0"), "{out}");
 }

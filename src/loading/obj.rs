@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 
-use super::material::{AlphaMode, IDENTITY_UV_TRANSFORM, ImageSource, MaterialDesc, TextureUse};
+use super::material::{AlphaMode, ImageSource, MaterialDesc, TextureUse};
 use super::{Mesh, NormalMode, area_weighted_normals, check_coordinate, corner_values};
 use crate::error::{Error, Result};
 
@@ -278,13 +278,13 @@ fn texture_use(
     } as u32;
     // -o/-s act on OBJ coordinates (v up); stored ones are (u, 1 − v), so
     // v' = s·v + o becomes 1 − v' = s·(1 − v) + (1 − s − o).
-    let mut transform = IDENTITY_UV_TRANSFORM;
-    transform[0] = [scale[0], 0.0, offset[0]];
-    transform[1] = [0.0, scale[1], 1.0 - scale[1] - offset[1]];
     Some(TextureUse {
         image,
         sampler: Default::default(),
-        transform,
+        transform: [
+            [scale[0], 0.0, offset[0]],
+            [0.0, scale[1], 1.0 - scale[1] - offset[1]],
+        ],
     })
 }
 
