@@ -26,9 +26,7 @@ fn write_gltf(
     let mut bin: Vec<u8> = bytemuck::cast_slice(positions).to_vec();
     bin.extend_from_slice(bytemuck::cast_slice(uvs));
     bin.extend_from_slice(bytemuck::cast_slice(triangles));
-    while bin.len() % 4 != 0 {
-        bin.push(0);
-    }
+    bin.resize(bin.len().next_multiple_of(4), 0);
     std::fs::write(dir.join(format!("{name}.bin")), &bin).unwrap();
     let (p, u, t) = (12 * positions.len(), 8 * uvs.len(), 2 * triangles.len());
     let lo = |i| positions.iter().map(|q| q[i]).fold(f32::INFINITY, f32::min);
