@@ -201,6 +201,16 @@ fn ray_cone_lod_of_a_known_geometry() {
     // Between powers of two the level is the straight-line log2 of the
     // float's bits: 3 texels → 1 + 0.5 (log2 3 = 1.585).
     assert_eq!(lod(Vec3::Z, 3.0 / 256.0), 256 + 128);
+    // A camera's cone: one pixel's angle (2·tan(vfov/2)/height), and at 16
+    // samples a quarter of it, so the level is two lower: jittered samples
+    // read finer levels and converge to the full texture's box filter.
+    let spread = lambert::texture::cone_spread(1.0, 512, 1);
+    assert_eq!(spread, 2.0 / 512.0);
+    assert_eq!(lambert::texture::cone_spread(1.0, 512, 16), spread / 4.0);
+    assert_eq!(
+        lod(Vec3::Z, 64.0 * spread) - lod(Vec3::Z, 16.0 * spread),
+        2 * 256
+    );
 }
 
 #[test]
