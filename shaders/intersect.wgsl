@@ -262,17 +262,42 @@ fn intersect_primitive(ray: Ray, shear: Shear, prim: u32) -> vec3<f32> {
     return no_triangle_hit();
 }
 
+// The texture in `slot` at (u, v) of triangle `prim` (which has
+// FLAG_ATTRIBUTES: slots are only filled for meshes with texture
+// coordinates), at the level of detail of a ray cone `cone_width` wide
+// there along `dir`; a cone of width 0 reads the base level (the any-hit
+// test's alpha).
+fn texture_at(slot: u32, tri: Triangle, prim: u32, u: f32, v: f32, dir: vec3<f32>, cone_width: f32) -> vec4<f32> {
+    let a = triangle_attributes_at(prim);
+    let uv = interpolate_uv(a.uvs[0], a.uvs[1], a.uvs[2], u, v);
+    var lod = 0;
+    if cone_width > 0.0 {
+        lod = texture_lod(slot, tri.v0, tri.v1, tri.v2, a.uvs[0], a.uvs[1], a.uvs[2], dir, cone_width);
+    }
+    return sample_texture(slot, uv, lod);
+}
+
 // The base colour at (u, v) of triangle `prim`: its material's, times its
-// corners' colours interpolated (FLAG_ATTRIBUTES). Alpha and shading both
-// read it.
-fn base_color_at(tri: Triangle, prim: u32, u: f32, v: f32) -> vec4<f32> {
-    var color = materials[tri.material].base_color;
+// corners' colours interpolated (FLAG_ATTRIBUTES), times its base colour
+// texture (RGBA) and its alpha texture's alpha, read as `texture_at` does.
+// Alpha and shading both read it.
+fn base_color_at(tri: Triangle, prim: u32, u: f32, v: f32, dir: vec3<f32>, cone_width: f32) -> vec4<f32> {
+    let material = materials[tri.material];
+    var color = material.base_color;
     if (tri.flags & FLAG_ATTRIBUTES) != 0u {
         let a = triangle_attributes_at(prim);
-        // fma, as the CPU's mul_add: the same bits whether or not the
-        // compiler would have fused a multiply-add of its own.
-        let w = 1.0 - u - v;
-        color *= fma(vec4<f32>(w), a.colors[0], fma(vec4<f32>(u), a.colors[1], v * a.colors[2]));
+        // Each product and sum rounded on its own (`rounded`), as the
+        // CPU's: lavapipe neither fuses an explicit `fma` reliably nor
+        // keeps a sum's order unless told (docs/textures.md).
+        let w = rounded(rounded(1.0 - u) - v);
+        color *= rounded4(rounded4(w * a.colors[0])
+            + rounded4(rounded4(u * a.colors[1]) + rounded4(v * a.colors[2])));
+        if material.base_color_texture != NO_TEXTURE {
+            color *= texture_at(material.base_color_texture, tri, prim, u, v, dir, cone_width);
+        }
+        if material.alpha_texture != NO_TEXTURE {
+            color.a *= texture_at(material.alpha_texture, tri, prim, u, v, dir, cone_width).a;
+        }
     }
     return color;
 }
@@ -290,7 +315,7 @@ fn cut_out(prim: u32, u: f32, v: f32) -> bool {
     if (tri.flags & FLAG_MASKED) == 0u {
         return false;
     }
-    return base_color_at(tri, prim, u, v).a < materials[tri.material].alpha_cutoff;
+    return base_color_at(tri, prim, u, v, vec3<f32>(0.0), 0.0).a < materials[tri.material].alpha_cutoff;
 }
 
 // Tests `prim`; if it is hit nearer than ray.tmax, makes it the hit and

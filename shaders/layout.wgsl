@@ -116,7 +116,9 @@ struct Params {
     sample_end: u32,
     // How often `loops_completed`'s loop must run (2).
     canary_loops: u32,
-    _pad0: u32,
+    // A camera ray's cone's spread angle: its width at distance t is
+    // t · cone_spread (texture::cone_spread; docs/textures.md).
+    cone_spread: f32,
     _pad1: u32,
 }
 
@@ -260,6 +262,8 @@ struct Surface {
 @group(0) @binding(14) var bvh_block_texels: texture_2d<u32>;
 @group(0) @binding(15) var<storage, read> triangle_attributes: array<TriangleAttributes>;
 @group(0) @binding(16) var<storage, read> triangle_attributes_hi: array<TriangleAttributes>;
+// The scene's textures, all in one array of words (src/texture/store.rs).
+@group(0) @binding(17) var<storage, read> textures: array<u32>;
 // Group 1 holds what one entry point reads and writes: an image tile for
 // `render`, a batch of rays for `trace_rays`.
 @group(1) @binding(0) var out_color: texture_storage_2d<rgba32float, write>;

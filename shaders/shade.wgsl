@@ -37,8 +37,16 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
                 shading = face_forward(normalize(interpolated), ray.dir);
             }
         }
-        let base = base_color_at(tri, hit.prim, hit.u, hit.v);
-        return Surface(position, error, geometric, shading, base.rgb, materials[tri.material].emission);
+        // The camera ray's cone where it hits (docs/textures.md).
+        let cone_width = hit.t * params.cone_spread;
+        let base = base_color_at(tri, hit.prim, hit.u, hit.v, ray.dir, cone_width);
+        let material = materials[tri.material];
+        var emission = material.emission;
+        if material.emissive_texture != NO_TEXTURE && (tri.flags & FLAG_ATTRIBUTES) != 0u {
+            emission *= texture_at(material.emissive_texture, tri, hit.prim, hit.u, hit.v, ray.dir,
+                cone_width).rgb;
+        }
+        return Surface(position, error, geometric, shading, base.rgb, emission);
     }
     let sphere = spheres[hit.prim - params.num_triangles];
     // Relative to the centre first: o − c is exact when both are near each

@@ -6,6 +6,7 @@
 use std::path::Path;
 
 use crate::error::Result;
+use crate::loading::material::ImageSource;
 use crate::loading::{self, Mesh, NormalMode};
 
 /// A user-facing input format.
@@ -95,6 +96,28 @@ impl Input {
         if mesh.triangles.is_empty() {
             return Ok(None);
         }
+        // The images the model carries, decoded as a scene would (files it
+        // names are left unread: the harness reads only its input).
+        let carried: Vec<ImageSource> = mesh
+            .images
+            .iter()
+            .map(|source| match source {
+                ImageSource::File(path) => ImageSource::Embedded {
+                    bytes: Vec::new(),
+                    name: path.display().to_string(),
+                },
+                embedded => embedded.clone(),
+            })
+            .collect();
+        let mut textures = crate::texture::TextureStore::default();
+        let mut warnings = Vec::new();
+        crate::texture::add_model_textures(
+            &mut textures,
+            path,
+            &carried,
+            &mesh.materials,
+            &mut warnings,
+        );
         let vertices: Vec<[f64; 3]> = mesh.positions.iter().map(|p| p.to_array()).collect();
         let faces: Vec<[i64; 3]> = mesh.triangles.iter().map(|t| t.map(i64::from)).collect();
         crate::Scene::from_arrays(&vertices, &faces, None).map(Some)

@@ -67,7 +67,9 @@ pub struct Params {
     pub sample_end: u32,
     /// Trip count of the shader's `loops_completed` check: 2.
     pub canary_loops: u32,
-    pub _pad0: u32,
+    /// A camera ray's cone's spread angle: its width at distance t is
+    /// t · cone_spread (`texture::cone_spread`).
+    pub cone_spread: f32,
     pub _pad1: u32,
 }
 

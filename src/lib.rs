@@ -33,6 +33,7 @@ pub mod rays;
 pub mod render;
 pub mod scene;
 pub mod shader_source;
+pub mod texture;
 
 pub use error::{Error, Result};
 pub use scene::Scene;

@@ -14,6 +14,8 @@ pub const SOURCE: &str = concat!(
     "\n",
     include_str!("../shaders/traverse.wgsl"),
     "\n",
+    include_str!("../shaders/texture.wgsl"),
+    "\n",
     include_str!("../shaders/shade.wgsl"),
     "\n",
     include_str!("../shaders/sample.wgsl"),

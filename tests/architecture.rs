@@ -474,6 +474,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("loading", 2),
     ("placement", 2),
     ("probe", 2),
+    ("texture", 2),
     ("scene", 3),
     ("cpu", 4),
     ("gpu", 4),

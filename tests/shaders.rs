@@ -98,7 +98,7 @@ fn host_structs_match_wgsl_layout() {
             sample_begin,
             sample_end,
             canary_loops,
-            _pad0,
+            cone_spread,
             _pad1,
         }
     );

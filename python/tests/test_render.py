@@ -42,6 +42,17 @@ def test_a_vertex_coloured_model_renders_as_the_cli_does(device, cli, tmp_path):
     assert (image[..., 0] - image[..., 1]).max() > 0.2
 
 
+@pytest.mark.parametrize("device", ["cpu", "gpu"])
+def test_a_textured_model_renders_as_the_cli_does(device, cli, tmp_path):
+    # The bundled textured glTF: a UV-grid texture and an alpha-masked leaf.
+    path = os.path.join(MESHES, "textured.glb")
+    cli("render", path, "-o", str(tmp_path / "cli.pfm"), "--device", device, "--width", "64", "--height", "48", "-q")
+    image = lambert.Scene.load(path).render(64, 48, device=device)
+    np.testing.assert_array_equal(image, read_pfm(tmp_path / "cli.pfm"))
+    # Textured, not flat: many distinct colours.
+    assert len(np.unique(image.reshape(-1, 3), axis=0)) > 50
+
+
 def test_gpu_and_cpu_renders_agree():
     scene = lambert.Scene.load(os.path.join(MESHES, "bunny_lowres.obj"))
     cpu = scene.render(64, 48, device="cpu")

@@ -41,8 +41,50 @@ impl<'a> Kernel<'a> {
         (intersect_sphere(ray, vec3(sphere.center), sphere.radius as Real), 0.0, 0.0)
     }
 
+    /// The texture in `slot` at (u, v) of triangle `prim` (with
+    /// FLAG_ATTRIBUTES), at the level of detail of a ray cone `cone_width`
+    /// wide there along `dir`; width 0 reads the base level (the any-hit
+    /// test's alpha). In f32 in both precisions, as the shader samples.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    pub fn texture_at(
+        &self,
+        slot: u32,
+        tri: &crate::layout::Triangle,
+        prim: u32,
+        u: Real,
+        v: Real,
+        dir: Vec3,
+        cone_width: f32,
+    ) -> Vec4 {
+        let a = &self.scene.attributes[prim as usize];
+        let uvs = a.uvs.map(glam::Vec2::from_array);
+        let uv = crate::cpu::texture::interpolate_uv(uvs[0], uvs[1], uvs[2], u as f32, v as f32);
+        let lod = if cone_width > 0.0 {
+            let p = |c: [f32; 3]| glam::Vec3::from_array(c);
+            let d = glam::Vec3::new(dir.x as f32, dir.y as f32, dir.z as f32);
+            self.textures.texture_lod(
+                slot,
+                p(tri.v0),
+                p(tri.v1),
+                p(tri.v2),
+                uvs[0],
+                uvs[1],
+                uvs[2],
+                d,
+                cone_width,
+            )
+        } else {
+            0
+        };
+        let c = self.textures.sample_texture(slot, uv, lod);
+        Vec4::new(c.x as Real, c.y as Real, c.z as Real, c.w as Real)
+    }
+
     /// The base colour at (u, v) of triangle `prim`: its material's, times
-    /// its corners' colours interpolated (FLAG_ATTRIBUTES).
+    /// its corners' colours interpolated (FLAG_ATTRIBUTES), times its base
+    /// colour texture (RGBA) and its alpha texture's alpha, read as
+    /// `texture_at` does.
     #[inline(always)]
     pub fn base_color_at(
         &self,
@@ -50,16 +92,28 @@ impl<'a> Kernel<'a> {
         prim: u32,
         u: Real,
         v: Real,
+        dir: Vec3,
+        cone_width: f32,
     ) -> Vec4 {
         let scene = self.scene;
-        let mut color = vec4(scene.materials[tri.material as usize].base_color);
+        let material = &scene.materials[tri.material as usize];
+        let mut color = vec4(material.base_color);
         if tri.flags & FLAG_ATTRIBUTES != 0 {
             let a = &scene.attributes[prim as usize];
-            // Fused, as the shader's fma: the GPU's compiler may fuse an
-            // a·b + c of its own, so the shader fuses explicitly.
-            let w = Vec4::splat(1.0 - u - v);
+            // Each product and sum rounded on its own, in this order, as
+            // the shader's (`rounded` there stops its compiler fusing or
+            // reordering them).
+            let w = Vec4::splat((1.0 - u) - v);
             let c = |k: usize| vec4(a.colors[k]);
-            color *= w.mul_add(c(0), Vec4::splat(u).mul_add(c(1), Vec4::splat(v) * c(2)));
+            color *= w * c(0) + (Vec4::splat(u) * c(1) + Vec4::splat(v) * c(2));
+            if material.base_color_texture != NO_TEXTURE {
+                color *= self.texture_at(material.base_color_texture, tri, prim, u, v, dir, cone_width);
+            }
+            if material.alpha_texture != NO_TEXTURE {
+                color.w *= self
+                    .texture_at(material.alpha_texture, tri, prim, u, v, dir, cone_width)
+                    .w;
+            }
         }
         color
     }
@@ -80,7 +134,7 @@ impl<'a> Kernel<'a> {
             return false;
         }
         let cutoff = self.scene.materials[tri.material as usize].alpha_cutoff as Real;
-        self.base_color_at(tri, prim, u, v).w < cutoff
+        self.base_color_at(tri, prim, u, v, Vec3::ZERO, 0.0).w < cutoff
     }
 
     /// Tests `prim`; if it is hit nearer than ray.tmax, makes it the hit and

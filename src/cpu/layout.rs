@@ -5,7 +5,7 @@
 
 use crate::bvh::{MAX_DEPTH, STACK_SIZE};
 use crate::layout::{
-    BVH_WIDTH, BvhNode, CompressedNode, FLAG_ATTRIBUTES, FLAG_MASKED, FLAG_SMOOTH, LEAF_BIT, LIGHT_POINT, META_LEAF, NO_HIT,
+    BVH_WIDTH, BvhNode, CompressedNode, FLAG_ATTRIBUTES, FLAG_MASKED, FLAG_SMOOTH, LEAF_BIT, LIGHT_POINT, META_LEAF, NO_HIT, NO_TEXTURE,
     PrimBlock, leaf_range,
 };
 use crate::camera::View;
@@ -113,6 +113,10 @@ pub struct Kernel<'a> {
     pub compressed: Option<&'a [CompressedNode]>,
     /// Whether some triangle is alpha-masked (the shader's HAS_ALPHA_MASK).
     alpha_mask: bool,
+    /// The scene's texture store (the shader's `textures`).
+    textures: crate::cpu::texture::Textures<'a>,
+    /// The camera rays' cone spread (the shader's `params.cone_spread`).
+    cone_spread: f32,
     /// The GPU's short stack: entries `trace_compressed` keeps before the
     /// oldest spill (`cwbvh::short_stack`; `MAX_DEPTH`, none spill).
     pub stack_entries: usize,
@@ -132,8 +136,11 @@ impl<'a> Kernel<'a> {
 
     /// `scene` seen from `view` rather than its default (`Scene::view`).
     pub fn with_view(scene: &'a Scene, view: &View, ymm_boxes: bool) -> Kernel<'a> {
+        let camera = scene.local_camera(&view.camera);
+        // From the f32 basis in both precisions, as the GPU's is.
+        let basis = crate::camera::f32::CameraBasis::new(&camera);
         Kernel {
-            camera: CameraBasis::new(&scene.local_camera(&view.camera)),
+            camera: CameraBasis::new(&camera),
             scene,
             spp: view.spp,
             seed: view.seed,
@@ -143,6 +150,10 @@ impl<'a> Kernel<'a> {
             intersect: scene.intersect,
             ymm_boxes,
             alpha_mask: scene.has_alpha_mask(),
+            textures: crate::cpu::texture::Textures {
+                words: scene.textures.words(),
+            },
+            cone_spread: crate::texture::cone_spread(basis.tan_half_y, basis.height, view.spp),
             compressed: None,
             stack_entries: MAX_DEPTH,
         }

@@ -12,6 +12,7 @@ mod prefetch;
 mod query;
 mod render;
 mod simd;
+pub mod texture;
 
 pub use prefetch::LARGE_BVH_BYTES;
 pub use query::{

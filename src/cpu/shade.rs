@@ -76,6 +76,23 @@ impl<'a> Kernel<'a> {
             let position = w * v0 + hit.u * v1 + hit.v * v2;
             let error = self_hit_bound(v0.abs().max(v1.abs()).max(v2.abs()));
             let geometric = face_forward((v1 - v0).cross(v2 - v0).normalize(), ray.dir);
+            // The camera ray's cone where it hits (docs/textures.md).
+            let cone_width = hit.t as f32 * self.cone_spread;
+            let material = &scene.materials[tri.material as usize];
+            let mut emission = vec3(material.emission);
+            if material.emissive_texture != NO_TEXTURE && tri.flags & FLAG_ATTRIBUTES != 0 {
+                emission *= self
+                    .texture_at(
+                        material.emissive_texture,
+                        tri,
+                        hit.prim,
+                        hit.u,
+                        hit.v,
+                        ray.dir,
+                        cone_width,
+                    )
+                    .truncate();
+            }
             let mut shading = geometric;
             if tri.flags & FLAG_SMOOTH != 0 {
                 let ns = &scene.normals[hit.prim as usize];
@@ -91,8 +108,10 @@ impl<'a> Kernel<'a> {
                 error,
                 geometric_normal: geometric,
                 shading_normal: shading,
-                albedo: self.base_color_at(tri, hit.prim, hit.u, hit.v).truncate(),
-                emission: vec3(scene.materials[tri.material as usize].emission),
+                albedo: self
+                    .base_color_at(tri, hit.prim, hit.u, hit.v, ray.dir, cone_width)
+                    .truncate(),
+                emission,
             };
         }
         let sphere = &scene.spheres[(hit.prim - num_triangles) as usize];

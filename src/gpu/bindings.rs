@@ -66,6 +66,7 @@ pub const SCENE: BindingTable = BindingTable {
         bind("bvh_block_texels", 14, Texels),
         bind("triangle_attributes", 15, Storage),
         bind("triangle_attributes_hi", 16, Storage),
+        bind("textures", 17, Storage),
     ],
 };
 

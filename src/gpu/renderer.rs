@@ -98,6 +98,7 @@ fn with_view(params: Params, offset: DVec3, view: &View) -> Params {
         strata_x: strata_columns(view.spp),
         sample_begin: 0,
         sample_end: view.spp,
+        cone_spread: crate::texture::cone_spread(basis.tan_half_y, basis.height, view.spp),
         ..params
     }
 }
@@ -249,6 +250,7 @@ fn scene_bind_group(
             ("loop_status", loop_status.buffer.as_entire_binding()),
             ("triangle_attributes", buffers.attributes.low_binding()),
             ("triangle_attributes_hi", buffers.attributes.high_binding()),
+            ("textures", buffers.textures.as_entire_binding()),
             (
                 "bvh_node_texels",
                 wgpu::BindingResource::TextureView(&node_view),

@@ -65,6 +65,8 @@ pub(super) struct SceneBuffers {
     pub lights: wgpu::Buffer,
     pub node_texture: wgpu::Texture,
     pub block_texture: wgpu::Texture,
+    /// `texture::TextureStore::words`.
+    pub textures: wgpu::Buffer,
     /// Bytes of all of them.
     pub device_bytes: u64,
 }
@@ -111,6 +113,11 @@ impl SceneBuffers {
         let spheres = gpu.storage_buffer("spheres", &non_empty::<Sphere>(&scene.spheres), limit)?;
         let materials = gpu.storage_buffer("materials", &non_empty(&scene.materials), limit)?;
         let lights = gpu.storage_buffer("lights", &non_empty(&scene.lights), limit)?;
+        let textures = gpu.storage_buffer(
+            "textures",
+            bytemuck::cast_slice(scene.textures.words()),
+            limit,
+        )?;
         let blocks = gpu.split_buffer(
             "BVH leaf blocks",
             &non_empty(buffer_blocks),
@@ -125,6 +132,7 @@ impl SceneBuffers {
             &spheres,
             &materials,
             &lights,
+            &textures,
             &blocks.buffer,
         ]
         .iter()
@@ -155,6 +163,7 @@ impl SceneBuffers {
             lights,
             node_texture,
             block_texture,
+            textures,
             device_bytes,
         })
     }

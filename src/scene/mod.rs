@@ -45,6 +45,8 @@ pub struct Scene {
     pub spheres: Vec<Sphere>,
     pub materials: Vec<Material>,
     pub lights: Vec<Light>,
+    /// Every texture the materials use, as both paths read it.
+    pub textures: crate::texture::TextureStore,
     /// Over all primitives; built by `load`/`from_toml`.
     pub bvh: Bvh,
     /// How rays find their hits; both paths follow it.
@@ -201,6 +203,7 @@ impl Scene {
             spheres: Vec::new(),
             materials: Vec::new(),
             lights: Vec::new(),
+            textures: Default::default(),
             bvh: Bvh::default(),
             accel: Accel::default(),
             intersect: Intersect::default(),
@@ -244,11 +247,32 @@ impl Scene {
         let (material, file_materials, fallback) = match uniform {
             Some(a) => (self.add_material(a), Vec::new(), 0),
             None => {
-                self.warnings.extend(untextured(path, &mesh.materials));
+                // Textures only where the mesh has texture coordinates to
+                // read them with (a loader warns of a texture without).
+                let slots = if mesh.uvs.is_some() {
+                    crate::texture::add_model_textures(
+                        &mut self.textures,
+                        path,
+                        &mesh.images,
+                        &mesh.materials,
+                        &mut self.warnings,
+                    )
+                } else {
+                    Vec::new()
+                };
                 let ids: Vec<u32> = mesh
                     .materials
                     .iter()
-                    .map(|m| self.push_material(material_of(m)))
+                    .enumerate()
+                    .map(|(i, m)| {
+                        let mut material = material_of(m);
+                        if let Some(s) = slots.get(i) {
+                            material.base_color_texture = s.base_color;
+                            material.emissive_texture = s.emissive;
+                            material.alpha_texture = s.alpha;
+                        }
+                        self.push_material(material)
+                    })
                     .collect();
                 let fallback = if mesh.face_materials.iter().any(Option::is_none) {
                     self.add_material(DEFAULT_ALBEDO)
@@ -402,29 +426,8 @@ impl Scene {
     }
 }
 
-/// Until the kernels sample textures: one warning naming the materials
-/// whose textures are read but not rendered (they render their factors).
-fn untextured(path: &Path, materials: &[loading::MaterialDesc]) -> Option<String> {
-    let names: Vec<&str> = materials
-        .iter()
-        .filter(|m| {
-            m.base_color_texture.is_some()
-                || m.emissive_texture.is_some()
-                || m.alpha_texture.is_some()
-        })
-        .map(|m| m.name.as_str())
-        .collect();
-    (!names.is_empty()).then(|| {
-        format!(
-            "{}: the textures of materials {} are not rendered yet (their colour factors are)",
-            path.display(),
-            names.join(", ")
-        )
-    })
-}
-
 /// The kernels' material of a file's: BLEND is rendered as MASK at 0.5
-/// (the loader warns), texture slots are empty until textures are bound.
+/// (the loader warns); texture slots are filled by `add_mesh`.
 fn material_of(desc: &loading::MaterialDesc) -> Material {
     let [r, g, b, a] = desc.base_color;
     let mut material = Material::from_albedo([r, g, b]);

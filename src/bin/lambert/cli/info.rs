@@ -66,6 +66,39 @@ pub(super) fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> 
         }
         println!("{line}");
     }
+    let textures = scene.textures.images();
+    println!("  textures: {}", textures.len());
+    for (t, image) in textures.iter().enumerate() {
+        // Which materials read it, and as what.
+        let users: Vec<String> = scene
+            .materials
+            .iter()
+            .enumerate()
+            .flat_map(|(i, m)| {
+                [
+                    (m.base_color_texture, "base colour"),
+                    (m.emissive_texture, "emissive"),
+                    (m.alpha_texture, "alpha"),
+                ]
+                .into_iter()
+                .filter(|&(slot, _)| {
+                    slot != lambert::layout::NO_TEXTURE
+                        && scene.textures.image_of_slot(slot) == Some(t)
+                })
+                .map(move |(_, role)| format!("{i} ({role})"))
+            })
+            .collect();
+        println!(
+            "    {t}: {}, {}×{} {}, {} mip levels, used by material{} {}",
+            image.name,
+            image.width,
+            image.height,
+            image.format,
+            image.level_count,
+            if users.len() == 1 { "" } else { "s" },
+            users.join(", ")
+        );
+    }
     let emissive = scene
         .materials
         .iter()
