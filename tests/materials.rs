@@ -140,8 +140,9 @@ const RED_GREEN_BLUE_WHITE: [[f32; 3]; 4] = [
 ];
 
 /// Item 2: an OBJ's `v x y z r g b` colours multiply its `Kd`, are
-/// interpolated across each triangle, and render the same on both paths,
-/// bit for bit; a scene's `albedo` replaces them.
+/// interpolated across each triangle, and render alike on both paths
+/// (`render_both`'s tolerance: the camera rays' barycentrics may differ in
+/// their last bits); a scene's `albedo` replaces them.
 #[test]
 fn obj_vertex_colours_reach_the_pixel_on_both_paths() {
     let dir = tempfile::tempdir().unwrap();
@@ -459,7 +460,7 @@ fn masked_scene(d: &Path, alpha_mode: &str, eye_z: f64) -> Scene {
 /// COLOR_0 alpha, interpolated) falls below alphaCutoff: invisible to
 /// camera rays, and shadow rays pass; where it is not cut out, it is seen
 /// and casts its shadow. BLEND renders as MASK at 0.5, with a warning. GPU
-/// and CPU agree bit for bit.
+/// and CPU cut out the same points (the same primitive in every pixel).
 #[test]
 fn alpha_masks_cut_out_for_camera_and_shadow_rays() {
     let dir = tempfile::tempdir().unwrap();
