@@ -7,9 +7,13 @@
 // Pinhole camera; `pixel` is a position in pixel units, row 0 at the top
 // (pixel centres are at +0.5).
 fn camera_ray(pixel: vec2<f32>) -> Ray {
-    let sx = (2.0 * pixel.x / f32(params.width) - 1.0) * params.tan_half_x;
-    let sy = (1.0 - 2.0 * pixel.y / f32(params.height)) * params.tan_half_y;
-    let dir = normalize(params.forward + sx * params.right + sy * params.up);
+    // Each operation rounded on its own, in the CPU twin's order, so both
+    // paths shoot the same bits (`rounded`: no fusing, no reordering).
+    let sx = rounded(rounded(rounded(2.0 * pixel.x) / f32(params.width)) - 1.0) * params.tan_half_x;
+    let sy = rounded(1.0 - rounded(rounded(2.0 * pixel.y) / f32(params.height))) * params.tan_half_y;
+    let v = rounded3(rounded3(params.forward + rounded3(sx * params.right)) + rounded3(sy * params.up));
+    let length_squared = rounded(rounded(rounded(v.x * v.x) + rounded(v.y * v.y)) + rounded(v.z * v.z));
+    let dir = rounded3(v * rounded(1.0 / rounded(sqrt(length_squared))));
     return Ray(params.eye, 0.0, dir, FAR);
 }
 

@@ -101,15 +101,15 @@ fn scene_in(dir: &Path, eye_z: f64, body: &str) -> Scene {
     Scene::from_toml(&text, &dir.join("scene.toml")).unwrap()
 }
 
-/// Renders on both paths and checks them equal within the project's
-/// GPU/CPU tolerance (docs/accuracy.md: WGSL's camera rays may be a few
-/// ULPs off the CPU's, and so their barycentrics and interpolated colours),
-/// every pixel hitting the same primitive; the CPU's render.
+/// Renders on both paths and checks them equal bit for bit (colours and
+/// the primitive in every pixel); the CPU's render.
 fn render_both(scene: &Scene, what: &str) -> Rendered {
     let cpu = render_cpu(scene);
     let gpu = render_gpu(scene);
-    let stats = lambert::diff::compare(&gpu, &cpu, &lambert::diff::Tolerance::default()).unwrap();
-    assert!(stats.passed, "{what}: GPU and CPU differ:\n{stats}");
+    assert!(
+        bits(&gpu) == bits(&cpu),
+        "{what}: GPU and CPU colours differ"
+    );
     assert_eq!(
         gpu.prims, cpu.prims,
         "{what}: GPU and CPU hit different primitives"
@@ -140,9 +140,8 @@ const RED_GREEN_BLUE_WHITE: [[f32; 3]; 4] = [
 ];
 
 /// Item 2: an OBJ's `v x y z r g b` colours multiply its `Kd`, are
-/// interpolated across each triangle, and render alike on both paths
-/// (`render_both`'s tolerance: the camera rays' barycentrics may differ in
-/// their last bits); a scene's `albedo` replaces them.
+/// interpolated across each triangle, and render the same on both paths,
+/// bit for bit; a scene's `albedo` replaces them.
 #[test]
 fn obj_vertex_colours_reach_the_pixel_on_both_paths() {
     let dir = tempfile::tempdir().unwrap();
@@ -460,7 +459,7 @@ fn masked_scene(d: &Path, alpha_mode: &str, eye_z: f64) -> Scene {
 /// COLOR_0 alpha, interpolated) falls below alphaCutoff: invisible to
 /// camera rays, and shadow rays pass; where it is not cut out, it is seen
 /// and casts its shadow. BLEND renders as MASK at 0.5, with a warning. GPU
-/// and CPU cut out the same points (the same primitive in every pixel).
+/// and CPU agree bit for bit.
 #[test]
 fn alpha_masks_cut_out_for_camera_and_shadow_rays() {
     let dir = tempfile::tempdir().unwrap();
