@@ -95,6 +95,28 @@ fn findings_say_what_is_wrong() {
     }
 }
 
+/// Images the gltf crate's validation lets through but its `Image::source`
+/// unwraps (found by `scripts/fuzz --short`): a warning naming the image,
+/// and the model loads with its material's factor.
+#[test]
+fn images_without_a_source_are_warnings_not_panics() {
+    for (name, why) in [
+        (
+            "accepted-image-buffer-view-without-mime-type.gltf",
+            "image 0: it has a bufferView but no mimeType",
+        ),
+        (
+            "accepted-image-without-uri-or-buffer-view.gltf",
+            "image 0: it has neither a bufferView nor a uri",
+        ),
+    ] {
+        let path = fuzz_dir("regressions").join("gltf").join(name);
+        let scene = lambert::Scene::load(&path).unwrap();
+        let warnings = scene.warnings.join("\n");
+        assert!(warnings.contains(why), "{name}: {warnings}");
+    }
+}
+
 /// The saved corpus (the harness's seeds) still parses without a panic,
 /// and its valid seeds still load: the corpus exercises the parsers' real
 /// paths, not only their first error.

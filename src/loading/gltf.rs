@@ -140,7 +140,7 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
     let mut all_normals = true;
     let mut default_material: Option<u32> = None;
     let mut material_ids: Vec<Option<u32>> = vec![None; document.materials().len()];
-    let mut images = Images::new(&buffers, path, document.images().len());
+    let mut images = Images::new(&document, &buffers, path);
     // Per vertex (parallel to positions): COLOR_0 (white where a primitive
     // has none) and the texture coordinates its material's textures read.
     let mut vertex_colors: Vec<[f32; 4]> = Vec::new();

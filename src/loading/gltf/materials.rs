@@ -98,6 +98,7 @@ pub(super) fn texture_coordinate_set(
 /// The file's images as materials use them: each read once, in the order
 /// first used (`Mesh::images`).
 pub(super) struct Images<'a> {
+    document: &'a gltf::Document,
     buffers: &'a [gltf::buffer::Data],
     path: &'a Path,
     /// Per image of the file, its index in `sources` (None: not yet).
@@ -107,11 +108,13 @@ pub(super) struct Images<'a> {
 
 impl<'a> Images<'a> {
     pub(super) fn new(
+        document: &'a gltf::Document,
         buffers: &'a [gltf::buffer::Data],
         path: &'a Path,
-        count: usize,
     ) -> Images<'a> {
+        let count = document.images().len();
         Images {
+            document,
             buffers,
             path,
             ids: vec![None; count],
@@ -160,6 +163,14 @@ impl<'a> Images<'a> {
 
     fn source(&self, image: &gltf::Image) -> std::result::Result<ImageSource, String> {
         let name = format!("{} image {}", self.path.display(), image.index());
+        // `Image::source` unwraps what the crate's validation lets through:
+        // a bufferView without a mimeType, or neither a bufferView nor a uri.
+        let json = &self.document.as_json().images[image.index()];
+        match (&json.buffer_view, &json.uri, &json.mime_type) {
+            (Some(_), _, None) => return Err("it has a bufferView but no mimeType".to_string()),
+            (None, None, _) => return Err("it has neither a bufferView nor a uri".to_string()),
+            _ => {}
+        }
         match image.source() {
             gltf::image::Source::View { view, .. } => {
                 let buffer = &self.buffers[view.buffer().index()].0;
