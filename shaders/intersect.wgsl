@@ -282,9 +282,9 @@ fn texture_at(slot: u32, tri: Triangle, prim: u32, u: f32, v: f32, dir: vec3<f32
 // texture (RGBA) and its alpha texture's alpha, read as `texture_at` does.
 // Alpha and shading both read it.
 fn base_color_at(tri: Triangle, prim: u32, u: f32, v: f32, dir: vec3<f32>, cone_width: f32) -> vec4<f32> {
-    let material = materials[tri.material];
-    var color = material.base_color;
-    if (tri.flags & FLAG_ATTRIBUTES) != 0u {
+    // Field by field: lavapipe loads a whole struct a lane at a time.
+    var color = materials[tri.material].base_color;
+    if HAS_ATTRIBUTES && (tri.flags & FLAG_ATTRIBUTES) != 0u {
         let a = triangle_attributes_at(prim);
         // Each product and sum rounded on its own (`rounded`), as the
         // CPU's: lavapipe neither fuses an explicit `fma` reliably nor
@@ -292,11 +292,13 @@ fn base_color_at(tri: Triangle, prim: u32, u: f32, v: f32, dir: vec3<f32>, cone_
         let w = rounded(rounded(1.0 - u) - v);
         color *= rounded4(rounded4(w * a.colors[0])
             + rounded4(rounded4(u * a.colors[1]) + rounded4(v * a.colors[2])));
-        if material.base_color_texture != NO_TEXTURE {
-            color *= texture_at(material.base_color_texture, tri, prim, u, v, dir, cone_width);
+        let base_color_texture = materials[tri.material].base_color_texture;
+        if HAS_TEXTURES && base_color_texture != NO_TEXTURE {
+            color *= texture_at(base_color_texture, tri, prim, u, v, dir, cone_width);
         }
-        if material.alpha_texture != NO_TEXTURE {
-            color.a *= texture_at(material.alpha_texture, tri, prim, u, v, dir, cone_width).a;
+        let alpha_texture = materials[tri.material].alpha_texture;
+        if HAS_TEXTURES && alpha_texture != NO_TEXTURE {
+            color.a *= texture_at(alpha_texture, tri, prim, u, v, dir, cone_width).a;
         }
     }
     return color;

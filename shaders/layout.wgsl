@@ -15,6 +15,13 @@ override HAS_DIRECTIONAL_LIGHTS: bool = true;
 // Some triangle is alpha-masked (FLAG_MASKED): traversal tests alpha at
 // its hits. False: the test is compiled out.
 override HAS_ALPHA_MASK: bool = true;
+// Some material reads a texture. False: texture lookups are compiled out
+// (lavapipe runs a branch's body masked even where no lane takes it, so
+// an untextured render would pay for them: 1.9× on the dragon).
+override HAS_TEXTURES: bool = true;
+// Some triangle has corner colours or texture coordinates
+// (FLAG_ATTRIBUTES). False: their interpolation is compiled out, likewise.
+override HAS_ATTRIBUTES: bool = true;
 // false: test every primitive (the reference that tests the BVH).
 override USE_BVH: bool = true;
 // Ray/triangle test: INTERSECT_SEED, INTERSECT_MOLLER_TRUMBORE or

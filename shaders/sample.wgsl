@@ -8,12 +8,20 @@
 // (pixel centres are at +0.5).
 fn camera_ray(pixel: vec2<f32>) -> Ray {
     // Each operation rounded on its own, in the CPU twin's order, so both
-    // paths shoot the same bits (`rounded`: no fusing, no reordering).
-    let sx = rounded(rounded(rounded(2.0 * pixel.x) / f32(params.width)) - 1.0) * params.tan_half_x;
-    let sy = rounded(1.0 - rounded(rounded(2.0 * pixel.y) / f32(params.height))) * params.tan_half_y;
-    let v = rounded3(rounded3(params.forward + rounded3(sx * params.right)) + rounded3(sy * params.up));
-    let length_squared = rounded(rounded(rounded(v.x * v.x) + rounded(v.y * v.y)) + rounded(v.z * v.z));
-    let dir = rounded3(v * rounded(1.0 / rounded(sqrt(length_squared))));
+    // paths shoot the same bits: a select on `guard`, which the compiler
+    // cannot know (as `rounded`'s, loaded once here), stops it fusing or
+    // reordering.
+    let guard = textures[0] != 0u;
+    let sx = select(select(2.0 * pixel.x / f32(params.width), 0.0, guard) - 1.0, 0.0, guard)
+        * params.tan_half_x;
+    let sy = select(1.0 - select(2.0 * pixel.y / f32(params.height), 0.0, guard), 0.0, guard)
+        * params.tan_half_y;
+    let zero = vec3<f32>(0.0);
+    let v = select(select(params.forward + select(sx * params.right, zero, guard), zero, guard)
+        + select(sy * params.up, zero, guard), zero, guard);
+    let squares = select(v * v, zero, guard);
+    let length_squared = select(select(squares.x + squares.y, 0.0, guard) + squares.z, 0.0, guard);
+    let dir = select(v * select(1.0 / select(sqrt(length_squared), 0.0, guard), 0.0, guard), zero, guard);
     return Ray(params.eye, 0.0, dir, FAR);
 }
 

@@ -40,10 +40,11 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
         // The camera ray's cone where it hits (docs/textures.md).
         let cone_width = hit.t * params.cone_spread;
         let base = base_color_at(tri, hit.prim, hit.u, hit.v, ray.dir, cone_width);
-        let material = materials[tri.material];
-        var emission = material.emission;
-        if material.emissive_texture != NO_TEXTURE && (tri.flags & FLAG_ATTRIBUTES) != 0u {
-            emission *= texture_at(material.emissive_texture, tri, hit.prim, hit.u, hit.v, ray.dir,
+        var emission = materials[tri.material].emission;
+        let emissive_texture = materials[tri.material].emissive_texture;
+        if HAS_TEXTURES && emissive_texture != NO_TEXTURE
+            && (tri.flags & FLAG_ATTRIBUTES) != 0u {
+            emission *= texture_at(emissive_texture, tri, hit.prim, hit.u, hit.v, ray.dir,
                 cone_width).rgb;
         }
         return Surface(position, error, geometric, shading, base.rgb, emission);

@@ -84,11 +84,7 @@ fn rounded(x: f32) -> f32 {
     return select(x, 0.0, textures[0] != 0u);
 }
 
-// `rounded` for vectors (no twin: Rust needs neither).
-fn rounded3(x: vec3<f32>) -> vec3<f32> {
-    return select(x, vec3<f32>(0.0), textures[0] != 0u);
-}
-
+// `rounded` for a vector (no twin: Rust needs neither).
 fn rounded4(x: vec4<f32>) -> vec4<f32> {
     return select(x, vec4<f32>(0.0), textures[0] != 0u);
 }

@@ -21,6 +21,8 @@ pub fn specialisation(scene: &Scene) -> Vec<(&'static str, f64)> {
         ("HAS_POINT_LIGHTS", flag(has_light(LIGHT_POINT))),
         ("HAS_DIRECTIONAL_LIGHTS", flag(has_light(LIGHT_DIRECTIONAL))),
         ("HAS_ALPHA_MASK", flag(scene.has_alpha_mask())),
+        ("HAS_TEXTURES", flag(scene.has_textures())),
+        ("HAS_ATTRIBUTES", flag(!scene.attributes.is_empty())),
         ("USE_BVH", flag(scene.accel == Accel::Bvh)),
         ("INTERSECT", scene.intersect.shader_value() as f64),
     ]

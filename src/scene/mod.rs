@@ -227,6 +227,16 @@ impl Scene {
         self.materials.iter().any(|m| m.alpha_mode == ALPHA_MASK)
     }
 
+    /// Whether some material reads a texture (the shader's HAS_TEXTURES:
+    /// without one, its texture lookups are compiled out).
+    pub fn has_textures(&self) -> bool {
+        self.materials.iter().any(|m| {
+            [m.base_color_texture, m.emissive_texture, m.alpha_texture]
+                .iter()
+                .any(|&slot| slot != crate::layout::NO_TEXTURE)
+        })
+    }
+
     /// Adds `mesh` (called `what` in errors about the file at `path`),
     /// every face with `albedo` when given, else with its file's material
     /// (DEFAULT_ALBEDO where it has none).
