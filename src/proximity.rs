@@ -57,7 +57,17 @@ impl Renderer {
         }
         let local = local_points(&placement, points)?;
         let mut answers = match self {
-            Renderer::Gpu(r) => r.closest_points(&local, max_distance)?,
+            Renderer::Gpu(r) => {
+                // The CPU's cull margins, so that both cull alike.
+                let radius = placement.radius as f32;
+                let margins: Vec<f32> = local
+                    .par_iter()
+                    .map(|p| {
+                        cpu::closest::query_margin(glam::Vec3::from(*p).abs().max_element(), radius)
+                    })
+                    .collect();
+                r.closest_points(&local, &margins, max_distance)?
+            }
             Renderer::Cpu(scene) => cpu::closest_points(scene, &local, max_distance),
         };
         if placement.offset != DVec3::ZERO {
@@ -113,7 +123,7 @@ impl Renderer {
         check_rays(rays)?;
         let local = placement.localize(rays);
         match self {
-            Renderer::Gpu(r) => r.count_intersections(&local.rays),
+            Renderer::Gpu(r) => r.count_intersections(&local.rays, cpu::box_pad(placement.radius)),
             Renderer::Cpu(scene) => Ok(cpu::count_intersections(scene, &local.rays)),
         }
     }
@@ -126,7 +136,18 @@ impl Renderer {
         check_rays(rays)?;
         let local = placement.localize(rays);
         let (ray_splits, mut hits) = match self {
-            Renderer::Gpu(r) => r.list_intersections(&local.rays)?,
+            Renderer::Gpu(r) => {
+                let (splits, mut hits) =
+                    r.list_intersections(&local.rays, cpu::box_pad(placement.radius))?;
+                // In the order the device found them: sorted as the CPU's.
+                let mut rest = hits.as_mut_slice();
+                for w in splits.windows(2) {
+                    let (ray, after) = rest.split_at_mut((w[1] - w[0]) as usize);
+                    cpu::sort_hits(ray);
+                    rest = after;
+                }
+                (splits, hits)
+            }
             Renderer::Cpu(scene) => cpu::list_intersections(scene, &local.rays),
         };
         if !local.shifts.is_empty() {

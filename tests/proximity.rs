@@ -577,3 +577,100 @@ fn the_four_lane_closest_point_is_the_scalar_one_bit_for_bit() {
         }
     }
 }
+
+/// The same queries on the GPU (lavapipe here) and the CPU path.
+fn both(triangles: Vec<Triangle>) -> (Renderer, Renderer) {
+    let scene = Arc::new(Scene::from_triangles(triangles));
+    let (gpu, _) = Renderer::open(
+        Arc::clone(&scene),
+        lambert::render::DeviceChoice::Gpu,
+        &Default::default(),
+    )
+    .unwrap_or_else(|e| {
+        panic!("GPU tests need a wgpu adapter ({e}): sudo apt-get install mesa-vulkan-drivers")
+    });
+    (gpu, Renderer::Cpu(scene))
+}
+
+#[test]
+fn gpu_and_cpu_answer_every_query_bit_for_bit() {
+    let mut triangles = soup(21, 500);
+    triangles.extend(sphere_mesh([0.2, 0.1, -0.3], 0.8, 16, 24));
+    let (mut gpu, mut cpu) = both(triangles.clone());
+    let mut rng = Lcg(77);
+    let mut points: Vec<[f32; 3]> = (0..3000).map(|_| rng.point(-1.6, 1.6)).collect();
+    points.extend(triangles.iter().take(200).map(|t| t.v2));
+    points.push([30.0, -20.0, 10.0]);
+    for max_distance in [f32::INFINITY, 0.05] {
+        let g = gpu.closest_points(&points, max_distance).unwrap();
+        let c = cpu.closest_points(&points, max_distance).unwrap();
+        let misses = c.iter().filter(|a| a.prim == NO_HIT).count();
+        assert!(
+            max_distance.is_infinite() || misses > 100,
+            "{misses} beyond the cut-off"
+        );
+        for (i, (g, c)) in g.iter().zip(&c).enumerate() {
+            assert_eq!(
+                bytemuck::bytes_of(g),
+                bytemuck::bytes_of(c),
+                "point {i} {:?}: GPU {g:?}, CPU {c:?}",
+                points[i]
+            );
+        }
+    }
+    let g = gpu.winding_numbers(&points).unwrap();
+    let c = cpu.winding_numbers(&points).unwrap();
+    for (i, (g, c)) in g.iter().zip(&c).enumerate() {
+        assert_eq!(g.to_bits(), c.to_bits(), "point {i}: GPU {g}, CPU {c}");
+    }
+    let rays: Vec<Ray> = (0..3000)
+        .map(|_| ray(rng.point(-1.6, 1.6), rng.point(-1.0, 1.0)))
+        .chain((0..24).map(|j| {
+            let phi = 2.0 * std::f32::consts::PI * j as f32 / 24.0;
+            ray([0.2, 0.1, -0.3], [phi.cos(), phi.sin(), 0.0])
+        }))
+        .collect();
+    assert_eq!(
+        gpu.count_intersections(&rays).unwrap(),
+        cpu.count_intersections(&rays).unwrap()
+    );
+    let (g, c) = (
+        gpu.list_intersections(&rays).unwrap(),
+        cpu.list_intersections(&rays).unwrap(),
+    );
+    assert_eq!(g.ray_splits, c.ray_splits);
+    assert!(c.hits.len() > 1000, "{} hits", c.hits.len());
+    for (i, (g, c)) in g.hits.iter().zip(&c.hits).enumerate() {
+        assert_eq!(
+            bytemuck::bytes_of(g),
+            bytemuck::bytes_of(c),
+            "hit {i}: GPU {g:?}, CPU {c:?}"
+        );
+    }
+    assert_eq!(
+        gpu.parity_inside(&points).unwrap(),
+        cpu.parity_inside(&points).unwrap()
+    );
+}
+
+#[test]
+fn the_gpu_refuses_what_the_cpu_refuses_and_answers_an_empty_scene() {
+    // The CPU renderer holds the scene, which winding queries need.
+    let (mut gpu, _cpu) = both(Vec::new());
+    let points = [[0.0, 0.0, 1.0], [2.0, 0.0, 0.0]];
+    assert_eq!(
+        gpu.closest_points(&points, f32::INFINITY).unwrap(),
+        vec![ClosestPoint::NONE; 2]
+    );
+    assert_eq!(gpu.winding_numbers(&points).unwrap(), vec![0.0; 2]);
+    assert_eq!(
+        gpu.count_intersections(&[ray([0.0; 3], [0.0, 0.0, 1.0])])
+            .unwrap(),
+        vec![0]
+    );
+    let e = gpu
+        .closest_points(&[[f32::NAN, 0.0, 0.0]], 1.0)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("point 0"), "{e}");
+}

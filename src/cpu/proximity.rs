@@ -60,7 +60,7 @@ pub fn winding_numbers(scene: &Scene, points: &[[f32; 3]]) -> Vec<f32> {
 /// edge or a vertex once.
 pub fn count_intersections(scene: &Scene, rays: &[Ray]) -> Vec<u32> {
     let kernel = f32::Kernel::new(scene);
-    let pad = box_pad(scene);
+    let pad = box_pad(scene.placement().radius);
     rays.par_iter()
         .with_min_len(CHUNK / 4)
         .map(|ray| {
@@ -75,7 +75,7 @@ pub fn count_intersections(scene: &Scene, rays: &[Ray]) -> Vec<u32> {
 /// hits (N + 1) and the hits, each ray's sorted by (t, prim).
 pub fn list_intersections(scene: &Scene, rays: &[Ray]) -> (Vec<u64>, Vec<ListedHit>) {
     let kernel = f32::Kernel::new(scene);
-    let pad = box_pad(scene);
+    let pad = box_pad(scene.placement().radius);
     let per_ray: Vec<Vec<ListedHit>> = rays
         .par_iter()
         .enumerate()
@@ -106,8 +106,8 @@ pub fn list_intersections(scene: &Scene, rays: &[Ray]) -> (Vec<u64>, Vec<ListedH
 /// How much the all-hits traversal grows each box (`enters_padded_box`):
 /// a millionth of the scene's radius, far more than the rounding of a
 /// plane's distance and far less than any box.
-pub fn box_pad(scene: &Scene) -> f32 {
-    (1e-6 * scene.placement().radius).max(f64::from(f32::MIN_POSITIVE)) as f32
+pub fn box_pad(scene_radius: f64) -> f32 {
+    (1e-6 * scene_radius).max(f64::from(f32::MIN_POSITIVE)) as f32
 }
 
 /// One ray's hits in the order both paths report them: by t, then prim.
