@@ -90,6 +90,7 @@ fn all_hits(ray_in: Ray, index: u32, pad: f32, fill: bool, base: u32) -> u32 {
     let tiny = bitcast<vec3<f32>>(vec3<u32>(bitcast<u32>(MIN_SLAB_DIR)) | sign_bits);
     let inv_dir = 1.0 / select(ray.dir, tiny, abs(ray.dir) < vec3<f32>(MIN_SLAB_DIR));
     var count = 0u;
+    // Zero-initialised: entry 0 is the root.
     var stack: array<u32, CLOSEST_STACK>;
     var sp = 1u;
     while sp > 0u {
@@ -97,30 +98,13 @@ fn all_hits(ray_in: Ray, index: u32, pad: f32, fill: bool, base: u32) -> u32 {
         let current = stack[sp];
         if (current & LEAF_REF) == 0u {
             let node = bvh_node_at(current);
-            let exponents = (vec3<u32>(node.exponents) >> vec3<u32>(0u, 8u, 16u)) & vec3<u32>(0xffu);
-            let grid = bitcast<vec3<f32>>(exponents << vec3<u32>(23u));
+            let grid = grid_scales(node);
             for (var slot = 0u; slot < 8u; slot++) {
-                let half = slot / 4u;
-                let shift = 8u * (slot % 4u);
-                let slot_meta = (node.child_meta[half] >> shift) & 0xffu;
-                if slot_meta == 0u {
-                    continue;
+                let child = compressed_child(node, grid, slot);
+                if child.reference != NO_HIT && enters_padded_box(ray, inv_dir, child.lo, child.hi, pad) {
+                    stack[sp] = child.reference;
+                    sp += 1u;
                 }
-                var lo: vec3<f32>;
-                var hi: vec3<f32>;
-                for (var a = 0u; a < 3u; a++) {
-                    lo[a] = fma(f32((node.q[2u * a][half] >> shift) & 0xffu), grid[a], node.origin[a]);
-                    hi[a] = fma(f32((node.q[2u * a + 1u][half] >> shift) & 0xffu), grid[a], node.origin[a]);
-                }
-                if !enters_padded_box(ray, inv_dir, lo, hi, pad) {
-                    continue;
-                }
-                var child = node.child_base + (slot_meta & 7u);
-                if (slot_meta & META_LEAF) != 0u {
-                    child = LEAF_REF | (((slot_meta >> 4u) & 7u) << 28u) | (node.block_base + (slot_meta & 0xfu));
-                }
-                stack[sp] = child;
-                sp += 1u;
             }
             continue;
         }
@@ -128,24 +112,13 @@ fn all_hits(ray_in: Ray, index: u32, pad: f32, fill: bool, base: u32) -> u32 {
         let blocks = ((current >> 28u) & 7u) + 1u;
         for (var i = first; i < first + blocks; i++) {
             let prims = block_prims(i);
-            var v: array<array<vec4<f32>, 3>, 3>;
-            for (var k = 0u; k < 3u; k++) {
-                for (var a = 0u; a < 3u; a++) {
-                    v[k][a] = block_lanes(i, k, a);
-                }
-            }
+            let v = block_vertices(i);
             for (var lane = 0u; lane < 4u; lane++) {
                 let prim = prims[lane];
                 if prim >= params.num_triangles {
                     continue;
                 }
-                let h = crossing(
-                    ray,
-                    shear,
-                    vec3<f32>(v[0][0][lane], v[0][1][lane], v[0][2][lane]),
-                    vec3<f32>(v[1][0][lane], v[1][1][lane], v[1][2][lane]),
-                    vec3<f32>(v[2][0][lane], v[2][1][lane], v[2][2][lane]),
-                );
+                let h = crossing(ray, shear, lane_vertex(v, 0u, lane), lane_vertex(v, 1u, lane), lane_vertex(v, 2u, lane));
                 if h.x < FAR {
                     if fill {
                         listed_hits[base + count] = ListedHit(index, prim, h.x * scale.x, h.y, h.z);

@@ -109,6 +109,57 @@ fn cull_bound(d2: f32, margin: f32) -> f32 {
     return d * d;
 }
 
+// Slot `slot` of a compressed node (its grid's scales `scale`): the child's
+// box, dequantised exactly, and its reference (a node, or a LEAF_REF leaf
+// of absolute blocks); reference NO_HIT for an empty slot. The walks of
+// closest_point and all_hits take children so.
+struct CompressedChild {
+    lo: vec3<f32>,
+    hi: vec3<f32>,
+    reference: u32,
+}
+
+fn grid_scales(node: CompressedNode) -> vec3<f32> {
+    let exponents = (vec3<u32>(node.exponents) >> vec3<u32>(0u, 8u, 16u)) & vec3<u32>(0xffu);
+    return bitcast<vec3<f32>>(exponents << vec3<u32>(23u));
+}
+
+fn compressed_child(node: CompressedNode, scale: vec3<f32>, slot: u32) -> CompressedChild {
+    let half = slot / 4u;
+    let shift = 8u * (slot % 4u);
+    let m = (node.child_meta[half] >> shift) & 0xffu;
+    var child: CompressedChild;
+    child.reference = NO_HIT;
+    if m == 0u {
+        return child;
+    }
+    for (var a = 0u; a < 3u; a++) {
+        child.lo[a] = fma(f32((node.q[2u * a][half] >> shift) & 0xffu), scale[a], node.origin[a]);
+        child.hi[a] = fma(f32((node.q[2u * a + 1u][half] >> shift) & 0xffu), scale[a], node.origin[a]);
+    }
+    child.reference = node.child_base + (m & 7u);
+    if (m & META_LEAF) != 0u {
+        child.reference = LEAF_REF | (((m >> 4u) & 7u) << 28u) | (node.block_base + (m & 0xfu));
+    }
+    return child;
+}
+
+// Block i's vertices (v[k][a]: coordinate a of vertex k, a lane per
+// primitive), and lane `lane`'s vertex k.
+fn block_vertices(i: u32) -> array<array<vec4<f32>, 3>, 3> {
+    var v: array<array<vec4<f32>, 3>, 3>;
+    for (var k = 0u; k < 3u; k++) {
+        for (var a = 0u; a < 3u; a++) {
+            v[k][a] = block_lanes(i, k, a);
+        }
+    }
+    return v;
+}
+
+fn lane_vertex(v: array<array<vec4<f32>, 3>, 3>, k: u32, lane: u32) -> vec3<f32> {
+    return vec3<f32>(v[k][0][lane], v[k][1][lane], v[k][2][lane]);
+}
+
 // The nearest point of the triangles to p within squared distance max_d2
 // (prim NO_HIT where none is), in the scene's local frame.
 fn closest_point(p: vec3<f32>, max_d2: f32, margin: f32) -> ClosestPoint {
@@ -120,29 +171,16 @@ fn closest_point(p: vec3<f32>, max_d2: f32, margin: f32) -> ClosestPoint {
     loop {
         if (current & LEAF_REF) == 0u {
             let node = bvh_node_at(current);
-            let exponents = (vec3<u32>(node.exponents) >> vec3<u32>(0u, 8u, 16u)) & vec3<u32>(0xffu);
-            let scale = bitcast<vec3<f32>>(exponents << vec3<u32>(23u));
+            let scale = grid_scales(node);
             let base = sp;
             for (var slot = 0u; slot < 8u; slot++) {
-                let half = slot / 4u;
-                let shift = 8u * (slot % 4u);
-                let m = (node.child_meta[half] >> shift) & 0xffu;
-                if m == 0u {
+                let child = compressed_child(node, scale, slot);
+                if child.reference == NO_HIT {
                     continue;
                 }
-                var lo: vec3<f32>;
-                var hi: vec3<f32>;
-                for (var a = 0u; a < 3u; a++) {
-                    lo[a] = fma(f32((node.q[2u * a][half] >> shift) & 0xffu), scale[a], node.origin[a]);
-                    hi[a] = fma(f32((node.q[2u * a + 1u][half] >> shift) & 0xffu), scale[a], node.origin[a]);
-                }
-                let d2 = box_distance2(p, lo, hi);
+                let d2 = box_distance2(p, child.lo, child.hi);
                 if d2 > bound {
                     continue;
-                }
-                var child = node.child_base + (m & 7u);
-                if (m & META_LEAF) != 0u {
-                    child = LEAF_REF | (((m >> 4u) & 7u) << 28u) | (node.block_base + (m & 0xfu));
                 }
                 // Nearest last (popped first).
                 var j = sp;
@@ -150,7 +188,7 @@ fn closest_point(p: vec3<f32>, max_d2: f32, margin: f32) -> ClosestPoint {
                     stack[j] = stack[j - 1u];
                     j -= 1u;
                 }
-                stack[j] = vec2<u32>(child, bitcast<u32>(d2));
+                stack[j] = vec2<u32>(child.reference, bitcast<u32>(d2));
                 sp += 1u;
             }
         } else {
@@ -158,23 +196,13 @@ fn closest_point(p: vec3<f32>, max_d2: f32, margin: f32) -> ClosestPoint {
             let count = ((current >> 28u) & 7u) + 1u;
             for (var i = first; i < first + count; i++) {
                 let prims = block_prims(i);
-                var v: array<array<vec4<f32>, 3>, 3>;
-                for (var k = 0u; k < 3u; k++) {
-                    for (var a = 0u; a < 3u; a++) {
-                        v[k][a] = block_lanes(i, k, a);
-                    }
-                }
+                let v = block_vertices(i);
                 for (var lane = 0u; lane < 4u; lane++) {
                     let prim = prims[lane];
                     if prim >= params.num_triangles {
                         continue;
                     }
-                    let r = closest_point_triangle(
-                        p,
-                        vec3<f32>(v[0][0][lane], v[0][1][lane], v[0][2][lane]),
-                        vec3<f32>(v[1][0][lane], v[1][1][lane], v[1][2][lane]),
-                        vec3<f32>(v[2][0][lane], v[2][1][lane], v[2][2][lane]),
-                    );
+                    let r = closest_point_triangle(p, lane_vertex(v, 0u, lane), lane_vertex(v, 1u, lane), lane_vertex(v, 2u, lane));
                     if better(r.d2, prim, best.distance, best.prim) {
                         best = ClosestPoint(r.q, prim, r.u, r.v, r.d2, 0u);
                         bound = cull_bound(r.d2, margin);

@@ -91,6 +91,7 @@ fn dipole_winding(q: vec3<f32>, centre: vec3<f32>, normal: vec3<f32>) -> f32 {
 
 fn winding_number(q: vec3<f32>) -> f32 {
     var w = 0.0;
+    // Zero-initialised: entry 0 is the root.
     var stack: array<u32, WINDING_STACK>;
     var sp = 1u;
     while sp > 0u {
