@@ -121,7 +121,8 @@ impl Renderers {
                     return Ok((&mut self.cpu, None));
                 }
                 match open_device(&self.scene, choice, &self.request)? {
-                    Opened::Gpu(renderer) => {
+                    Opened::Gpu(mut renderer) => {
+                        renderer.set_winding_source(Arc::downgrade(&self.scene));
                         self.gpu_is_hardware = !renderer.gpu().is_software();
                         let gpu = self.gpu.insert(Renderer::Gpu(renderer));
                         Ok((gpu, None))
@@ -155,7 +156,11 @@ impl Renderer {
         request: &AdapterRequest,
     ) -> Result<(Renderer, Option<String>)> {
         Ok(match open_device(&scene, choice, request)? {
-            Opened::Gpu(renderer) => (Renderer::Gpu(renderer), None),
+            Opened::Gpu(mut renderer) => {
+                // Winding queries build the scene's winding tree from it.
+                renderer.set_winding_source(Arc::downgrade(&scene));
+                (Renderer::Gpu(renderer), None)
+            }
             Opened::Cpu(note) => (Renderer::Cpu(scene), note),
         })
     }
@@ -267,4 +272,14 @@ impl Renderer {
             )),
         }
     }
+}
+
+/// Every crossing of a list of rays (`Renderer::list_intersections`): ray
+/// i's are `hits[ray_splits[i] .. ray_splits[i + 1]]`, sorted by t, then
+/// triangle.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct IntersectionList {
+    /// N + 1 offsets into `hits`.
+    pub ray_splits: Vec<u64>,
+    pub hits: Vec<crate::layout::ListedHit>,
 }

@@ -169,6 +169,31 @@ fn host_structs_match_wgsl_layout() {
             q
         }
     );
+    check_layout!(
+        m,
+        ClosestPoint {
+            point,
+            prim,
+            u,
+            v,
+            distance,
+            _pad
+        }
+    );
+    check_layout!(m, ListedHit { ray, prim, t, u, v });
+    check_layout!(
+        m,
+        WindingNode {
+            centre,
+            radius,
+            normal,
+            first_child,
+            child_count,
+            first_prim,
+            prim_count,
+            _pad
+        }
+    );
 }
 
 #[test]

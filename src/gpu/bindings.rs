@@ -111,8 +111,34 @@ pub const PIXEL_LIST: BindingTable = BindingTable {
     ],
 };
 
+/// Group 1 of the geometric queries (`closest_points`, `winding_numbers`,
+/// `count_hits`, `list_hits`; shaders/entry_proximity.wgsl): each binds
+/// them all and uses its own.
+pub const PROXIMITY: BindingTable = BindingTable {
+    label: "proximity",
+    group: 1,
+    entries: &[
+        bind("rays", 2, Storage),
+        bind("query_points", 11, Storage),
+        bind("query_scalars", 12, Storage),
+        bind("closest_out", 13, StorageWrite),
+        bind("winding_out", 14, StorageWrite),
+        bind("winding_nodes", 15, Storage),
+        bind("winding_prims", 16, Storage),
+        bind("hit_counts", 17, StorageWrite),
+        bind("listed_hits", 18, StorageWrite),
+    ],
+};
+
 /// Every table.
-pub const TABLES: [&BindingTable; 5] = [&SCENE, &IMAGE_TILE, &SHADOWS_APART, &RAYS, &PIXEL_LIST];
+pub const TABLES: [&BindingTable; 6] = [
+    &SCENE,
+    &IMAGE_TILE,
+    &SHADOWS_APART,
+    &RAYS,
+    &PIXEL_LIST,
+    &PROXIMITY,
+];
 
 impl BindingTable {
     pub(super) fn layout(&self, device: &wgpu::Device) -> wgpu::BindGroupLayout {

@@ -41,6 +41,7 @@ pub struct GpuRenderer {
     pub(super) samples_per_dispatch: u32,
     pub(super) timer: Option<Timer>,
     pub(super) lists: ListState,
+    pub(super) proximity: super::proximity::ProximityState,
     /// How a render traces its shadow rays (the tests set either).
     pub shadow_dispatch: ShadowDispatch,
     /// Bytes of the scene's buffers on the device.
@@ -198,6 +199,7 @@ impl GpuRenderer {
             samples_per_dispatch,
             timer,
             lists: ListState::default(),
+            proximity: Default::default(),
             shadow_dispatch,
             device_bytes: buffers.device_bytes,
             split_arrays: buffers.split_arrays(),

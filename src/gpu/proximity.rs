@@ -1,0 +1,381 @@
+//! Geometric queries on the resident scene (closest points, winding
+//! numbers, every hit along rays; shaders/entry_proximity.wgsl): points and
+//! rays in the scene's local frame, answers in it (`proximity`, in the
+//! engine, moves them). Buffers are kept between calls and grown as
+//! needed, as `run_list`'s are; the winding tree is uploaded on the first
+//! winding query, from the host's scene (`winding_source`).
+
+use std::collections::HashMap;
+use std::sync::Weak;
+
+use crate::error::{Error, Result};
+use crate::layout::{ClosestPoint, ListedHit, NO_HIT, Ray, WORKGROUP_INVOCATIONS};
+use crate::scene::Scene;
+
+use super::GpuRenderer;
+use super::bindings::{PROXIMITY, SCENE};
+
+/// Items per dispatch at most: no dispatch runs long enough for a watchdog,
+/// and the workgroup count stays within every device's limit.
+const BATCH: usize = 1 << 18;
+
+/// What the queries keep between calls.
+#[derive(Default)]
+pub(super) struct ProximityState {
+    layout: Option<wgpu::BindGroupLayout>,
+    pipelines: HashMap<&'static str, wgpu::ComputePipeline>,
+    /// By binding name (and "readback"), grown as needed.
+    buffers: HashMap<&'static str, wgpu::Buffer>,
+    /// The winding tree's nodes and triangle ids, once uploaded.
+    winding: Option<(wgpu::Buffer, wgpu::Buffer)>,
+    /// The host's scene, for its winding tree (set by the engine when it
+    /// opens the renderer; the jobs let it go, and then no winding query
+    /// runs on this renderer).
+    pub winding_source: Option<Weak<Scene>>,
+}
+
+/// One binding's buffer and the bytes of it a dispatch binds.
+type Bound<'a> = (&'static str, &'a wgpu::Buffer, u64);
+
+impl GpuRenderer {
+    /// Spheres in the resident scene (the queries are over triangles).
+    pub fn sphere_count(&self) -> u32 {
+        self.params.num_spheres
+    }
+
+    /// Where a winding query finds the scene's winding tree (the engine
+    /// sets it when it opens the renderer from an `Arc<Scene>`).
+    pub fn set_winding_source(&mut self, scene: Weak<Scene>) {
+        self.proximity.winding_source = Some(scene);
+    }
+
+    /// A kept buffer of at least `size` bytes (4 at least).
+    fn kept_buffer(
+        &mut self,
+        label: &'static str,
+        size: u64,
+        usage: wgpu::BufferUsages,
+    ) -> wgpu::Buffer {
+        let size = size.max(16).next_multiple_of(16);
+        if let Some(b) = self
+            .proximity
+            .buffers
+            .get(label)
+            .filter(|b| b.size() >= size)
+        {
+            return b.clone();
+        }
+        let buffer = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size,
+            usage,
+            mapped_at_creation: false,
+        });
+        self.proximity.buffers.insert(label, buffer.clone());
+        buffer
+    }
+
+    fn storage(&mut self, label: &'static str, bytes: &[u8]) -> wgpu::Buffer {
+        use wgpu::BufferUsages as U;
+        let buffer = self.kept_buffer(
+            label,
+            bytes.len() as u64,
+            U::STORAGE | U::COPY_DST | U::COPY_SRC,
+        );
+        self.gpu.queue.write_buffer(&buffer, 0, bytes);
+        buffer
+    }
+
+    /// Runs `entry` over `items` invocations with the named buffers bound
+    /// (the rest of the table bound to a small placeholder).
+    fn dispatch_query(&mut self, entry: &'static str, items: usize, bound: &[Bound]) -> Result<()> {
+        if self.proximity.layout.is_none() {
+            self.proximity.layout = Some(PROXIMITY.layout(&self.gpu.device));
+        }
+        if !self.proximity.pipelines.contains_key(entry) {
+            let p = &self.pipelines;
+            let layout = self.proximity.layout.as_ref().expect("built");
+            let pipeline = p.build(&self.gpu, entry, layout, &p.constants)?;
+            self.proximity.pipelines.insert(entry, pipeline);
+        }
+        // The bindings this entry point does not use: each its own kept
+        // buffer (one buffer under two bindings, one of them written,
+        // would be refused).
+        use wgpu::BufferUsages as U;
+        let unused: Vec<(&str, wgpu::Buffer)> = PROXIMITY
+            .entries
+            .iter()
+            .filter(|e| !bound.iter().any(|(name, ..)| *name == e.name))
+            .map(|e| {
+                (
+                    e.name,
+                    self.kept_buffer(e.name, 64, U::STORAGE | U::COPY_DST | U::COPY_SRC),
+                )
+            })
+            .collect();
+        let resources = PROXIMITY
+            .entries
+            .iter()
+            .map(|e| {
+                let (buffer, size) = match bound.iter().find(|(name, ..)| *name == e.name) {
+                    Some(&(_, b, size)) => (b, size.max(4)),
+                    None => (
+                        &unused.iter().find(|(n, _)| *n == e.name).expect("kept").1,
+                        64,
+                    ),
+                };
+                (
+                    e.name,
+                    wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer,
+                        offset: 0,
+                        size: wgpu::BufferSize::new(size),
+                    }),
+                )
+            })
+            .collect();
+        let layout = self.proximity.layout.as_ref().expect("built");
+        let group = PROXIMITY.bind_group(&self.gpu.device, entry, layout, resources);
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(entry),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&self.proximity.pipelines[entry]);
+            pass.set_bind_group(SCENE.group, &self.resident.scene_group, &[]);
+            pass.set_bind_group(PROXIMITY.group, &group, &[]);
+            pass.dispatch_workgroups(items.div_ceil(WORKGROUP_INVOCATIONS as usize) as u32, 1, 1);
+        }
+        self.gpu.queue.submit([encoder.finish()]);
+        self.gpu.wait()?;
+        if self.loops_were_cut()? {
+            return Err(Error::Gpu(format!(
+                "{} cut the shader's loops short in {entry} (Mesa's llvmpipe ends loops \
+                 after 65535 iterations an invocation group): use the CPU path",
+                self.gpu.describe()
+            )));
+        }
+        Ok(())
+    }
+
+    /// The first `len` bytes of `buffer`, as `T`s.
+    fn read_back<T: bytemuck::Pod>(&mut self, buffer: &wgpu::Buffer, len: u64) -> Result<Vec<T>> {
+        use wgpu::BufferUsages as U;
+        let staging = self.kept_buffer("readback", len, U::COPY_DST | U::MAP_READ);
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, len);
+        self.gpu.queue.submit([encoder.finish()]);
+        self.gpu
+            .read_mapped(&staging, len, "query results", |bytes| {
+                bytemuck::pod_collect_to_vec(bytes)
+            })
+    }
+
+    /// `cpu::closest_points` on the device (`margins`: each point's cull
+    /// margin, the CPU's `query_margin`).
+    pub fn closest_points(
+        &mut self,
+        points: &[[f32; 3]],
+        margins: &[f32],
+        max_distance: f32,
+    ) -> Result<Vec<ClosestPoint>> {
+        let scalars = [max_distance * max_distance, 0.0, 0.0, 0.0];
+        let mut out = Vec::with_capacity(points.len());
+        for (chunk, margins) in points.chunks(BATCH).zip(margins.chunks(BATCH)) {
+            let input: Vec<[f32; 4]> = chunk
+                .iter()
+                .zip(margins)
+                .map(|(p, &m)| [p[0], p[1], p[2], m])
+                .collect();
+            let points = self.storage("query_points", bytemuck::cast_slice(&input));
+            let scalars = self.storage("query_scalars", bytemuck::cast_slice(&scalars));
+            let len = (chunk.len() * size_of::<ClosestPoint>()) as u64;
+            let answers = self.kept_buffer(
+                "closest_out",
+                len,
+                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            );
+            self.dispatch_query(
+                "closest_points",
+                chunk.len(),
+                &[
+                    ("query_points", &points, (input.len() * 16) as u64),
+                    ("query_scalars", &scalars, 16),
+                    ("closest_out", &answers, len),
+                ],
+            )?;
+            let answers: Vec<ClosestPoint> = self.read_back(&answers, len)?;
+            out.extend(answers.into_iter().map(|a| {
+                if a.prim == NO_HIT {
+                    ClosestPoint::NONE
+                } else {
+                    a
+                }
+            }));
+        }
+        Ok(out)
+    }
+
+    /// `cpu::winding_numbers` on the device: the same tree (uploaded on the
+    /// first call) walked in the same order.
+    pub fn winding_numbers(&mut self, points: &[[f32; 3]]) -> Result<Vec<f32>> {
+        if self.proximity.winding.is_none() {
+            let scene = self
+                .proximity
+                .winding_source
+                .as_ref()
+                .and_then(Weak::upgrade)
+                .ok_or_else(|| {
+                    Error::Gpu(
+                        "winding numbers need the scene's winding tree, and this GPU renderer \
+                         no longer has the host's scene: open it with Renderer::open or \
+                         Renderers, keeping the scene"
+                            .into(),
+                    )
+                })?;
+            let tree = scene.bvh.winding_tree(scene.triangles.len());
+            use wgpu::util::DeviceExt;
+            let upload = |label, bytes: &[u8]| {
+                self.gpu
+                    .device
+                    .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some(label),
+                        contents: if bytes.is_empty() { &[0; 4] } else { bytes },
+                        usage: wgpu::BufferUsages::STORAGE,
+                    })
+            };
+            let nodes = upload("winding nodes", bytemuck::cast_slice(&tree.nodes));
+            let prims = upload("winding prims", bytemuck::cast_slice(&tree.prims));
+            self.proximity.winding = Some((nodes, prims));
+        }
+        let (nodes, prims) = self.proximity.winding.clone().expect("uploaded");
+        let mut out = Vec::with_capacity(points.len());
+        for chunk in points.chunks(BATCH) {
+            let input: Vec<[f32; 4]> = chunk.iter().map(|p| [p[0], p[1], p[2], 0.0]).collect();
+            let points = self.storage("query_points", bytemuck::cast_slice(&input));
+            let len = (chunk.len() * 4) as u64;
+            let answers = self.kept_buffer(
+                "winding_out",
+                len,
+                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            );
+            self.dispatch_query(
+                "winding_numbers",
+                chunk.len(),
+                &[
+                    ("query_points", &points, (input.len() * 16) as u64),
+                    ("winding_nodes", &nodes, nodes.size()),
+                    ("winding_prims", &prims, prims.size()),
+                    ("winding_out", &answers, len),
+                ],
+            )?;
+            out.extend(self.read_back::<f32>(&answers, len)?);
+        }
+        Ok(out)
+    }
+
+    /// Each ray's count of crossings (`pad`: the CPU's `box_pad`).
+    fn count_chunk(
+        &mut self,
+        rays: &[Ray],
+        pad: f32,
+    ) -> Result<(wgpu::Buffer, wgpu::Buffer, Vec<u32>)> {
+        let rays_buffer = self.storage("rays", bytemuck::cast_slice(rays));
+        let scalars = self.storage("query_scalars", bytemuck::cast_slice(&[0.0, pad, 0.0, 0.0]));
+        let len = (rays.len() * 4) as u64;
+        let counts = self.kept_buffer(
+            "hit_counts",
+            len,
+            wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+        );
+        self.dispatch_query(
+            "count_hits",
+            rays.len(),
+            &[
+                ("rays", &rays_buffer, (rays.len() * size_of::<Ray>()) as u64),
+                ("query_scalars", &scalars, 16),
+                ("hit_counts", &counts, len),
+            ],
+        )?;
+        let n = self.read_back::<u32>(&counts, len)?;
+        Ok((rays_buffer, counts, n))
+    }
+
+    /// `cpu::count_intersections` on the device.
+    pub fn count_intersections(&mut self, rays: &[Ray], pad: f32) -> Result<Vec<u32>> {
+        let mut out = Vec::with_capacity(rays.len());
+        for chunk in rays.chunks(BATCH) {
+            out.extend(self.count_chunk(chunk, pad)?.2);
+        }
+        Ok(out)
+    }
+
+    /// `cpu::list_intersections` on the device, each ray's hits in the
+    /// order the traversal found them (the engine sorts them): counts,
+    /// their prefix sums, then a second pass that writes each ray's hits
+    /// from its first slot.
+    pub fn list_intersections(
+        &mut self,
+        rays: &[Ray],
+        pad: f32,
+    ) -> Result<(Vec<u64>, Vec<ListedHit>)> {
+        let mut splits = vec![0u64];
+        let mut hits = Vec::new();
+        for (c, chunk) in rays.chunks(BATCH).enumerate() {
+            let (rays_buffer, counts, n) = self.count_chunk(chunk, pad)?;
+            let mut firsts = Vec::with_capacity(n.len());
+            let mut total = 0u64;
+            for &k in &n {
+                firsts.push(total as u32);
+                total += k as u64;
+                splits.push(splits.last().expect("one") + k as u64);
+            }
+            if total == 0 {
+                continue;
+            }
+            if total > u32::MAX as u64 / size_of::<ListedHit>() as u64 {
+                return Err(Error::GpuLimit(format!(
+                    "{total} hits in one batch of rays are more than one buffer holds"
+                )));
+            }
+            self.gpu
+                .queue
+                .write_buffer(&counts, 0, bytemuck::cast_slice(&firsts));
+            let scalars =
+                self.storage("query_scalars", bytemuck::cast_slice(&[0.0, pad, 0.0, 0.0]));
+            let len = total * size_of::<ListedHit>() as u64;
+            let listed = self.kept_buffer(
+                "listed_hits",
+                len,
+                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            );
+            self.dispatch_query(
+                "list_hits",
+                chunk.len(),
+                &[
+                    (
+                        "rays",
+                        &rays_buffer,
+                        (chunk.len() * size_of::<Ray>()) as u64,
+                    ),
+                    ("query_scalars", &scalars, 16),
+                    ("hit_counts", &counts, (n.len() * 4) as u64),
+                    ("listed_hits", &listed, len),
+                ],
+            )?;
+            let base = (c * BATCH) as u32;
+            hits.extend(
+                self.read_back::<ListedHit>(&listed, len)?
+                    .into_iter()
+                    .map(|h| ListedHit {
+                        ray: h.ray + base,
+                        ..h
+                    }),
+            );
+        }
+        Ok((splits, hits))
+    }
+}
