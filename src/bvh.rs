@@ -23,9 +23,11 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 mod validate;
+mod winding;
 
 pub use validate::{Invalid, TreeStats};
 pub(crate) use validate::{LeafSizes, SahCost, inside};
+pub use winding::WindingTree;
 
 use crate::layout::{
     BVH_WIDTH, BvhNode, LEAF_BIT, LEAF_FIRST_MASK, PrimBlock, Sphere, Triangle, leaf_range,
@@ -61,6 +63,9 @@ pub struct Bvh {
     /// The leaves' primitives, four to a block, in leaf order.
     pub blocks: Vec<PrimBlock>,
     pub build_time: std::time::Duration,
+    /// The winding tree, built on the first winding query
+    /// (`winding_tree`): renders never pay for it.
+    winding: std::sync::OnceLock<WindingTree>,
 }
 
 /// An axis-aligned box.
@@ -129,6 +134,7 @@ impl Default for Bvh {
             nodes: vec![BvhNode::EMPTY],
             blocks: Vec::new(),
             build_time: std::time::Duration::ZERO,
+            winding: std::sync::OnceLock::new(),
         }
     }
 }
@@ -197,6 +203,13 @@ impl Bvh {
             bvh.depth()
         );
         bvh
+    }
+
+    /// The winding tree of this BVH, whose primitives below
+    /// `triangle_count` are triangles; built on the first call.
+    pub fn winding_tree(&self, triangle_count: usize) -> &WindingTree {
+        self.winding
+            .get_or_init(|| WindingTree::build(self, triangle_count))
     }
 
     /// Fills node `index` from `node`'s children (or their children), then

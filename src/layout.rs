@@ -410,3 +410,63 @@ impl CompressedNode {
         )
     }
 }
+
+/// A closest-point query's answer for one point (docs/ray-query.md,
+/// "Closest points"): the nearest point of triangle `prim`, which is
+/// (1−u−v)·v0 + u·v1 + v·v2 as `Hit`'s u and v are, and its distance.
+/// Beyond the query's max distance, or in an empty scene, `prim` is
+/// `NO_HIT`, `distance` +inf, and the point and u, v are 0.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct ClosestPoint {
+    pub point: [f32; 3],
+    pub prim: u32,
+    pub u: f32,
+    pub v: f32,
+    pub distance: f32,
+    pub _pad: u32,
+}
+
+impl ClosestPoint {
+    /// What a point with no triangle within the max distance reports.
+    pub const NONE: ClosestPoint = ClosestPoint {
+        point: [0.0; 3],
+        prim: NO_HIT,
+        u: 0.0,
+        v: 0.0,
+        distance: f32::INFINITY,
+        _pad: 0,
+    };
+}
+
+/// One crossing of an all-hits query: ray `ray` crosses triangle `prim` at
+/// t (in units of the ray's direction), at (u, v) as `Hit` gives them.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct ListedHit {
+    pub ray: u32,
+    pub prim: u32,
+    pub t: f32,
+    pub u: f32,
+    pub v: f32,
+}
+
+/// One node of the winding tree (`bvh::WindingTree`, fast winding numbers
+/// after Barill et al. 2018): the dipole of every triangle below it (the
+/// sum of their area vectors, half the edge cross products, and their
+/// area-weighted centre), the radius about that centre of a ball holding
+/// them, its interior children `first_child ..` (`child_count` of them)
+/// and the triangles of its leaves, `first_prim ..` (`prim_count`) in
+/// `WindingTree::prims`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct WindingNode {
+    pub centre: [f32; 3],
+    pub radius: f32,
+    pub normal: [f32; 3],
+    pub first_child: u32,
+    pub child_count: u32,
+    pub first_prim: u32,
+    pub prim_count: u32,
+    pub _pad: u32,
+}

@@ -29,6 +29,7 @@ pub mod parts;
 pub mod placement;
 pub mod probe;
 pub mod progress;
+pub mod proximity;
 pub mod rays;
 pub mod render;
 pub mod scene;

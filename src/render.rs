@@ -268,3 +268,13 @@ impl Renderer {
         }
     }
 }
+
+/// Every crossing of a list of rays (`Renderer::list_intersections`): ray
+/// i's are `hits[ray_splits[i] .. ray_splits[i + 1]]`, sorted by t, then
+/// triangle.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct IntersectionList {
+    /// N + 1 offsets into `hits`.
+    pub ray_splits: Vec<u64>,
+    pub hits: Vec<crate::layout::ListedHit>,
+}

@@ -480,6 +480,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("gpu", 4),
     ("rays", 5),
     ("render", 5),
+    ("proximity", 5),
     ("adaptive", 6),
     ("inputs", 6),
     ("jobs", 6),

@@ -13,5 +13,6 @@ include!("fetch.rs");
 include!("intersect.rs");
 include!("traverse.rs");
 include!("traverse_cpu.rs");
+include!("all_hits.rs");
 include!("shade.rs");
 include!("sample.rs");

@@ -2,6 +2,7 @@
 //! with rayon. `f32` is the reference the GPU is diffed against; `f64` is the
 //! same code in double precision, the oracle that measures both.
 
+pub mod closest;
 /// Single precision, as on the GPU.
 #[allow(clippy::unnecessary_cast)]
 pub mod f32;
@@ -9,12 +10,17 @@ pub mod f32;
 #[allow(clippy::unnecessary_cast)]
 pub mod f64;
 mod prefetch;
+mod proximity;
 mod query;
 mod render;
 mod simd;
 pub mod texture;
+pub mod winding;
 
 pub use prefetch::LARGE_BVH_BYTES;
+pub use proximity::{
+    closest_points, count_intersections, list_intersections, sort_hits, winding_numbers,
+};
 pub use query::{
     QueryOptions, QueryRays, SharedOut, TracedChunk, trace_local_rays_each, trace_rays,
     trace_rays_each, trace_rays_f64, trace_rays_gpu_twin, trace_rays_with,

@@ -11,12 +11,14 @@
 //! - `renderer`: `GpuRenderer`, a scene resident on the device;
 //! - `render`: the render passes (megakernel, or shadows apart);
 //! - `query`: ray queries and pixel lists;
+//! - `proximity`: closest points, winding numbers, every hit along rays;
 //! - `timer` and `readback`: timestamps, and getting results back.
 
 mod adapter;
 pub mod bindings;
 mod device;
 mod pipelines;
+mod proximity;
 mod query;
 mod readback;
 mod render;

@@ -1,0 +1,193 @@
+//! Geometric queries on a `Renderer` (docs/ray-query.md): closest points,
+//! winding numbers and the inside tests built on them, and every hit
+//! along rays, on either device. Here, what both paths share: the checks
+//! of the points and rays, and their move into the scene's local frame
+//! (world points and rays in, world answers out, as `trace`).
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use crate::cpu;
+use crate::error::{Error, Result};
+use crate::layout::{ClosestPoint, NO_HIT, Ray};
+use crate::limits::{MAX_LOCAL_COORDINATE, vector_text};
+use crate::placement::{Placement, world_hit};
+use crate::render::{IntersectionList, Renderer};
+
+/// The direction of `parity_inside`'s rays: Open3D's (RaycastingScene's
+/// ComputeOccupancy and ComputeSignedDistance cast (1, 1, 1)).
+pub const PARITY_DIRECTION: [f32; 3] = [1.0, 1.0, 1.0];
+
+impl Renderer {
+    fn placement_and_spheres(&self) -> (Placement, u32) {
+        match self {
+            Renderer::Gpu(r) => (r.placement, r.sphere_count()),
+            Renderer::Cpu(scene) => (scene.placement(), scene.spheres.len() as u32),
+        }
+    }
+
+    /// Queries are over triangles: a scene with spheres is refused.
+    fn triangles_only(&self, query: &str) -> Result<Placement> {
+        let (placement, spheres) = self.placement_and_spheres();
+        if spheres > 0 {
+            return Err(Error::Usage(format!(
+                "{query} are over triangles, and this scene has {spheres} sphere(s): \
+                 give spheres as meshes for this query"
+            )));
+        }
+        Ok(placement)
+    }
+
+    /// The nearest point of the scene's triangles to each world point
+    /// within `max_distance` (≥ 0; +inf for no limit): the point (world),
+    /// the triangle, its (u, v) as `trace` gives them and the distance;
+    /// `ClosestPoint::NONE` where no triangle is that near. Where several
+    /// triangles are equally near (an edge or a vertex they share), the
+    /// lowest id.
+    pub fn closest_points(
+        &mut self,
+        points: &[[f32; 3]],
+        max_distance: f32,
+    ) -> Result<Vec<ClosestPoint>> {
+        let placement = self.triangles_only("closest points")?;
+        if max_distance.is_nan() || max_distance < 0.0 {
+            return Err(Error::Usage(format!(
+                "max_distance = {max_distance}: it must be 0 or more (+inf for no limit)"
+            )));
+        }
+        let local = local_points(&placement, points)?;
+        let mut answers = match self {
+            Renderer::Gpu(r) => r.closest_points(&local, max_distance)?,
+            Renderer::Cpu(scene) => cpu::closest_points(scene, &local, max_distance),
+        };
+        if placement.offset != DVec3::ZERO {
+            answers.par_iter_mut().for_each(|a| {
+                if a.prim != NO_HIT {
+                    a.point = (DVec3::from(a.point.map(f64::from)) + placement.offset)
+                        .as_vec3()
+                        .to_array();
+                }
+            });
+        }
+        Ok(answers)
+    }
+
+    /// The generalized winding number of the scene's triangles at each
+    /// world point (Jacobson et al. 2013, through Barill et al.'s tree):
+    /// 1 inside a closed, outward-facing mesh, 0 outside, fractions near
+    /// holes. Inside is ≥ 0.5.
+    pub fn winding_numbers(&mut self, points: &[[f32; 3]]) -> Result<Vec<f32>> {
+        let placement = self.triangles_only("winding numbers")?;
+        let local = local_points(&placement, points)?;
+        match self {
+            Renderer::Gpu(r) => r.winding_numbers(&local),
+            Renderer::Cpu(scene) => Ok(cpu::winding_numbers(scene, &local)),
+        }
+    }
+
+    /// Whether each world point is inside by parity: an odd number of
+    /// crossings along a ray from it in direction `PARITY_DIRECTION`, as
+    /// Open3D counts (for watertight meshes; `winding_numbers` for others).
+    pub fn parity_inside(&mut self, points: &[[f32; 3]]) -> Result<Vec<bool>> {
+        check_points(points)?;
+        let rays: Vec<Ray> = points
+            .iter()
+            .map(|&origin| Ray {
+                origin,
+                tmin: 0.0,
+                dir: PARITY_DIRECTION,
+                tmax: f32::INFINITY,
+            })
+            .collect();
+        Ok(self
+            .count_intersections(&rays)?
+            .into_iter()
+            .map(|n| n % 2 == 1)
+            .collect())
+    }
+
+    /// How many triangles each world ray crosses in (tmin, tmax), an edge
+    /// or a vertex crossed once.
+    pub fn count_intersections(&mut self, rays: &[Ray]) -> Result<Vec<u32>> {
+        let placement = self.triangles_only("intersection counts")?;
+        check_rays(rays)?;
+        let local = placement.localize(rays);
+        match self {
+            Renderer::Gpu(r) => r.count_intersections(&local.rays),
+            Renderer::Cpu(scene) => Ok(cpu::count_intersections(scene, &local.rays)),
+        }
+    }
+
+    /// Every crossing of each world ray in (tmin, tmax), sorted by t (then
+    /// triangle) per ray: ray i's are `hits[ray_splits[i]..ray_splits[i +
+    /// 1]]`.
+    pub fn list_intersections(&mut self, rays: &[Ray]) -> Result<IntersectionList> {
+        let placement = self.triangles_only("intersection lists")?;
+        check_rays(rays)?;
+        let local = placement.localize(rays);
+        let (ray_splits, mut hits) = match self {
+            Renderer::Gpu(r) => r.list_intersections(&local.rays)?,
+            Renderer::Cpu(scene) => cpu::list_intersections(scene, &local.rays),
+        };
+        if !local.shifts.is_empty() {
+            hits.par_iter_mut().for_each(|h| {
+                h.t = world_hit(
+                    crate::layout::Hit {
+                        t: h.t,
+                        prim: h.prim,
+                        u: h.u,
+                        v: h.v,
+                    },
+                    local.shifts[h.ray as usize],
+                )
+                .t
+            });
+        }
+        Ok(IntersectionList { ray_splits, hits })
+    }
+}
+
+/// Every point finite, or an error naming the first that is not.
+fn check_points(points: &[[f32; 3]]) -> Result<()> {
+    match points
+        .par_iter()
+        .position_first(|p| !p.iter().all(|c| c.is_finite()))
+    {
+        None => Ok(()),
+        Some(i) => Err(Error::Usage(format!(
+            "point {i}: {:?} is not finite (NaN or infinite)",
+            points[i]
+        ))),
+    }
+}
+
+/// The rays as `trace` takes them, or an error naming the first bad one.
+fn check_rays(rays: &[Ray]) -> Result<()> {
+    crate::rays::validate_rays(rays).map_err(|bad| Error::Usage(bad.to_string()))
+}
+
+/// The world points in the scene's local frame (in f64, then rounded
+/// once), or an error naming the first that is not finite or lies so far
+/// from the scene that f32 squares of its distance would overflow.
+fn local_points(placement: &Placement, points: &[[f32; 3]]) -> Result<Vec<[f32; 3]>> {
+    check_points(points)?;
+    let local = |p: &[f32; 3]| DVec3::from(p.map(f64::from)) - placement.offset;
+    if let Some(i) = points
+        .par_iter()
+        .position_first(|p| local(p).abs().max_element() > MAX_LOCAL_COORDINATE)
+    {
+        return Err(Error::Usage(format!(
+            "point {i}: {} is more than {MAX_LOCAL_COORDINATE:e} from the scene's centre {} \
+             along an axis: its distance cannot be given in f32",
+            vector_text(DVec3::from(points[i].map(f64::from))),
+            vector_text(placement.offset)
+        )));
+    }
+    if placement.offset == DVec3::ZERO {
+        return Ok(points.to_vec());
+    }
+    Ok(points
+        .par_iter()
+        .map(|p| local(p).as_vec3().to_array())
+        .collect())
+}
