@@ -21,7 +21,6 @@ number (the default, timed here) or by parity (--parity adds it).
 import argparse
 import json
 import os
-import platform
 import statistics
 import sys
 import time
@@ -29,19 +28,9 @@ import time
 import numpy as np
 
 import lambert
+from python_bench import cpu_name  # benches/, beside this script
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-
-
-def cpu_name():
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown CPU"
 
 
 def load_mesh(path):

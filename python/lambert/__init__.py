@@ -212,7 +212,7 @@ class Scene:
 
     def distance(self, points, *, device="auto"):
         """(N,) float32: the distance from each point to the nearest triangle."""
-        return _lambert.distance(self._native, _floats("points", points), device)
+        return _lambert.point_values(self._native, _floats("points", points), "distance", "winding", device)
 
     def signed_distance(self, points, method="winding", *, device="auto"):
         """(N,) float32: the distance to the nearest triangle, negative
@@ -222,13 +222,13 @@ class Scene:
         crosses the surface an odd number of times (watertight meshes)."""
         if method not in ("winding", "parity"):
             raise ValueError(f'method={method!r}: use "winding" or "parity"')
-        return _lambert.signed_distance(self._native, _floats("points", points), method, device)
+        return _lambert.point_values(self._native, _floats("points", points), "signed_distance", method, device)
 
     def winding_number(self, points, *, device="auto"):
         """(N,) float32: the generalized winding number of the triangles
         about each point (1 inside a closed, outward-facing mesh, 0 outside,
         fractional near holes)."""
-        return _lambert.winding_numbers(self._native, _floats("points", points), device)
+        return _lambert.point_values(self._native, _floats("points", points), "winding_number", "winding", device)
 
     def contains(self, points, *, device="auto"):
         """(N,) bool: whether each point is inside (winding number ≥ 0.5)."""
@@ -239,7 +239,7 @@ class Scene:
         tmin < t < tmax (rays as for :meth:`intersect`); a crossing through
         an edge or vertex that triangles share counts once."""
         o, d, lo, hi = _query(origins, directions, tmin, tmax)
-        return _lambert.count_intersections(self._native, o, d, lo, hi, device)
+        return _lambert.crossings(self._native, o, d, lo, hi, device, False)
 
     def list_intersections(self, origins, directions=None, tmin=0.0, tmax=np.inf, *, device="auto"):
         """Every crossing of each ray within tmin < t < tmax, sorted by t
@@ -247,7 +247,7 @@ class Scene:
         i's crossings are rows ray_splits[i]:ray_splits[i+1]), ``ray_ids``
         int64, ``t`` float32, ``prim_id`` int64, ``u``, ``v`` float32."""
         o, d, lo, hi = _query(origins, directions, tmin, tmax)
-        return _lambert.list_intersections(self._native, o, d, lo, hi, device)
+        return _lambert.crossings(self._native, o, d, lo, hi, device, True)
 
     def camera_rays(self, width=None, height=None):
         """(origins, directions), each (width·height, 3) float32: the scene

@@ -245,7 +245,7 @@ class RaycastingScene:
             counts[traced] = np.diff(listed["ray_splits"])
             listed["ray_ids"] = traced[listed["ray_ids"]]
         splits = np.zeros(len(o) + 1, dtype=np.uint32)
-        np.cumsum(counts, out=splits[1:], casting="unsafe")
+        splits[1:] = np.cumsum(counts)
         geometry, primitive = self._ids(listed["prim_id"])
         return _out({"ray_splits": splits, "ray_ids": listed["ray_ids"].astype(np.uint32),
                      "t_hit": listed["t"], "geometry_ids": geometry, "primitive_ids": primitive,

@@ -5,40 +5,48 @@ formulas rather than from lambert's code."""
 import numpy as np
 
 
+def _on_segment(p, s0, s1):
+    """The point of segment s0 s1 nearest p, and its parameter (0 at s0)."""
+    e = s1 - s0
+    ee = (e * e).sum(-1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = np.where(ee > 0, ((p - s0) * e).sum(-1) / ee, 0.0)
+    t = np.clip(t, 0.0, 1.0)
+    return s0 + t[..., None] * e, t
+
+
 def closest_on_triangles(p, a, b, c):
     """The point of each triangle (a, b, c) nearest each p (all (..., 3)
-    broadcast together), by Ericson's Voronoi regions (Real-Time Collision
-    Detection, 5.1.5): the point and its weights u (of b) and v (of c)."""
-    ab, ac, ap = b - a, c - a, p - a
-    d1, d2 = (ab * ap).sum(-1), (ac * ap).sum(-1)
-    bp = p - b
-    d3, d4 = (ab * bp).sum(-1), (ac * bp).sum(-1)
-    cp = p - c
-    d5, d6 = (ab * cp).sum(-1), (ac * cp).sum(-1)
-    vc = d1 * d4 - d3 * d2
-    vb = d5 * d2 - d1 * d6
-    va = d3 * d6 - d5 * d4
+    broadcast together) and its weights u (of b) and v (of c): the
+    projection onto the plane where it falls inside the triangle, else the
+    nearest of the three edges' nearest points (so degenerate triangles
+    are their edges)."""
+    ab, ac = b - a, c - a
+    n = np.cross(ab, ac)
+    nn = (n * n).sum(-1)
+    # Barycentrics of the projection, by areas against the normal.
     with np.errstate(invalid="ignore", divide="ignore"):
-        denom = va + vb + vc
-        u = np.where(denom != 0, vb / denom, 0.0)
-        v = np.where(denom != 0, vc / denom, 0.0)
-        # Regions, checked in Ericson's order: later ones take precedence below.
-        t_ab = np.clip(d1 / (d1 - d3), 0, 1)
-        t_ac = np.clip(d2 / (d2 - d6), 0, 1)
-        t_bc = np.clip((d4 - d3) / ((d4 - d3) + (d5 - d6)), 0, 1)
-    cases = [
-        (va <= 0) & (d4 - d3 >= 0) & (d5 - d6 >= 0), (1 - t_bc, t_bc),
-        (vb <= 0) & (d2 >= 0) & (d6 <= 0), (0 * u, t_ac),
-        (vc <= 0) & (d1 >= 0) & (d3 <= 0), (t_ab, 0 * v),
-        (d6 >= 0) & (d5 <= d6), (0 * u, 1 + 0 * v),
-        (d3 >= 0) & (d4 <= d3), (1 + 0 * u, 0 * v),
-        (d1 <= 0) & (d2 <= 0), (0 * u, 0 * v),
-    ]
-    for k in range(0, len(cases), 2):
-        where, (cu, cv) = cases[k], cases[k + 1]
-        u, v = np.where(where, cu, u), np.where(where, cv, v)
-    u, v = np.nan_to_num(u), np.nan_to_num(v)
-    point = a + u[..., None] * ab + v[..., None] * ac
+        ap = p - a
+        u_in = (np.cross(ap, ac) * n).sum(-1) / nn
+        v_in = (np.cross(ab, ap) * n).sum(-1) / nn
+    inside = (nn > 0) & (u_in >= 0) & (v_in >= 0) & (u_in + v_in <= 1)
+    candidates = []
+    q_ab, t_ab = _on_segment(p, a, b)
+    candidates.append((q_ab, t_ab, 0 * t_ab))
+    q_ac, t_ac = _on_segment(p, a, c)
+    candidates.append((q_ac, 0 * t_ac, t_ac))
+    q_bc, t_bc = _on_segment(p, b, c)
+    candidates.append((q_bc, 1 - t_bc, t_bc))
+    point, u, v = candidates[0]
+    best = ((point - p) ** 2).sum(-1)
+    for q, cu, cv in candidates[1:]:
+        d = ((q - p) ** 2).sum(-1)
+        nearer = d < best
+        point = np.where(nearer[..., None], q, point)
+        u, v, best = np.where(nearer, cu, u), np.where(nearer, cv, v), np.where(nearer, d, best)
+    projection = a + np.nan_to_num(u_in)[..., None] * ab + np.nan_to_num(v_in)[..., None] * ac
+    point = np.where(inside[..., None], projection, point)
+    u, v = np.where(inside, u_in, u), np.where(inside, v_in, v)
     return point, u, v
 
 

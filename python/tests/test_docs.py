@@ -10,13 +10,20 @@ import pytest
 from conftest import ROOT
 
 
-def test_the_documented_example_runs(tmp_path, monkeypatch):
+def run_example(heading, tmp_path, monkeypatch):
+    """Runs the first python block after the heading starting `heading`
+    in tmp_path; returns its variables."""
     with open(os.path.join(ROOT, "docs", "python.md")) as f:
         text = f.read()
-    example = re.search(r"## Example.*?```python\n(.*?)```", text, re.S).group(1)
+    example = re.search(heading + r".*?```python\n(.*?)```", text, re.S).group(1)
     monkeypatch.chdir(tmp_path)
     namespace = {}
     exec(compile(example, "docs/python.md", "exec"), namespace)
+    return namespace
+
+
+def test_the_documented_example_runs(tmp_path, monkeypatch):
+    namespace = run_example("## Example: a depth image", tmp_path, monkeypatch)
     depth = namespace["depth"]
     assert depth.shape == (256, 256)
     # The height field spans [-1, 1]²; the grid [-1.2, 1.2]²: the middle
@@ -29,14 +36,9 @@ def test_the_documented_example_runs(tmp_path, monkeypatch):
 
 
 def test_the_proximity_example_runs_and_says_what_it_prints(tmp_path, monkeypatch):
-    with open(os.path.join(ROOT, "docs", "python.md")) as f:
-        text = f.read()
-    example = re.search(r"## Example: closest points.*?```python\n(.*?)```", text, re.S).group(1)
-    monkeypatch.chdir(tmp_path)
-    ns = {}
-    exec(compile(example, "docs/python.md", "exec"), ns)
+    ns = run_example("## Example: closest points", tmp_path, monkeypatch)
     # What the comments say.
-    np.testing.assert_array_equal(ns["near"]["point"], [[-1, 0, 0], [1, 0, 0], [0.5, 0.2, 1]])
+    np.testing.assert_allclose(ns["near"]["point"], [[-1, 0, 0], [1, 0, 0], [0.5, 0.2, 1]], rtol=1e-6)
     np.testing.assert_allclose(ns["near"]["distance"], [1, 2, 0.1], rtol=1e-6)
     assert ns["near"]["prim_id"][0] == 0
     np.testing.assert_allclose(ns["sdf"], [-1, 2, -0.1], rtol=1e-6)

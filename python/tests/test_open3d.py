@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import lambert
+import reference as ref
 from conftest import MESHES, SHARED_MODELS, read_obj, reference_module
 
 INVALID = lambert.open3d.INVALID_ID
@@ -69,11 +70,16 @@ def test_closest_points_agree_with_open3d(model):
     d_mine = np.linalg.norm(got["points"] - points, axis=1)
     d_theirs = np.linalg.norm(expected["points"] - points, axis=1)
     np.testing.assert_allclose(d_mine, d_theirs, rtol=1e-5, atol=1e-6 * size)
-    # The same triangle, unless two are (nearly) as near.
+    # The same point; the same triangle unless several are as near (a
+    # point nearest a vertex or edge they share, common outside a mesh).
+    near = np.linalg.norm(got["points"] - expected["points"], axis=1) < 1e-5 * size
+    assert near.mean() > 0.99
     same = got["primitive_ids"] == expected["primitive_ids"]
-    assert same.mean() > 0.99
-    np.testing.assert_allclose(got["points"][same], expected["points"][same], atol=1e-5 * size)
-    np.testing.assert_allclose(got["primitive_uvs"][same], expected["primitive_uvs"][same], atol=1e-4)
+    assert same.mean() > 0.5
+    # Barycentrics of (nearly) the same point: on a thin triangle near a
+    # vertex a tiny difference in the point is a larger one in (u, v).
+    uv_close = np.abs(got["primitive_uvs"] - expected["primitive_uvs"]).max(axis=1) < 1e-4
+    assert uv_close[same].mean() > 0.999
     np.testing.assert_allclose(got["primitive_normals"][same], expected["primitive_normals"][same], atol=1e-5)
     assert (got["geometry_ids"] == 0).all()
     np.testing.assert_allclose(ours.compute_distance(points), numpy(theirs.compute_distance(points)),
@@ -101,23 +107,28 @@ def test_signed_distance_and_occupancy_agree_with_open3d_on_closed_meshes(model)
         np.testing.assert_array_equal(np.signbit(parity)[clear], (expected < 0)[clear])
 
 
-def test_winding_numbers_and_signed_distances_agree_with_libigl(model):
+@pytest.mark.parametrize("device", ["cpu", "gpu"])
+def test_winding_numbers_and_signed_distances_agree_with_libigl(model, device):
     igl = reference_module("igl")
     v, f, points, _, size = model
     v64, f64, p64 = v.astype(np.float64), f.astype(np.int64), points.astype(np.float64)
     w_igl = igl.winding_number(v64, f64, p64)
     scene = lambert.Scene.from_arrays(v, f)
-    for device in ("cpu", "gpu"):
-        w = scene.winding_number(points, device=device)
-        np.testing.assert_allclose(w, w_igl, atol=1e-2)
-        sd = scene.signed_distance(points, device=device)
-        s_igl = igl.signed_distance(p64, v64, f64, sign_type=igl.SIGNED_DISTANCE_TYPE_WINDING_NUMBER)[0]
-        np.testing.assert_allclose(np.abs(sd), np.abs(s_igl), rtol=1e-5, atol=1e-6 * size)
-        # libigl's sign is the exact winding number's: the same off the
-        # threshold (meshes with holes included).
-        clear = np.abs(w_igl - 0.5) > 0.02
-        np.testing.assert_array_equal(np.signbit(sd)[clear], (s_igl < 0)[clear])
-        np.testing.assert_array_equal(scene.contains(points, device=device)[clear], (w_igl >= 0.5)[clear])
+    s_igl = igl.signed_distance(p64, v64, f64, sign_type=igl.SIGNED_DISTANCE_TYPE_WINDING_NUMBER)[0]
+    w = scene.winding_number(points, device=device)
+    # The far field is approximated (docs/ray-query.md): a little off
+    # libigl's exact sum at some points, far less on most.
+    np.testing.assert_allclose(w, w_igl, atol=2e-2)
+    assert np.median(np.abs(w - w_igl)) < 5e-3
+    sd = scene.signed_distance(points, device=device)
+    # libigl's sign is the exact winding number's: the same off the
+    # threshold (meshes with holes included). Its distances are not
+    # compared: libigl 2.6.3's disagree with a brute force on the
+    # shared teapot (by up to 0.18 of its 41), where lambert's and
+    # Open3D's agree with it.
+    clear = np.abs(w_igl - 0.5) > 0.05
+    np.testing.assert_array_equal(np.signbit(sd)[clear], (s_igl < 0)[clear])
+    np.testing.assert_array_equal(scene.contains(points, device=device)[clear], (w_igl >= 0.5)[clear])
 
 
 def test_rays_agree_with_open3d(model):
@@ -141,13 +152,20 @@ def test_rays_agree_with_open3d(model):
     counts = ours.count_intersections(rays)
     expected_counts = numpy(theirs.count_intersections(rays))
     assert counts.dtype == expected_counts.dtype == np.int32
-    # Open3D's Embree may count a crossing at a shared edge twice or not at
-    # all; lambert's watertight test counts it once. Random rays hit edges
-    # almost never.
-    assert (counts == expected_counts).mean() > 0.999
+    # Open3D skips a crossing at the same t as the one before it on the same
+    # geometry: of two overlapping triangles (the dragons have some) it
+    # counts one, lambert both, as the brute force does.
+    disagree = np.flatnonzero(counts != expected_counts)
+    assert len(disagree) < 0.01 * len(rays)
+    crossed = ref.crossings(v, f, rays[disagree, :3], rays[disagree, 3:])
+    for i, hits in zip(disagree, crossed):
+        assert counts[i] == len(hits), f"ray {i}"
+        t = np.array([h[0] for h in hits], dtype=np.float32)
+        assert (np.diff(t) == 0).any(), f"ray {i}: {t} has no two crossings at one t"
     listed = ours.list_intersections(rays)
     expected_list = numpy(theirs.list_intersections(rays))
-    same_keys_and_dtypes(listed, expected_list)
+    assert sorted(listed) == sorted(expected_list)
+    assert all(listed[k].dtype == expected_list[k].dtype for k in listed)
     agree = np.flatnonzero(counts == expected_counts)
     for i in agree[:300]:
         a = slice(listed["ray_splits"][i], listed["ray_splits"][i + 1])
@@ -171,7 +189,11 @@ def test_several_geometries_are_numbered_as_open3d_numbers_them():
     got = ours.compute_closest_points(points)
     assert set(np.unique(got["geometry_ids"])) == {0, 1}
     same = (got["geometry_ids"] == expected["geometry_ids"]) & (got["primitive_ids"] == expected["primitive_ids"])
-    assert same.mean() > 0.99
+    assert same.mean() > 0.5
+    np.testing.assert_allclose(got["points"], expected["points"], atol=1e-5)
+    # Where the ids differ, the two triangles are equally near.
+    d = np.linalg.norm(got["points"] - points, axis=1)
+    np.testing.assert_allclose(d, np.linalg.norm(expected["points"] - points, axis=1), rtol=1e-5, atol=1e-6)
     rays = np.concatenate([points, rng.normal(size=(2000, 3)).astype(np.float32)], axis=1)
     a, b = ours.cast_rays(rays), numpy(theirs.cast_rays(rays))
     assert (a["geometry_ids"] == b["geometry_ids"]).mean() > 0.999

@@ -79,10 +79,10 @@ def test_closest_points_are_the_brute_force_ones(mesh, device):
     prim = got["prim_id"]
     assert (prim >= 0).all()
     np.testing.assert_allclose(all_d[np.arange(len(points)), prim], d_ref, rtol=1e-5, atol=tol, err_msg=name)
-    unique = np.sort(all_d, axis=1)[:, 1] - d_ref > 1e-3 * scale(v)
-    assert unique.sum() > len(points) // 3
+    unique = np.sort(all_d, axis=1)[:, 1] - d_ref > 1e-5 * scale(v)
+    assert unique.sum() > len(points) // 10
     np.testing.assert_array_equal(prim[unique], prim_ref[unique], err_msg=name)
-    np.testing.assert_allclose(got["point"], point_ref, atol=10 * tol, err_msg=name)
+    np.testing.assert_allclose(got["point"][unique], point_ref[unique], atol=10 * tol, err_msg=name)
     # u and v are the point's weights on its triangle, as intersect's are.
     tri = v[f[prim]]
     u, w = got["u"].astype(np.float64), got["v"].astype(np.float64)
@@ -134,7 +134,10 @@ def test_inside_is_a_winding_number_of_a_half_or_more(mesh, device):
     w_ref = ref.winding_numbers(v, f, points)
     inside = scene.contains(points, device=device)
     assert inside.dtype == bool
-    clear = np.abs(w_ref - 0.5) > 0.05
+    # Off the surface (on it, the exact sum itself is ambiguous) and off
+    # the threshold.
+    d_ref = ref.closest_points(v, f, points)[0]
+    clear = (np.abs(w_ref - 0.5) > 0.05) & (d_ref > 1e-3 * scale(v))
     np.testing.assert_array_equal(inside[clear], (w_ref >= 0.5)[clear], err_msg=name)
     np.testing.assert_array_equal(inside, scene.winding_number(points, device=device) >= 0.5)
     if name in CLOSED:
@@ -171,11 +174,13 @@ def test_a_hole_gets_a_sensible_inside_by_winding_number():
 
 
 def random_rays(v, n, seed):
+    """From around the mesh's box (twice its size) towards points within
+    it: most cross the mesh."""
     rng = np.random.default_rng(seed)
     lo, hi = v.min(axis=0), v.max(axis=0)
     o = (lo + hi) / 2 + (rng.random((n, 3)) - 0.5) * 2 * (hi - lo)
-    d = rng.normal(size=(n, 3))
-    return o, d
+    target = (lo + hi) / 2 + (rng.random((n, 3)) - 0.5) * 0.8 * (hi - lo)
+    return o, target - o
 
 
 @pytest.mark.parametrize("device", DEVICES)
@@ -203,8 +208,8 @@ def test_crossings_are_the_brute_force_ones(mesh, device):
         np.testing.assert_allclose(t, [h[0] for h in hits], rtol=1e-5, atol=1e-6)
         order = np.argsort([h[1] for h in hits])
         mine = np.argsort(listed["prim_id"][rows])
-        np.testing.assert_allclose(listed["u"][rows][mine], np.array([h[2] for h in hits])[order], atol=1e-5)
-        np.testing.assert_allclose(listed["v"][rows][mine], np.array([h[3] for h in hits])[order], atol=1e-5)
+        np.testing.assert_allclose(listed["u"][rows][mine], np.array([h[2] for h in hits])[order], atol=1e-4)
+        np.testing.assert_allclose(listed["v"][rows][mine], np.array([h[3] for h in hits])[order], atol=1e-4)
 
 
 @pytest.mark.parametrize("device", DEVICES)
@@ -338,11 +343,11 @@ def test_bad_options_are_value_errors_naming_them():
     with pytest.raises(TypeError, match="max_distance"):
         scene.closest_points(p, max_distance="far")
     for query in ("closest_points", "distance", "signed_distance", "contains"):
-        with pytest.raises(ValueError, match="device='tpu'"):
+        with pytest.raises(ValueError, match='device="tpu"'):
             getattr(scene, query)(p, device="tpu")
     with pytest.raises(ValueError, match="2 origins but 3 directions"):
         scene.count_intersections(p, np.ones((3, 3)))
-    with pytest.raises(ValueError, match="ray 1: dy is nan"):
+    with pytest.raises(ValueError, match="ray 1: dy is NaN"):
         scene.count_intersections(p, [[1, 0, 0], [0, np.nan, 0]])
     with pytest.raises(ValueError, match="ray 0: the direction"):
         scene.list_intersections(p, np.zeros((2, 3)))
@@ -351,7 +356,8 @@ def test_bad_options_are_value_errors_naming_them():
 
 
 def test_a_scene_without_triangles_is_a_value_error(tmp_path):
-    (tmp_path / "ball.toml").write_text("[[sphere]]\ncenter = [0.0, 0.0, 0.0]\nradius = 1.0\n")
+    (tmp_path / "ball.toml").write_text("[camera]\neye = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\nvfov = 40.0\nwidth = 8\nheight = 8\n"
+                                        "[[sphere]]\ncenter = [0.0, 0.0, 0.0]\nradius = 1.0\n")
     scene = lambert.Scene.load(tmp_path / "ball.toml")
     assert scene.triangle_count == 0 and scene.sphere_count == 1
     p = np.zeros((1, 3))
@@ -360,6 +366,12 @@ def test_a_scene_without_triangles_is_a_value_error(tmp_path):
             getattr(scene, query)(p, device="cpu")
     with pytest.raises(ValueError, match="no triangles"):
         scene.count_intersections(p, np.ones((1, 3)), device="cpu")
+    # Triangles and spheres: the queries are over triangles alone.
+    scene = lambert.Scene.load(os.path.join(os.path.dirname(MESHES), "spheres.toml"))
+    assert scene.triangle_count and scene.sphere_count
+    for query in ("closest_points", "signed_distance", "contains"):
+        with pytest.raises(ValueError, match="sphere"):
+            getattr(scene, query)(p, device="cpu")
 
 
 def test_queries_run_in_threads_at_once_with_the_gil_released():

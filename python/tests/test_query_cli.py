@@ -52,9 +52,10 @@ def test_point_queries_write_what_python_returns(cli, tmp_path, bunny, device):
                           dtype=CLOSEST_DTYPE)
     expected = scene.closest_points(points, max_distance=reach, device=device)
     assert len(closest) == len(points)
-    np.testing.assert_array_equal(np.stack([closest["x"], closest["y"], closest["z"]], axis=1)[closest["prim"] != 0xFFFFFFFF],
-                                  expected["point"][expected["prim_id"] >= 0])
-    np.testing.assert_array_equal(np.where(closest["prim"] == 0xFFFFFFFF, -1, closest["prim"]), expected["prim_id"])
+    prim = closest["prim"].astype(np.int64)
+    np.testing.assert_array_equal(np.where(prim == 0xFFFFFFFF, -1, prim), expected["prim_id"])
+    point = np.stack([closest["x"], closest["y"], closest["z"]], axis=1)
+    np.testing.assert_array_equal(point, expected["point"])
     np.testing.assert_array_equal(closest["distance"], expected["distance"])
     assert (closest["reserved"] == 0).all()
     assert 0 < (expected["prim_id"] >= 0).sum() < len(points)
@@ -123,7 +124,8 @@ def test_bad_options_are_refused_before_any_work(tmp_path, bunny):
     cases = [
         (["distance", "--points", p, "--max-distance", "1"], "--max-distance does not apply"),
         (["closest", "--points", p, "--method", "parity"], "--method does not apply"),
-        (["closest", "--points", p, "--max-distance", "-1"], "not a finite number"),
+        (["closest", "--points", p, "--max-distance=-1"], "not a finite number"),
+        (["closest", "--points", p, "--max-distance", "nan"], "not a finite number"),
         (["count", "--points", p], "--points (it takes --rays)"),
         (["list"], "give --rays"),
         (["closest"], "give --points"),

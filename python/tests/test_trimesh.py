@@ -170,11 +170,11 @@ def test_closest_points_on_the_surface_match_trimesh(index):
     expected = trimesh.proximity.ProximityQuery(mesh).on_surface(points)
     assert closest.dtype == distance.dtype == np.float64 and closest.shape == (500, 3)
     np.testing.assert_allclose(distance, expected[1], rtol=1e-5, atol=1e-6 * mesh.scale)
-    same = triangle_id == expected[2]
-    assert same.mean() > 0.95
-    np.testing.assert_allclose(closest[same], expected[0][same], atol=1e-5 * mesh.scale)
-    # Where the triangle differs, the two are equally near (an edge or vertex).
-    np.testing.assert_allclose(distance[~same], expected[1][~same], rtol=1e-5, atol=1e-6 * mesh.scale)
+    # The same point, but for a few equally near elsewhere; the same
+    # triangle unless several are as near (a vertex or edge they share).
+    near = np.linalg.norm(closest - expected[0], axis=1) < 1e-5 * mesh.scale
+    assert near.mean() > 0.99
+    assert (triangle_id == expected[2]).mean() > 0.5
     np.testing.assert_allclose(np.linalg.norm(closest - points, axis=1), distance, rtol=1e-12)
 
 
