@@ -550,3 +550,30 @@ fn bad_inputs_are_refused_with_the_first_bad_one_named() {
         assert!(e.contains("1 sphere"), "{e}");
     }
 }
+
+#[test]
+fn the_four_lane_closest_point_is_the_scalar_one_bit_for_bit() {
+    use lambert::cpu::closest::{closest_point_block, closest_point_triangle};
+    use lambert::layout::PrimBlock;
+    let triangles = soup(5, 400);
+    let mut rng = Lcg(11);
+    for chunk in triangles.chunks(4) {
+        let ids: Vec<u32> = (0..chunk.len() as u32).collect();
+        let block = PrimBlock::new(&ids, chunk);
+        for _ in 0..20 {
+            let p = glam::Vec3::from(rng.point(-2.0, 2.0));
+            let (d2, u, v, q) = closest_point_block(p, &block);
+            for (lane, t) in chunk.iter().enumerate() {
+                let (sq, sd2, su, sv) =
+                    closest_point_triangle(p, t.v0.into(), t.v1.into(), t.v2.into());
+                let lane_q = [q[0][lane], q[1][lane], q[2][lane]];
+                assert_eq!(
+                    (d2[lane].to_bits(), u[lane].to_bits(), v[lane].to_bits()),
+                    (sd2.to_bits(), su.to_bits(), sv.to_bits()),
+                    "{p} {t:?}"
+                );
+                assert_eq!(lane_q.map(f32::to_bits), sq.to_array().map(f32::to_bits));
+            }
+        }
+    }
+}

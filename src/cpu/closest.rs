@@ -8,10 +8,10 @@
 //! that could hold a candidate as good as the best so far
 //! (`cull_bound`), so they find the same answer, bit for bit.
 
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
-use crate::bvh::{Bvh, STACK_SIZE, occupied_slots};
-use crate::layout::{BVH_WIDTH, LEAF_BIT, NO_HIT, leaf_range};
+use crate::bvh::Bvh;
+use crate::layout::{LEAF_BIT, NO_HIT, PrimBlock, leaf_range};
 
 /// The nearest point found for a query point: its squared distance, the
 /// triangle, (u, v) on it, and the point itself (all in the scene's local
@@ -122,15 +122,128 @@ pub fn query_margin(point_extent: f32, scene_radius: f32) -> f32 {
     1e-5 * point_extent.max(scene_radius)
 }
 
+/// `closest_point_triangle` on a leaf block's four lanes at once: the same
+/// operations in the same order in each lane (SSE's are IEEE's, so the
+/// same bits as the scalar function and the shader), the interior and the
+/// three edges all computed and the answer selected as the scalar
+/// function's branches choose it. Returns (d², u, v) per lane and the
+/// points' coordinates per axis.
+#[inline(always)]
+pub fn closest_point_block(p: Vec3, block: &PrimBlock) -> (Vec4, Vec4, Vec4, [Vec4; 3]) {
+    let v = |k: usize| block.v[k].map(Vec4::from_array);
+    let [a, b, c] = [v(0), v(1), v(2)];
+    let p = [Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z)];
+    let sub = |x: [Vec4; 3], y: [Vec4; 3]| [x[0] - y[0], x[1] - y[1], x[2] - y[2]];
+    let dot = |x: [Vec4; 3], y: [Vec4; 3]| x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
+    let ab = sub(b, a);
+    let ac = sub(c, a);
+    let ap = sub(p, a);
+    let bp = sub(p, b);
+    let cp = sub(p, c);
+    let d1 = dot(ab, ap);
+    let d2 = dot(ac, ap);
+    let d3 = dot(ab, bp);
+    let d4 = dot(ac, bp);
+    let d5 = dot(ab, cp);
+    let d6 = dot(ac, cp);
+    let va = d3 * d6 - d5 * d4;
+    let vb = d5 * d2 - d1 * d6;
+    let vc = d1 * d4 - d3 * d2;
+    let sum = va + vb + vc;
+    let zero = Vec4::ZERO;
+    let interior = va.cmpgt(zero) & vb.cmpgt(zero) & vc.cmpgt(zero) & sum.cmpgt(zero);
+    let iv = vb / sum;
+    let iw = vc / sum;
+    let iq: [Vec4; 3] = std::array::from_fn(|k| a[k] + ab[k] * iv + ac[k] * iw);
+    let id = sub(p, iq);
+    let id2 = dot(id, id);
+    let segment = |s0: [Vec4; 3], e: [Vec4; 3]| {
+        let ee = dot(e, e);
+        let t = Vec4::select(
+            ee.cmpgt(zero),
+            (dot(sub(p, s0), e) / ee).max(zero).min(Vec4::ONE),
+            zero,
+        );
+        let q: [Vec4; 3] = std::array::from_fn(|k| s0[k] + e[k] * t);
+        let d = sub(p, q);
+        (q, dot(d, d), t)
+    };
+    let (mut q, mut best, t1) = segment(a, ab);
+    let (mut u, mut w) = (t1, zero);
+    let (q2, d2_ac, t2) = segment(a, ac);
+    let nearer = d2_ac.cmplt(best);
+    q = std::array::from_fn(|k| Vec4::select(nearer, q2[k], q[k]));
+    best = Vec4::select(nearer, d2_ac, best);
+    u = Vec4::select(nearer, zero, u);
+    w = Vec4::select(nearer, t2, w);
+    let (q3, d2_bc, t3) = segment(b, sub(c, b));
+    let nearer = d2_bc.cmplt(best);
+    q = std::array::from_fn(|k| Vec4::select(nearer, q3[k], q[k]));
+    best = Vec4::select(nearer, d2_bc, best);
+    u = Vec4::select(nearer, Vec4::ONE - t3, u);
+    w = Vec4::select(nearer, t3, w);
+    (
+        Vec4::select(interior, id2, best),
+        Vec4::select(interior, iv, u),
+        Vec4::select(interior, iw, w),
+        std::array::from_fn(|k| Vec4::select(interior, iq[k], q[k])),
+    )
+}
+
+/// A best-first queue of boxes (node or leaf references) by squared
+/// distance: a binary min-heap, kept by the caller between queries so that
+/// a query allocates nothing.
+pub type BoxQueue = Vec<(f32, u32)>;
+
+fn queue_push(queue: &mut BoxQueue, entry: (f32, u32)) {
+    queue.push(entry);
+    let mut i = queue.len() - 1;
+    while i > 0 {
+        let parent = (i - 1) / 2;
+        if queue[parent].0 <= queue[i].0 {
+            break;
+        }
+        queue.swap(parent, i);
+        i = parent;
+    }
+}
+
+fn queue_pop(queue: &mut BoxQueue) -> Option<(f32, u32)> {
+    let last = queue.pop()?;
+    if queue.is_empty() {
+        return Some(last);
+    }
+    let top = std::mem::replace(&mut queue[0], last);
+    let mut i = 0;
+    loop {
+        let (l, r) = (2 * i + 1, 2 * i + 2);
+        let mut m = i;
+        if l < queue.len() && queue[l].0 < queue[m].0 {
+            m = l;
+        }
+        if r < queue.len() && queue[r].0 < queue[m].0 {
+            m = r;
+        }
+        if m == i {
+            return Some(top);
+        }
+        queue.swap(i, m);
+        i = m;
+    }
+}
+
 /// The nearest point of the BVH's triangles (ids below `triangle_count`)
-/// to `p` within squared distance `max_d2` (None when none is), nearest
-/// box first, boxes beyond `cull_bound` of the best so far skipped.
+/// to `p` within squared distance `max_d2` (None when none is): boxes
+/// nearest first from a queue (`queue`, emptied first), each leaf's blocks
+/// four triangles at a time, boxes beyond `cull_bound` of the best so far
+/// skipped.
 pub fn closest_point(
     bvh: &Bvh,
     triangle_count: usize,
     p: Vec3,
     max_d2: f32,
     margin: f32,
+    queue: &mut BoxQueue,
 ) -> Option<Nearest> {
     let mut best = Nearest {
         d2: max_d2,
@@ -140,68 +253,53 @@ pub fn closest_point(
         point: Vec3::ZERO,
     };
     let mut bound = cull_bound(max_d2, margin);
-    let mut stack = [(0u32, 0.0f32); STACK_SIZE];
-    let mut sp = 0;
+    queue.clear();
     let mut current = 0u32;
     loop {
         if current & LEAF_BIT == 0 {
             let node = &bvh.nodes[current as usize];
-            // Children within the bound, nearest last (popped first).
-            let base = sp;
-            for slot in occupied_slots(node) {
-                let (lo, hi) = node.child_bounds(slot);
-                let d2 = box_distance2(p, Vec3::from(lo), Vec3::from(hi));
-                if d2 > bound {
-                    continue;
+            for half in 0..2 {
+                let row = |r: usize| Vec4::from_slice(&node.bounds[r][4 * half..4 * half + 4]);
+                let axis = |k: usize, x: f32| {
+                    (row(2 * k) - Vec4::splat(x))
+                        .max(Vec4::splat(x) - row(2 * k + 1))
+                        .max(Vec4::ZERO)
+                };
+                let (dx, dy, dz) = (axis(0, p.x), axis(1, p.y), axis(2, p.z));
+                let d2 = (dx * dx + dy * dy + dz * dz).to_array();
+                for lane in 0..4 {
+                    let slot = 4 * half + lane;
+                    if node.occupied >> slot & 1 == 1 && d2[lane] <= bound {
+                        queue_push(queue, (d2[lane], node.children[slot]));
+                    }
                 }
-                let mut j = sp;
-                while j > base && stack[j - 1].1 < d2 {
-                    stack[j] = stack[j - 1];
-                    j -= 1;
-                }
-                stack[j] = (node.children[slot], d2);
-                sp += 1;
             }
-            debug_assert!(sp - base <= BVH_WIDTH);
         } else {
             let (first, count) = leaf_range(current);
             for block in &bvh.blocks[first as usize..(first + count) as usize] {
+                let (d2, u, v, q) = closest_point_block(p, block);
+                let (d2, u, v) = (d2.to_array(), u.to_array(), v.to_array());
                 for lane in 0..4 {
                     let prim = block.prims[lane];
-                    if prim as usize >= triangle_count {
-                        continue;
-                    }
-                    let vertex = |k: usize| {
-                        Vec3::new(
-                            block.v[k][0][lane],
-                            block.v[k][1][lane],
-                            block.v[k][2][lane],
-                        )
-                    };
-                    let (q, d2, u, v) = closest_point_triangle(p, vertex(0), vertex(1), vertex(2));
-                    if better(d2, prim, best.d2, best.prim) {
+                    if (prim as usize) < triangle_count
+                        && better(d2[lane], prim, best.d2, best.prim)
+                    {
                         best = Nearest {
-                            d2,
+                            d2: d2[lane],
                             prim,
-                            u,
-                            v,
-                            point: q,
+                            u: u[lane],
+                            v: v[lane],
+                            point: Vec3::new(q[0][lane], q[1][lane], q[2][lane]),
                         };
-                        bound = cull_bound(d2, margin);
+                        bound = cull_bound(d2[lane], margin);
                     }
                 }
             }
         }
-        // The nearest entry still within the bound.
-        loop {
-            if sp == 0 {
-                return (best.prim != NO_HIT).then_some(best);
-            }
-            sp -= 1;
-            if stack[sp].1 <= bound {
-                current = stack[sp].0;
-                break;
-            }
+        // The nearest box left, if it is within the bound.
+        match queue_pop(queue) {
+            Some((d2, child)) if d2 <= bound => current = child,
+            _ => return (best.prim != NO_HIT).then_some(best),
         }
     }
 }

@@ -27,10 +27,10 @@ pub fn closest_points(scene: &Scene, points: &[[f32; 3]], max_distance: f32) -> 
     points
         .par_iter()
         .with_min_len(CHUNK)
-        .map(|&p| {
+        .map_init(Vec::new, |queue, &p| {
             let p = Vec3::from(p);
             let margin = query_margin(p.abs().max_element(), radius);
-            match closest_point(&scene.bvh, triangles, p, max_d2, margin) {
+            match closest_point(&scene.bvh, triangles, p, max_d2, margin, queue) {
                 Some(n) => ClosestPoint {
                     point: n.point.to_array(),
                     prim: n.prim,
