@@ -13,7 +13,7 @@ import pytest
 
 import lambert
 import reference as ref
-from conftest import MESHES, SHARED_MODELS, read_obj, reference_module
+from conftest import MESHES, QUERY_DEVICES, SHARED_MODELS, read_obj, reference_module
 
 INVALID = lambert.open3d.INVALID_ID
 
@@ -107,7 +107,7 @@ def test_signed_distance_and_occupancy_agree_with_open3d_on_closed_meshes(model)
         np.testing.assert_array_equal(np.signbit(parity)[clear], (expected < 0)[clear])
 
 
-@pytest.mark.parametrize("device", ["cpu", "gpu"])
+@pytest.mark.parametrize("device", QUERY_DEVICES)
 def test_winding_numbers_and_signed_distances_agree_with_libigl(model, device):
     igl = reference_module("igl")
     v, f, points, _, size = model

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import lambert
-from conftest import LAMBERT, MESHES, records
+from conftest import LAMBERT, MESHES, QUERY_DEVICES, records
 
 MESH = os.path.join(MESHES, "bunny_lowres.obj")
 CLOSEST_DTYPE = np.dtype([("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("prim", "<u4"), ("u", "<f4"), ("v", "<f4"),
@@ -42,15 +42,16 @@ def query(cli, tmp_path, what, input_args, device, *extra):
     return out
 
 
-@pytest.mark.parametrize("device", ["cpu", "gpu"])
+@pytest.mark.parametrize("device", QUERY_DEVICES)
 def test_point_queries_write_what_python_returns(cli, tmp_path, bunny, device):
     scene, points, _, _ = bunny
     points.tofile(tmp_path / "points.bin")
     given = ["--points", str(tmp_path / "points.bin")]
     reach = 0.01
+    # Python's answers first: the CLI's files must hold them.
+    expected = scene.closest_points(points, max_distance=reach, device=device)
     closest = np.fromfile(query(cli, tmp_path, "closest", given, device, "--max-distance", str(reach)),
                           dtype=CLOSEST_DTYPE)
-    expected = scene.closest_points(points, max_distance=reach, device=device)
     assert len(closest) == len(points)
     prim = closest["prim"].astype(np.int64)
     np.testing.assert_array_equal(np.where(prim == 0xFFFFFFFF, -1, prim), expected["prim_id"])
@@ -69,16 +70,18 @@ def test_point_queries_write_what_python_returns(cli, tmp_path, bunny, device):
     assert 0 < inside.sum() < len(points)
 
 
-@pytest.mark.parametrize("device", ["cpu", "gpu"])
+@pytest.mark.parametrize("device", QUERY_DEVICES)
 def test_ray_queries_write_what_python_returns(cli, tmp_path, bunny, device):
     scene, _, o, d = bunny
     r = records(o, d, 0.0, np.inf)
     r.tofile(tmp_path / "rays.bin")
     given = ["--rays", str(tmp_path / "rays.bin")]
-    counts = np.fromfile(query(cli, tmp_path, "count", given, device), dtype="<u4")
-    np.testing.assert_array_equal(counts, scene.count_intersections(o, d, device=device))
-    listed = np.fromfile(query(cli, tmp_path, "list", given, device), dtype=LISTED_DTYPE)
+    # Python's answers first: the CLI's files must hold them.
+    expected_counts = scene.count_intersections(o, d, device=device)
     expected = scene.list_intersections(o, d, device=device)
+    counts = np.fromfile(query(cli, tmp_path, "count", given, device), dtype="<u4")
+    np.testing.assert_array_equal(counts, expected_counts)
+    listed = np.fromfile(query(cli, tmp_path, "list", given, device), dtype=LISTED_DTYPE)
     np.testing.assert_array_equal(listed["ray"], expected["ray_ids"])
     for mine, theirs in (("prim", "prim_id"), ("t", "t"), ("u", "u"), ("v", "v")):
         np.testing.assert_array_equal(listed[mine], expected[theirs])
