@@ -30,7 +30,7 @@ import numpy as np  # noqa: E402
 
 from . import _lambert  # noqa: E402
 
-__all__ = ["RAY_DTYPE", "Scene", "trimesh", "write_image"]
+__all__ = ["RAY_DTYPE", "Scene", "open3d", "trimesh", "write_image"]
 
 #: The record layout of a ray file (docs/ray-query.md): little-endian
 #: float32 ox oy oz tmin dx dy dz tmax, 32 bytes a ray. An array of it goes
@@ -82,6 +82,17 @@ def _count(name, value):
     if n > 0xFFFFFFFF:
         raise ValueError(f"{name} = {n} is too large")
     return n
+
+
+def _max_distance(value):
+    """A closest-point query's reach: a number ≥ 0, inf for no limit."""
+    try:
+        d = float(value)
+    except (TypeError, ValueError):
+        raise TypeError(f"max_distance must be a number, not {type(value).__name__}") from None
+    if not d >= 0.0:
+        raise ValueError(f"max_distance = {d}: must be a number ≥ 0 (inf for no limit)")
+    return d
 
 
 def _albedo(albedo):
@@ -188,6 +199,56 @@ class Scene:
         o, d, lo, hi = _query(origins, directions, tmin, tmax)
         return self._native.occluded(o, d, lo, hi, device, intersect)
 
+    def closest_points(self, points, max_distance=np.inf, *, device="auto"):
+        """The closest point of the scene's triangles to each of ``points``
+        ((N, 3), any float dtype) within ``max_distance``. Returns a dict:
+        ``point`` (N, 3) float32, ``prim_id`` int64 (-1 where nothing lies
+        within max_distance), ``u``, ``v`` float32 (the point is
+        (1-u-v)·v0 + u·v1 + v·v2, as ``intersect``'s), ``distance`` float32
+        (inf beyond max_distance). Of triangles at the same distance (a
+        point nearest an edge or vertex they share), one is reported."""
+        p = _floats("points", points)
+        return _lambert.closest_points(self._native, p, _max_distance(max_distance), device)
+
+    def distance(self, points, *, device="auto"):
+        """(N,) float32: the distance from each point to the nearest triangle."""
+        return _lambert.point_values(self._native, _floats("points", points), "distance", "winding", device)
+
+    def signed_distance(self, points, method="winding", *, device="auto"):
+        """(N,) float32: the distance to the nearest triangle, negative
+        inside. ``method="winding"``: inside where the generalized winding
+        number is at least 0.5 (meshes with holes or self-intersections get
+        a sensible inside); ``"parity"``: inside where a ray from the point
+        crosses the surface an odd number of times (watertight meshes)."""
+        if method not in ("winding", "parity"):
+            raise ValueError(f'method={method!r}: use "winding" or "parity"')
+        return _lambert.point_values(self._native, _floats("points", points), "signed_distance", method, device)
+
+    def winding_number(self, points, *, device="auto"):
+        """(N,) float32: the generalized winding number of the triangles
+        about each point (1 inside a closed, outward-facing mesh, 0 outside,
+        fractional near holes)."""
+        return _lambert.point_values(self._native, _floats("points", points), "winding_number", "winding", device)
+
+    def contains(self, points, *, device="auto"):
+        """(N,) bool: whether each point is inside (winding number ≥ 0.5)."""
+        return _lambert.contains(self._native, _floats("points", points), device)
+
+    def count_intersections(self, origins, directions=None, tmin=0.0, tmax=np.inf, *, device="auto"):
+        """(N,) int32: how many times each ray crosses the triangles within
+        tmin < t < tmax (rays as for :meth:`intersect`); a crossing through
+        an edge or vertex that triangles share counts once."""
+        o, d, lo, hi = _query(origins, directions, tmin, tmax)
+        return _lambert.crossings(self._native, o, d, lo, hi, device, False)
+
+    def list_intersections(self, origins, directions=None, tmin=0.0, tmax=np.inf, *, device="auto"):
+        """Every crossing of each ray within tmin < t < tmax, sorted by t
+        along each ray. Returns a dict: ``ray_splits`` (N + 1,) int64 (ray
+        i's crossings are rows ray_splits[i]:ray_splits[i+1]), ``ray_ids``
+        int64, ``t`` float32, ``prim_id`` int64, ``u``, ``v`` float32."""
+        o, d, lo, hi = _query(origins, directions, tmin, tmax)
+        return _lambert.crossings(self._native, o, d, lo, hi, device, True)
+
     def camera_rays(self, width=None, height=None):
         """(origins, directions), each (width·height, 3) float32: the scene
         camera's rays through pixel centres, row-major from the top (unit
@@ -244,6 +305,7 @@ def write_image(path, image):
     _lambert.write_image(path, np.ascontiguousarray(a, dtype=np.float32))
 
 
-# After Scene: the drop-in builds on it. trimesh itself is imported only
-# where the drop-in needs it, so `import lambert` works without it.
-from . import trimesh  # noqa: E402
+# After Scene: the drop-ins build on it. trimesh and Open3D themselves are
+# imported only where a drop-in needs them, so `import lambert` works
+# without them.
+from . import open3d, trimesh  # noqa: E402

@@ -1,8 +1,10 @@
-"""A drop-in for trimesh's ray intersector, traced by lambert.
+"""Drop-ins for trimesh's ray intersector and proximity queries, traced by
+lambert.
 
-Switch with one line::
+Switch with one line each::
 
     mesh.ray = lambert.trimesh.RayMeshIntersector(mesh)
+    closest, distance, triangle_id = lambert.trimesh.ProximityQuery(mesh).on_surface(points)
 
 The methods take and return what ``trimesh.ray.ray_pyembree``'s do. Unlike
 Embree's, no ray passes between two triangles that share an edge. Multiple
@@ -17,7 +19,7 @@ import numpy as np
 
 from . import Scene
 
-__all__ = ["RayMeshIntersector"]
+__all__ = ["ProximityQuery", "RayMeshIntersector"]
 
 
 def _rays(ray_origins, ray_directions, mesh):
@@ -37,10 +39,9 @@ def _rays(ray_origins, ray_directions, mesh):
     return o, d, ok
 
 
-class RayMeshIntersector:
-    """Ray queries on a ``trimesh.Trimesh``, on lambert's GPU path or its
-    CPU path (``device="auto"`` takes a GPU when there is a hardware one).
-    The scene is built on first use and rebuilt if the mesh changes."""
+class _Cached:
+    """A lambert Scene of a trimesh mesh, built on first use and rebuilt
+    if the mesh changes."""
 
     def __init__(self, geometry, device="auto"):
         self.mesh = geometry
@@ -53,6 +54,12 @@ class RayMeshIntersector:
         if self._built is None or self._built[0] != key:
             self._built = (key, Scene.from_arrays(self.mesh.vertices, self.mesh.faces))
         return self._built[1]
+
+
+class RayMeshIntersector(_Cached):
+    """Ray queries on a ``trimesh.Trimesh``, on lambert's GPU path or its
+    CPU path (``device="auto"`` takes a GPU when there is a hardware one).
+    The scene is built on first use and rebuilt if the mesh changes."""
 
     def intersects_first(self, ray_origins, ray_directions):
         """(n,) int: the index of the first triangle each ray hits, -1 for none."""
@@ -117,3 +124,59 @@ class RayMeshIntersector:
             # Nothing is inside an empty mesh (trimesh's test needs bounds).
             return np.zeros(len(np.asarray(points, dtype=np.float64).reshape(-1, 3)), dtype=bool)
         return contains_points(self, points)
+
+
+def _points(points):
+    """float64 (n, 3) points, as trimesh's proximity functions take them."""
+    p = np.asanyarray(points, dtype=np.float64)
+    if p.ndim != 2 or p.shape[1] != 3:
+        raise ValueError("points must be (n,3)!")
+    return p
+
+
+class ProximityQuery(_Cached):
+    """trimesh's ``ProximityQuery`` (``mesh.nearest``) on lambert's closest
+    points, on its GPU path or its CPU path (``device="auto"`` takes a
+    GPU when there is a hardware one).
+
+    Where it differs from trimesh:
+
+    - ``on_surface``: the closest point is found in float32 and returned
+      as (1-u-v)·v0 + u·v1 + v·v2 of the triangle found, evaluated in
+      float64 (trimesh's is float64 throughout): on a mesh of size 1 it is
+      within about 1e-7 of trimesh's. Of triangles equally near (a point
+      nearest an edge or vertex they share) one is reported; trimesh
+      prefers the one whose normal faces the point most.
+    - ``signed_distance`` signs by the generalized winding number (inside
+      where it is at least 0.5) rather than by the closest triangle's
+      normal and ray parity: meshes with holes or self-intersections get a
+      sensible inside. The sign is trimesh's: positive inside, negative
+      outside; the distance is ``on_surface``'s, in float64.
+    - ``vertex`` is trimesh's own (a k-d tree over the vertices, which
+      needs scipy): lambert has no nearest-vertex query.
+    - A point with a non-finite coordinate is a ``ValueError`` naming its
+      row; on a mesh with no faces ``on_surface`` and ``signed_distance``
+      raise ``ValueError`` too (trimesh's fail on an empty array).
+    """
+
+    def on_surface(self, points):
+        """(closest (n, 3) float64, distance (n,) float64, triangle_id (n,)
+        int64): the closest point of the mesh to each point."""
+        p = _points(points)
+        found = self._scene.closest_points(p, device=self.device)
+        triangle_id = found["prim_id"]
+        corners = np.asarray(self.mesh.vertices, dtype=np.float64)[np.asarray(self.mesh.faces)[triangle_id]]
+        u, v = found["u"].astype(np.float64), found["v"].astype(np.float64)
+        closest = (1 - u - v)[:, None] * corners[:, 0] + u[:, None] * corners[:, 1] + v[:, None] * corners[:, 2]
+        return closest, np.linalg.norm(p - closest, axis=1), triangle_id
+
+    def signed_distance(self, points):
+        """(n,) float64: the distance to the mesh, positive inside (trimesh's sign)."""
+        p = _points(points)
+        distance = self.on_surface(p)[1]
+        return np.where(self._scene.contains(p, device=self.device), distance, -distance)
+
+    def vertex(self, points):
+        """(distance (n,) float64, vertex_id (n,) int): the nearest vertex
+        to each point, by trimesh's own k-d tree."""
+        return self.mesh.kdtree.query(points)

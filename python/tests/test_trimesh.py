@@ -146,3 +146,69 @@ def test_stl_files_load_as_trimesh_reads_them(index, tmp_path):
     same = arrays.intersect(o, d, device="cpu")
     for column in ["t", "prim_id", "u", "v"]:
         assert np.array_equal(mine[column], same[column]), column
+
+
+def open_mesh():
+    """A torus with a band of faces removed: a mesh with a hole."""
+    torus = trimesh.creation.torus(major_radius=1.0, minor_radius=0.3)
+    keep = torus.triangles_center[:, 0] < 0.9
+    return trimesh.Trimesh(torus.vertices, torus.faces[keep], process=False)
+
+
+def proximity_points(mesh, n, seed):
+    rng = np.random.default_rng(seed)
+    lo, hi = mesh.bounds
+    return (lo + hi) / 2 + (rng.random((n, 3)) - 0.5) * 1.5 * (hi - lo)
+
+
+@pytest.mark.parametrize("index", range(4))
+def test_closest_points_on_the_surface_match_trimesh(index):
+    mesh = (list(meshes()) + [open_mesh()])[index]
+    points = proximity_points(mesh, 500, seed=index)
+    query = lambert.trimesh.ProximityQuery(mesh, device="cpu")
+    closest, distance, triangle_id = query.on_surface(points)
+    expected = trimesh.proximity.ProximityQuery(mesh).on_surface(points)
+    assert closest.dtype == distance.dtype == np.float64 and closest.shape == (500, 3)
+    np.testing.assert_allclose(distance, expected[1], rtol=1e-5, atol=1e-6 * mesh.scale)
+    # The same point, but for a few equally near elsewhere; the same
+    # triangle unless several are as near (a vertex or edge they share).
+    near = np.linalg.norm(closest - expected[0], axis=1) < 1e-5 * mesh.scale
+    assert near.mean() > 0.99
+    assert (triangle_id == expected[2]).mean() > 0.5
+    np.testing.assert_allclose(np.linalg.norm(closest - points, axis=1), distance, rtol=1e-12)
+
+
+@pytest.mark.parametrize("index", range(4))
+def test_signed_distance_has_trimeshs_sign(index):
+    mesh = (list(meshes()) + [open_mesh()])[index]
+    points = proximity_points(mesh, 500, seed=10 + index)
+    sd = lambert.trimesh.ProximityQuery(mesh, device="cpu").signed_distance(points)
+    assert sd.dtype == np.float64
+    if mesh.is_watertight:
+        expected = trimesh.proximity.signed_distance(mesh, points)
+        clear = np.abs(expected) > 1e-6
+        np.testing.assert_array_equal(np.sign(sd[clear]), np.sign(expected[clear]))
+        np.testing.assert_allclose(np.abs(sd), np.abs(expected), rtol=1e-5, atol=1e-6 * mesh.scale)
+        np.testing.assert_array_equal(sd[clear] > 0, mesh.contains(points)[clear])
+    else:
+        # Inside by winding number: the torus's tube still holds its middle.
+        inside = lambert.Scene.from_arrays(mesh.vertices, mesh.faces).contains(points)
+        np.testing.assert_array_equal(sd > 0, inside)
+        assert inside.any()
+
+
+def test_nearest_vertex_is_trimeshs():
+    mesh = trimesh.creation.icosphere(subdivisions=2)
+    points = proximity_points(mesh, 200, seed=3)
+    distance, vertex_id = lambert.trimesh.ProximityQuery(mesh).vertex(points)
+    expected = trimesh.proximity.ProximityQuery(mesh).vertex(points)
+    np.testing.assert_array_equal(vertex_id, expected[1])
+    np.testing.assert_allclose(distance, expected[0])
+
+
+def test_proximity_on_bad_points_is_a_value_error():
+    query = lambert.trimesh.ProximityQuery(trimesh.creation.box())
+    with pytest.raises(ValueError, match=r"points must be \(n,3\)"):
+        query.on_surface(np.zeros((4, 2)))
+    with pytest.raises(ValueError, match="points row 1"):
+        query.signed_distance([[0, 0, 0], [np.nan, 0, 0]])

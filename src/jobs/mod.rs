@@ -1,6 +1,7 @@
 //! Render jobs, the work the front ends share (the `lambert` binary, and
 //! the Python package): one image (`image`, with a time budget or adaptive
-//! sampling), a part of one (`tile`), turntable frames (`turntable`). Each
+//! sampling), a part of one (`tile`), turntable frames (`turntable`), and
+//! the queries beyond the first hit over files (`query`). Each
 //! opens the device, renders and writes, tells a `ProgressSink` what it is
 //! doing as it goes, and returns a report for its caller to print; the
 //! caller parses options and loads the scene. Also the f64 oracle's scene
@@ -18,12 +19,17 @@ use crate::render::{DeviceChoice, Renderer, open_gpu};
 use crate::scene::{Intersect, Scene};
 
 mod image;
+mod query;
 mod tile;
 mod turntable;
 
 pub use image::{
     BudgetPlan, BudgetReport, BvhSummary, ImageJob, ImageReport, Sampled, Sampling, render_image,
     render_view,
+};
+pub use query::{
+    INSIDE_WINDING, POINT_BYTES, PointQuery, QueryJob, QueryKind, QueryReport, RayQuery, Sign,
+    distances, inside, parse_points, read_points, run_query, signed_distances,
 };
 pub use tile::{TileJob, TileReport, render_tile};
 pub use turntable::{FrameReport, TurntableJob, TurntableReport, frame_path, render_turntable};

@@ -10,6 +10,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 mod benchmark;
 mod info;
 mod options;
+mod query;
 mod turntable;
 
 use options::{
@@ -55,6 +56,9 @@ enum Command {
     Trace(TraceArgs),
     /// Write a scene's camera rays (pixel centres, row by row) as a ray file.
     CameraRays(CameraRaysArgs),
+    /// Closest points, distances, signed distances or inside tests of a
+    /// point file; or counts or lists of every crossing of a ray file.
+    Query(query::QueryArgs),
     /// List adapters, backends and limits.
     Info(InfoArgs),
     /// Measure trace speed over a ladder of models, or run time against
@@ -339,6 +343,7 @@ pub fn run() -> Result<ExitCode> {
         }),
         Command::Trace(args) => trace(&args, quiet),
         Command::CameraRays(args) => camera_rays(&args, quiet),
+        Command::Query(args) => query::query(&args, quiet),
         Command::Info(args) => match &args.model {
             Some(model) => info::model_info(model, args.camera.as_deref()),
             None => info::info(&args.adapter),

@@ -1,0 +1,298 @@
+//! Queries beyond the first hit as a job (`lambert query`; docs/ray-query.md,
+//! "Closest points, distances and crossings"): a point file or a ray file
+//! in, one record per point, ray or crossing out, written atomically. Also
+//! what the CLI and the Python package share of them: the sign of a signed
+//! distance and the inside test, on a `Renderer`'s queries.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+use super::open;
+use crate::error::{Error, Result};
+use crate::gpu::AdapterRequest;
+use crate::layout::{ClosestPoint, ListedHit, NO_HIT, Ray};
+use crate::limits::MAX_COORDINATE;
+use crate::output::write_atomically;
+use crate::progress::ProgressSink;
+use crate::rays;
+use crate::render::{DeviceChoice, Renderer};
+use crate::scene::Scene;
+
+/// A point file's record: little-endian f32 x, y, z.
+pub const POINT_BYTES: usize = 12;
+const AXES: [&str; 3] = ["x", "y", "z"];
+
+/// A point is inside where the triangles' generalized winding number about
+/// it is at least this: 1 inside a closed mesh, 0 outside, and across a
+/// hole the boundary between the two.
+pub const INSIDE_WINDING: f32 = 0.5;
+
+/// How a signed distance tells inside from outside.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Sign {
+    /// The generalized winding number, at least `INSIDE_WINDING` inside:
+    /// sensible on meshes with holes or self-intersections.
+    #[default]
+    Winding,
+    /// An odd number of crossings along a ray from the point (as Open3D
+    /// does): for watertight meshes.
+    Parity,
+}
+
+impl Sign {
+    pub const ALL: [Sign; 2] = [Sign::Winding, Sign::Parity];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Sign::Winding => "winding",
+            Sign::Parity => "parity",
+        }
+    }
+}
+
+/// Whether each point is inside the triangles, by `sign`.
+pub fn inside(renderer: &mut Renderer, points: &[[f32; 3]], sign: Sign) -> Result<Vec<bool>> {
+    match sign {
+        Sign::Winding => Ok(renderer
+            .winding_numbers(points)?
+            .into_iter()
+            .map(|w| w >= INSIDE_WINDING)
+            .collect()),
+        Sign::Parity => renderer.parity_inside(points),
+    }
+}
+
+/// The distance from each point to the nearest triangle.
+pub fn distances(renderer: &mut Renderer, points: &[[f32; 3]]) -> Result<Vec<f32>> {
+    Ok(renderer
+        .closest_points(points, f32::INFINITY)?
+        .iter()
+        .map(|c| c.distance)
+        .collect())
+}
+
+/// The distance to the nearest triangle, negative inside (by `sign`); a
+/// point on the surface inside is -0.0.
+pub fn signed_distances(
+    renderer: &mut Renderer,
+    points: &[[f32; 3]],
+    sign: Sign,
+) -> Result<Vec<f32>> {
+    let distance = distances(renderer, points)?;
+    let inside = inside(renderer, points, sign)?;
+    Ok(distance
+        .into_iter()
+        .zip(inside)
+        .map(|(d, inside)| if inside { -d } else { d })
+        .collect())
+}
+
+/// Reads and checks a point file: every coordinate finite and within
+/// `MAX_COORDINATE`, the first bad one named by point, byte offset and axis.
+pub fn read_points(path: &Path) -> Result<Vec<[f32; 3]>> {
+    let bytes = crate::files::read_capped(path, crate::files::MAX_RAY_BYTES)?;
+    parse_points(&bytes, path)
+}
+
+/// Decodes a point file's bytes; `path` names it in errors.
+pub fn parse_points(bytes: &[u8], path: &Path) -> Result<Vec<[f32; 3]>> {
+    if !bytes.len().is_multiple_of(POINT_BYTES) {
+        return Err(Error::Usage(format!(
+            "{}: {} bytes is not a whole number of points ({POINT_BYTES} bytes each: 3 \
+             little-endian f32 x y z); {} bytes left over",
+            path.display(),
+            bytes.len(),
+            bytes.len() % POINT_BYTES
+        )));
+    }
+    // A copy rather than a cast: `bytes` may be unaligned.
+    let points: Vec<[f32; 3]> = bytemuck::pod_collect_to_vec(bytes);
+    let bad = |c: &f32| !(c.is_finite() && (*c as f64).abs() <= MAX_COORDINATE);
+    if let Some(i) = points.iter().position(|p| p.iter().any(bad)) {
+        let axis = points[i].iter().position(bad).expect("a bad coordinate");
+        return Err(Error::Usage(format!(
+            "{}: point {i} (byte offset {}): {} is {:?}; coordinates must be finite and within ±{MAX_COORDINATE:e}",
+            path.display(),
+            i * POINT_BYTES,
+            AXES[axis],
+            points[i][axis]
+        )));
+    }
+    Ok(points)
+}
+
+/// What `lambert query` computes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum QueryKind {
+    /// Of a point file.
+    Points(PointQuery),
+    /// Of a ray file.
+    Rays(RayQuery),
+}
+
+/// A query of points, and its records.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PointQuery {
+    /// The closest point within a max distance: a `ClosestPoint` record
+    /// (32 bytes) per point.
+    Closest { max_distance: f32 },
+    /// The unsigned distance: an f32 per point.
+    Distance,
+    /// The distance, negative inside: an f32 per point.
+    SignedDistance(Sign),
+    /// Inside or not: a byte (1 or 0) per point.
+    Inside(Sign),
+}
+
+/// A query of rays, and its records.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RayQuery {
+    /// How many times each ray crosses the triangles: a u32 per ray.
+    Count,
+    /// Every crossing, by ray and then t: a `ListedHit` record (20 bytes)
+    /// per crossing.
+    List,
+}
+
+/// One query to run and write.
+pub struct QueryJob<'a> {
+    pub kind: QueryKind,
+    /// The point file, or the ray file.
+    pub input: &'a Path,
+    pub output: &'a Path,
+    pub device: DeviceChoice,
+    pub adapter: &'a AdapterRequest,
+}
+
+/// What `run_query` did.
+#[derive(Debug, serde::Serialize)]
+pub struct QueryReport {
+    pub output: PathBuf,
+    /// `Renderer::describe` of the device it ran on.
+    pub device: String,
+    /// Points or rays read.
+    pub queries: usize,
+    /// Records written.
+    pub records: usize,
+    /// Points within the max distance, points inside, or crossings.
+    pub found: usize,
+    pub read_seconds: f64,
+    pub query_seconds: f64,
+    pub write_seconds: f64,
+}
+
+/// A query's records as bytes, how many, and how many found something.
+struct Records {
+    bytes: Vec<u8>,
+    count: usize,
+    found: usize,
+}
+
+type Work = Box<dyn FnOnce(&mut Renderer) -> Result<Records>>;
+
+/// Runs `job` on `scene` and writes its records.
+pub fn run_query(
+    scene: Scene,
+    job: &QueryJob,
+    sink: Option<&dyn ProgressSink>,
+) -> Result<QueryReport> {
+    if scene.triangles.is_empty() {
+        return Err(Error::Usage(
+            "the scene has no triangles: proximity and crossing queries are over triangles".into(),
+        ));
+    }
+    let start = Instant::now();
+    let (queries, work): (usize, Work) = match job.kind {
+        QueryKind::Points(query) => {
+            let points = read_points(job.input)?;
+            (
+                points.len(),
+                Box::new(move |r| point_records(r, query, &points)),
+            )
+        }
+        QueryKind::Rays(query) => {
+            let rays = rays::read_rays(job.input)?;
+            (rays.len(), Box::new(move |r| ray_records(r, query, &rays)))
+        }
+    };
+    let read_seconds = start.elapsed().as_secs_f64();
+    let (mut renderer, _) = open(Arc::new(scene), job.device, job.adapter, sink)?;
+    let start = Instant::now();
+    let records = work(&mut renderer)?;
+    let query_seconds = start.elapsed().as_secs_f64();
+    let start = Instant::now();
+    write_atomically(job.output, &records.bytes)?;
+    Ok(QueryReport {
+        output: job.output.to_path_buf(),
+        device: renderer.describe(),
+        queries,
+        records: records.count,
+        found: records.found,
+        read_seconds,
+        query_seconds,
+        write_seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+fn point_records(renderer: &mut Renderer, query: PointQuery, p: &[[f32; 3]]) -> Result<Records> {
+    let floats = |v: Vec<f32>, found: usize| Records {
+        bytes: bytemuck::cast_slice(&v).to_vec(),
+        count: v.len(),
+        found,
+    };
+    Ok(match query {
+        PointQuery::Closest { max_distance } => {
+            // The reserved word written as the format says: 0.
+            let found: Vec<ClosestPoint> = renderer
+                .closest_points(p, max_distance)?
+                .into_iter()
+                .map(|c| ClosestPoint { _pad: 0, ..c })
+                .collect();
+            Records {
+                bytes: bytemuck::cast_slice(&found).to_vec(),
+                count: found.len(),
+                found: found.iter().filter(|c| c.prim != NO_HIT).count(),
+            }
+        }
+        PointQuery::Distance => floats(distances(renderer, p)?, p.len()),
+        PointQuery::SignedDistance(sign) => {
+            let d = signed_distances(renderer, p, sign)?;
+            let inside = d.iter().filter(|d| d.is_sign_negative()).count();
+            floats(d, inside)
+        }
+        PointQuery::Inside(sign) => {
+            let bytes: Vec<u8> = inside(renderer, p, sign)?
+                .into_iter()
+                .map(u8::from)
+                .collect();
+            let found = bytes.iter().filter(|&&b| b == 1).count();
+            Records {
+                count: bytes.len(),
+                bytes,
+                found,
+            }
+        }
+    })
+}
+
+fn ray_records(renderer: &mut Renderer, query: RayQuery, rays: &[Ray]) -> Result<Records> {
+    Ok(match query {
+        RayQuery::Count => {
+            let counts = renderer.count_intersections(rays)?;
+            Records {
+                bytes: bytemuck::cast_slice(&counts).to_vec(),
+                count: counts.len(),
+                found: counts.iter().map(|&c| c as usize).sum(),
+            }
+        }
+        RayQuery::List => {
+            let hits: Vec<ListedHit> = renderer.list_intersections(rays)?.hits;
+            Records {
+                bytes: bytemuck::cast_slice(&hits).to_vec(),
+                count: hits.len(),
+                found: hits.len(),
+            }
+        }
+    })
+}
