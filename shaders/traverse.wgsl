@@ -147,15 +147,20 @@ fn pop_group(sp: u32) -> vec2<u32> {
 }
 
 // Closest hit through the compressed BVH, children in octant order (no
-// sorting); with `any_hit`, the first hit found. Each pass of the loop
-// tests the leaf blocks the last node visit entered, then visits one node:
-// on a GPU running invocations in lockstep (lavapipe's SIMD lanes too) an
-// invocation that has blocks to test and one that has a node to visit then
-// do both in the same pass, rather than one waiting on the other. A node
-// group (child_base; entered interior children in visit order, and the
-// interior slots in bits 8–15) names the next nodes without reading their
-// parent again: slot s is node child_base + the interior slots below s.
-// The stack holds groups, pushed when traversal descends below a node:
+// sorting); with `any_hit`, the first hit found. Aila and Laine's
+// while-while form: the outer loop tests the leaf blocks the last node
+// visit entered, then the inner loop visits nodes until one enters blocks
+// (or none is left). Each invocation still tests a node's blocks before it
+// visits the next node, so its order, and its hit, is the CPU twin's, bit
+// for bit. Why two loops: lavapipe runs invocations in the lanes of a SIMD
+// register and runs every branch and loop body at least once for all of
+// them, masked, so in one loop each pass paid for a block test whether any
+// lane had a block or not; here a block test runs once a leaf is found, and
+// the node visits between leaves run back to back (docs/bvh.md: 1.3x).
+// A node group (child_base; entered interior children in visit order, and
+// the interior slots in bits 8–15) names the next nodes without reading
+// their parent again: slot s is node child_base + the interior slots below
+// s. The stack holds groups, pushed when traversal descends below a node:
 // one per level at most.
 fn trace_compressed(ray_in: Ray, shear: Shear, any_hit: bool) -> Hit {
     var ray = ray_in;
@@ -176,26 +181,36 @@ fn trace_compressed(ray_in: Ray, shear: Shear, any_hit: bool) -> Hit {
                 return hit;
             }
         }
-        if (group.y & 0xffu) == 0u {
-            if sp == 0u {
+        var done = false;
+        loop {
+            if (group.y & 0xffu) == 0u {
+                if sp == 0u {
+                    done = true;
+                    break;
+                }
+                sp -= 1u;
+                group = pop_group(sp);
+            }
+            let next_bit = firstTrailingBit(group.y & 0xffu);
+            let slot = next_bit ^ octant;
+            group.y &= ~(1u << next_bit);
+            if (group.y & 0xffu) != 0u {
+                push_group(sp, group);
+                sp += 1u;
+            }
+            let below = (group.y >> 8u) & ((1u << slot) - 1u);
+            let next = bvh_node_at(group.x + countOneBits(below));
+            let hits = intersect_compressed_node(ray, slabs, next, octant);
+            group = vec2<u32>(next.child_base, hits.x);
+            blocks = hits.y;
+            block_base = next.block_base;
+            if blocks != 0u {
                 break;
             }
-            sp -= 1u;
-            group = pop_group(sp);
         }
-        let next_bit = firstTrailingBit(group.y & 0xffu);
-        let slot = next_bit ^ octant;
-        group.y &= ~(1u << next_bit);
-        if (group.y & 0xffu) != 0u {
-            push_group(sp, group);
-            sp += 1u;
+        if done {
+            break;
         }
-        let below = (group.y >> 8u) & ((1u << slot) - 1u);
-        let next = bvh_node_at(group.x + countOneBits(below));
-        let hits = intersect_compressed_node(ray, slabs, next, octant);
-        group = vec2<u32>(next.child_base, hits.x);
-        blocks = hits.y;
-        block_base = next.block_base;
     }
     return hit;
 }

@@ -95,9 +95,10 @@ impl GroupStack {
 impl<'a> Kernel<'a> {
     /// The shader's `trace_compressed`: closest hit through the GPU's
     /// compressed nodes (`nodes`, the scene's BVH compressed), children in
-    /// octant order, each pass the blocks of the last node visited and then
-    /// one node, a node group (child_base and its masks) per stack entry;
-    /// with `any_hit`, the first hit found.
+    /// octant order, in the shader's while-while form (the blocks of the
+    /// last node visited, then nodes until one enters blocks: the same order
+    /// as one loop doing a node a pass), a node group (child_base and its
+    /// masks) per stack entry; with `any_hit`, the first hit found.
     pub fn trace_compressed(
         &self,
         nodes: &[CompressedNode],
@@ -127,28 +128,33 @@ impl<'a> Kernel<'a> {
                     return hit;
                 }
             }
-            if group.1 & 0xff == 0 {
-                if sp == 0 {
+            // Nodes until one enters blocks (the shader's inner loop).
+            loop {
+                if group.1 & 0xff == 0 {
+                    if sp == 0 {
+                        return hit;
+                    }
+                    sp -= 1;
+                    group = stack.pop_group(sp);
+                }
+                let next_bit = (group.1 & 0xff).trailing_zeros();
+                let slot = next_bit ^ octant;
+                group.1 &= !(1 << next_bit);
+                if group.1 & 0xff != 0 {
+                    stack.push_group(sp, group);
+                    sp += 1;
+                }
+                let below = (group.1 >> 8) & ((1 << slot) - 1);
+                let node = &nodes[(group.0 + below.count_ones()) as usize];
+                let (entered, next_blocks) = intersect_compressed_node(&ray, &slabs, node, octant);
+                group = (node.child_base, entered);
+                leaf_blocks = next_blocks;
+                block_base = node.block_base;
+                if leaf_blocks != 0 {
                     break;
                 }
-                sp -= 1;
-                group = stack.pop_group(sp);
             }
-            let next_bit = (group.1 & 0xff).trailing_zeros();
-            let slot = next_bit ^ octant;
-            group.1 &= !(1 << next_bit);
-            if group.1 & 0xff != 0 {
-                stack.push_group(sp, group);
-                sp += 1;
-            }
-            let below = (group.1 >> 8) & ((1 << slot) - 1);
-            let node = &nodes[(group.0 + below.count_ones()) as usize];
-            let (entered, next_blocks) = intersect_compressed_node(&ray, &slabs, node, octant);
-            group = (node.child_base, entered);
-            leaf_blocks = next_blocks;
-            block_base = node.block_base;
         }
-        hit
     }
 
     /// Every primitive in turn: the reference the BVH is tested against.
