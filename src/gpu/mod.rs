@@ -45,10 +45,14 @@ const RENDER_WORKGROUP: [u32; 2] = [8, 8];
 const _: () =
     assert!(RENDER_WORKGROUP[0] * RENDER_WORKGROUP[1] == crate::layout::WORKGROUP_INVOCATIONS);
 
-/// Most lights a render traces the shadow rays of apart (the shader's
-/// `shadow_blocked` has a bit of a pixel's word each; the queue holds a
-/// ray for each light of each tile pixel, `SHADOW_QUERY_BYTES`).
-pub const MAX_LIGHTS_APART: u32 = 8;
+/// Camera rays a dispatch of the wavefront render (shadows apart) takes
+/// at most: a 1-spp megakernel tile's. Its tile shrinks as its samples
+/// grow (`GpuRenderer::tile_side`).
+pub const WAVE_RAYS: u32 = TILE * TILE;
+/// Shadow rays a wavefront dispatch queues at most: 8 lights of each of
+/// `WAVE_RAYS`; more lights shrink its tile and its samples in turn, so no
+/// dispatch traces more than a megakernel tile with as many lights.
+pub const WAVE_SHADOW_RAYS: u32 = WAVE_RAYS * 8;
 
 /// Bytes of the shader's `ShadowQuery` (a queued shadow ray; GPU-only,
 /// checked against naga's layout in tests/shaders.rs).
