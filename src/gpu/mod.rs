@@ -46,13 +46,15 @@ const _: () =
     assert!(RENDER_WORKGROUP[0] * RENDER_WORKGROUP[1] == crate::layout::WORKGROUP_INVOCATIONS);
 
 /// Camera rays a dispatch of the wavefront render (shadows apart) takes
-/// at most: a 1-spp megakernel tile's. Its tile shrinks as its samples
-/// grow (`GpuRenderer::tile_side`).
-pub const WAVE_RAYS: u32 = TILE * TILE;
-/// Shadow rays a wavefront dispatch queues at most: 8 lights of each of
-/// `WAVE_RAYS`; more lights shrink its tile and its samples in turn, so no
-/// dispatch traces more than a megakernel tile with as many lights.
-pub const WAVE_SHADOW_RAYS: u32 = WAVE_RAYS * 8;
+/// at most: as many as the megakernel's largest tile dispatch (a 256²
+/// tile at 3 samples per pixel: `GpuRenderer::tile_side` rounds up), whose
+/// tiles it shares.
+pub const WAVE_RAYS: u32 = 3 * TILE * TILE;
+/// Shadow rays a wavefront dispatch queues at most where it has more than
+/// a few lights: 8 lights of each pixel of a 1-spp tile; more lights
+/// shrink its tile and its samples in turn, so no dispatch traces more
+/// than a megakernel tile with as many lights.
+pub const WAVE_SHADOW_RAYS: u32 = TILE * TILE * 8;
 
 /// Bytes of the shader's `ShadowQuery` (a queued shadow ray; GPU-only,
 /// checked against naga's layout in tests/shaders.rs).

@@ -166,17 +166,19 @@ impl GpuRenderer {
 
     /// Side of the tiles `render` dispatches: TILE at 1 sample per pixel
     /// per dispatch, smaller as they grow, so that a dispatch traces about
-    /// as many camera rays (TILE²) at any spp; in the wavefront, the
-    /// largest whose camera rays fit its buffers (`wave_budget`).
+    /// as many camera rays (TILE²) at any spp; in the wavefront no larger
+    /// than its buffers take (`wave_budget`: smaller with many lights).
     pub fn tile_side(&self) -> u32 {
         let samples = self.params.spp.min(self.samples_per_dispatch());
         let step = RENDER_WORKGROUP[0].max(RENDER_WORKGROUP[1]);
+        let side = (TILE / samples.isqrt().max(1))
+            .next_multiple_of(step)
+            .clamp(step, TILE);
         if self.shadows_apart() {
-            let side = (wave_budget(self.params.num_lights) / samples).isqrt();
-            return (side / step * step).clamp(step, TILE);
+            let fits = (wave_budget(self.params.num_lights) / samples).isqrt() / step * step;
+            return side.min(fits.max(step));
         }
-        let side = TILE / samples.isqrt().max(1);
-        side.next_multiple_of(step).clamp(step, TILE)
+        side
     }
 
     /// Number of tiles `render` dispatches for the current camera.
