@@ -84,7 +84,10 @@ fn report(what: &str, times: &mut [Vec<Duration>; 3]) {
     times.iter_mut().for_each(|t| t.sort());
     let alone = median(&times[2]);
     println!("{what}:");
-    for (name, t) in ["wavefront", "megakernel", "rays alone"].iter().zip(times.iter()) {
+    for (name, t) in ["wavefront", "megakernel", "rays alone"]
+        .iter()
+        .zip(times.iter())
+    {
         let m = median(t);
         println!(
             "  {name:<11} {m:.3} s ({:.3}–{:.3}), {:.2}x the rays alone",

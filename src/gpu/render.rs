@@ -22,23 +22,32 @@ use super::{GpuRenderer, RENDER_WORKGROUP, SHADOW_QUERY_BYTES, TILE, WAVE_RAYS, 
 pub(super) const LLVMPIPE_SAMPLES_PER_DISPATCH: u32 = 32;
 
 /// How a render traces its shadow rays: in the `render` megakernel, each
-/// invocation after its own primary hit, or apart (`render_primary`
-/// traces a dispatch's camera rays and queues their shadow rays,
-/// `render_shadows` traces the queue side by side, `render_shade` shades
-/// and adds the samples; the same image, bit for bit). Apart measured
-/// faster on lavapipe (docs/bvh.md): the default wherever shadows are
-/// traced (any number of lights whose queue fits a binding), at any spp.
-/// LAMBERT_SHADOW_DISPATCH=megakernel|apart chooses (`GpuOptions`).
+/// invocation after its own primary hit, or apart, the wavefront
+/// (`render_primary` traces a dispatch's camera rays and queues their
+/// shadow rays, `render_shadows` traces the queue side by side,
+/// `render_shade` shades and adds the samples; the same image, bit for
+/// bit, at any spp and any number of lights).
+/// LAMBERT_SHADOW_DISPATCH=megakernel|apart chooses (`GpuOptions`);
+/// unset, `Measured`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ShadowDispatch {
     Megakernel,
     Apart,
+    /// Whichever measured faster on lavapipe (docs/bvh.md): apart below
+    /// `WAVE_BELOW_SPP` samples per pixel, the megakernel from there.
+    Measured,
 }
 
+/// Samples per pixel from which the megakernel measured faster than the
+/// wavefront (the dragon, one point light, CPU time on lavapipe: 0.83×
+/// the megakernel's at 1 spp, 1.02× at 4, 1.15× at 16, 1.29× at 64;
+/// docs/bvh.md).
+pub const WAVE_BELOW_SPP: u32 = 4;
+
 impl ShadowDispatch {
-    /// Apart where it applies (shadows traced, and a queue for the
-    /// scene's lights no larger than `max_binding` bytes), unless `chosen`
-    /// (LAMBERT_SHADOW_DISPATCH) says otherwise.
+    /// `Measured` where apart applies (shadows traced, and a queue for
+    /// the scene's lights no larger than `max_binding` bytes), unless
+    /// `chosen` (LAMBERT_SHADOW_DISPATCH) says otherwise.
     pub(super) fn for_scene(
         scene: &Scene,
         chosen: Option<&str>,
@@ -47,7 +56,8 @@ impl ShadowDispatch {
         let lights = scene.lights.len().min(u32::MAX as usize) as u32;
         let applies = scene.shadows && lights > 0 && wave_queue_bytes(lights) <= max_binding;
         match chosen {
-            None | Some("apart") if applies => Ok(ShadowDispatch::Apart),
+            None if applies => Ok(ShadowDispatch::Measured),
+            Some("apart") if applies => Ok(ShadowDispatch::Apart),
             None | Some("apart") | Some("megakernel") => Ok(ShadowDispatch::Megakernel),
             Some(other) => Err(Error::Usage(format!(
                 "{SHADOW_DISPATCH_ENV}={other:?}: use \"megakernel\" or \"apart\""
@@ -222,7 +232,11 @@ impl GpuRenderer {
     /// an earlier version that dispatched each sample's passes and waited
     /// took 152 s rather than 19 over the sampling tests.
     pub fn shadows_apart(&self) -> bool {
-        self.shadow_dispatch == ShadowDispatch::Apart
+        match self.shadow_dispatch {
+            ShadowDispatch::Apart => true,
+            ShadowDispatch::Megakernel => false,
+            ShadowDispatch::Measured => self.params.spp < WAVE_BELOW_SPP,
+        }
     }
 
     /// Halves `samples_per_dispatch` after the driver cut loops short.
