@@ -307,5 +307,9 @@ struct ShadowQuery {
 @group(1) @binding(7) var<storage, read_write> split_hits: array<Hit>;
 @group(1) @binding(8) var<storage, read_write> shadow_queue: array<ShadowQuery>;
 @group(1) @binding(9) var<storage, read_write> shadow_count: array<atomic<u32>, 1>;
+// `render_shadows`' indirect dispatch (workgroups x, y, z: one a
+// WORKGROUP_INVOCATIONS queued rays), apart from the count, which that
+// pass reads: a dispatch may not bind its indirect buffer.
+@group(1) @binding(10) var<storage, read_write> shadow_workgroups: array<atomic<u32>, 3>;
 // `render_shade`'s camera ray's first word of shadow_blocked.
 var<private> shade_blocked: u32;

@@ -95,6 +95,7 @@ pub const SHADOWS_APART: BindingTable = BindingTable {
         bind("split_hits", 7, StorageWrite),
         bind("shadow_queue", 8, StorageWrite),
         bind("shadow_count", 9, StorageWrite),
+        bind("shadow_workgroups", 10, StorageWrite),
     ],
 };
 

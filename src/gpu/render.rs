@@ -97,7 +97,10 @@ pub(super) struct SplitShadows {
     shadows: wgpu::ComputePipeline,
     shade: wgpu::ComputePipeline,
     group: wgpu::BindGroup,
+    /// `group` but for `shadow_workgroups`: `render_shadows`'.
+    shadows_group: wgpu::BindGroup,
     count: wgpu::Buffer,
+    workgroups: wgpu::Buffer,
 }
 
 impl GpuRenderer {
@@ -278,7 +281,11 @@ impl GpuRenderer {
         let (groups_x, groups_y) = (width.div_ceil(wx), height.div_ceil(wy));
         if let (true, Some(split)) = (self.shadows_apart(), &self.pipelines.split) {
             let samples = self.params.sample_end - self.params.sample_begin;
-            encoder.clear_buffer(&split.count, 0, None);
+            // The queue empty, `render_shadows`' dispatch 0 × 1 × 1.
+            gpu.queue
+                .write_buffer(&split.count, 0, bytemuck::bytes_of(&0u32));
+            gpu.queue
+                .write_buffer(&split.workgroups, 0, bytemuck::cast_slice(&[0u32, 1, 1]));
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("render tile, shadows apart"),
                 timestamp_writes: self.timer.as_ref().map(Timer::writes),
@@ -287,10 +294,12 @@ impl GpuRenderer {
             pass.set_bind_group(SHADOWS_APART.group, &split.group, &[]);
             pass.set_pipeline(&split.primary);
             pass.dispatch_workgroups(groups_x, groups_y, samples);
-            // An invocation a camera ray (a workgroup's as many as the
-            // primary pass's).
+            // An invocation a queued shadow ray (the primary pass counts
+            // the workgroups).
             pass.set_pipeline(&split.shadows);
-            pass.dispatch_workgroups(groups_x * groups_y * samples, 1, 1);
+            pass.set_bind_group(SHADOWS_APART.group, &split.shadows_group, &[]);
+            pass.dispatch_workgroups_indirect(&split.workgroups, 0);
+            pass.set_bind_group(SHADOWS_APART.group, &split.group, &[]);
             pass.set_pipeline(&split.shade);
             pass.dispatch_workgroups(groups_x, groups_y, 1);
         } else {
@@ -317,31 +326,49 @@ impl GpuRenderer {
         let layout = SHADOWS_APART.layout(device);
         let lights = self.params.num_lights;
         let rays = wave_budget(lights) as u64;
-        let buffer = |label, size| {
+        let buffer = |label, size, usage| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
                 size,
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                usage: wgpu::BufferUsages::STORAGE | usage,
                 mapped_at_creation: false,
             })
         };
-        let hits = buffer("primary hits", rays * std::mem::size_of::<Hit>() as u64);
-        let queue = buffer("shadow queue", wave_queue_bytes(lights));
-        let count = buffer("shadow count", 4);
-        let [color, prim] = self.tile.views();
-        let group = SHADOWS_APART.bind_group(
-            device,
-            SHADOWS_APART.label,
-            &layout,
-            vec![
-                ("out_color", wgpu::BindingResource::TextureView(&color)),
-                ("out_prim", wgpu::BindingResource::TextureView(&prim)),
-                ("tile_sums", self.resident.tile_sums.as_entire_binding()),
-                ("split_hits", hits.as_entire_binding()),
-                ("shadow_queue", queue.as_entire_binding()),
-                ("shadow_count", count.as_entire_binding()),
-            ],
+        let none = wgpu::BufferUsages::empty();
+        let hits = buffer(
+            "primary hits",
+            rays * std::mem::size_of::<Hit>() as u64,
+            none,
         );
+        let queue = buffer("shadow queue", wave_queue_bytes(lights), none);
+        let count = buffer("shadow count", 4, wgpu::BufferUsages::COPY_DST);
+        let workgroups = buffer(
+            "shadow workgroups",
+            12,
+            wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::INDIRECT,
+        );
+        // What `render_shadows` binds in its place: a dispatch may not
+        // bind the buffer it is dispatched by.
+        let unused = buffer("shadow workgroups, unused", 12, none);
+        let [color, prim] = self.tile.views();
+        let group_with = |workgroups: &wgpu::Buffer| {
+            SHADOWS_APART.bind_group(
+                device,
+                SHADOWS_APART.label,
+                &layout,
+                vec![
+                    ("out_color", wgpu::BindingResource::TextureView(&color)),
+                    ("out_prim", wgpu::BindingResource::TextureView(&prim)),
+                    ("tile_sums", self.resident.tile_sums.as_entire_binding()),
+                    ("split_hits", hits.as_entire_binding()),
+                    ("shadow_queue", queue.as_entire_binding()),
+                    ("shadow_count", count.as_entire_binding()),
+                    ("shadow_workgroups", workgroups.as_entire_binding()),
+                ],
+            )
+        };
+        let group = group_with(&workgroups);
+        let shadows_group = group_with(&unused);
         let p = &self.pipelines;
         let mut constants = p.constants.clone();
         constants.push(("SHADOW_WORDS", shadow_words(lights) as f64));
@@ -352,7 +379,9 @@ impl GpuRenderer {
             shadows: p.build(&self.gpu, "render_shadows", &layout, &constants)?,
             shade: p.build(&self.gpu, "render_shade", &layout, &from_queue)?,
             group,
+            shadows_group,
             count,
+            workgroups,
         })
     }
 }
