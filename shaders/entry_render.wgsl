@@ -13,20 +13,7 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocatio
     if slot == NO_HIT {
         return;
     }
-    let pixel = params.tile_origin + id.xy;
-    var sums = vec4<f32>(0.0);
-    if params.sample_begin > 0u {
-        sums = tile_sums[slot];
-    }
-    let result = add_samples(pixel, sums);
-    if params.sample_begin == 0u {
-        textureStore(out_prim, id.xy, vec4<u32>(result.prim, 0u, 0u, 0u));
-    }
-    if params.sample_end == params.spp {
-        textureStore(out_color, id.xy, pixel_mean(result.sums));
-    } else {
-        tile_sums[slot] = result.sums;
-    }
+    store_samples(id, slot, add_samples(params.tile_origin + id.xy, sums_so_far(slot)));
     report_cut_loops();
 }
 

@@ -1,79 +1,101 @@
-// Entry points: a render with the shadow rays in a dispatch of their own
-// (gpu::ShadowDispatch): `render_primary`, `render_shadows`,
-// `render_shade`, in that order.
+// Entry points: the wavefront render, its shadow rays in a dispatch of
+// their own (gpu::ShadowDispatch): `render_primary`, `render_shadows`,
+// `render_shade`, in that order, for `params.sample_begin` to
+// `params.sample_end` of each tile pixel at once.
 // Bindings (naga's reflection):
-// `render_primary`: all of group 0 (0 to 14); group 1's out_color (its
-// size), split_hits, shadow_queue, shadow_count, shadow_blocked (1:0,
-// 1:7 to 1:10).
-// `render_shadows`: group 0 but for triangle_normals, materials, lights
-// and triangle_normals_hi (0:0, 0:1, 0:3, 0:6 to 0:8, 0:10 to 0:14);
-// group 1's shadow_queue, shadow_count, shadow_blocked (1:8 to 1:10).
-// `render_shade`: group 0 but for loop_status (0:0 to 0:11, 0:13, 0:14);
-// group 1's out_color, out_prim, split_hits, shadow_blocked (1:0, 1:1,
-// 1:7, 1:10).
+// `render_primary`: all of group 0 (0 to 17, 20); group 1's out_color
+// (its size), split_hits, shadow_queue, shadow_count, shadow_workgroups
+// (1:0, 1:7 to 1:10).
+// `render_shadows`: group 0 but for triangle_normals, materials, lights,
+// triangle_normals_hi and textures; group 1's shadow_queue,
+// shadow_count (1:8, 1:9).
+// `render_shade`: group 0 but for loop_status; group 1's out_color,
+// out_prim, tile_sums, split_hits (1:0, 1:1, 1:6, 1:7).
 
-// Shadow rays apart, pass 1: the pixel's primary hit (its one sample),
+// The number of a camera ray of the wavefront path: sample `sample` of
+// the dispatch (0 for its first) of invocation `id`'s pixel, over the
+// dispatch's grid (`groups` workgroups), so that a dispatch's rays are
+// numbered densely from 0: its index in split_hits, and times
+// SHADOW_WORDS in shadow_blocked.
+fn wave_ray(id: vec3<u32>, groups: vec3<u32>, sample: u32) -> u32 {
+    let columns = groups.x * RENDER_WORKGROUP_X;
+    let rows = groups.y * RENDER_WORKGROUP_Y;
+    return (sample * rows + id.y) * columns + id.x;
+}
+
+// Pass 1: a camera ray a sample (id.z) of each tile pixel, its hit kept
 // and its shadow rays queued.
 @compute @workgroup_size(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y)
-fn render_primary(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+fn render_primary(
+    @builtin(global_invocation_id) id: vec3<u32>,
+    @builtin(local_invocation_index) lane: u32,
+    @builtin(num_workgroups) groups: vec3<u32>,
+) {
     stack_base = lane * STACK_ENTRIES;
-    let slot = tile_slot(id);
-    if slot == NO_HIT {
+    if tile_slot(id) == NO_HIT {
         return;
     }
-    let ray = camera_ray(sample_position(params.tile_origin + id.xy, params.sample_begin));
+    let index = wave_ray(id, groups, id.z);
+    let ray = camera_ray(sample_position(params.tile_origin + id.xy, params.sample_begin + id.z));
     let hit = trace_closest(ray);
-    split_hits[slot] = hit;
+    split_hits[index] = hit;
     if hit.prim != NO_HIT && HAS_SHADOWS && params.shadows != 0u {
         let surface = surface_at(ray, hit);
         let origin = offset_ray_origin(surface.position, surface.error, surface.geometric_normal);
-        atomicStore(&shadow_blocked[slot], 0u);
+        for (var w = 0u; w < SHADOW_WORDS; w++) {
+            atomicStore(&shadow_blocked[index * SHADOW_WORDS + w], 0u);
+        }
         for (var i = 0u; i < params.num_lights; i++) {
             let sample = light_sample(surface, origin, lights[i]);
             if sample.lit {
                 let q = atomicAdd(&shadow_count[0], 1u);
-                shadow_queue[q] = ShadowQuery(slot, i, vec2<u32>(0u), sample.shadow_ray);
+                // A workgroup of `render_shadows` each so many rays.
+                if q % WORKGROUP_INVOCATIONS == 0u {
+                    atomicAdd(&shadow_workgroups[0], 1u);
+                }
+                shadow_queue[q] = ShadowQuery(index, i, vec2<u32>(0u), sample.shadow_ray);
             }
         }
     }
     report_cut_loops();
 }
 
-// Pass 2: the queued shadow rays, side by side (as many invocations as
-// the tile has pixels, each taking every so many: at most as many shadow
-// rays as a `render` invocation traces).
+// Pass 2: the queued shadow rays, side by side, one an invocation,
+// dispatched indirectly with as many workgroups as the queue fills
+// (`shadow_workgroups`): a workgroup a camera ray's worth cost lavapipe
+// about a tenth of the 1-spp dragon's render in empty workgroups.
 @compute @workgroup_size(WORKGROUP_INVOCATIONS)
-fn render_shadows(
-    @builtin(global_invocation_id) id: vec3<u32>,
-    @builtin(local_invocation_index) lane: u32,
-    @builtin(num_workgroups) groups: vec3<u32>,
-) {
+fn render_shadows(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
     stack_base = lane * STACK_ENTRIES;
-    let count = atomicLoad(&shadow_count[0]);
-    let stride = groups.x * WORKGROUP_INVOCATIONS;
-    for (var i = id.x; i < count; i += stride) {
-        let q = shadow_queue[i];
-        if trace_any(q.ray) {
-            atomicOr(&shadow_blocked[q.slot], 1u << q.light);
-        }
+    if id.x >= atomicLoad(&shadow_count[0]) {
+        return;
+    }
+    let q = shadow_queue[id.x];
+    if trace_any(q.ray) {
+        atomicOr(&shadow_blocked[q.slot * SHADOW_WORDS + q.light / 32u], 1u << (q.light % 32u));
     }
     report_cut_loops();
 }
 
-// Pass 3: shading from the hit and the shadows found (renders of one
-// sample per pixel: gpu::GpuRenderer::shadows_apart), written as `render`
-// writes its one sample.
+// Pass 3: each tile pixel's samples shaded in turn from their hits and
+// the shadows found, added and written as `render` adds and writes them.
 @compute @workgroup_size(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y)
-fn render_shade(@builtin(global_invocation_id) id: vec3<u32>) {
+fn render_shade(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let slot = tile_slot(id);
     if slot == NO_HIT {
         return;
     }
-    shade_blocked = atomicLoad(&shadow_blocked[slot]);
-    let ray = camera_ray(sample_position(params.tile_origin + id.xy, params.sample_begin));
-    let hit = split_hits[slot];
-    let color = shade(ray, hit);
-    let y = dot(color, LUMINANCE);
-    textureStore(out_prim, id.xy, vec4<u32>(hit.prim, 0u, 0u, 0u));
-    textureStore(out_color, id.xy, pixel_mean(vec4<f32>(color, y * y)));
+    let pixel = params.tile_origin + id.xy;
+    var result = SampleSums(sums_so_far(slot), NO_HIT);
+    for (var sample = params.sample_begin; sample < params.sample_end; sample++) {
+        let index = wave_ray(id, groups, sample - params.sample_begin);
+        shade_blocked = index * SHADOW_WORDS;
+        let hit = split_hits[index];
+        if sample == params.sample_begin {
+            result.prim = hit.prim;
+        }
+        let ray = camera_ray(sample_position(pixel, sample));
+        result.sums = add_sample(result.sums, shade(ray, hit));
+    }
+    store_samples(id, slot, result);
 }

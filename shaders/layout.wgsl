@@ -53,8 +53,12 @@ override RENDER_WORKGROUP_Y: u32 = 8u;
 // STACK_SPILLS: the stack's oldest entries then move to `stack_spill`.
 override STACK_ENTRIES: u32 = 8u;
 override STACK_SPILLS: bool = false;
-// `shade` takes its shadows from `shade_blocked` rather than tracing them.
+// `shade` takes its shadows from `shadow_blocked` (at `shade_blocked`)
+// rather than tracing them.
 override SHADOWS_FROM_QUEUE: bool = false;
+// Words of `shadow_blocked` a camera ray of the wavefront path has: one
+// bit a light (gpu::render's `wave_budget`).
+override SHADOW_WORDS: u32 = 1u;
 // Invocations per workgroup of every entry point (RENDER_WORKGROUP_X ×
 // RENDER_WORKGROUP_Y for `render`).
 const WORKGROUP_INVOCATIONS: u32 = 64u;
@@ -271,6 +275,12 @@ struct Surface {
 @group(0) @binding(16) var<storage, read> triangle_attributes_hi: array<TriangleAttributes>;
 // The scene's textures, all in one array of words (src/texture/store.rs).
 @group(0) @binding(17) var<storage, read> textures: array<u32>;
+// Each camera ray's blocked lights in the wavefront path (bit i of word
+// i / 32 for light i; SHADOW_WORDS words a ray), set by `render_shadows`.
+// In group 0 because `shade` reads it (under SHADOWS_FROM_QUEUE) and
+// every entry point that shades binds group 0; set apart from the
+// scene's numbers.
+@group(0) @binding(20) var<storage, read_write> shadow_blocked: array<atomic<u32>>;
 // Group 1 holds what one entry point reads and writes: an image tile for
 // `render`, a batch of rays for `trace_rays`.
 @group(1) @binding(0) var out_color: texture_storage_2d<rgba32float, write>;
@@ -285,9 +295,9 @@ struct Surface {
 // between the dispatches that add its samples in turn.
 @group(1) @binding(6) var<storage, read_write> tile_sums: array<vec4<f32>>;
 // Shadow rays in a dispatch of their own (`render_primary`,
-// `render_shadows`, `render_shade`; gpu::ShadowDispatch): each tile
-// pixel's hit, the shadow rays to trace (compacted), how many, and each
-// pixel's blocked lights (bit i for light i).
+// `render_shadows`, `render_shade`; gpu::ShadowDispatch): each camera
+// ray's hit (`wave_ray` numbers them), the shadow rays to trace
+// (compacted; `slot` is the camera ray's number), and how many.
 struct ShadowQuery {
     slot: u32,
     light: u32,
@@ -297,7 +307,9 @@ struct ShadowQuery {
 @group(1) @binding(7) var<storage, read_write> split_hits: array<Hit>;
 @group(1) @binding(8) var<storage, read_write> shadow_queue: array<ShadowQuery>;
 @group(1) @binding(9) var<storage, read_write> shadow_count: array<atomic<u32>, 1>;
-@group(1) @binding(10) var<storage, read_write> shadow_blocked: array<atomic<u32>>;
-// `render_shade`'s pixel's word of shadow_blocked (at most
-// gpu::MAX_LIGHTS_APART lights).
+// `render_shadows`' indirect dispatch (workgroups x, y, z: one a
+// WORKGROUP_INVOCATIONS queued rays), apart from the count, which that
+// pass reads: a dispatch may not bind its indirect buffer.
+@group(1) @binding(10) var<storage, read_write> shadow_workgroups: array<atomic<u32>, 3>;
+// `render_shade`'s camera ray's first word of shadow_blocked.
 var<private> shade_blocked: u32;

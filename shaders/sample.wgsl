@@ -85,21 +85,22 @@ struct SampleSums {
 }
 
 fn add_samples(pixel: vec2<u32>, sums: vec4<f32>) -> SampleSums {
-    var sum = sums.xyz;
-    var sum_squares = sums.w;
-    var first_prim = NO_HIT;
+    var result = SampleSums(sums, NO_HIT);
     for (var sample = params.sample_begin; sample < params.sample_end; sample++) {
         let ray = camera_ray(sample_position(pixel, sample));
         let hit = trace_closest(ray);
         if sample == params.sample_begin {
-            first_prim = hit.prim;
+            result.prim = hit.prim;
         }
-        let color = shade(ray, hit);
-        sum += color;
-        let y = dot(color, LUMINANCE);
-        sum_squares += y * y;
+        result.sums = add_sample(result.sums, shade(ray, hit));
     }
-    return SampleSums(vec4<f32>(sum, sum_squares), first_prim);
+    return result;
+}
+
+// `sums` with one more sample's colour (and its squared luminance).
+fn add_sample(sums: vec4<f32>, color: vec3<f32>) -> vec4<f32> {
+    let y = dot(color, LUMINANCE);
+    return vec4<f32>(sums.xyz + color, sums.w + y * y);
 }
 
 // A pixel's box-filtered mean and the variance of its mean luminance (the
@@ -125,4 +126,26 @@ fn tile_slot(id: vec3<u32>) -> u32 {
         return NO_HIT;
     }
     return id.y * size.x + id.x;
+}
+
+// A tile pixel's sums of the samples before `params.sample_begin`, kept
+// in `tile_sums` between dispatches.
+fn sums_so_far(slot: u32) -> vec4<f32> {
+    if params.sample_begin > 0u {
+        return tile_sums[slot];
+    }
+    return vec4<f32>(0.0);
+}
+
+// A tile pixel's samples so far: its primitive after its first sample,
+// its mean after its last, else its sums for the next dispatch.
+fn store_samples(id: vec3<u32>, slot: u32, result: SampleSums) {
+    if params.sample_begin == 0u {
+        textureStore(out_prim, id.xy, vec4<u32>(result.prim, 0u, 0u, 0u));
+    }
+    if params.sample_end == params.spp {
+        textureStore(out_color, id.xy, pixel_mean(result.sums));
+    } else {
+        tile_sums[slot] = result.sums;
+    }
 }

@@ -129,7 +129,8 @@ fn light_sample(surface: Surface, origin: vec3<f32>, light: Light) -> LightSampl
 
 fn shadowed(ray: Ray, light: u32) -> bool {
     if SHADOWS_FROM_QUEUE {
-        return ((shade_blocked >> light) & 1u) != 0u;
+        let word = atomicLoad(&shadow_blocked[shade_blocked + light / 32u]);
+        return ((word >> (light % 32u)) & 1u) != 0u;
     }
     return trace_any(ray);
 }

@@ -162,43 +162,74 @@ fn scenes_split_across_bindings_render_the_same() {
     }
 }
 
-/// Shadow rays traced apart (the default, at one sample per pixel) and in
-/// the megakernel give the same image, bit for bit (colour, variance and
-/// primitive); a render of several samples, and a scene with more lights
-/// than the queue takes, render in the megakernel.
+/// The wavefront render (shadow rays apart; the default below
+/// `WAVE_BELOW_SPP`) and the megakernel give the same image, bit for bit (colour, variance and
+/// primitive): at 1 and 3 spp on five scenes, at 40 spp (more than a
+/// dispatch takes on llvmpipe: the sums carried between dispatches), and
+/// with 40 lights (two words of blocked bits a ray), which also agree with
+/// the CPU path.
 #[test]
 fn shadow_rays_apart_render_as_the_megakernel_does() {
-    use lambert::gpu::{GpuRenderer, MAX_LIGHTS_APART, ShadowDispatch};
-    let hidden = lambert::progress::Progress::hidden();
     for name in ["cornell", "spheres", "bunny", "dragon", "edge_cases"] {
         let mut scene = load(name);
-        scene.view.spp = 1;
-        let mut renderer = GpuRenderer::new(open_gpu(), &scene).expect("scene uploads");
-        assert_eq!(renderer.shadow_dispatch, ShadowDispatch::Apart, "{name}");
-        assert!(renderer.shadows_apart(), "{name}");
-        let apart = renderer.render(&hidden).unwrap().0;
-        renderer.shadow_dispatch = ShadowDispatch::Megakernel;
-        let mega = renderer.render(&hidden).unwrap().0;
-        let bits = |r: &lambert::output::Rendered| {
-            let rgb: Vec<u32> = r.image.rgb.iter().flatten().map(|c| c.to_bits()).collect();
-            let var: Vec<u32> = r.variance.iter().map(|v| v.to_bits()).collect();
-            (rgb, var, r.prims.clone())
-        };
-        assert!(bits(&apart) == bits(&mega), "{name}: apart differs");
-        println!("{name}: shadow rays apart = megakernel, bit for bit");
-        scene.view.spp = 3;
-        let renderer = GpuRenderer::new(open_gpu(), &scene).expect("scene uploads");
-        assert!(!renderer.shadows_apart(), "{name} at 3 spp");
+        for spp in [1, 3] {
+            scene.view.spp = spp;
+            apart_as_megakernel(&scene, &format!("{name} at {spp} spp"));
+        }
     }
-    let lights: String = (0..=MAX_LIGHTS_APART)
+    for name in ["spheres", "edge_cases"] {
+        let mut scene = load(name);
+        scene.view.spp = 40;
+        apart_as_megakernel(&scene, &format!("{name} at 40 spp"));
+    }
+    // A ring of lights above a ball that shades a larger one below.
+    let lights: String = (0..40)
         .map(|i| {
-            format!("[[point_light]]\nposition = [{i}.0, 3.0, 2.0]\nintensity = [1.0, 1.0, 1.0]\n")
+            let a = i as f64 * std::f64::consts::TAU / 40.0;
+            let (x, z) = (0.8 * a.cos(), 0.8 * a.sin());
+            format!("[[point_light]]\nposition = [{x}, 3.0, {z}]\nintensity = [0.5, 0.5, 0.5]\n")
         })
         .collect();
-    let many = scene(&format!(
-        "[camera]\neye = [0.0, 0.0, 3.0]\nlook_at = [0.0, 0.0, 0.0]\nvfov = 40.0\nwidth = 8\nheight = 8\n\
-         [[sphere]]\ncenter = [0.0, 0.0, 0.0]\nradius = 1.0\n{lights}"
+    let mut many = scene(&format!(
+        "[camera]\neye = [0.0, 2.5, 3.0]\nlook_at = [0.0, 0.0, 0.0]\nvfov = 40.0\nwidth = 48\nheight = 40\n\
+         [[sphere]]\ncenter = [0.0, 0.0, 0.0]\nradius = 1.0\n\
+         [[sphere]]\ncenter = [0.0, 1.6, 0.0]\nradius = 0.3\n{lights}"
     ));
-    let renderer = GpuRenderer::new(open_gpu(), &many).expect("scene uploads");
-    assert_eq!(renderer.shadow_dispatch, ShadowDispatch::Megakernel);
+    for spp in [1, 4] {
+        many.view.spp = spp;
+        let apart = apart_as_megakernel(&many, &format!("40 lights at {spp} spp"));
+        let stats = compare(&apart, &render_cpu(&many), &Tolerance::default()).unwrap();
+        assert!(stats.passed, "40 lights at {spp} spp: GPU vs CPU\n{stats}");
+    }
+}
+
+/// Renders `scene` in the wavefront (its default) and in the megakernel;
+/// fails unless they are the same bits. Returns the image.
+fn apart_as_megakernel(scene: &lambert::Scene, label: &str) -> lambert::output::Rendered {
+    use lambert::gpu::{GpuRenderer, ShadowDispatch};
+    let hidden = lambert::progress::Progress::hidden();
+    let mut renderer = GpuRenderer::new(open_gpu(), scene).expect("scene uploads");
+    assert_eq!(
+        renderer.shadow_dispatch,
+        ShadowDispatch::Measured,
+        "{label}"
+    );
+    assert_eq!(
+        renderer.shadows_apart(),
+        scene.view.spp < lambert::gpu::WAVE_BELOW_SPP,
+        "{label}: the wavefront by default where it measured faster"
+    );
+    renderer.shadow_dispatch = ShadowDispatch::Apart;
+    assert!(renderer.shadows_apart(), "{label}");
+    let apart = renderer.render(&hidden).unwrap().0;
+    renderer.shadow_dispatch = ShadowDispatch::Megakernel;
+    let mega = renderer.render(&hidden).unwrap().0;
+    let bits = |r: &lambert::output::Rendered| {
+        let rgb: Vec<u32> = r.image.rgb.iter().flatten().map(|c| c.to_bits()).collect();
+        let var: Vec<u32> = r.variance.iter().map(|v| v.to_bits()).collect();
+        (rgb, var, r.prims.clone())
+    };
+    assert!(bits(&apart) == bits(&mega), "{label}: apart differs");
+    println!("{label}: shadow rays apart = megakernel, bit for bit");
+    apart
 }

@@ -52,8 +52,7 @@ impl<'a> Kernel<'a> {
         samples: std::ops::Range<u32>,
         sums: (Vec3, Real),
     ) -> ((Vec3, Real), u32) {
-        let luminance = Vec3::new(0.2126, 0.7152, 0.0722);
-        let (mut sum, mut sum_squares) = sums;
+        let mut sums = sums;
         let mut first_prim = NO_HIT;
         let first = samples.start;
         for sample in samples {
@@ -63,12 +62,15 @@ impl<'a> Kernel<'a> {
             if sample == first {
                 first_prim = hit.prim;
             }
-            let color = self.shade(&ray, &hit);
-            sum += color;
-            let l = color.dot(luminance);
-            sum_squares += l * l;
+            sums = self.add_sample(sums, self.shade(&ray, &hit));
         }
-        ((sum, sum_squares), first_prim)
+        (sums, first_prim)
+    }
+
+    /// `sums` with one more sample's colour (and its squared luminance).
+    pub fn add_sample(&self, (sum, sum_squares): (Vec3, Real), color: Vec3) -> (Vec3, Real) {
+        let l = color.dot(Vec3::new(0.2126, 0.7152, 0.0722));
+        (sum + color, sum_squares + l * l)
     }
 
     /// The pixel's mean and the variance of its mean luminance, from the

@@ -67,30 +67,35 @@ pub const SCENE: BindingTable = BindingTable {
         bind("triangle_attributes", 15, Storage),
         bind("triangle_attributes_hi", 16, Storage),
         bind("textures", 17, Storage),
+        bind("shadow_blocked", 20, StorageWrite),
     ],
 };
 
 const OUT_COLOR: Binding = bind("out_color", 0, Image(wgpu::TextureFormat::Rgba32Float));
 const OUT_PRIM: Binding = bind("out_prim", 1, Image(wgpu::TextureFormat::R32Uint));
 
+const TILE_SUMS: Binding = bind("tile_sums", 6, StorageWrite);
+
 /// Group 1 of `render`: a tile's pixels.
 pub const IMAGE_TILE: BindingTable = BindingTable {
     label: "image tile",
     group: 1,
-    entries: &[OUT_COLOR, OUT_PRIM, bind("tile_sums", 6, StorageWrite)],
+    entries: &[OUT_COLOR, OUT_PRIM, TILE_SUMS],
 };
 
-/// Group 1 of `render_primary`, `render_shadows` and `render_shade`.
+/// Group 1 of `render_primary`, `render_shadows` and `render_shade` (the
+/// blocked bits are group 0's: `shade` reads them).
 pub const SHADOWS_APART: BindingTable = BindingTable {
     label: "image tile, shadows apart",
     group: 1,
     entries: &[
         OUT_COLOR,
         OUT_PRIM,
+        TILE_SUMS,
         bind("split_hits", 7, StorageWrite),
         bind("shadow_queue", 8, StorageWrite),
         bind("shadow_count", 9, StorageWrite),
-        bind("shadow_blocked", 10, StorageWrite),
+        bind("shadow_workgroups", 10, StorageWrite),
     ],
 };
 

@@ -10,7 +10,8 @@ use super::adapter::{AdapterRequest, choose_adapter, describe, is_software};
 /// lambert requests from the adapter (`Gpu::open_limited`).
 pub const MAX_BUFFER_ENV: &str = "LAMBERT_GPU_MAX_BUFFER_BYTES";
 
-/// `LAMBERT_SHADOW_DISPATCH`: megakernel or apart (`ShadowDispatch`).
+/// `LAMBERT_SHADOW_DISPATCH`: megakernel or apart (`ShadowDispatch`;
+/// unset, by spp as measured).
 pub const SHADOW_DISPATCH_ENV: &str = "LAMBERT_SHADOW_DISPATCH";
 
 /// Settings a front end found in the environment, as it found them: each

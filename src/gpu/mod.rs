@@ -30,7 +30,7 @@ mod upload;
 pub use adapter::{AdapterRequest, enumerate_adapters};
 pub use device::{Gpu, GpuOptions, MAX_BUFFER_ENV, SHADOW_DISPATCH_ENV};
 pub use readback::padded_bytes_per_row;
-pub use render::ShadowDispatch;
+pub use render::{ShadowDispatch, WAVE_BELOW_SPP};
 pub use renderer::GpuRenderer;
 pub use shader::{SHADER_SOURCE, specialisation};
 pub use timer::GpuTimings;
@@ -47,10 +47,16 @@ const RENDER_WORKGROUP: [u32; 2] = [8, 8];
 const _: () =
     assert!(RENDER_WORKGROUP[0] * RENDER_WORKGROUP[1] == crate::layout::WORKGROUP_INVOCATIONS);
 
-/// Most lights a render traces the shadow rays of apart (the shader's
-/// `shadow_blocked` has a bit of a pixel's word each; the queue holds a
-/// ray for each light of each tile pixel, `SHADOW_QUERY_BYTES`).
-pub const MAX_LIGHTS_APART: u32 = 8;
+/// Camera rays a dispatch of the wavefront render (shadows apart) takes
+/// at most: as many as the megakernel's largest tile dispatch (a 256²
+/// tile at 3 samples per pixel: `GpuRenderer::tile_side` rounds up), whose
+/// tiles it shares.
+pub const WAVE_RAYS: u32 = 3 * TILE * TILE;
+/// Shadow rays a wavefront dispatch queues at most where it has more than
+/// a few lights: 8 lights of each pixel of a 1-spp tile; more lights
+/// shrink its tile and its samples in turn, so no dispatch traces more
+/// than a megakernel tile with as many lights.
+pub const WAVE_SHADOW_RAYS: u32 = TILE * TILE * 8;
 
 /// Bytes of the shader's `ShadowQuery` (a queued shadow ray; GPU-only,
 /// checked against naga's layout in tests/shaders.rs).

@@ -1,5 +1,6 @@
-//! The render passes: tile by tile, in the `render` megakernel or with the
-//! shadow rays apart (`render_primary`, `render_shadows`, `render_shade`),
+//! The render passes: tile by tile, in the `render` megakernel or as a
+//! wavefront with the shadow rays apart (`render_primary`,
+//! `render_shadows`, `render_shade`: every sample of a dispatch at once),
 //! each tile read back before the next.
 
 use std::time::{Duration, Instant};
@@ -13,7 +14,7 @@ use crate::scene::Scene;
 use super::bindings::{IMAGE_TILE, SCENE, SHADOWS_APART};
 use super::device::SHADOW_DISPATCH_ENV;
 use super::timer::{GpuTimings, Timer};
-use super::{GpuRenderer, MAX_LIGHTS_APART, RENDER_WORKGROUP, SHADOW_QUERY_BYTES, TILE};
+use super::{GpuRenderer, RENDER_WORKGROUP, SHADOW_QUERY_BYTES, TILE, WAVE_RAYS, WAVE_SHADOW_RAYS};
 
 /// Samples a dispatch adds to each pixel on llvmpipe: the bundled scenes'
 /// pixels ran out of loop iterations from about 192 (a 3,674-triangle
@@ -21,33 +22,72 @@ use super::{GpuRenderer, MAX_LIGHTS_APART, RENDER_WORKGROUP, SHADOW_QUERY_BYTES,
 pub(super) const LLVMPIPE_SAMPLES_PER_DISPATCH: u32 = 32;
 
 /// How a render traces its shadow rays: in the `render` megakernel, each
-/// invocation after its own primary hit, or apart (`render_primary`
-/// queues them, `render_shadows` traces the queue side by side,
-/// `render_shade` shades; the same image, bit for bit). Apart measured
-/// faster on lavapipe (docs/bvh.md): the default wherever shadows are
-/// traced and there are at most `MAX_LIGHTS_APART` lights, for renders
-/// at one sample per pixel (`shadows_apart`).
-/// LAMBERT_SHADOW_DISPATCH=megakernel|apart chooses (`GpuOptions`).
+/// invocation after its own primary hit, or apart, the wavefront
+/// (`render_primary` traces a dispatch's camera rays and queues their
+/// shadow rays, `render_shadows` traces the queue side by side,
+/// `render_shade` shades and adds the samples; the same image, bit for
+/// bit, at any spp and any number of lights).
+/// LAMBERT_SHADOW_DISPATCH=megakernel|apart chooses (`GpuOptions`);
+/// unset, `Measured`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ShadowDispatch {
     Megakernel,
     Apart,
+    /// Whichever measured faster on lavapipe (docs/bvh.md): apart below
+    /// `WAVE_BELOW_SPP` samples per pixel, the megakernel from there.
+    Measured,
 }
 
+/// Samples per pixel from which the megakernel measured faster than the
+/// wavefront (the dragon, one point light, CPU time on lavapipe: 0.83×
+/// the megakernel's at 1 spp, 1.02× at 4, 1.15× at 16, 1.29× at 64;
+/// docs/bvh.md).
+pub const WAVE_BELOW_SPP: u32 = 4;
+
 impl ShadowDispatch {
-    /// Apart where it applies, unless `chosen` (LAMBERT_SHADOW_DISPATCH)
-    /// says otherwise.
-    pub(super) fn for_scene(scene: &Scene, chosen: Option<&str>) -> Result<ShadowDispatch> {
-        let applies =
-            scene.shadows && (1..=MAX_LIGHTS_APART as usize).contains(&scene.lights.len());
+    /// `Measured` where apart applies (shadows traced, and a queue for
+    /// the scene's lights no larger than `max_binding` bytes), unless
+    /// `chosen` (LAMBERT_SHADOW_DISPATCH) says otherwise.
+    pub(super) fn for_scene(
+        scene: &Scene,
+        chosen: Option<&str>,
+        max_binding: u64,
+    ) -> Result<ShadowDispatch> {
+        let lights = scene.lights.len().min(u32::MAX as usize) as u32;
+        let applies = scene.shadows && lights > 0 && wave_queue_bytes(lights) <= max_binding;
         match chosen {
-            None | Some("apart") if applies => Ok(ShadowDispatch::Apart),
+            None if applies => Ok(ShadowDispatch::Measured),
+            Some("apart") if applies => Ok(ShadowDispatch::Apart),
             None | Some("apart") | Some("megakernel") => Ok(ShadowDispatch::Megakernel),
             Some(other) => Err(Error::Usage(format!(
                 "{SHADOW_DISPATCH_ENV}={other:?}: use \"megakernel\" or \"apart\""
             ))),
         }
     }
+}
+
+/// Camera rays a wavefront dispatch takes with `lights` lights:
+/// `WAVE_RAYS`, fewer where their shadow rays would pass
+/// `WAVE_SHADOW_RAYS`, a workgroup's at the least.
+fn wave_budget(lights: u32) -> u32 {
+    (WAVE_SHADOW_RAYS / lights.max(1)).clamp(WORKGROUP_INVOCATIONS, WAVE_RAYS)
+}
+
+/// Bytes of a wavefront dispatch's shadow queue: a ray for each light of
+/// each camera ray.
+fn wave_queue_bytes(lights: u32) -> u64 {
+    wave_budget(lights) as u64 * lights.max(1) as u64 * SHADOW_QUERY_BYTES
+}
+
+/// Words of blocked bits a camera ray has (the shader's SHADOW_WORDS).
+fn shadow_words(lights: u32) -> u32 {
+    lights.div_ceil(32).max(1)
+}
+
+/// Bytes of `shadow_blocked` (group 0: `shade` reads it) for a scene of
+/// `lights` lights.
+pub(super) fn shadow_blocked_bytes(lights: u32) -> u64 {
+    wave_budget(lights) as u64 * shadow_words(lights) as u64 * 4
 }
 
 /// The three passes of a render with its shadow rays apart, and their
@@ -57,7 +97,10 @@ pub(super) struct SplitShadows {
     shadows: wgpu::ComputePipeline,
     shade: wgpu::ComputePipeline,
     group: wgpu::BindGroup,
+    /// `group` but for `shadow_workgroups`: `render_shadows`'.
+    shadows_group: wgpu::BindGroup,
     count: wgpu::Buffer,
+    workgroups: wgpu::Buffer,
 }
 
 impl GpuRenderer {
@@ -136,12 +179,19 @@ impl GpuRenderer {
 
     /// Side of the tiles `render` dispatches: TILE at 1 sample per pixel
     /// per dispatch, smaller as they grow, so that a dispatch traces about
-    /// as many camera rays (TILE²) at any spp.
+    /// as many camera rays (TILE²) at any spp; in the wavefront no larger
+    /// than its buffers take (`wave_budget`: smaller with many lights).
     pub fn tile_side(&self) -> u32 {
         let samples = self.params.spp.min(self.samples_per_dispatch());
-        let side = TILE / samples.isqrt().max(1);
         let step = RENDER_WORKGROUP[0].max(RENDER_WORKGROUP[1]);
-        side.next_multiple_of(step).clamp(step, TILE)
+        let side = (TILE / samples.isqrt().max(1))
+            .next_multiple_of(step)
+            .clamp(step, TILE);
+        if self.shadows_apart() {
+            let fits = (wave_budget(self.params.num_lights) / samples).isqrt() / step * step;
+            return side.min(fits.max(step));
+        }
+        side
     }
 
     /// Number of tiles `render` dispatches for the current camera.
@@ -167,22 +217,29 @@ impl GpuRenderer {
         Ok(device_time)
     }
 
-    /// Samples a render dispatch adds to a pixel: one with the shadow rays
-    /// apart (each sample's passes in turn).
+    /// Samples a render dispatch adds to a pixel; in the wavefront, no
+    /// more than leave a workgroup's pixels within its buffers.
     fn samples_per_dispatch(&self) -> u32 {
         if self.shadows_apart() {
-            1
+            let budget = wave_budget(self.params.num_lights);
+            self.samples_per_dispatch
+                .min(budget / WORKGROUP_INVOCATIONS)
         } else {
             self.samples_per_dispatch
         }
     }
 
-    /// Whether this render traces its shadow rays apart: as
-    /// `shadow_dispatch` asks, at one sample per pixel. With more, each
-    /// sample would be a dispatch of its own, waited on: the sampling
-    /// tests' high-spp renders took 152 s rather than 19.
+    /// Whether this render is the wavefront (its shadow rays apart), as
+    /// `shadow_dispatch` asks. Each of its dispatches takes every sample of
+    /// the tile's pixels a megakernel dispatch would, in one submission:
+    /// an earlier version that dispatched each sample's passes and waited
+    /// took 152 s rather than 19 over the sampling tests.
     pub fn shadows_apart(&self) -> bool {
-        self.shadow_dispatch == ShadowDispatch::Apart && self.params.spp == 1
+        match self.shadow_dispatch {
+            ShadowDispatch::Apart => true,
+            ShadowDispatch::Megakernel => false,
+            ShadowDispatch::Measured => self.params.spp < WAVE_BELOW_SPP,
+        }
     }
 
     /// Halves `samples_per_dispatch` after the driver cut loops short.
@@ -221,8 +278,14 @@ impl GpuRenderer {
             .write_buffer(&resident.params_buffer, 0, bytemuck::bytes_of(&self.params));
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         let [wx, wy] = RENDER_WORKGROUP;
+        let (groups_x, groups_y) = (width.div_ceil(wx), height.div_ceil(wy));
         if let (true, Some(split)) = (self.shadows_apart(), &self.pipelines.split) {
-            encoder.clear_buffer(&split.count, 0, None);
+            let samples = self.params.sample_end - self.params.sample_begin;
+            // The queue empty, `render_shadows`' dispatch 0 × 1 × 1.
+            gpu.queue
+                .write_buffer(&split.count, 0, bytemuck::bytes_of(&0u32));
+            gpu.queue
+                .write_buffer(&split.workgroups, 0, bytemuck::cast_slice(&[0u32, 1, 1]));
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("render tile, shadows apart"),
                 timestamp_writes: self.timer.as_ref().map(Timer::writes),
@@ -230,11 +293,15 @@ impl GpuRenderer {
             pass.set_bind_group(SCENE.group, &resident.scene_group, &[]);
             pass.set_bind_group(SHADOWS_APART.group, &split.group, &[]);
             pass.set_pipeline(&split.primary);
-            pass.dispatch_workgroups(width.div_ceil(wx), height.div_ceil(wy), 1);
+            pass.dispatch_workgroups(groups_x, groups_y, samples);
+            // An invocation a queued shadow ray (the primary pass counts
+            // the workgroups).
             pass.set_pipeline(&split.shadows);
-            pass.dispatch_workgroups((width * height).div_ceil(WORKGROUP_INVOCATIONS), 1, 1);
+            pass.set_bind_group(SHADOWS_APART.group, &split.shadows_group, &[]);
+            pass.dispatch_workgroups_indirect(&split.workgroups, 0);
+            pass.set_bind_group(SHADOWS_APART.group, &split.group, &[]);
             pass.set_pipeline(&split.shade);
-            pass.dispatch_workgroups(width.div_ceil(wx), height.div_ceil(wy), 1);
+            pass.dispatch_workgroups(groups_x, groups_y, 1);
         } else {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("render tile"),
@@ -243,7 +310,7 @@ impl GpuRenderer {
             pass.set_pipeline(self.pipelines.render.as_ref().expect("prepared"));
             pass.set_bind_group(SCENE.group, &resident.scene_group, &[]);
             pass.set_bind_group(IMAGE_TILE.group, &resident.image_group, &[]);
-            pass.dispatch_workgroups(width.div_ceil(wx), height.div_ceil(wy), 1);
+            pass.dispatch_workgroups(groups_x, groups_y, 1);
         }
         if let Some(timer) = &self.timer {
             timer.resolve(&mut encoder);
@@ -257,43 +324,64 @@ impl GpuRenderer {
     pub(super) fn build_split(&self) -> Result<SplitShadows> {
         let device = &self.gpu.device;
         let layout = SHADOWS_APART.layout(device);
-        let pixels = (TILE * TILE) as u64;
-        let lights = (self.params.num_lights as u64).max(1);
-        let buffer = |label, size| {
+        let lights = self.params.num_lights;
+        let rays = wave_budget(lights) as u64;
+        let buffer = |label, size, usage| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
                 size,
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                usage: wgpu::BufferUsages::STORAGE | usage,
                 mapped_at_creation: false,
             })
         };
-        let hits = buffer("primary hits", pixels * std::mem::size_of::<Hit>() as u64);
-        let queue = buffer("shadow queue", pixels * lights * SHADOW_QUERY_BYTES);
-        let count = buffer("shadow count", 4);
-        let blocked = buffer("shadow blocked", pixels * 4);
-        let [color, prim] = self.tile.views();
-        let group = SHADOWS_APART.bind_group(
-            device,
-            SHADOWS_APART.label,
-            &layout,
-            vec![
-                ("out_color", wgpu::BindingResource::TextureView(&color)),
-                ("out_prim", wgpu::BindingResource::TextureView(&prim)),
-                ("split_hits", hits.as_entire_binding()),
-                ("shadow_queue", queue.as_entire_binding()),
-                ("shadow_count", count.as_entire_binding()),
-                ("shadow_blocked", blocked.as_entire_binding()),
-            ],
+        let none = wgpu::BufferUsages::empty();
+        let hits = buffer(
+            "primary hits",
+            rays * std::mem::size_of::<Hit>() as u64,
+            none,
         );
+        let queue = buffer("shadow queue", wave_queue_bytes(lights), none);
+        let count = buffer("shadow count", 4, wgpu::BufferUsages::COPY_DST);
+        let workgroups = buffer(
+            "shadow workgroups",
+            12,
+            wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::INDIRECT,
+        );
+        // What `render_shadows` binds in its place: a dispatch may not
+        // bind the buffer it is dispatched by.
+        let unused = buffer("shadow workgroups, unused", 12, none);
+        let [color, prim] = self.tile.views();
+        let group_with = |workgroups: &wgpu::Buffer| {
+            SHADOWS_APART.bind_group(
+                device,
+                SHADOWS_APART.label,
+                &layout,
+                vec![
+                    ("out_color", wgpu::BindingResource::TextureView(&color)),
+                    ("out_prim", wgpu::BindingResource::TextureView(&prim)),
+                    ("tile_sums", self.resident.tile_sums.as_entire_binding()),
+                    ("split_hits", hits.as_entire_binding()),
+                    ("shadow_queue", queue.as_entire_binding()),
+                    ("shadow_count", count.as_entire_binding()),
+                    ("shadow_workgroups", workgroups.as_entire_binding()),
+                ],
+            )
+        };
+        let group = group_with(&workgroups);
+        let shadows_group = group_with(&unused);
         let p = &self.pipelines;
-        let mut from_queue = p.constants.clone();
+        let mut constants = p.constants.clone();
+        constants.push(("SHADOW_WORDS", shadow_words(lights) as f64));
+        let mut from_queue = constants.clone();
         from_queue.push(("SHADOWS_FROM_QUEUE", 1.0));
         Ok(SplitShadows {
-            primary: p.build(&self.gpu, "render_primary", &layout, &p.constants)?,
-            shadows: p.build(&self.gpu, "render_shadows", &layout, &p.constants)?,
+            primary: p.build(&self.gpu, "render_primary", &layout, &constants)?,
+            shadows: p.build(&self.gpu, "render_shadows", &layout, &constants)?,
             shade: p.build(&self.gpu, "render_shade", &layout, &from_queue)?,
             group,
+            shadows_group,
             count,
+            workgroups,
         })
     }
 }

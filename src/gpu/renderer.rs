@@ -19,7 +19,7 @@ use super::device::Gpu;
 use super::pipelines::{Layouts, Pipelines, resident_constants};
 use super::query::ListState;
 use super::readback::{LoopStatus, TileTargets};
-use super::render::{LLVMPIPE_SAMPLES_PER_DISPATCH, ShadowDispatch};
+use super::render::{LLVMPIPE_SAMPLES_PER_DISPATCH, ShadowDispatch, shadow_blocked_bytes};
 use super::shader::{SHADER_SOURCE, specialisation};
 use super::timer::Timer;
 use super::upload::{BvhStorage, SceneBuffers};
@@ -61,6 +61,9 @@ pub struct GpuRenderer {
 pub(super) struct Resident {
     pub scene_group: wgpu::BindGroup,
     pub image_group: wgpu::BindGroup,
+    /// Each tile pixel's sums between the dispatches that add its samples
+    /// (both render paths').
+    pub tile_sums: wgpu::Buffer,
     pub params_buffer: wgpu::Buffer,
     pub loop_status: LoopStatus,
 }
@@ -154,10 +157,20 @@ impl GpuRenderer {
         });
         let loop_status = LoopStatus::new(device);
         let layouts = Layouts::new(device);
+        let shadow_blocked = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("shadow blocked"),
+            size: shadow_blocked_bytes(params.num_lights),
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
 
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let scene_group =
-            scene_bind_group(device, &layouts, &buffers, &params_buffer, &loop_status);
+        let scene_group = scene_bind_group(
+            device,
+            &layouts,
+            &buffers,
+            [&params_buffer, &loop_status.buffer, &shadow_blocked],
+        );
         let [color, prim] = tile.views();
         let image_group = IMAGE_TILE.bind_group(
             device,
@@ -178,8 +191,11 @@ impl GpuRenderer {
         }
         gpu.wait()?;
         let timer = Timer::new(&gpu);
-        let shadow_dispatch =
-            ShadowDispatch::for_scene(scene, gpu.options.shadow_dispatch.as_deref())?;
+        let shadow_dispatch = ShadowDispatch::for_scene(
+            scene,
+            gpu.options.shadow_dispatch.as_deref(),
+            gpu.limits.max_storage_buffer_binding_size as u64,
+        )?;
         let samples_per_dispatch = if is_llvmpipe(&gpu.info) {
             LLVMPIPE_SAMPLES_PER_DISPATCH
         } else {
@@ -191,6 +207,7 @@ impl GpuRenderer {
             resident: Resident {
                 scene_group,
                 image_group,
+                tile_sums,
                 params_buffer,
                 loop_status,
             },
@@ -222,13 +239,12 @@ impl GpuRenderer {
 }
 
 /// Group 0: the uniform, the scene's arrays (low and high ranges), the
-/// loop flag and the BVH's texels.
+/// loop flag, the BVH's texels and the wavefront's blocked bits.
 fn scene_bind_group(
     device: &wgpu::Device,
     layouts: &Layouts,
     buffers: &SceneBuffers,
-    params_buffer: &wgpu::Buffer,
-    loop_status: &LoopStatus,
+    [params_buffer, loop_status, shadow_blocked]: [&wgpu::Buffer; 3],
 ) -> wgpu::BindGroup {
     let node_view = buffers.node_texture.create_view(&Default::default());
     let block_view = buffers.block_texture.create_view(&Default::default());
@@ -249,7 +265,7 @@ fn scene_bind_group(
             ("triangle_normals_hi", buffers.normals.high_binding()),
             ("bvh_nodes_hi", buffers.nodes.high_binding()),
             ("bvh_blocks_hi", buffers.blocks.high_binding()),
-            ("loop_status", loop_status.buffer.as_entire_binding()),
+            ("loop_status", loop_status.as_entire_binding()),
             ("triangle_attributes", buffers.attributes.low_binding()),
             ("triangle_attributes_hi", buffers.attributes.high_binding()),
             ("textures", buffers.textures.as_entire_binding()),
@@ -261,6 +277,7 @@ fn scene_bind_group(
                 "bvh_block_texels",
                 wgpu::BindingResource::TextureView(&block_view),
             ),
+            ("shadow_blocked", shadow_blocked.as_entire_binding()),
         ],
     )
 }
