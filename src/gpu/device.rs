@@ -42,6 +42,8 @@ pub struct Gpu {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
     pub info: wgpu::AdapterInfo,
+    /// The adapter it was opened on (a window asks it what it can show).
+    pub adapter: wgpu::Adapter,
     pub limits: wgpu::Limits,
     /// The request's options, for the renderers opened on this device.
     pub options: GpuOptions,
@@ -101,6 +103,7 @@ impl Gpu {
             device,
             queue,
             info,
+            adapter,
             limits,
             options: request.options.clone(),
             errors,
