@@ -15,10 +15,13 @@ use lambert::render::{Progressive, Renderer};
 
 /// The cornell box, small, at `spp` (a 2×3 grid of strata at 6: the
 /// stratification depends on spp, so batches must keep the whole view's).
+/// Several tiles wide and high at any spp (a GPU tile is at most 256
+/// pixels a side, 128 at 6 spp), so that the GPU's sums of one tile must
+/// be carried to its next batch past the others.
 fn small_view(spp: u32) -> (Arc<lambert::Scene>, View) {
     let mut scene = load("cornell");
-    scene.view.camera.width = 37;
-    scene.view.camera.height = 29;
+    scene.view.camera.width = 517;
+    scene.view.camera.height = 263;
     scene.view.spp = spp;
     scene.view.seed = 7;
     let view = scene.view.clone();
@@ -114,7 +117,7 @@ fn a_batch_past_the_views_samples_or_of_another_size_is_refused() {
     assert!(error.contains("non-empty"), "{error}");
     let mut short = vec![[0.0f32; 4]; pixels - 1];
     let error = lambert::cpu::add_samples(&scene, &view, 0..1, &mut short).unwrap_err();
-    assert!(error.contains("sums for a 37×29 view"), "{error}");
+    assert!(error.contains("sums for a 517×263 view"), "{error}");
     let mut gpu = GpuRenderer::new(open_gpu(), &scene).unwrap();
     gpu.set_view(&view);
     let error = gpu.add_samples(0..5, &mut sums).unwrap_err().to_string();
