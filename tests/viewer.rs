@@ -149,9 +149,15 @@ struct Viewer {
 
 impl Viewer {
     fn start(x: Xvfb, args: &[&str]) -> Viewer {
+        Viewer::start_with(x, args, &[])
+    }
+
+    /// `start`, with environment variables set.
+    fn start_with(x: Xvfb, args: &[&str], env: &[(&str, &str)]) -> Viewer {
         let mut child = lambert_command()
             .arg("view")
             .args(args)
+            .envs(env.iter().copied())
             .env("DISPLAY", &x.display)
             .env_remove("WAYLAND_DISPLAY")
             .stdin(Stdio::null())
@@ -497,6 +503,41 @@ fn keys_and_wheel_move_the_camera_as_listed() {
     wait_for(&viewer.stdout, "key list", |l| {
         l.contains("orbit about the look-at point")
     });
+    assert!(viewer.quit().success());
+}
+
+#[test]
+fn with_no_gpu_adapter_the_cpu_path_renders_and_the_cpu_shows_it() {
+    let Some(x) = xvfb() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let shot = dir.path().join("shot.png");
+    // No Vulkan driver: no adapter, and no surface for the window.
+    let no_gpu = [("VK_ICD_FILENAMES", "/nonexistent/icd.json")];
+    let scene = cornell();
+    let args = [s(&scene), "--width", "72", "--height", "40", "--spp", "3"];
+    let viewer = Viewer::start_with(
+        x,
+        &[&args[..], &["--screenshot", s(&shot)]].concat(),
+        &no_gpu,
+    );
+    wait_for(&viewer.stderr, "the CPU path's note", |l| {
+        l.starts_with("rendering on the CPU path") && l.contains("shown by the CPU")
+    });
+    viewer.converged_screenshot(3);
+    let on_screen = viewer.screen();
+    let rendered = dir.path().join("rendered.png");
+    let render_args: Vec<&str> = ["render"].into_iter().chain(args).collect();
+    let render = lambert(&[&render_args[..], &["-o", s(&rendered), "--device", "cpu"]].concat());
+    assert!(render.status.success(), "{}", common::stderr(&render));
+    let rendered = png(&rendered);
+    assert!(
+        png(&shot) == rendered,
+        "Shift+S's screenshot differs from render --spp 3"
+    );
+    assert!(
+        on_screen == rendered,
+        "the window shows other pixels than render --spp 3"
+    );
     assert!(viewer.quit().success());
 }
 

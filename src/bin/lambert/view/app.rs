@@ -20,7 +20,7 @@ use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
 
 use super::Settings;
-use super::present::Presenter;
+use super::present::{CpuPresenter, GpuPresenter, Presenter};
 use super::worker::{Command, Frame, Report, Worker};
 
 /// The keys and the mouse, as `H` prints them (docs/viewer.md too).
@@ -108,42 +108,63 @@ impl App {
             backends: settings.request.instance_backends()?,
             ..wgpu::InstanceDescriptor::new_without_display_handle()
         });
-        let surface = instance
-            .create_surface(Arc::clone(&window))
-            .map_err(|e| Error::Gpu(format!("a surface for the window: {e}")))?;
-        let presenting = Presenting {
-            instance: &instance,
-            surface: &surface,
-        };
-        let scene = Arc::new(settings.scene);
-        let (renderer, note) = Renderer::open_presenting(
-            Arc::clone(&scene),
-            settings.device,
-            &settings.request,
-            Some(&presenting),
-        )?;
         let say = |line: &str| {
             if !settings.quiet {
                 eprintln!("{line}");
             }
         };
+        // No surface where no backend runs (no Vulkan driver at all): the
+        // render goes where `render`'s would, and the CPU shows it.
+        let surface = instance.create_surface(Arc::clone(&window));
+        let presenting = surface.as_ref().ok().map(|surface| Presenting {
+            instance: &instance,
+            surface,
+        });
+        let scene = Arc::new(settings.scene);
+        let (renderer, note) = Renderer::open_presenting(
+            Arc::clone(&scene),
+            settings.device,
+            &settings.request,
+            presenting.as_ref(),
+        )?;
         if let Some(note) = note {
             say(&note);
         }
-        let (gpu, shown_by) = match &renderer {
-            Renderer::Gpu(r) => (Some(r.gpu().clone()), r.gpu().clone()),
-            // The CPU path renders; any adapter (lavapipe too) shows.
-            Renderer::Cpu(_) => {
-                let shown_by = Gpu::open_presenting(&settings.request, false, &presenting)?;
-                say(&format!(
-                    "rendering on the CPU path (slower, still progressive); shown through {}",
-                    shown_by.describe()
-                ));
-                (None, shown_by)
-            }
+        // The GPU that renders shows its frames; the CPU path's are shown
+        // by any adapter that can present (lavapipe too), else by the CPU.
+        let shown_by = match (&renderer, &presenting) {
+            (Renderer::Gpu(r), Some(_)) => Ok(r.gpu().clone()),
+            (_, Some(p)) => Gpu::open_presenting(&settings.request, false, p),
+            (_, None) => Err(Error::Gpu(format!(
+                "no surface for the window: {}",
+                surface
+                    .as_ref()
+                    .err()
+                    .map(|e| e.to_string())
+                    .unwrap_or_default()
+            ))),
+        };
+        if renderer.is_cpu() {
+            let shown = match &shown_by {
+                Ok(gpu) => format!("shown through {}", gpu.describe()),
+                Err(e) => format!("shown by the CPU ({e})"),
+            };
+            say(&format!(
+                "rendering on the CPU path (slower, still progressive); {shown}"
+            ));
+        }
+        let gpu = match &renderer {
+            Renderer::Gpu(r) => Some(r.gpu().clone()),
+            Renderer::Cpu(_) => None,
         };
         self.about = renderer.describe();
-        self.presenter = Some(Presenter::new(surface, shown_by, &window)?);
+        drop(presenting);
+        self.presenter = Some(match (shown_by, surface) {
+            (Ok(shown_by), Ok(surface)) => {
+                Presenter::Gpu(GpuPresenter::new(surface, shown_by, &window)?)
+            }
+            _ => Presenter::Cpu(CpuPresenter::new(&window)?),
+        });
         let view = View {
             spp: settings.spp,
             ..scene.view.clone()
@@ -193,9 +214,11 @@ impl App {
         self.quit(event_loop);
     }
 
-    fn present(&mut self) {
-        if let (Some(presenter), Some(frame)) = (&mut self.presenter, &self.latest) {
-            presenter.present(frame);
+    fn present(&mut self, event_loop: &ActiveEventLoop) {
+        if let (Some(presenter), Some(frame)) = (&mut self.presenter, &self.latest)
+            && let Err(e) = presenter.present(frame)
+        {
+            self.fail(e, event_loop);
         }
     }
 
@@ -276,7 +299,7 @@ impl ApplicationHandler<Report> for App {
             }
             Report::Print(text) => print!("{text}"),
             Report::Finished => {
-                self.present();
+                self.present(event_loop);
                 self.quit(event_loop);
             }
             Report::Failed(e) => self.fail(Error::Usage(e), event_loop),
@@ -286,7 +309,7 @@ impl ApplicationHandler<Report> for App {
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
         match event {
             WindowEvent::CloseRequested => self.quit(event_loop),
-            WindowEvent::RedrawRequested => self.present(),
+            WindowEvent::RedrawRequested => self.present(event_loop),
             WindowEvent::Resized(size) => {
                 if let Some(presenter) = &mut self.presenter {
                     presenter.resize(size.width, size.height);

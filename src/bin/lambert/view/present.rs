@@ -1,8 +1,10 @@
 //! Showing a frame: its 8-bit sRGB bytes copied as they are into the
 //! window's surface (a linear, non-sRGB format, so that no conversion
 //! touches them: the screen shows the screenshot's very pixels), on the
-//! device that renders.
+//! device that renders; or, where no adapter can present to the window,
+//! written by the CPU into the window's own buffer (softbuffer).
 
+use std::num::NonZeroU32;
 use std::sync::Arc;
 
 use lambert::error::{Error, Result};
@@ -11,15 +13,102 @@ use winit::window::Window;
 
 use super::worker::Frame;
 
-pub struct Presenter {
-    pub surface: wgpu::Surface<'static>,
+pub enum Presenter {
+    Gpu(GpuPresenter),
+    Cpu(CpuPresenter),
+}
+
+impl Presenter {
+    pub fn resize(&mut self, width: u32, height: u32) {
+        match self {
+            Presenter::Gpu(p) => p.resize(width, height),
+            Presenter::Cpu(p) => (p.width, p.height) = (width, height),
+        }
+    }
+
+    /// Shows `frame`, at the window's top left (black where a frame of
+    /// the size before a resize does not cover it).
+    pub fn present(&mut self, frame: &Frame) -> Result<()> {
+        match self {
+            Presenter::Gpu(p) => {
+                p.present(frame);
+                Ok(())
+            }
+            Presenter::Cpu(p) => p.present(frame),
+        }
+    }
+}
+
+/// `frame`'s pixels laid out in a `width` × `height` window, each a
+/// `pixel` of its 8-bit sRGB R, G and B, black beyond the frame.
+fn fit<T: Copy>(
+    frame: &Frame,
+    width: u32,
+    height: u32,
+    black: T,
+    pixel: impl Fn(&[u8]) -> T,
+) -> Vec<T> {
+    let mut out = vec![black; width as usize * height as usize];
+    let columns = frame.width.min(width) as usize;
+    for y in 0..frame.height.min(height) as usize {
+        let from = &frame.rgba[y * frame.width as usize * 4..][..columns * 4];
+        let to = &mut out[y * width as usize..][..columns];
+        for (to, from) in to.iter_mut().zip(from.chunks(4)) {
+            *to = pixel(from);
+        }
+    }
+    out
+}
+
+/// The CPU writing the window's pixels (X11's PutImage), where no
+/// adapter can present.
+pub struct CpuPresenter {
+    surface: softbuffer::Surface<Arc<Window>, Arc<Window>>,
+    width: u32,
+    height: u32,
+}
+
+impl CpuPresenter {
+    pub fn new(window: &Arc<Window>) -> Result<CpuPresenter> {
+        let fail = |e: softbuffer::SoftBufferError| {
+            Error::Usage(format!("showing frames without a GPU (softbuffer): {e}"))
+        };
+        let context = softbuffer::Context::new(Arc::clone(window)).map_err(fail)?;
+        let surface = softbuffer::Surface::new(&context, Arc::clone(window)).map_err(fail)?;
+        let size = window.inner_size();
+        Ok(CpuPresenter {
+            surface,
+            width: size.width,
+            height: size.height,
+        })
+    }
+
+    fn present(&mut self, frame: &Frame) -> Result<()> {
+        let fail = |e: softbuffer::SoftBufferError| Error::Usage(format!("showing a frame: {e}"));
+        let (Some(width), Some(height)) =
+            (NonZeroU32::new(self.width), NonZeroU32::new(self.height))
+        else {
+            return Ok(());
+        };
+        self.surface.resize(width, height).map_err(fail)?;
+        let pixels = fit(frame, self.width, self.height, 0u32, |p| {
+            (p[0] as u32) << 16 | (p[1] as u32) << 8 | p[2] as u32
+        });
+        let mut buffer = self.surface.buffer_mut().map_err(fail)?;
+        buffer.copy_from_slice(&pixels);
+        buffer.present().map_err(fail)
+    }
+}
+
+pub struct GpuPresenter {
+    surface: wgpu::Surface<'static>,
     gpu: Gpu,
     config: wgpu::SurfaceConfiguration,
     /// Whether the surface's bytes are in BGRA order.
     bgra: bool,
 }
 
-impl Presenter {
+impl GpuPresenter {
     /// Configures `surface` (made by the instance `gpu`'s adapter came
     /// from) for `window` on `gpu`.
     pub fn new(surface: wgpu::Surface<'static>, gpu: Gpu, window: &Arc<Window>) -> Result<Self> {
@@ -57,7 +146,7 @@ impl Presenter {
             color_space: wgpu::SurfaceColorSpace::Auto,
         };
         surface.configure(&gpu.device, &config);
-        Ok(Presenter {
+        Ok(GpuPresenter {
             surface,
             gpu,
             config,
@@ -65,7 +154,7 @@ impl Presenter {
         })
     }
 
-    pub fn resize(&mut self, width: u32, height: u32) {
+    fn resize(&mut self, width: u32, height: u32) {
         if width > 0 && height > 0 {
             self.config.width = width;
             self.config.height = height;
@@ -73,10 +162,9 @@ impl Presenter {
         }
     }
 
-    /// Shows `frame`, at the window's top left (black where a frame of
-    /// the size before a resize does not cover it). A window that cannot
-    /// show it now (hidden, being resized) skips it: the next frame comes.
-    pub fn present(&mut self, frame: &Frame) {
+    /// A window that cannot show a frame now (hidden, being resized)
+    /// skips it: the next frame comes.
+    fn present(&mut self, frame: &Frame) {
         let texture = match self.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t)
             | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
@@ -87,19 +175,13 @@ impl Presenter {
             _ => return,
         };
         let (width, height) = (self.config.width, self.config.height);
-        let mut bytes = vec![0u8; width as usize * height as usize * 4];
-        let columns = frame.width.min(width) as usize;
-        for y in 0..frame.height.min(height) as usize {
-            let from = &frame.rgba[y * frame.width as usize * 4..][..columns * 4];
-            let to = &mut bytes[y * width as usize * 4..][..columns * 4];
-            to.copy_from_slice(from);
-            if self.bgra {
-                to.chunks_mut(4).for_each(|p| p.swap(0, 2));
-            }
-        }
+        let order = if self.bgra { [2, 1, 0] } else { [0, 1, 2] };
+        let pixels = fit(frame, width, height, [0u8, 0, 0, 255], |p| {
+            [p[order[0]], p[order[1]], p[order[2]], 255]
+        });
         self.gpu.queue.write_texture(
             texture.texture.as_image_copy(),
-            &bytes,
+            bytemuck::cast_slice(&pixels),
             wgpu::TexelCopyBufferLayout {
                 offset: 0,
                 bytes_per_row: Some(width * 4),
