@@ -498,6 +498,18 @@ fn keys_and_wheel_move_the_camera_as_listed() {
     // L: shadows off, said on stderr.
     viewer.key("l");
     wait_for(&viewer.stderr, "shadows line", |l| l == "shadows off");
+    // A resized window renders at its new size.
+    let window = viewer.window.clone();
+    viewer.xdotool(&["windowsize", &window, "100", "70"]);
+    let deadline = Instant::now() + PATIENCE;
+    while viewer.camera()["width"].as_integer() != Some(100) {
+        assert!(
+            Instant::now() < deadline,
+            "the resize did not reach the view"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    assert_eq!(viewer.camera()["height"].as_integer(), Some(70));
     // H lists the keys on stdout.
     viewer.key("h");
     wait_for(&viewer.stdout, "key list", |l| {
