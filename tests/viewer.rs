@@ -441,18 +441,15 @@ fn a_drag_orbits_and_the_camera_printed_renders_what_the_window_shows() {
         "--device",
         "gpu",
     ]);
-    assert!(render.status.success(), "{}", common::stderr(&render));
-    let rendered = png(&rendered);
-    assert_eq!((rendered.0, rendered.1), (width, height));
-    assert!(
-        png(&shot) == rendered,
-        "Shift+S's screenshot differs from render of the camera C printed"
+    assert_eq!((png(&rendered).0, png(&rendered).1), (width, height));
+    assert_shows(
+        viewer,
+        on_screen,
+        &shot,
+        render,
+        &rendered,
+        "of the camera C printed",
     );
-    assert!(
-        on_screen == rendered,
-        "the window shows other pixels than render of the camera C printed"
-    );
-    assert!(viewer.quit().success());
 }
 
 #[test]
@@ -540,16 +537,63 @@ fn with_no_gpu_adapter_the_cpu_path_renders_and_the_cpu_shows_it() {
     let rendered = dir.path().join("rendered.png");
     let render_args: Vec<&str> = ["render"].into_iter().chain(args).collect();
     let render = lambert(&[&render_args[..], &["-o", s(&rendered), "--device", "cpu"]].concat());
+    assert_shows(viewer, on_screen, &shot, render, &rendered, "--spp 3");
+}
+
+/// The screenshot Shift+S saved and the window's pixels are those of
+/// `lambert render` (its run and its image, `what` it rendered); Escape
+/// then ends the viewer well.
+fn assert_shows(
+    viewer: Viewer,
+    on_screen: (u32, u32, Vec<u8>),
+    shot: &Path,
+    render: std::process::Output,
+    rendered: &Path,
+    what: &str,
+) {
     assert!(render.status.success(), "{}", common::stderr(&render));
-    let rendered = png(&rendered);
+    let rendered = png(rendered);
     assert!(
-        png(&shot) == rendered,
-        "Shift+S's screenshot differs from render --spp 3"
+        png(shot) == rendered,
+        "Shift+S's screenshot differs from render {what}"
     );
     assert!(
         on_screen == rendered,
-        "the window shows other pixels than render --spp 3"
+        "the window shows other pixels than render {what}"
     );
+    assert!(viewer.quit().success());
+}
+
+#[test]
+fn f_frames_the_model_and_number_keys_choose_its_gltf_cameras() {
+    let Some(x) = xvfb() else { return };
+    let model = asset("scenes/meshes/boxes.glb");
+    let args = [
+        s(&model),
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--spp",
+        "1",
+        "--device",
+        "cpu",
+    ];
+    let viewer = Viewer::start(x, &args);
+    let file = viewer.camera();
+    viewer.key("f");
+    let framed = viewer.camera();
+    assert_ne!(framed["eye"], file["eye"], "f did not move the camera");
+    assert_eq!(framed["vfov"].as_float(), Some(40.0));
+    // 1: the file's first camera (its eye at (0, 2.5, 7)), at the window's size.
+    viewer.key("1");
+    let first = viewer.camera();
+    assert_eq!(vector(&first, "eye"), DVec3::new(0.0, 2.5, 7.0));
+    assert_eq!(first, file);
+    viewer.key("9");
+    wait_for(&viewer.stderr, "no camera 9", |l| {
+        l.contains("there is no camera 9")
+    });
     assert!(viewer.quit().success());
 }
 
