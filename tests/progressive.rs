@@ -48,7 +48,16 @@ fn progressive(renderer: &mut Renderer, view: &View, batches: &[u32]) -> Vec<Ima
 }
 
 fn check_batches_equal_one_render(mut renderer: Renderer, path: &str) {
-    for (spp, batches) in [(6, &[1u32][..]), (6, &[2, 1, 3]), (1, &[1]), (6, &[6])] {
+    // 3 spp: where a wavefront renders few samples (shadows apart), its
+    // passes must carry the sums alike.
+    let cases = [
+        (6, &[1u32][..]),
+        (6, &[2, 1, 3]),
+        (1, &[1]),
+        (6, &[6]),
+        (3, &[1]),
+    ];
+    for (spp, batches) in cases {
         let (_, view) = small_view(spp);
         let (whole, _) = renderer.render(&view, None).unwrap();
         let images = progressive(&mut renderer, &view, batches);
