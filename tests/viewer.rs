@@ -29,10 +29,16 @@ impl Drop for Killed {
     }
 }
 
-/// An X server of its own for one test: its display, e.g. ":7".
+/// One X server at a time: a server ending unlinks its socket after its
+/// lock, so one started meanwhile on the freed number lost its socket.
+static ONE_SERVER: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// An X server of its own for one test: its display, e.g. ":7". (Fields
+/// drop in order: the server ends before the next may start.)
 struct Xvfb {
     display: String,
     server: Child,
+    _turn: std::sync::MutexGuard<'static, ()>,
 }
 
 impl Drop for Xvfb {
@@ -68,6 +74,7 @@ fn xvfb() -> Option<Xvfb> {
         eprintln!("skipped: {message}");
         return None;
     }
+    let turn = ONE_SERVER.lock().unwrap_or_else(|e| e.into_inner());
     // -displayfd: the server picks a free display and writes its number.
     let mut server = Command::new("Xvfb")
         .args([
@@ -91,6 +98,7 @@ fn xvfb() -> Option<Xvfb> {
     let x = Xvfb {
         display: format!(":{number}"),
         server,
+        _turn: turn,
     };
     // Until a client gets through (other suites may start servers too).
     let deadline = Instant::now() + PATIENCE;
@@ -138,6 +146,16 @@ fn wait_for(lines: &Receiver<String>, what: &str, wanted: impl Fn(&str) -> bool)
     }
 }
 
+/// xdotool's output on `x`.
+fn xdotool(x: &Xvfb, args: &[&str]) -> String {
+    let output = Command::new("xdotool")
+        .args(args)
+        .env("DISPLAY", &x.display)
+        .output()
+        .expect("xdotool runs");
+    String::from_utf8_lossy(&output.stdout).into_owned()
+}
+
 /// A running `lambert view` and its X server.
 struct Viewer {
     x: Xvfb,
@@ -152,40 +170,57 @@ impl Viewer {
         Viewer::start_with(x, args, &[])
     }
 
-    /// `start`, with environment variables set.
+    /// `start`, with environment variables set. A first connection to a
+    /// fresh Xvfb is now and then refused on this machine (shared with
+    /// other suites' servers) though xdotool's got through: a viewer that
+    /// says it cannot open a window is started again, twice at most.
     fn start_with(x: Xvfb, args: &[&str], env: &[(&str, &str)]) -> Viewer {
-        let mut child = lambert_command()
-            .arg("view")
-            .args(args)
-            .envs(env.iter().copied())
-            .env("DISPLAY", &x.display)
-            .env_remove("WAYLAND_DISPLAY")
-            .stdin(Stdio::null())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("lambert view starts");
-        let stdout = lines(child.stdout.take().unwrap());
-        let stderr = lines(child.stderr.take().unwrap());
-        let mut viewer = Viewer {
+        let spawn = || {
+            let mut child = lambert_command()
+                .arg("view")
+                .args(args)
+                .envs(env.iter().copied())
+                .env("DISPLAY", &x.display)
+                .env_remove("WAYLAND_DISPLAY")
+                .stdin(Stdio::null())
+                .stdout(Stdio::piped())
+                .stderr(Stdio::piped())
+                .spawn()
+                .expect("lambert view starts");
+            let stdout = lines(child.stdout.take().unwrap());
+            let stderr = lines(child.stderr.take().unwrap());
+            (Killed(child), stdout, stderr)
+        };
+        let mut attempt = 1;
+        let (window, (process, stdout, stderr)) = 'started: loop {
+            let (mut process, stdout, stderr) = spawn();
+            let deadline = Instant::now() + PATIENCE;
+            loop {
+                let found = xdotool(&x, &["search", "--name", "^lambert view"]);
+                if let Some(id) = found.lines().next() {
+                    break 'started (id.to_string(), (process, stdout, stderr));
+                }
+                if let Some(status) = process.0.try_wait().unwrap() {
+                    let errors: Vec<String> = stderr.try_iter().collect();
+                    let refused = errors.iter().any(|e| e.contains("cannot open a window"));
+                    assert!(
+                        refused && attempt < 3,
+                        "lambert view exited ({status}) before its window showed: {errors:?}"
+                    );
+                    eprintln!("attempt {attempt}: {errors:?}; again");
+                    attempt += 1;
+                    break;
+                }
+                assert!(Instant::now() < deadline, "no window within {PATIENCE:?}");
+                std::thread::sleep(Duration::from_millis(100));
+            }
+        };
+        let viewer = Viewer {
             x,
-            process: Killed(child),
+            process,
             stdout,
             stderr,
-            window: String::new(),
-        };
-        let deadline = Instant::now() + PATIENCE;
-        viewer.window = loop {
-            let found = viewer.xdotool(&["search", "--name", "^lambert view"]);
-            if let Some(id) = found.lines().next() {
-                break id.to_string();
-            }
-            if let Some(status) = viewer.process.0.try_wait().unwrap() {
-                let errors: Vec<String> = viewer.stderr.try_iter().collect();
-                panic!("lambert view exited ({status}) before its window showed: {errors:?}");
-            }
-            assert!(Instant::now() < deadline, "no window within {PATIENCE:?}");
-            std::thread::sleep(Duration::from_millis(100));
+            window,
         };
         // No window manager runs: give the window the keyboard, and the
         // pointer over it for the wheel.
@@ -196,12 +231,7 @@ impl Viewer {
     }
 
     fn xdotool(&self, args: &[&str]) -> String {
-        let output = Command::new("xdotool")
-            .args(args)
-            .env("DISPLAY", &self.x.display)
-            .output()
-            .expect("xdotool runs");
-        String::from_utf8_lossy(&output.stdout).into_owned()
+        xdotool(&self.x, args)
     }
 
     /// Presses a key (an X keysym: "c", "S", "Escape") as a keyboard would.

@@ -158,10 +158,9 @@ impl App {
             Renderer::Cpu(_) => None,
         };
         self.about = renderer.describe();
-        drop(presenting);
         self.presenter = Some(match (shown_by, surface) {
             (Ok(shown_by), Ok(surface)) => {
-                Presenter::Gpu(GpuPresenter::new(surface, shown_by, &window)?)
+                Presenter::Gpu(Box::new(GpuPresenter::new(surface, shown_by, &window)?))
             }
             _ => Presenter::Cpu(CpuPresenter::new(&window)?),
         });

@@ -14,7 +14,8 @@ use winit::window::Window;
 use super::worker::Frame;
 
 pub enum Presenter {
-    Gpu(GpuPresenter),
+    /// Boxed: a surface's configuration is large.
+    Gpu(Box<GpuPresenter>),
     Cpu(CpuPresenter),
 }
 
