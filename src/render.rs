@@ -7,9 +7,9 @@ use std::time::{Duration, Instant};
 use crate::camera::View;
 use crate::cpu::{self, Precision};
 use crate::error::{Error, Result};
-use crate::gpu::{AdapterRequest, Gpu, GpuRenderer};
+use crate::gpu::{AdapterRequest, Gpu, GpuRenderer, Presenting};
 use crate::layout::{Hit, Ray};
-use crate::output::Rendered;
+use crate::output::{Image, Rendered};
 use crate::progress::{Progress, ProgressSink};
 use crate::scene::{Intersect, Scene};
 
@@ -49,16 +49,37 @@ enum Opened {
     Cpu(Option<String>),
 }
 
+/// The device of a GPU render: any adapter `request` matches (only
+/// hardware ones with `hardware_only`), among those that can present to
+/// the window if one is given.
+fn open_gpu_device(
+    request: &AdapterRequest,
+    hardware_only: bool,
+    presenting: Option<&Presenting>,
+) -> Result<Gpu> {
+    match presenting {
+        Some(p) => Gpu::open_presenting(request, hardware_only, p),
+        None => Gpu::open(request, hardware_only),
+    }
+}
+
 /// The one policy of where a scene renders: `cpu` the CPU path; `gpu` any
 /// adapter (`open_gpu`); `auto` a hardware adapter (or the one named),
 /// else the CPU path with a note, as for a scene too large for the
-/// adapter.
-fn open_device(scene: &Scene, choice: DeviceChoice, request: &AdapterRequest) -> Result<Opened> {
+/// adapter. With a window, only adapters that can present to it count.
+fn open_device(
+    scene: &Scene,
+    choice: DeviceChoice,
+    request: &AdapterRequest,
+    presenting: Option<&Presenting>,
+) -> Result<Opened> {
     match choice {
         DeviceChoice::Cpu => Ok(Opened::Cpu(None)),
-        DeviceChoice::Gpu => Ok(Opened::Gpu(Box::new(open_gpu(scene, request)?))),
+        DeviceChoice::Gpu => Ok(Opened::Gpu(Box::new(open_any_gpu(
+            scene, request, presenting,
+        )?))),
         DeviceChoice::Auto => {
-            let gpu = match Gpu::open(request, !request.names_adapter()) {
+            let gpu = match open_gpu_device(request, !request.names_adapter(), presenting) {
                 Ok(gpu) => gpu,
                 Err(e) => return Ok(Opened::Cpu(Some(fallback_note(&e)))),
             };
@@ -77,7 +98,15 @@ fn open_device(scene: &Scene, choice: DeviceChoice, request: &AdapterRequest) ->
 /// software ones included, failing if none opens or the scene does not fit.
 /// Also what the measurements and comparisons of the GPU itself use.
 pub fn open_gpu(scene: &Scene, request: &AdapterRequest) -> Result<GpuRenderer> {
-    GpuRenderer::new(Gpu::open(request, false)?, scene)
+    open_any_gpu(scene, request, None)
+}
+
+fn open_any_gpu(
+    scene: &Scene,
+    request: &AdapterRequest,
+    presenting: Option<&Presenting>,
+) -> Result<GpuRenderer> {
+    GpuRenderer::new(open_gpu_device(request, false, presenting)?, scene)
 }
 
 /// The renderers of one scene, each opened (and the scene uploaded to it)
@@ -120,7 +149,7 @@ impl Renderers {
                 if choice == DeviceChoice::Auto && self.auto_fell_back {
                     return Ok((&mut self.cpu, None));
                 }
-                match open_device(&self.scene, choice, &self.request)? {
+                match open_device(&self.scene, choice, &self.request, None)? {
                     Opened::Gpu(mut renderer) => {
                         renderer.set_winding_source(Arc::downgrade(&self.scene));
                         self.gpu_is_hardware = !renderer.gpu().is_software();
@@ -155,7 +184,18 @@ impl Renderer {
         choice: DeviceChoice,
         request: &AdapterRequest,
     ) -> Result<(Renderer, Option<String>)> {
-        Ok(match open_device(&scene, choice, request)? {
+        Renderer::open_presenting(scene, choice, request, None)
+    }
+
+    /// `open`, for a window (the viewer's): a GPU is one that can present
+    /// to it, so that the image is shown on the device that renders it.
+    pub fn open_presenting(
+        scene: Arc<Scene>,
+        choice: DeviceChoice,
+        request: &AdapterRequest,
+        presenting: Option<&Presenting>,
+    ) -> Result<(Renderer, Option<String>)> {
+        Ok(match open_device(&scene, choice, request, presenting)? {
             Opened::Gpu(mut renderer) => {
                 // Winding queries build the scene's winding tree from it.
                 renderer.set_winding_source(Arc::downgrade(&scene));
@@ -250,6 +290,27 @@ impl Renderer {
         }
     }
 
+    /// Adds the next `count` samples of `progressive`'s view (fewer when
+    /// fewer are left) on this renderer's device.
+    pub fn add_samples(&mut self, progressive: &mut Progressive, count: u32) -> Result<()> {
+        let view = &progressive.view;
+        let start = progressive.samples;
+        let samples = start..start.saturating_add(count).min(view.spp);
+        let finished = match self {
+            Renderer::Gpu(renderer) => {
+                renderer.set_view(view);
+                renderer.add_samples(samples.clone(), &mut progressive.sums)?
+            }
+            Renderer::Cpu(scene) => {
+                cpu::add_samples(scene, view, samples.clone(), &mut progressive.sums)
+                    .map_err(Error::Usage)?
+            }
+        };
+        progressive.samples = samples.end;
+        progressive.finished = finished;
+        Ok(())
+    }
+
     /// Readies the device for `trace` (builds its pipeline).
     pub fn prepare_trace(&mut self, any_hit: bool, intersect: Intersect) -> Result<()> {
         match self {
@@ -282,4 +343,62 @@ pub struct IntersectionList {
     /// N + 1 offsets into `hits`.
     pub ray_splits: Vec<u64>,
     pub hits: Vec<crate::layout::ListedHit>,
+}
+
+/// A render refined a few samples at a time (`Renderer::add_samples`; the
+/// viewer's): per pixel, the sums of the first `samples()` of the view's
+/// `spp` stratified samples, in the order `render` adds them, so that
+/// once all are added `image()` is bit for bit `Renderer::render(view)`'s
+/// image.
+pub struct Progressive {
+    view: View,
+    samples: u32,
+    /// Colour sums and squared luminance, row by row.
+    sums: Vec<[f32; 4]>,
+    /// The renderer's own means, once every sample is in.
+    finished: Option<Image>,
+}
+
+impl Progressive {
+    pub fn new(view: View) -> Progressive {
+        let pixels = view.camera.width as usize * view.camera.height as usize;
+        Progressive {
+            view,
+            samples: 0,
+            sums: vec![[0.0; 4]; pixels],
+            finished: None,
+        }
+    }
+
+    pub fn view(&self) -> &View {
+        &self.view
+    }
+
+    /// Samples per pixel added so far.
+    pub fn samples(&self) -> u32 {
+        self.samples
+    }
+
+    /// Whether every one of the view's samples is in.
+    pub fn is_finished(&self) -> bool {
+        self.samples == self.view.spp
+    }
+
+    /// The image so far: each pixel's mean over the samples added (black
+    /// before any), and once all are, the renderer's image itself.
+    pub fn image(&self) -> Image {
+        if let Some(image) = &self.finished {
+            return image.clone();
+        }
+        let n = self.samples.max(1) as f32;
+        Image {
+            width: self.view.camera.width,
+            height: self.view.camera.height,
+            rgb: self
+                .sums
+                .iter()
+                .map(|s| [s[0] / n, s[1] / n, s[2] / n])
+                .collect(),
+        }
+    }
 }

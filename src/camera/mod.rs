@@ -200,3 +200,23 @@ pub fn strata_columns(spp: u32) -> u32 {
         .find(|d| spp.is_multiple_of(*d))
         .unwrap_or(1)
 }
+
+/// A progressive render's batch of samples `samples` of a `(width,
+/// height, spp)` view, added to `pixels` sums: a non-empty range within
+/// the view's samples, and one sum for each pixel.
+pub fn check_batch(
+    (width, height, spp): (u32, u32, u32),
+    samples: &std::ops::Range<u32>,
+    pixels: usize,
+) -> Result<(), String> {
+    if samples.is_empty() || samples.end > spp {
+        return Err(format!(
+            "samples {}..{} of a view of {spp} samples per pixel: a batch is a non-empty range within them",
+            samples.start, samples.end
+        ));
+    }
+    if pixels != width as usize * height as usize {
+        return Err(format!("{pixels} sums for a {width}×{height} view"));
+    }
+    Ok(())
+}

@@ -25,7 +25,9 @@ pub use query::{
     QueryOptions, QueryRays, SharedOut, TracedChunk, trace_local_rays_each, trace_rays,
     trace_rays_each, trace_rays_f64, trace_rays_gpu_twin, trace_rays_with,
 };
-pub use render::{render, render_gpu_twin, render_pixel_list, render_rows, render_with};
+pub use render::{
+    add_samples, render, render_gpu_twin, render_pixel_list, render_rows, render_with,
+};
 pub use simd::{CPU_KERNEL_ENV, CpuKernel};
 
 /// Which precision the CPU path computes in.

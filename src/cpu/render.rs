@@ -100,6 +100,66 @@ pub(super) fn twin_stack_entries(scene: &Scene) -> usize {
     crate::cwbvh::short_stack(scene.bvh.depth(), crate::cwbvh::MIN_WORKGROUP_BYTES).0
 }
 
+/// The single-precision kernel of `view` on `cpu_kernel`, tracing the
+/// GPU's compressed nodes where given.
+fn kernel32<'a>(
+    scene: &'a Scene,
+    view: &View,
+    cpu_kernel: CpuKernel,
+    compressed: Option<&'a [layout::CompressedNode]>,
+) -> f32::Kernel<'a> {
+    let mut kernel = f32::Kernel::with_view(scene, view, cpu_kernel.ymm_boxes());
+    kernel.compressed = compressed;
+    kernel.stack_entries = twin_stack_entries(scene);
+    kernel
+}
+
+/// A progressive render's next samples on the CPU path (the twin of
+/// `GpuRenderer::add_samples`): samples `samples` of `view` added to each
+/// pixel's sums (colour, squared luminance; row by row), which hold
+/// samples `0..samples.start`; once they are the last, the image `render`
+/// makes, bit for bit (the same kernel, its loop split).
+pub fn add_samples(
+    scene: &Scene,
+    view: &View,
+    samples: std::ops::Range<u32>,
+    sums: &mut [[::core::primitive::f32; 4]],
+) -> Result<Option<Image>, String> {
+    let c = &view.camera;
+    crate::camera::check_batch((c.width, c.height, view.spp), &samples, sums.len())?;
+    let cpu_kernel = CpuKernel::active();
+    check_runs(cpu_kernel);
+    let width = view.camera.width as usize;
+    let kernel = kernel32(scene, view, cpu_kernel, None);
+    sums.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
+        // SAFETY: checked above.
+        unsafe {
+            with_simd(
+                cpu_kernel,
+                #[inline(always)]
+                || {
+                    for (x, s) in row.iter_mut().enumerate() {
+                        let before = (glam::Vec3::new(s[0], s[1], s[2]), s[3]);
+                        let samples = samples.clone();
+                        let ((sum, squares), _) =
+                            kernel.add_samples(x as u32, y as u32, samples, before);
+                        *s = [sum.x, sum.y, sum.z, squares];
+                    }
+                },
+            )
+        }
+    });
+    let mean = |s: &[::core::primitive::f32; 4]| {
+        let (mean, _) = kernel.pixel_mean((glam::Vec3::new(s[0], s[1], s[2]), s[3]));
+        mean.to_array()
+    };
+    Ok((samples.end == view.spp).then(|| Image {
+        width: view.camera.width,
+        height: view.camera.height,
+        rgb: sums.par_iter().map(mean).collect(),
+    }))
+}
+
 fn render_rows_with(
     scene: &Scene,
     view: &View,
@@ -115,9 +175,7 @@ fn render_rows_with(
     let mut rgb = vec![[0.0; 3]; width * height];
     let mut prims = vec![0u32; width * height];
     let mut variance = vec![0.0; width * height];
-    let mut kernel32 = f32::Kernel::with_view(scene, view, cpu_kernel.ymm_boxes());
-    kernel32.compressed = compressed;
-    kernel32.stack_entries = twin_stack_entries(scene);
+    let kernel32 = kernel32(scene, view, cpu_kernel, compressed);
     let kernel64 = f64::Kernel::with_view(scene, view, f64::has_ymm_boxes());
     rgb.par_chunks_mut(width)
         .zip(prims.par_chunks_mut(width))

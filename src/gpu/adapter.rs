@@ -100,6 +100,12 @@ impl AdapterRequest {
         Ok(parts.join(" "))
     }
 
+    /// The backends an instance for this request enables: those asked
+    /// for, else Vulkan, Metal and DX12 (what a window's instance uses).
+    pub fn instance_backends(&self) -> Result<wgpu::Backends> {
+        Ok(self.backends()?.unwrap_or(wgpu::Backends::PRIMARY))
+    }
+
     /// Whether Vulkan is among the backends asked for (lavapipe can help).
     pub fn wants_vulkan(&self) -> Result<bool> {
         Ok(self
@@ -132,14 +138,39 @@ pub fn enumerate_adapters(request: &AdapterRequest) -> Result<Vec<wgpu::Adapter>
     }
 }
 
-/// The best adapter matching `request`: hardware before software,
-/// Vulkan/Metal/DX12 before GL. With `hardware_only`, software rasterisers
-/// such as lavapipe do not count.
+/// A window to present to (the viewer's): the instance its surface was
+/// made by, whose adapters alone can present to it.
+pub struct Presenting<'a> {
+    pub instance: &'a wgpu::Instance,
+    pub surface: &'a wgpu::Surface<'a>,
+}
+
+/// The adapters to choose from: all that `request` finds, or, for a
+/// window, those of its instance that can present to its surface.
+fn candidates(
+    request: &AdapterRequest,
+    presenting: Option<&Presenting>,
+) -> Result<Vec<wgpu::Adapter>> {
+    let Some(p) = presenting else {
+        return enumerate_adapters(request);
+    };
+    let all = pollster::block_on(p.instance.enumerate_adapters(request.instance_backends()?));
+    Ok(all
+        .into_iter()
+        .filter(|a| a.is_surface_supported(p.surface))
+        .collect())
+}
+
+/// The best adapter matching `request` (and able to present to the
+/// window, if one is given): hardware before software, Vulkan/Metal/DX12
+/// before GL. With `hardware_only`, software rasterisers such as lavapipe
+/// do not count.
 pub(super) fn choose_adapter(
     request: &AdapterRequest,
     hardware_only: bool,
+    presenting: Option<&Presenting>,
 ) -> Result<wgpu::Adapter> {
-    let adapters = enumerate_adapters(request)?;
+    let adapters = candidates(request, presenting)?;
     let filter = request.name_filter();
     let rank = |info: &wgpu::AdapterInfo| {
         let kind = match info.device_type {
@@ -167,6 +198,10 @@ pub(super) fn choose_adapter(
             (Some(f), _) => format!("no adapter whose name contains '{f}'"),
             (None, true) => "no hardware GPU adapter".to_string(),
             (None, false) => "no GPU adapter".to_string(),
+        };
+        let wanted = match presenting {
+            Some(_) => format!("{wanted} that can present to the window"),
+            None => wanted,
         };
         let available = if available.is_empty() {
             "none (install Mesa's lavapipe: apt-get install mesa-vulkan-drivers)".to_string()

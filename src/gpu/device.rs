@@ -4,7 +4,7 @@ use std::sync::{Arc, Mutex};
 
 use crate::error::{Error, Result};
 
-use super::adapter::{AdapterRequest, choose_adapter, describe, is_software};
+use super::adapter::{AdapterRequest, Presenting, choose_adapter, describe, is_software};
 
 /// `LAMBERT_GPU_MAX_BUFFER_BYTES`: a cap on the buffer and binding sizes
 /// lambert requests from the adapter (`Gpu::open_limited`).
@@ -36,11 +36,15 @@ impl GpuOptions {
     }
 }
 
-/// An open device and queue.
+/// An open device and queue. A clone shares them (a viewer presents on
+/// the device its renderer renders on).
+#[derive(Clone)]
 pub struct Gpu {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
     pub info: wgpu::AdapterInfo,
+    /// The adapter it was opened on (a window asks it what it can show).
+    pub adapter: wgpu::Adapter,
     pub limits: wgpu::Limits,
     /// The request's options, for the renderers opened on this device.
     pub options: GpuOptions,
@@ -63,7 +67,28 @@ impl Gpu {
         hardware_only: bool,
         max_buffer_bytes: Option<u64>,
     ) -> Result<Gpu> {
-        let adapter = choose_adapter(request, hardware_only)?;
+        Gpu::open_adapter(
+            choose_adapter(request, hardware_only, None)?,
+            request,
+            max_buffer_bytes,
+        )
+    }
+
+    /// `open`, choosing among the adapters that can present to a window.
+    pub fn open_presenting(
+        request: &AdapterRequest,
+        hardware_only: bool,
+        presenting: &Presenting,
+    ) -> Result<Gpu> {
+        let adapter = choose_adapter(request, hardware_only, Some(presenting))?;
+        Gpu::open_adapter(adapter, request, request.options.max_buffer_bytes()?)
+    }
+
+    fn open_adapter(
+        adapter: wgpu::Adapter,
+        request: &AdapterRequest,
+        max_buffer_bytes: Option<u64>,
+    ) -> Result<Gpu> {
         let info = adapter.get_info();
         let limits = requested_limits(&adapter, max_buffer_bytes);
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
@@ -79,6 +104,7 @@ impl Gpu {
             device,
             queue,
             info,
+            adapter,
             limits,
             options: request.options.clone(),
             errors,

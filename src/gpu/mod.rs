@@ -10,6 +10,7 @@
 //! - `pipelines`: the module's layouts and pipelines, built on first use;
 //! - `renderer`: `GpuRenderer`, a scene resident on the device;
 //! - `render`: the render passes (megakernel, or shadows apart);
+//! - `progressive`: a render's samples added a few at a time (the viewer);
 //! - `query`: ray queries and pixel lists;
 //! - `proximity`: closest points, winding numbers, every hit along rays;
 //! - `timer` and `readback`: timestamps, and getting results back.
@@ -18,6 +19,7 @@ mod adapter;
 pub mod bindings;
 mod device;
 mod pipelines;
+mod progressive;
 mod proximity;
 mod query;
 mod readback;
@@ -27,7 +29,7 @@ mod shader;
 mod timer;
 mod upload;
 
-pub use adapter::{AdapterRequest, enumerate_adapters};
+pub use adapter::{AdapterRequest, Presenting, enumerate_adapters};
 pub use device::{Gpu, GpuOptions, MAX_BUFFER_ENV, SHADOW_DISPATCH_ENV};
 pub use readback::padded_bytes_per_row;
 pub use render::{ShadowDispatch, WAVE_BELOW_SPP};

@@ -146,7 +146,9 @@ impl GpuRenderer {
                 let tile_width = side.min(width - tile_x);
                 let tile_height = side.min(rows.end - tile_y);
                 let start = Instant::now();
-                let device_time = self.render_tile(tile_x, tile_y, tile_width, tile_height)?;
+                let samples = 0..self.params.spp;
+                let device_time =
+                    self.render_tile(tile_x, tile_y, tile_width, tile_height, samples)?;
                 timings.render += start.elapsed();
                 if let Some(t) = device_time {
                     *timings.device.get_or_insert(Duration::ZERO) += t;
@@ -200,16 +202,23 @@ impl GpuRenderer {
         self.params.width.div_ceil(side) as u64 * self.params.height.div_ceil(side) as u64
     }
 
-    /// Renders one tile, its samples over as many dispatches as
-    /// `samples_per_dispatch` asks. Returns the device time where
-    /// timestamps work.
-    fn render_tile(&mut self, x: u32, y: u32, width: u32, height: u32) -> Result<Option<Duration>> {
-        let spp = self.params.spp;
-        let step = self.samples_per_dispatch().min(spp);
+    /// Renders samples `samples` of one tile (all of them, or a
+    /// progressive render's next few, added to the tile's sums), over as
+    /// many dispatches as `samples_per_dispatch` asks. Returns the device
+    /// time where timestamps work.
+    pub(super) fn render_tile(
+        &mut self,
+        x: u32,
+        y: u32,
+        width: u32,
+        height: u32,
+        samples: std::ops::Range<u32>,
+    ) -> Result<Option<Duration>> {
+        let step = self.samples_per_dispatch().min(self.params.spp);
         let mut device_time = None;
-        for begin in (0..spp).step_by(step as usize) {
+        for begin in samples.clone().step_by(step as usize) {
             self.params.sample_begin = begin;
-            self.params.sample_end = (begin + step).min(spp);
+            self.params.sample_end = (begin + step).min(samples.end);
             if let Some(t) = self.dispatch_tile(x, y, width, height)? {
                 *device_time.get_or_insert(Duration::ZERO) += t;
             }

@@ -57,7 +57,8 @@ pub struct GpuRenderer {
 }
 
 /// The bind groups every pass binds (the scene's buffers live on in
-/// them), the uniform and the shader's loop flag.
+/// them), the uniform, the shader's loop flag, and the tile's sums of
+/// samples (which `render` keeps between a tile's dispatches).
 pub(super) struct Resident {
     pub scene_group: wgpu::BindGroup,
     pub image_group: wgpu::BindGroup,
@@ -152,7 +153,10 @@ impl GpuRenderer {
         let tile_sums = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("tile sums"),
             size: (TILE * TILE * 16) as u64,
-            usage: wgpu::BufferUsages::STORAGE,
+            // Copied both ways by a progressive render (`add_samples`).
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         let loop_status = LoopStatus::new(device);

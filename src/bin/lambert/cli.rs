@@ -12,6 +12,7 @@ mod info;
 mod options;
 mod query;
 mod turntable;
+mod view;
 
 use options::{
     AdapterArgs, BenchDevice, Device, RenderOptions, SceneOptions, ViewOptions, fraction,
@@ -66,6 +67,9 @@ enum Command {
     Bench(BenchArgs),
     /// Assemble the parts of a render (`render --tile I/N`) into one image.
     Merge(MergeArgs),
+    /// Open a window showing the scene ray traced, refined progressively;
+    /// move the camera with the mouse and keys (H lists them).
+    View(view::ViewArgs),
 }
 
 #[derive(Args)]
@@ -350,6 +354,7 @@ pub fn run() -> Result<ExitCode> {
         },
         Command::Bench(args) => benchmark::bench(&args, quiet),
         Command::Merge(args) => merge(&args, quiet),
+        Command::View(args) => view::run(args, quiet),
     }
 }
 

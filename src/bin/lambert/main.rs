@@ -5,6 +5,7 @@ use std::process::ExitCode;
 mod cli;
 mod plot;
 mod progress_bar;
+mod view;
 
 fn main() -> ExitCode {
     // Mesa's device-select Vulkan layer connects to a Wayland display while

@@ -203,6 +203,11 @@ pub(super) struct RenderOptions {
 }
 
 impl RenderOptions {
+    /// `--spp`, if given.
+    pub(super) fn spp(&self) -> Option<u32> {
+        self.scene.spp
+    }
+
     pub(super) fn load(&self, path: &Path) -> Result<Scene> {
         let mut scene = self.scene.load(path)?;
         if let Some(ambient) = self.ambient {

@@ -1,0 +1,65 @@
+//! `lambert view`'s arguments, handed to the viewer (src/bin/lambert/view/).
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::Args;
+
+use lambert::error::{Error, Result};
+use lambert::limits::validate_spp;
+
+use super::options::{AdapterArgs, Device, RenderOptions};
+use super::{check_output_path, print_warnings};
+use crate::view::{INTERACTIVE_SPP, Settings, view};
+
+#[derive(Args)]
+pub(super) struct ViewArgs {
+    /// A scene (.toml) or model file, as `render` takes.
+    scene: PathBuf,
+    #[arg(long, value_enum, default_value_t)]
+    device: Device,
+    #[command(flatten)]
+    options: RenderOptions,
+    #[command(flatten)]
+    adapter: AdapterArgs,
+    /// Render N frames of one sample per pixel each (the image `render
+    /// --spp N` makes, bit for bit), write --screenshot and exit. Without
+    /// it the image is refined up to --spp (default 1024) and the window
+    /// stays.
+    #[arg(
+        long,
+        value_name = "N",
+        conflicts_with = "spp",
+        requires = "screenshot"
+    )]
+    frames: Option<u32>,
+    /// Where --frames, and Shift+S, write the image (.png, .exr or .pfm)
+    /// [default for Shift+S: lambert-view-NNN.png, the first free].
+    #[arg(long, value_name = "PATH")]
+    screenshot: Option<PathBuf>,
+}
+
+pub(super) fn run(args: ViewArgs, quiet: bool) -> Result<ExitCode> {
+    if let Some(path) = &args.screenshot {
+        check_output_path(path, &[&args.scene])?;
+    }
+    if let Some(frames) = args.frames {
+        validate_spp(frames).map_err(|e| Error::Usage(format!("--frames: {e}")))?;
+    }
+    let scene = args.options.load(&args.scene)?;
+    print_warnings(&scene, quiet);
+    let spp = args
+        .frames
+        .or(args.options.spp())
+        .unwrap_or(INTERACTIVE_SPP);
+    view(Settings {
+        path: args.scene,
+        scene,
+        device: args.device.into(),
+        request: args.adapter.request(),
+        spp,
+        frames: args.frames.is_some(),
+        screenshot: args.screenshot,
+        quiet,
+    })
+}

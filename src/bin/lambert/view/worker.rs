@@ -1,0 +1,304 @@
+//! The viewer's render thread: it owns the renderer and the progressive
+//! render of the current view, adds a sample per frame, and hands each
+//! frame to the window (which never waits on it); the window's commands
+//! (a new camera, shadows, another model, a screenshot) reach it between
+//! frames.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::mpsc::{Receiver, TryRecvError};
+use std::time::{Duration, Instant};
+
+use lambert::camera::{Camera, View};
+use lambert::error::{Error, Result};
+use lambert::gpu::{Gpu, GpuRenderer};
+use lambert::output::Image;
+use lambert::render::{Progressive, Renderer};
+use lambert::scene::Scene;
+
+/// What the window asks of the render thread.
+pub enum Command {
+    /// A drag, in pixels (`navigate::orbit`, `navigate::pan`).
+    Orbit {
+        dx: f64,
+        dy: f64,
+    },
+    Pan {
+        dx: f64,
+        dy: f64,
+    },
+    /// Notches of the wheel, towards the scene positive.
+    Dolly(f64),
+    /// A fly key: w, a, s, d, e or q.
+    Fly(char),
+    /// The window's new size: the image's.
+    Resize {
+        width: u32,
+        height: u32,
+    },
+    /// Frame the model (`F`).
+    Frame,
+    /// The file's camera (`R`: None), or its glTF camera 1 to 9.
+    FileCamera(Option<usize>),
+    /// Shadows on or off (`L`).
+    ToggleShadows,
+    /// Another scene or model file (dropped on the window).
+    Load(PathBuf),
+    /// Write the image so far (`S`).
+    Screenshot(PathBuf),
+    /// Print the camera as a `[camera]` table (`C`).
+    PrintCamera,
+}
+
+/// What the render thread tells the window.
+pub enum Report {
+    Frame(Arc<Frame>),
+    /// A line for the terminal (stderr: notes, unless --quiet).
+    Say(String),
+    /// A result for the terminal (stdout: the `[camera]` table).
+    Print(String),
+    /// `--frames N`: the last frame is in and the screenshot written.
+    Finished,
+    Failed(String),
+}
+
+/// One frame: the image so far as 8-bit sRGB (the PNG's bytes), and the
+/// heads-up line's figures.
+pub struct Frame {
+    pub width: u32,
+    pub height: u32,
+    /// RGBA, 8-bit sRGB, row by row.
+    pub rgba: Vec<u8>,
+    pub samples: u32,
+    pub spp: u32,
+    pub frame_time: Duration,
+    pub mrays_per_s: f64,
+    pub triangles: usize,
+}
+
+/// The render thread's state.
+pub struct Worker {
+    /// The host's copy, for a rebuild (shadows) and for framing.
+    pub scene: Arc<Scene>,
+    /// The file the scene came from (its cameras, `R`, `1`–`9`).
+    pub path: PathBuf,
+    pub renderer: Renderer,
+    /// The device the renderer renders on, when a GPU's: rebuilds stay on
+    /// the device the window presents with.
+    pub gpu: Option<Gpu>,
+    pub progressive: Progressive,
+    /// `--frames N`: write here once the N samples are in, then stop.
+    pub frames_screenshot: Option<PathBuf>,
+}
+
+impl Worker {
+    /// Runs until the window goes (`commands` closes); `report` returns
+    /// false once the window is gone.
+    pub fn run(mut self, commands: Receiver<Command>, report: impl Fn(Report) -> bool) {
+        loop {
+            let command = if self.progressive.is_finished() {
+                match commands.recv() {
+                    Ok(command) => Some(command),
+                    Err(_) => return,
+                }
+            } else {
+                match commands.try_recv() {
+                    Ok(command) => Some(command),
+                    Err(TryRecvError::Empty) => None,
+                    Err(TryRecvError::Disconnected) => return,
+                }
+            };
+            let step = match command {
+                Some(command) => self.obey(command, &report),
+                None => self.add_frame(&report),
+            };
+            if let Err(e) = step {
+                report(Report::Failed(e.to_string()));
+                return;
+            }
+        }
+    }
+
+    fn obey(&mut self, command: Command, report: &impl Fn(Report) -> bool) -> Result<()> {
+        use super::navigate::{camera_toml, dolly, fly, frame, orbit, pan};
+        let camera = self.progressive.view().camera.clone();
+        let (width, height) = (camera.width, camera.height);
+        let sized = |c: Camera| Camera { width, height, ..c };
+        match command {
+            Command::Orbit { dx, dy } => self.restart(orbit(&camera, dx, dy, height)),
+            Command::Pan { dx, dy } => self.restart(pan(&camera, dx, dy, height)),
+            Command::Dolly(notches) => self.restart(dolly(&camera, notches)),
+            Command::Fly(key) => {
+                if let Some(moved) = fly(&camera, key) {
+                    self.restart(moved);
+                }
+            }
+            Command::Resize { width, height } => {
+                if (width, height) != (camera.width, camera.height) {
+                    self.restart(Camera {
+                        width,
+                        height,
+                        ..camera
+                    });
+                }
+            }
+            Command::Frame => match self.scene.bvh.bounds() {
+                Some(b) => {
+                    let offset = self.scene.offset;
+                    let bounds = (b.min.as_dvec3() + offset, b.max.as_dvec3() + offset);
+                    self.restart(frame(bounds, width, height));
+                }
+                None => {
+                    report(Report::Say("the scene has no geometry to frame".into()));
+                }
+            },
+            Command::FileCamera(index) => match self.file_camera(index) {
+                Ok(camera) => self.restart(sized(camera)),
+                Err(e) => {
+                    report(Report::Say(format!("{e}")));
+                }
+            },
+            Command::ToggleShadows => {
+                let mut scene = (*self.scene).clone();
+                scene.shadows = !scene.shadows;
+                report(Report::Say(format!(
+                    "shadows {}",
+                    if scene.shadows { "on" } else { "off" }
+                )));
+                self.upload(scene, camera)?;
+            }
+            Command::Load(path) => match Scene::load(&path) {
+                Ok(scene) => {
+                    for warning in &scene.warnings {
+                        report(Report::Say(format!("warning: {warning}")));
+                    }
+                    let camera = sized(scene.view.camera.clone());
+                    match self.upload(scene, camera) {
+                        Ok(()) => {
+                            report(Report::Say(format!("loaded {}", path.display())));
+                            self.path = path;
+                        }
+                        Err(e) => {
+                            report(Report::Say(format!("error: {}: {e}", path.display())));
+                        }
+                    }
+                }
+                Err(e) => {
+                    report(Report::Say(format!("error: {e}")));
+                }
+            },
+            Command::Screenshot(path) => {
+                self.progressive.image().save(&path)?;
+                report(Report::Say(format!(
+                    "wrote {} ({} spp)",
+                    path.display(),
+                    self.progressive.samples()
+                )));
+            }
+            Command::PrintCamera => {
+                report(Report::Print(camera_toml(&camera)));
+            }
+        }
+        Ok(())
+    }
+
+    /// The file's camera (`index` None), or its glTF camera `index`.
+    fn file_camera(&self, index: Option<usize>) -> Result<Camera> {
+        let Some(index) = index else {
+            return Ok(Scene::load(&self.path)?.view.camera);
+        };
+        let is_gltf = lambert::loading::Format::of(&self.path).is_ok_and(|f| f.is_gltf());
+        if !is_gltf {
+            return Err(Error::Usage(format!(
+                "{}: keys 1 to 9 choose a glTF file's cameras; this is no glTF file",
+                self.path.display()
+            )));
+        }
+        let mode = lambert::loading::NormalMode::Smooth;
+        let cameras = lambert::loading::gltf::load_scene(&self.path, mode)?.cameras;
+        let Some(name) = cameras.get(index).map(|c| c.name.clone()) else {
+            return Err(Error::Usage(format!(
+                "{} has {} perspective camera(s); there is no camera {}",
+                self.path.display(),
+                cameras.len(),
+                index + 1
+            )));
+        };
+        // Chosen by name as `--camera` does; an unnamed one only as the first.
+        let name = match (name, index) {
+            (Some(name), _) => Some(name),
+            (None, 0) => None,
+            (None, _) => {
+                return Err(Error::Usage(format!(
+                    "camera {} of {} has no name: only a first camera is chosen unnamed",
+                    index + 1,
+                    self.path.display()
+                )));
+            }
+        };
+        Ok(Scene::load_with_camera(&self.path, name.as_deref())?
+            .view
+            .camera)
+    }
+
+    /// `scene` on the device the renderer is on (or the CPU path), seen
+    /// from `camera`.
+    fn upload(&mut self, scene: Scene, camera: Camera) -> Result<()> {
+        self.renderer = match &self.gpu {
+            Some(gpu) => Renderer::Gpu(Box::new(GpuRenderer::new(gpu.clone(), &scene)?)),
+            None => Renderer::Cpu(Arc::new(scene.clone())),
+        };
+        self.scene = Arc::new(scene);
+        self.restart(camera);
+        Ok(())
+    }
+
+    /// Starts the view again from its first sample, from `camera`.
+    fn restart(&mut self, camera: Camera) {
+        let view = View {
+            camera,
+            ..self.progressive.view().clone()
+        };
+        self.progressive = Progressive::new(view);
+    }
+
+    /// Adds one sample per pixel and reports the frame; with `--frames`,
+    /// writes the screenshot after the last.
+    fn add_frame(&mut self, report: &impl Fn(Report) -> bool) -> Result<()> {
+        let start = Instant::now();
+        self.renderer.add_samples(&mut self.progressive, 1)?;
+        let frame_time = start.elapsed();
+        let image = self.progressive.image();
+        let view = self.progressive.view();
+        let rays = view.camera.width as f64 * view.camera.height as f64;
+        let frame = Frame {
+            width: image.width,
+            height: image.height,
+            rgba: rgba8(&image),
+            samples: self.progressive.samples(),
+            spp: view.spp,
+            frame_time,
+            mrays_per_s: rays / frame_time.as_secs_f64().max(1e-9) / 1e6,
+            triangles: self.scene.triangles.len(),
+        };
+        report(Report::Frame(Arc::new(frame)));
+        if self.progressive.is_finished()
+            && let Some(path) = self.frames_screenshot.take()
+        {
+            image.save(&path)?;
+            report(Report::Say(format!("wrote {}", path.display())));
+            report(Report::Finished);
+        }
+        Ok(())
+    }
+}
+
+/// The image as RGBA, 8-bit sRGB: the bytes the PNG writer writes, so
+/// the window shows what a screenshot saves.
+fn rgba8(image: &Image) -> Vec<u8> {
+    image
+        .to_srgb8()
+        .chunks(3)
+        .flat_map(|rgb| [rgb[0], rgb[1], rgb[2], 255])
+        .collect()
+}

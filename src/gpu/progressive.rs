@@ -1,0 +1,108 @@
+//! A render refined a few samples at a time (the viewer's): samples
+//! `[begin, end)` of the view added, tile by tile, to per-pixel sums the
+//! caller keeps, exactly as `render` adds a tile's samples over its
+//! dispatches, so that the last batch's means are `render`'s image bit for
+//! bit.
+
+use std::ops::Range;
+
+use crate::error::{Error, Result};
+use crate::output::Image;
+use crate::progress::Progress;
+
+use super::{GpuRenderer, TILE};
+
+/// Bytes of one pixel's sums (colour, squared luminance) in `tile_sums`.
+const SUMS_BYTES: u64 = 16;
+
+impl GpuRenderer {
+    /// Adds samples `samples` of the current view (of its `spp`) to `sums`
+    /// (one per pixel, row by row: colour sums and squared luminance, as
+    /// the shader keeps them), which hold samples `0..samples.start`.
+    /// When `samples.end` is the view's spp, returns the finished image:
+    /// the shader's means, bit for bit the image `render` returns.
+    pub fn add_samples(
+        &mut self,
+        samples: Range<u32>,
+        sums: &mut [[f32; 4]],
+    ) -> Result<Option<Image>> {
+        let (width, height, spp) = (self.params.width, self.params.height, self.params.spp);
+        let view = (width, height, spp);
+        crate::camera::check_batch(view, &samples, sums.len()).map_err(Error::Usage)?;
+        if samples == (0..spp) {
+            let (rendered, _) = self.render(&Progress::hidden())?;
+            return Ok(Some(rendered.image));
+        }
+        self.prepare_render()?;
+        loop {
+            // The sums change only once the batch's loops ran whole.
+            let mut next = sums.to_vec();
+            let image = self.add_samples_once(&samples, &mut next)?;
+            if !self.loops_were_cut()? {
+                sums.copy_from_slice(&next);
+                return Ok(image);
+            }
+            self.fewer_samples_per_dispatch()?;
+        }
+    }
+
+    fn add_samples_once(
+        &mut self,
+        samples: &Range<u32>,
+        sums: &mut [[f32; 4]],
+    ) -> Result<Option<Image>> {
+        let (width, height) = (self.params.width, self.params.height);
+        let finishing = samples.end == self.params.spp;
+        let mut rgb = vec![[0.0f32; 3]; if finishing { sums.len() } else { 0 }];
+        let staging = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("tile sums readback"),
+            size: TILE as u64 * TILE as u64 * SUMS_BYTES,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let side = self.tile_side();
+        for tile_y in (0..height).step_by(side as usize) {
+            for tile_x in (0..width).step_by(side as usize) {
+                let tile_width = side.min(width - tile_x) as usize;
+                let tile_height = side.min(height - tile_y);
+                // The tile's rows in `tile_sums`, TILE pixels apart.
+                let at = |row: u32| ((tile_y + row) * width + tile_x) as usize;
+                let slot = |row: u32| (row * TILE) as usize;
+                if samples.start > 0 {
+                    let mut block = vec![[0.0f32; 4]; slot(tile_height)];
+                    for row in 0..tile_height {
+                        block[slot(row)..][..tile_width]
+                            .copy_from_slice(&sums[at(row)..][..tile_width]);
+                    }
+                    let bytes = bytemuck::cast_slice(&block);
+                    self.gpu
+                        .queue
+                        .write_buffer(&self.resident.tile_sums, 0, bytes);
+                }
+                let extent = [tile_width as u32, tile_height];
+                self.render_tile(tile_x, tile_y, extent[0], extent[1], samples.clone())?;
+                if finishing {
+                    self.tile
+                        .read(&self.gpu, extent[0], tile_height, |row, colors, _| {
+                            for (i, src) in colors.chunks(4).enumerate() {
+                                rgb[at(row) + i] = [src[0], src[1], src[2]];
+                            }
+                        })?;
+                    continue;
+                }
+                let len = slot(tile_height) as u64 * SUMS_BYTES;
+                let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+                encoder.copy_buffer_to_buffer(&self.resident.tile_sums, 0, &staging, 0, len);
+                self.gpu.queue.submit([encoder.finish()]);
+                self.gpu.read_mapped(&staging, len, "tile sums", |bytes| {
+                    let block: &[[f32; 4]] = bytemuck::cast_slice(bytes);
+                    for row in 0..tile_height {
+                        sums[at(row)..][..tile_width]
+                            .copy_from_slice(&block[slot(row)..][..tile_width]);
+                    }
+                })?;
+            }
+        }
+        Ok(finishing.then_some(Image { width, height, rgb }))
+    }
+}
