@@ -267,12 +267,12 @@ impl Viewer {
         text.parse().expect("the camera printed is TOML")
     }
 
-    /// `Shift+S` until the screenshot holds every one of the view's
+    /// `s` until the screenshot holds every one of the view's
     /// samples (`spp`): the image the window settles on.
     fn converged_screenshot(&self, spp: u32) {
         let deadline = Instant::now() + PATIENCE;
         loop {
-            self.key("S");
+            self.key("s");
             let line = wait_for(&self.stderr, "screenshot line", |l| l.starts_with("wrote "));
             if line.ends_with(&format!("({spp} spp)")) {
                 // The last frame came before the line: let it be shown.
@@ -296,14 +296,19 @@ impl Viewer {
     }
 
     /// Escape, and the exit status.
-    fn quit(mut self) -> std::process::ExitStatus {
-        self.key("Escape");
+    fn quit(self) -> std::process::ExitStatus {
+        self.quit_with("Escape")
+    }
+
+    /// `key` (Escape or q), and the exit status.
+    fn quit_with(mut self, key: &str) -> std::process::ExitStatus {
+        self.key(key);
         let deadline = Instant::now() + PATIENCE;
         loop {
             if let Some(status) = self.process.0.try_wait().unwrap() {
                 return status;
             }
-            assert!(Instant::now() < deadline, "Escape did not close the viewer");
+            assert!(Instant::now() < deadline, "{key} did not close the viewer");
             std::thread::sleep(Duration::from_millis(50));
         }
     }
@@ -542,7 +547,8 @@ fn keys_and_wheel_move_the_camera_as_listed() {
     wait_for(&viewer.stdout, "key list", |l| {
         l.contains("orbit about the look-at point")
     });
-    assert!(viewer.quit().success());
+    // q quits where no mouse button is held (with one, it flies down).
+    assert!(viewer.quit_with("q").success());
 }
 
 #[test]

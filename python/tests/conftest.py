@@ -101,23 +101,4 @@ def reference_module(name):
         pytest.skip(f"{name} is not installed (scripts/test-python installs it)")
 
 
-def _gpu_queries_pending():
-    """Whether the library answers the proximity and crossing queries on a
-    GPU with "not yet computed on the GPU path" (issue 32's GPU half, on
-    its way from branch h32-core)."""
-    import lambert
-
-    scene = lambert.Scene.from_arrays(np.eye(3), np.array([[0, 1, 2]]))
-    try:
-        scene.distance(np.zeros((1, 3)), device="gpu")
-    except RuntimeError as e:
-        return "not yet computed on the GPU path" in str(e)
-    return False
-
-
-#: While the GPU half is pending, its tests are expected to fail with the
-#: library's RuntimeError, strictly: once it lands they must pass, and a
-#: wrong answer fails now as it will then.
-GPU_PENDING = pytest.mark.xfail(_gpu_queries_pending(), raises=RuntimeError, strict=True,
-                                reason="the library's GPU path of these queries is not yet written")
-QUERY_DEVICES = ["cpu", pytest.param("gpu", marks=GPU_PENDING)]
+QUERY_DEVICES = ["cpu", "gpu"]

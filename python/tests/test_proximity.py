@@ -13,7 +13,7 @@ import pytest
 
 import lambert
 import reference as ref
-from conftest import GPU_PENDING, MESHES, QUERY_DEVICES, read_obj
+from conftest import MESHES, QUERY_DEVICES, read_obj
 from test_layouts import layouts, layouts1
 
 DEVICES = QUERY_DEVICES
@@ -241,7 +241,6 @@ def test_a_ray_through_a_shared_edge_or_vertex_crosses_once(device):
     np.testing.assert_allclose(listed["t"], np.tile([4.0, 6.0], 4), rtol=1e-6)
 
 
-@GPU_PENDING
 def test_the_gpu_gives_the_cpus_results_bit_for_bit(mesh):
     name, v, f, scene, points = mesh
     cpu = scene.closest_points(points, device="cpu")

@@ -29,16 +29,16 @@ lambert view: keys and mouse
   left drag          orbit about the look-at point
   right/middle drag  pan
   wheel              dolly (10% closer a notch)
-  w a s d            fly forward, left, back, right
-  e q                fly up, down
+  w a d e            fly forward, left, right, up
+  s q                (with a mouse button held) fly back, down
   f                  frame the model
   r                  the file's camera
   1 .. 9             the file's cameras (glTF)
   l                  shadows on/off
-  Shift+S            save a screenshot (PNG of the image so far, full resolution)
+  s, Shift+S         save a screenshot (PNG of the image so far, full resolution)
   c                  print the camera as a [camera] table
   h                  this list
-  Esc, Shift+Q       quit
+  Esc, q, Shift+Q    quit
   drop a file        load it";
 
 /// What a drag does.
@@ -243,9 +243,15 @@ impl App {
         let (Some(c), None) = (chars.next(), chars.next()) else {
             return;
         };
+        // `s` and `q` are both the issue's screenshot and quit and WASD/QE's
+        // back and down: they fly while a mouse button is held (as in
+        // viewers that fly with the right button down), else save and quit.
+        let flying = self.drag.is_some();
         match c {
             'Q' => self.quit(event_loop),
+            'q' if !flying => self.quit(event_loop),
             'S' => self.send(Command::Screenshot(self.screenshot_path())),
+            's' if !flying => self.send(Command::Screenshot(self.screenshot_path())),
             'w' | 'a' | 's' | 'd' | 'e' | 'q' => self.send(Command::Fly(c)),
             'f' | 'F' => self.send(Command::Frame),
             'r' | 'R' => self.send(Command::FileCamera(None)),
