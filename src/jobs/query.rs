@@ -217,9 +217,13 @@ pub fn run_query(
         }
     };
     let read_seconds = start.elapsed().as_secs_f64();
-    let (mut renderer, _) = open(Arc::new(scene), job.device, job.adapter, sink)?;
+    // Held until the queries are done: a GPU renderer builds the winding
+    // tree (inside tests, signed distances) from the host's scene.
+    let scene = Arc::new(scene);
+    let (mut renderer, _) = open(Arc::clone(&scene), job.device, job.adapter, sink)?;
     let start = Instant::now();
     let records = work(&mut renderer)?;
+    drop(scene);
     let query_seconds = start.elapsed().as_secs_f64();
     let start = Instant::now();
     write_atomically(job.output, &records.bytes)?;
