@@ -57,7 +57,7 @@ impl Renderer {
         }
         let local = local_points(&placement, points)?;
         let mut answers = match self {
-            Renderer::Gpu(r) => {
+            Renderer::Gpu(r) => in_spatial_order(&local, |local| {
                 // The CPU's cull margins, so that both cull alike.
                 let radius = placement.radius as f32;
                 let margins: Vec<f32> = local
@@ -66,8 +66,8 @@ impl Renderer {
                         cpu::closest::query_margin(glam::Vec3::from(*p).abs().max_element(), radius)
                     })
                     .collect();
-                r.closest_points(&local, &margins, max_distance)?
-            }
+                r.closest_points(local, &margins, max_distance)
+            })?,
             Renderer::Cpu(scene) => cpu::closest_points(scene, &local, max_distance),
         };
         if placement.offset != DVec3::ZERO {
@@ -90,7 +90,7 @@ impl Renderer {
         let placement = self.triangles_only("winding numbers")?;
         let local = local_points(&placement, points)?;
         match self {
-            Renderer::Gpu(r) => r.winding_numbers(&local),
+            Renderer::Gpu(r) => in_spatial_order(&local, |local| r.winding_numbers(local)),
             Renderer::Cpu(scene) => Ok(cpu::winding_numbers(scene, &local)),
         }
     }
@@ -166,6 +166,23 @@ impl Renderer {
         }
         Ok(IntersectionList { ray_splits, hits })
     }
+}
+
+/// `query` of the points taken in Morton order (`cpu::spatial_order`:
+/// neighbouring invocations then walk the same nodes, which keeps them in
+/// the device's caches), its answers put back in the points' order.
+fn in_spatial_order<T: Copy + Send + Sync>(
+    points: &[[f32; 3]],
+    query: impl FnOnce(&[[f32; 3]]) -> Result<Vec<T>>,
+) -> Result<Vec<T>> {
+    let order = cpu::spatial_order(points);
+    let sorted: Vec<[f32; 3]> = order.par_iter().map(|&i| points[i as usize]).collect();
+    let answers = query(&sorted)?;
+    let mut out = answers.clone();
+    for (&i, &a) in order.iter().zip(&answers) {
+        out[i as usize] = a;
+    }
+    Ok(out)
 }
 
 /// Every point finite, or an error naming the first that is not.

@@ -578,6 +578,56 @@ fn the_four_lane_closest_point_is_the_scalar_one_bit_for_bit() {
     }
 }
 
+/// A closest-point query started from any triangle as its hint (as
+/// `closest_points` starts each from its neighbour's answer) finds what
+/// it finds with none, bit for bit, ties included.
+#[test]
+fn a_hint_changes_no_closest_point() {
+    use lambert::cpu::closest::closest_point;
+    // Shared vertices and edges (a tessellated sphere) make ties.
+    let mut triangles = sphere_mesh([0.0; 3], 1.0, 12, 16);
+    triangles.extend(soup(9, 200));
+    let scene = Scene::from_triangles(triangles.clone());
+    let mut rng = Lcg(21);
+    let mut queue = Vec::new();
+    let mut points: Vec<[f32; 3]> = (0..300).map(|_| rng.point(-2.5, 2.5)).collect();
+    // On vertices, where several triangles are equally near.
+    points.extend(triangles.iter().take(40).map(|t| t.v0));
+    for p in points {
+        let p = glam::Vec3::from(p);
+        let plain = closest_point(
+            &scene.bvh,
+            triangles.len(),
+            p,
+            f32::INFINITY,
+            1e-5,
+            None,
+            &mut queue,
+        );
+        for prim in (0..triangles.len()).step_by(37) {
+            let t = &triangles[prim];
+            let hint = Some((prim as u32, [t.v0, t.v1, t.v2].map(glam::Vec3::from)));
+            let hinted = closest_point(
+                &scene.bvh,
+                triangles.len(),
+                p,
+                f32::INFINITY,
+                1e-5,
+                hint,
+                &mut queue,
+            );
+            assert_eq!(hinted, plain, "{p} from triangle {prim}");
+        }
+        // Within a max distance the hint may lie beyond: still the same.
+        let t = &triangles[0];
+        let hint = Some((0, [t.v0, t.v1, t.v2].map(glam::Vec3::from)));
+        assert_eq!(
+            closest_point(&scene.bvh, triangles.len(), p, 0.01, 1e-5, hint, &mut queue),
+            closest_point(&scene.bvh, triangles.len(), p, 0.01, 1e-5, None, &mut queue),
+        );
+    }
+}
+
 /// The same queries on the GPU (lavapipe here) and the CPU path.
 fn both(triangles: Vec<Triangle>) -> (Renderer, Renderer) {
     let scene = Arc::new(Scene::from_triangles(triangles));

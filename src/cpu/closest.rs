@@ -236,13 +236,17 @@ fn queue_pop(queue: &mut BoxQueue) -> Option<(f32, u32)> {
 /// to `p` within squared distance `max_d2` (None when none is): boxes
 /// nearest first from a queue (`queue`, emptied first), each leaf's blocks
 /// four triangles at a time, boxes beyond `cull_bound` of the best so far
-/// skipped.
+/// skipped. `hint`, a triangle (id and vertices) likely near `p` (a
+/// neighbouring query's answer), is the first candidate: its bound prunes
+/// from the start, and as `better` orders candidates totally the answer
+/// is the same with or without it.
 pub fn closest_point(
     bvh: &Bvh,
     triangle_count: usize,
     p: Vec3,
     max_d2: f32,
     margin: f32,
+    hint: Option<(u32, [Vec3; 3])>,
     queue: &mut BoxQueue,
 ) -> Option<Nearest> {
     let mut best = Nearest {
@@ -252,7 +256,19 @@ pub fn closest_point(
         v: 0.0,
         point: Vec3::ZERO,
     };
-    let mut bound = cull_bound(max_d2, margin);
+    if let Some((prim, [a, b, c])) = hint {
+        let (point, d2, u, v) = closest_point_triangle(p, a, b, c);
+        if better(d2, prim, best.d2, best.prim) {
+            best = Nearest {
+                d2,
+                prim,
+                u,
+                v,
+                point,
+            };
+        }
+    }
+    let mut bound = cull_bound(best.d2, margin);
     queue.clear();
     let mut current = 0u32;
     loop {

@@ -19,7 +19,8 @@ pub mod winding;
 
 pub use prefetch::LARGE_BVH_BYTES;
 pub use proximity::{
-    box_pad, closest_points, count_intersections, list_intersections, sort_hits, winding_numbers,
+    box_pad, closest_points, count_intersections, list_intersections, sort_hits, spatial_order,
+    winding_numbers,
 };
 pub use query::{
     QueryOptions, QueryRays, SharedOut, TracedChunk, trace_local_rays_each, trace_rays,

@@ -9,12 +9,80 @@ use rayon::prelude::*;
 use super::closest::{closest_point, query_margin};
 use super::f32;
 use super::winding::winding_number;
-use crate::layout::{ClosestPoint, ListedHit, Ray};
+use crate::layout::{ClosestPoint, ListedHit, NO_HIT, Ray};
 use crate::scene::Scene;
 
 /// Points per parallel task: enough to amortise the task, few enough to
 /// balance two to a few dozen threads.
 const CHUNK: usize = 1024;
+
+/// The points' indices in Morton order over their bounding box (10 bits
+/// an axis): queries taken in this order touch the same nodes and leaves
+/// one after another, which keeps them in cache, and each closest-point
+/// query starts from its predecessor's triangle (`closest_points`). The
+/// answers do not depend on the order.
+pub fn spatial_order(points: &[[f32; 3]]) -> Vec<u32> {
+    let (lo, hi) = points
+        .par_iter()
+        .fold(
+            || (Vec3::INFINITY, Vec3::NEG_INFINITY),
+            |(lo, hi), &p| (lo.min(Vec3::from(p)), hi.max(Vec3::from(p))),
+        )
+        .reduce(
+            || (Vec3::INFINITY, Vec3::NEG_INFINITY),
+            |a, b| (a.0.min(b.0), a.1.max(b.1)),
+        );
+    let scale = Vec3::splat(1023.0) / (hi - lo).max(Vec3::splat(f32::MIN_POSITIVE));
+    // Every other bit of a 10-bit number spread to every third.
+    let spread = |x: u32| {
+        let mut x = x & 0x3ff;
+        x = (x | x << 16) & 0x0300_00ff;
+        x = (x | x << 8) & 0x0300_f00f;
+        x = (x | x << 4) & 0x030c_30c3;
+        (x | x << 2) & 0x0924_9249
+    };
+    let mut keyed: Vec<(u32, u32)> = points
+        .par_iter()
+        .enumerate()
+        .map(|(i, &p)| {
+            let c = ((Vec3::from(p) - lo) * scale).to_array().map(|c| c as u32);
+            (
+                spread(c[0]) | spread(c[1]) << 1 | spread(c[2]) << 2,
+                i as u32,
+            )
+        })
+        .collect();
+    keyed.par_sort_unstable();
+    keyed.into_iter().map(|(_, i)| i).collect()
+}
+
+/// `f(i)` for every index in `order`, in parallel chunks of `CHUNK` taken
+/// in order (with state `init()` carried through a chunk), put back in
+/// index order (over a vector of `fill`).
+fn in_order<T, S>(
+    order: &[u32],
+    fill: T,
+    init: impl Fn() -> S + Sync,
+    f: impl Fn(&mut S, usize) -> T + Sync,
+) -> Vec<T>
+where
+    T: Send + Copy,
+{
+    let chunks: Vec<Vec<T>> = order
+        .par_chunks(CHUNK)
+        .map(|chunk| {
+            let mut state = init();
+            chunk.iter().map(|&i| f(&mut state, i as usize)).collect()
+        })
+        .collect();
+    let mut out = vec![fill; order.len()];
+    for (chunk, values) in order.chunks(CHUNK).zip(chunks) {
+        for (&i, v) in chunk.iter().zip(values) {
+            out[i as usize] = v;
+        }
+    }
+    out
+}
 
 /// The nearest point of the scene's triangles to each point (local frame)
 /// within `max_distance` (squared distance ≤ max_distance², in f32);
@@ -24,36 +92,46 @@ pub fn closest_points(scene: &Scene, points: &[[f32; 3]], max_distance: f32) -> 
     let triangles = scene.triangles.len();
     let radius = scene.placement().radius as f32;
     let max_d2 = max_distance * max_distance;
-    points
-        .par_iter()
-        .with_min_len(CHUNK)
-        .map_init(Vec::new, |queue, &p| {
-            let p = Vec3::from(p);
+    let order = spatial_order(points);
+    in_order(
+        &order,
+        ClosestPoint::NONE,
+        || (Vec::new(), NO_HIT),
+        |(queue, previous), i| {
+            let p = Vec3::from(points[i]);
             let margin = query_margin(p.abs().max_element(), radius);
-            match closest_point(&scene.bvh, triangles, p, max_d2, margin, queue) {
-                Some(n) => ClosestPoint {
-                    point: n.point.to_array(),
-                    prim: n.prim,
-                    u: n.u,
-                    v: n.v,
-                    distance: n.d2.sqrt(),
-                    _pad: 0,
-                },
+            let hint = (*previous != NO_HIT).then(|| {
+                let t = &scene.triangles[*previous as usize];
+                (*previous, [t.v0, t.v1, t.v2].map(Vec3::from))
+            });
+            match closest_point(&scene.bvh, triangles, p, max_d2, margin, hint, queue) {
+                Some(n) => {
+                    *previous = n.prim;
+                    ClosestPoint {
+                        point: n.point.to_array(),
+                        prim: n.prim,
+                        u: n.u,
+                        v: n.v,
+                        distance: n.d2.sqrt(),
+                        _pad: 0,
+                    }
+                }
                 None => ClosestPoint::NONE,
             }
-        })
-        .collect()
+        },
+    )
 }
 
 /// The generalized winding number of the scene's triangles at each point
 /// (local frame), through the winding tree (built on the first call).
 pub fn winding_numbers(scene: &Scene, points: &[[f32; 3]]) -> Vec<f32> {
     let tree = scene.bvh.winding_tree(scene.triangles.len());
-    points
-        .par_iter()
-        .with_min_len(CHUNK)
-        .map(|&q| winding_number(tree, &scene.triangles, Vec3::from(q)))
-        .collect()
+    in_order(
+        &spatial_order(points),
+        0.0,
+        || (),
+        |_, i| winding_number(tree, &scene.triangles, Vec3::from(points[i])),
+    )
 }
 
 /// How many triangles each ray (local frame) crosses in (tmin, tmax), an
