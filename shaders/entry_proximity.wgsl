@@ -20,7 +20,8 @@
 
 // query_points, query_scalars → closest_out.
 @compute @workgroup_size(WORKGROUP_INVOCATIONS)
-fn closest_points(@builtin(global_invocation_id) id: vec3<u32>) {
+fn closest_points(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
+    let id = spread_invocation(group, groups, local, vec3<u32>(WORKGROUP_INVOCATIONS, 1u, 1u));
     if id.x >= arrayLength(&closest_out) {
         return;
     }
@@ -31,7 +32,8 @@ fn closest_points(@builtin(global_invocation_id) id: vec3<u32>) {
 
 // query_points, winding_nodes, winding_prims → winding_out.
 @compute @workgroup_size(WORKGROUP_INVOCATIONS)
-fn winding_numbers(@builtin(global_invocation_id) id: vec3<u32>) {
+fn winding_numbers(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
+    let id = spread_invocation(group, groups, local, vec3<u32>(WORKGROUP_INVOCATIONS, 1u, 1u));
     if id.x >= arrayLength(&winding_out) {
         return;
     }
@@ -41,7 +43,8 @@ fn winding_numbers(@builtin(global_invocation_id) id: vec3<u32>) {
 
 // rays, query_scalars → hit_counts.
 @compute @workgroup_size(WORKGROUP_INVOCATIONS)
-fn count_hits(@builtin(global_invocation_id) id: vec3<u32>) {
+fn count_hits(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
+    let id = spread_invocation(group, groups, local, vec3<u32>(WORKGROUP_INVOCATIONS, 1u, 1u));
     if id.x >= arrayLength(&rays) {
         return;
     }
@@ -51,7 +54,8 @@ fn count_hits(@builtin(global_invocation_id) id: vec3<u32>) {
 
 // rays, query_scalars, hit_counts (each ray's first slot) → listed_hits.
 @compute @workgroup_size(WORKGROUP_INVOCATIONS)
-fn list_hits(@builtin(global_invocation_id) id: vec3<u32>) {
+fn list_hits(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
+    let id = spread_invocation(group, groups, local, vec3<u32>(WORKGROUP_INVOCATIONS, 1u, 1u));
     if id.x >= arrayLength(&rays) {
         return;
     }

@@ -6,7 +6,8 @@
 
 // One ray of a `lambert trace` batch. Misses leave t = FAR, prim = NO_HIT.
 @compute @workgroup_size(WORKGROUP_INVOCATIONS)
-fn trace_rays(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+fn trace_rays(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    let id = spread_invocation(group, groups, local, vec3<u32>(WORKGROUP_INVOCATIONS, 1u, 1u));
     stack_base = lane * STACK_ENTRIES;
     if id.x >= arrayLength(&rays) {
         return;

@@ -7,7 +7,8 @@
 // pixel_results.
 
 @compute @workgroup_size(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y)
-fn render(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+fn render(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    let id = spread_invocation(group, groups, local, vec3<u32>(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y, 1u));
     stack_base = lane * STACK_ENTRIES;
     let slot = tile_slot(id);
     if slot == NO_HIT {
@@ -20,7 +21,8 @@ fn render(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocatio
 // Adaptive sampling's later passes: `params.spp` more samples (seeded by
 // `params.seed`) for each listed pixel, in parts as `render` adds them.
 @compute @workgroup_size(WORKGROUP_INVOCATIONS)
-fn render_pixel_list(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+fn render_pixel_list(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    let id = spread_invocation(group, groups, local, vec3<u32>(WORKGROUP_INVOCATIONS, 1u, 1u));
     stack_base = lane * STACK_ENTRIES;
     if id.x >= arrayLength(&pixel_list) {
         return;

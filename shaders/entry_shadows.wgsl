@@ -27,10 +27,11 @@ fn wave_ray(id: vec3<u32>, groups: vec3<u32>, sample: u32) -> u32 {
 // and its shadow rays queued.
 @compute @workgroup_size(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y)
 fn render_primary(
-    @builtin(global_invocation_id) id: vec3<u32>,
+    @builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>,
     @builtin(local_invocation_index) lane: u32,
     @builtin(num_workgroups) groups: vec3<u32>,
 ) {
+    let id = spread_invocation(group, groups, local, vec3<u32>(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y, 1u));
     stack_base = lane * STACK_ENTRIES;
     if tile_slot(id) == NO_HIT {
         return;
@@ -65,7 +66,8 @@ fn render_primary(
 // (`shadow_workgroups`): a workgroup a camera ray's worth cost lavapipe
 // about a tenth of the 1-spp dragon's render in empty workgroups.
 @compute @workgroup_size(WORKGROUP_INVOCATIONS)
-fn render_shadows(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+fn render_shadows(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    let id = spread_invocation(group, groups, local, vec3<u32>(WORKGROUP_INVOCATIONS, 1u, 1u));
     stack_base = lane * STACK_ENTRIES;
     if id.x >= atomicLoad(&shadow_count[0]) {
         return;
@@ -80,7 +82,8 @@ fn render_shadows(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_i
 // Pass 3: each tile pixel's samples shaded in turn from their hits and
 // the shadows found, added and written as `render` adds and writes them.
 @compute @workgroup_size(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y)
-fn render_shade(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+fn render_shade(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let id = spread_invocation(group, groups, local, vec3<u32>(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y, 1u));
     let slot = tile_slot(id);
     if slot == NO_HIT {
         return;

@@ -59,9 +59,42 @@ override SHADOWS_FROM_QUEUE: bool = false;
 // Words of `shadow_blocked` a camera ray of the wavefront path has: one
 // bit a light (gpu::render's `wave_budget`).
 override SHADOW_WORDS: u32 = 1u;
+// lavapipe's compute threads (gpu::pipelines' `cpu_threads`; 1 on every
+// other adapter): llvmpipe hands thread t the t-th contiguous 1/T of a
+// dispatch's workgroups (Mesa's lp_cs_tpool), so the entry points take
+// workgroups through `spread_workgroup`, which deals neighbouring blocks of
+// work to different threads.
+override CPU_THREADS: u32 = 1u;
 // Invocations per workgroup of every entry point (RENDER_WORKGROUP_X ×
 // RENDER_WORKGROUP_Y for `render`).
 const WORKGROUP_INVOCATIONS: u32 = 64u;
+
+// The block of work (rays, pixels) of workgroup `group` of `groups`: on
+// llvmpipe thread t runs workgroups t·C to t·C + C − 1 (C = groups /
+// CPU_THREADS, the rest after them one by one), and as it is given them
+// here it works on blocks t, t + T, t + 2T, …: every thread gets a
+// share of each part of the image, where contiguous halves of it (the
+// dragon and the sky above it) differ in work by up to 2× and the dispatch
+// waits for the slower thread. A permutation of 0..groups; the identity
+// where CPU_THREADS = 1.
+fn spread_workgroup(group: u32, groups: u32) -> u32 {
+    let chunk = groups / CPU_THREADS;
+    if group >= chunk * CPU_THREADS {
+        return group;
+    }
+    return (group % chunk) * CPU_THREADS + group / chunk;
+}
+
+// The global invocation id of a 2D (or 3D) dispatch with its workgroups
+// spread as `spread_workgroup` spreads them (llvmpipe numbers a grid's
+// workgroups x fastest, then y, then z).
+fn spread_invocation(group: vec3<u32>, groups: vec3<u32>, local: vec3<u32>, size: vec3<u32>) -> vec3<u32> {
+    let linear = (group.z * groups.y + group.y) * groups.x + group.x;
+    let spread = spread_workgroup(linear, groups.x * groups.y * groups.z);
+    let plane = groups.x * groups.y;
+    let g = vec3<u32>(spread % groups.x, (spread % plane) / groups.x, spread / plane);
+    return g * size + local;
+}
 
 const NO_HIT: u32 = 0xffffffffu;
 // Texels a row of the BVH textures: 1 << TEXEL_ROW_BITS (gpu::TEXELS_PER_ROW).

@@ -233,3 +233,60 @@ fn apart_as_megakernel(scene: &lambert::Scene, label: &str) -> lambert::output::
     println!("{label}: shadow rays apart = megakernel, bit for bit");
     apart
 }
+
+/// The workgroups dealt to llvmpipe's threads in turn (the shader's
+/// `spread_workgroup`, sized by `Gpu::cpu_threads`) are a permutation of
+/// the dispatch's work, whatever the number of threads assumed: renders in
+/// both paths and ray queries come out the same bits for 1 to 7 of them,
+/// remainders included (a wrong permutation drops or repeats pixels).
+#[test]
+fn workgroups_spread_over_any_thread_count_change_no_pixel_or_hit() {
+    use lambert::gpu::{AdapterRequest, Gpu, GpuOptions, GpuRenderer, ShadowDispatch};
+    let hidden = lambert::progress::Progress::hidden();
+    let mut scene = load("bunny");
+    scene.view.camera.width = 72;
+    scene.view.camera.height = 40;
+    scene.view.spp = 3;
+    let rays = lambert::rays::camera_rays(&scene);
+    let outputs = |threads: &str| {
+        let request = AdapterRequest {
+            options: GpuOptions {
+                llvmpipe_threads: Some(threads.to_string()),
+                ..GpuOptions::default()
+            },
+            ..AdapterRequest::default()
+        };
+        let gpu = Gpu::open(&request, false).expect("an adapter (lavapipe on CI)");
+        if gpu.info.name.to_lowercase().contains("llvmpipe") {
+            assert_eq!(
+                gpu.cpu_threads().to_string(),
+                threads,
+                "LP_NUM_THREADS is followed"
+            );
+        }
+        let mut renderer = GpuRenderer::new(gpu, &scene).expect("scene uploads");
+        let mut images = Vec::new();
+        for dispatch in [ShadowDispatch::Apart, ShadowDispatch::Megakernel] {
+            renderer.shadow_dispatch = dispatch;
+            let r = renderer.render(&hidden).unwrap().0;
+            images.push((bits(&r), r.prims.clone()));
+        }
+        let hits = renderer.trace_rays(&rays, false, scene.intersect).unwrap();
+        let hits: Vec<[u32; 4]> = hits
+            .iter()
+            .map(|h| [h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits()])
+            .collect();
+        (images, hits)
+    };
+    let one = outputs("1");
+    assert!(
+        one.1.iter().any(|h| h[1] != lambert::layout::NO_HIT),
+        "the rays hit the bunny"
+    );
+    for threads in ["2", "3", "5", "7"] {
+        assert!(
+            outputs(threads) == one,
+            "{threads} threads assumed: the output differs"
+        );
+    }
+}

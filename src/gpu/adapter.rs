@@ -3,7 +3,7 @@
 
 use crate::error::{Error, Result};
 
-use super::device::{GpuOptions, MAX_BUFFER_ENV, SHADOW_DISPATCH_ENV};
+use super::device::{GpuOptions, LLVMPIPE_THREADS_ENV, MAX_BUFFER_ENV, SHADOW_DISPATCH_ENV};
 
 /// Which adapter to use: `--adapter`, `--backend`, or wgpu's own
 /// `WGPU_ADAPTER_NAME` and `WGPU_BACKEND` when those are unset, and the
@@ -32,6 +32,7 @@ impl AdapterRequest {
             options: GpuOptions {
                 max_buffer_bytes: var(MAX_BUFFER_ENV),
                 shadow_dispatch: var(SHADOW_DISPATCH_ENV),
+                llvmpipe_threads: var(LLVMPIPE_THREADS_ENV),
             },
             ..self
         }

@@ -23,7 +23,13 @@ pub struct GpuOptions {
     pub max_buffer_bytes: Option<String>,
     /// `SHADOW_DISPATCH_ENV`, checked when a scene is uploaded.
     pub shadow_dispatch: Option<String>,
+    /// `LLVMPIPE_THREADS_ENV`, Mesa's own: how many threads llvmpipe runs
+    /// a dispatch on.
+    pub llvmpipe_threads: Option<String>,
 }
+
+/// Mesa's variable for llvmpipe's thread count (its default: the CPUs).
+pub const LLVMPIPE_THREADS_ENV: &str = "LP_NUM_THREADS";
 
 impl GpuOptions {
     fn max_buffer_bytes(&self) -> Result<Option<u64>> {
@@ -52,6 +58,22 @@ pub struct Gpu {
 }
 
 impl Gpu {
+    /// The threads llvmpipe splits a dispatch between (the shader's
+    /// `CPU_THREADS`, which deals them neighbouring blocks of work in
+    /// turn): Mesa's `LP_NUM_THREADS` or the CPUs it sees; 1 on other
+    /// adapters, which schedule workgroups themselves.
+    pub fn cpu_threads(&self) -> u32 {
+        if !super::adapter::is_llvmpipe(&self.info) {
+            return 1;
+        }
+        let cpus = || std::thread::available_parallelism().map_or(1, |n| n.get() as u32);
+        let threads = match &self.options.llvmpipe_threads {
+            Some(v) => v.trim().parse().unwrap_or_else(|_| cpus()),
+            None => cpus(),
+        };
+        threads.max(1)
+    }
+
     /// Opens the best adapter matching `request`: hardware before software,
     /// Vulkan/Metal/DX12 before GL. With `hardware_only`, software
     /// rasterisers such as lavapipe do not count.

@@ -132,6 +132,7 @@ pub(super) fn resident_constants(
     );
     constants.push(("STACK_ENTRIES", stack_entries as f64));
     constants.push(("STACK_SPILLS", spills as u32 as f64));
+    constants.push(("CPU_THREADS", gpu.cpu_threads() as f64));
     constants
 }
 
