@@ -162,8 +162,8 @@ fn scenes_split_across_bindings_render_the_same() {
     }
 }
 
-/// The wavefront render (shadow rays apart; the default below
-/// `WAVE_BELOW_SPP`) and the megakernel give the same image, bit for bit (colour, variance and
+/// The wavefront render (shadow rays apart; the default at any spp where
+/// shadows are traced) and the megakernel give the same image, bit for bit (colour, variance and
 /// primitive): at 1 and 3 spp on five scenes, at 40 spp (more than a
 /// dispatch takes on llvmpipe: the sums carried between dispatches), and
 /// with 40 lights (two words of blocked bits a ray), which also agree with
@@ -211,15 +211,9 @@ fn apart_as_megakernel(scene: &lambert::Scene, label: &str) -> lambert::output::
     let mut renderer = GpuRenderer::new(open_gpu(), scene).expect("scene uploads");
     assert_eq!(
         renderer.shadow_dispatch,
-        ShadowDispatch::Measured,
-        "{label}"
+        ShadowDispatch::Apart,
+        "{label}: the wavefront by default, at any spp"
     );
-    assert_eq!(
-        renderer.shadows_apart(),
-        scene.view.spp < lambert::gpu::WAVE_BELOW_SPP,
-        "{label}: the wavefront by default where it measured faster"
-    );
-    renderer.shadow_dispatch = ShadowDispatch::Apart;
     assert!(renderer.shadows_apart(), "{label}");
     let apart = renderer.render(&hidden).unwrap().0;
     renderer.shadow_dispatch = ShadowDispatch::Megakernel;

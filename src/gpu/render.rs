@@ -28,25 +28,19 @@ pub(super) const LLVMPIPE_SAMPLES_PER_DISPATCH: u32 = 32;
 /// `render_shade` shades and adds the samples; the same image, bit for
 /// bit, at any spp and any number of lights).
 /// LAMBERT_SHADOW_DISPATCH=megakernel|apart chooses (`GpuOptions`);
-/// unset, `Measured`.
+/// unset, apart wherever it applies: on a quiet machine it measured
+/// faster than the megakernel at every spp (lavapipe, the dragon, one
+/// point light, device time: 0.73× at 1 spp, 0.98× at 4, 0.95× at 16,
+/// 0.90× at 64; docs/bvh.md).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ShadowDispatch {
     Megakernel,
     Apart,
-    /// Whichever measured faster on lavapipe (docs/bvh.md): apart below
-    /// `WAVE_BELOW_SPP` samples per pixel, the megakernel from there.
-    Measured,
 }
 
-/// Samples per pixel from which the megakernel measured faster than the
-/// wavefront (the dragon, one point light, CPU time on lavapipe: 0.83×
-/// the megakernel's at 1 spp, 1.02× at 4, 1.15× at 16, 1.29× at 64;
-/// docs/bvh.md).
-pub const WAVE_BELOW_SPP: u32 = 4;
-
 impl ShadowDispatch {
-    /// `Measured` where apart applies (shadows traced, and a queue for
-    /// the scene's lights no larger than `max_binding` bytes), unless
+    /// `Apart` where it applies (shadows traced, and a queue for the
+    /// scene's lights no larger than `max_binding` bytes), unless
     /// `chosen` (LAMBERT_SHADOW_DISPATCH) says otherwise.
     pub(super) fn for_scene(
         scene: &Scene,
@@ -56,8 +50,7 @@ impl ShadowDispatch {
         let lights = scene.lights.len().min(u32::MAX as usize) as u32;
         let applies = scene.shadows && lights > 0 && wave_queue_bytes(lights) <= max_binding;
         match chosen {
-            None if applies => Ok(ShadowDispatch::Measured),
-            Some("apart") if applies => Ok(ShadowDispatch::Apart),
+            None | Some("apart") if applies => Ok(ShadowDispatch::Apart),
             None | Some("apart") | Some("megakernel") => Ok(ShadowDispatch::Megakernel),
             Some(other) => Err(Error::Usage(format!(
                 "{SHADOW_DISPATCH_ENV}={other:?}: use \"megakernel\" or \"apart\""
@@ -244,11 +237,7 @@ impl GpuRenderer {
     /// an earlier version that dispatched each sample's passes and waited
     /// took 152 s rather than 19 over the sampling tests.
     pub fn shadows_apart(&self) -> bool {
-        match self.shadow_dispatch {
-            ShadowDispatch::Apart => true,
-            ShadowDispatch::Megakernel => false,
-            ShadowDispatch::Measured => self.params.spp < WAVE_BELOW_SPP,
-        }
+        self.shadow_dispatch == ShadowDispatch::Apart
     }
 
     /// Halves `samples_per_dispatch` after the driver cut loops short.
