@@ -24,12 +24,14 @@ pub enum Input {
     Stl,
     /// A ray file of `lambert trace`.
     Rays,
+    /// A point file of `lambert query`.
+    Points,
     /// An EXR part file of `lambert merge`.
     Part,
 }
 
 impl Input {
-    pub const ALL: [Input; 8] = [
+    pub const ALL: [Input; 9] = [
         Input::Toml,
         Input::Obj,
         Input::Mtl,
@@ -37,6 +39,7 @@ impl Input {
         Input::Gltf,
         Input::Stl,
         Input::Rays,
+        Input::Points,
         Input::Part,
     ];
 
@@ -57,6 +60,7 @@ impl Input {
             Input::Gltf => "gltf",
             Input::Stl => "stl",
             Input::Rays => "rays",
+            Input::Points => "points",
             Input::Part => "part",
         }
     }
@@ -81,6 +85,7 @@ impl Input {
                 &mut Default::default(),
             ),
             Input::Rays => crate::rays::parse_rays(bytes, path).map(drop),
+            Input::Points => crate::rays::parse_points(bytes, path).map(drop),
             Input::Part => crate::parts::parse_part(bytes, path).map(drop),
         }
     }

@@ -12,6 +12,7 @@ use serde::Serialize;
 use crate::cpu;
 use crate::error::{Error, Result};
 use crate::layout::{Hit, NO_HIT, Ray};
+use crate::limits::MAX_COORDINATE;
 use crate::output::write_atomically;
 use crate::scene::Scene;
 
@@ -53,6 +54,44 @@ fn check_ray_bytes(length: usize, path: &Path) -> Result<()> {
         )));
     }
     Ok(())
+}
+
+/// A point file's record: little-endian f32 x, y, z.
+pub const POINT_BYTES: usize = 12;
+const AXES: [&str; 3] = ["x", "y", "z"];
+
+/// Reads and checks a point file: every coordinate finite and within
+/// `MAX_COORDINATE`, the first bad one named by point, byte offset and axis.
+pub fn read_points(path: &Path) -> Result<Vec<[f32; 3]>> {
+    let bytes = crate::files::read_capped(path, crate::files::MAX_RAY_BYTES)?;
+    parse_points(&bytes, path)
+}
+
+/// Decodes a point file's bytes; `path` names it in errors.
+pub fn parse_points(bytes: &[u8], path: &Path) -> Result<Vec<[f32; 3]>> {
+    if !bytes.len().is_multiple_of(POINT_BYTES) {
+        return Err(Error::Usage(format!(
+            "{}: {} bytes is not a whole number of points ({POINT_BYTES} bytes each: 3 \
+             little-endian f32 x y z); {} bytes left over",
+            path.display(),
+            bytes.len(),
+            bytes.len() % POINT_BYTES
+        )));
+    }
+    // A copy rather than a cast: `bytes` may be unaligned.
+    let points: Vec<[f32; 3]> = bytemuck::pod_collect_to_vec(bytes);
+    let bad = |c: &f32| !(c.is_finite() && (*c as f64).abs() <= MAX_COORDINATE);
+    if let Some(i) = points.iter().position(|p| p.iter().any(bad)) {
+        let axis = points[i].iter().position(bad).expect("a bad coordinate");
+        return Err(Error::Usage(format!(
+            "{}: point {i} (byte offset {}): {} is {:?}; coordinates must be finite and within ±{MAX_COORDINATE:e}",
+            path.display(),
+            i * POINT_BYTES,
+            AXES[axis],
+            points[i][axis]
+        )));
+    }
+    Ok(points)
 }
 
 /// Decodes a ray file's bytes; `path` names it in errors.

@@ -28,9 +28,11 @@ pub use image::{
     render_view,
 };
 pub use query::{
-    INSIDE_WINDING, POINT_BYTES, PointQuery, QueryJob, QueryKind, QueryReport, RayQuery, Sign,
-    distances, inside, parse_points, read_points, run_query, signed_distances,
+    INSIDE_WINDING, PointQuery, QueryJob, QueryKind, QueryReport, RayQuery, Sign, distances,
+    inside, run_query, signed_distances,
 };
+// The point file is a file format beside the ray file (crate::rays).
+pub use crate::rays::{POINT_BYTES, parse_points, read_points};
 pub use tile::{TileJob, TileReport, render_tile};
 pub use turntable::{FrameReport, TurntableJob, TurntableReport, frame_path, render_turntable};
 

@@ -12,16 +12,11 @@ use super::open;
 use crate::error::{Error, Result};
 use crate::gpu::AdapterRequest;
 use crate::layout::{ClosestPoint, ListedHit, NO_HIT, Ray};
-use crate::limits::MAX_COORDINATE;
 use crate::output::write_atomically;
 use crate::progress::ProgressSink;
 use crate::rays;
 use crate::render::{DeviceChoice, Renderer};
 use crate::scene::Scene;
-
-/// A point file's record: little-endian f32 x, y, z.
-pub const POINT_BYTES: usize = 12;
-const AXES: [&str; 3] = ["x", "y", "z"];
 
 /// A point is inside where the triangles' generalized winding number about
 /// it is at least this: 1 inside a closed mesh, 0 outside, and across a
@@ -86,40 +81,6 @@ pub fn signed_distances(
         .zip(inside)
         .map(|(d, inside)| if inside { -d } else { d })
         .collect())
-}
-
-/// Reads and checks a point file: every coordinate finite and within
-/// `MAX_COORDINATE`, the first bad one named by point, byte offset and axis.
-pub fn read_points(path: &Path) -> Result<Vec<[f32; 3]>> {
-    let bytes = crate::files::read_capped(path, crate::files::MAX_RAY_BYTES)?;
-    parse_points(&bytes, path)
-}
-
-/// Decodes a point file's bytes; `path` names it in errors.
-pub fn parse_points(bytes: &[u8], path: &Path) -> Result<Vec<[f32; 3]>> {
-    if !bytes.len().is_multiple_of(POINT_BYTES) {
-        return Err(Error::Usage(format!(
-            "{}: {} bytes is not a whole number of points ({POINT_BYTES} bytes each: 3 \
-             little-endian f32 x y z); {} bytes left over",
-            path.display(),
-            bytes.len(),
-            bytes.len() % POINT_BYTES
-        )));
-    }
-    // A copy rather than a cast: `bytes` may be unaligned.
-    let points: Vec<[f32; 3]> = bytemuck::pod_collect_to_vec(bytes);
-    let bad = |c: &f32| !(c.is_finite() && (*c as f64).abs() <= MAX_COORDINATE);
-    if let Some(i) = points.iter().position(|p| p.iter().any(bad)) {
-        let axis = points[i].iter().position(bad).expect("a bad coordinate");
-        return Err(Error::Usage(format!(
-            "{}: point {i} (byte offset {}): {} is {:?}; coordinates must be finite and within ±{MAX_COORDINATE:e}",
-            path.display(),
-            i * POINT_BYTES,
-            AXES[axis],
-            points[i][axis]
-        )));
-    }
-    Ok(points)
 }
 
 /// What `lambert query` computes.
@@ -205,7 +166,7 @@ pub fn run_query(
     let start = Instant::now();
     let (queries, work): (usize, Work) = match job.kind {
         QueryKind::Points(query) => {
-            let points = read_points(job.input)?;
+            let points = crate::rays::read_points(job.input)?;
             (
                 points.len(),
                 Box::new(move |r| point_records(r, query, &points)),
