@@ -27,40 +27,7 @@ fn owns_edge(dx: f32, dy: f32, det: f32) -> bool {
 
 // (t, u, v) of the crossing, t = FAR where there is none.
 fn crossing(ray: Ray, shear: Shear, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> vec3<f32> {
-    let kx = shear.axes.x;
-    let ky = shear.axes.y;
-    let kz = shear.axes.z;
-    let oa = a - ray.origin;
-    let ob = b - ray.origin;
-    let oc = c - ray.origin;
-    let ax = oa[kx] - shear.s.x * oa[kz];
-    let ay = oa[ky] - shear.s.y * oa[kz];
-    let bx = ob[kx] - shear.s.x * ob[kz];
-    let by = ob[ky] - shear.s.y * ob[kz];
-    let cx = oc[kx] - shear.s.x * oc[kz];
-    let cy = oc[ky] - shear.s.y * oc[kz];
-    let u = cx * by - cy * bx;
-    let v = ax * cy - ay * cx;
-    let w = bx * ay - by * ax;
-    let miss = vec3<f32>(FAR, 0.0, 0.0);
-    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
-        return miss;
-    }
-    let det = u + v + w;
-    if det == 0.0 {
-        return miss;
-    }
-    if (u == 0.0 && !owns_edge(bx - cx, by - cy, det))
-        || (v == 0.0 && !owns_edge(cx - ax, cy - ay, det))
-        || (w == 0.0 && !owns_edge(ax - bx, ay - by, det)) {
-        return miss;
-    }
-    let t_scaled = u * shear.s.z * oa[kz] + v * shear.s.z * ob[kz] + w * shear.s.z * oc[kz];
-    let t = t_scaled / det;
-    if !(t > ray.tmin && t < ray.tmax) {
-        return miss;
-    }
-    return vec3<f32>(t, v / det, w / det);
+    return watertight_test(ray, shear, a, b, c, true);
 }
 
 fn enters_padded_box(ray: Ray, inv_dir: vec3<f32>, lo: vec3<f32>, hi: vec3<f32>, pad: f32) -> bool {

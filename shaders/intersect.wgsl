@@ -101,6 +101,13 @@ fn ray_shear(dir: vec3<f32>) -> Shear {
 // Edge values of exactly 0 count as inside for both (the paper recomputes
 // them in f64, which GPUs may lack; a tie then hits both, never neither).
 fn intersect_triangle_watertight(ray: Ray, shear: Shear, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> vec3<f32> {
+    return watertight_test(ray, shear, a, b, c, false);
+}
+
+// The watertight test; with `owned_edges`, an edge value of exactly 0
+// counts only for the triangle that owns_edge (every-hit queries, which
+// must count a crossing once) rather than for both.
+fn watertight_test(ray: Ray, shear: Shear, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, owned_edges: bool) -> vec3<f32> {
     let k = shear.axes;
     let oa = a - ray.origin;
     let ob = b - ray.origin;
@@ -111,6 +118,7 @@ fn intersect_triangle_watertight(ray: Ray, shear: Shear, a: vec3<f32>, b: vec3<f
     let by = ob[k.y] - shear.s.y * ob[k.z];
     let cx = oc[k.x] - shear.s.x * oc[k.z];
     let cy = oc[k.y] - shear.s.y * oc[k.z];
+    // u: edge c → b, v: a → c, w: b → a.
     let u = cx * by - cy * bx;
     let v = ax * cy - ay * cx;
     let w = bx * ay - by * ax;
@@ -119,6 +127,11 @@ fn intersect_triangle_watertight(ray: Ray, shear: Shear, a: vec3<f32>, b: vec3<f
     }
     let det = u + v + w;
     if det == 0.0 {
+        return no_triangle_hit();
+    }
+    if owned_edges && ((u == 0.0 && !owns_edge(bx - cx, by - cy, det))
+        || (v == 0.0 && !owns_edge(cx - ax, cy - ay, det))
+        || (w == 0.0 && !owns_edge(ax - bx, ay - by, det))) {
         return no_triangle_hit();
     }
     let t_scaled = u * shear.s.z * oa[k.z] + v * shear.s.z * ob[k.z] + w * shear.s.z * oc[k.z];

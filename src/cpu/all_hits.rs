@@ -21,44 +21,12 @@ pub fn owns_edge(dx: Real, dy: Real, det: Real) -> bool {
 }
 
 /// (t, u, v) where the ray crosses triangle (a, b, c) in (tmin, tmax), t
-/// = FAR where it does not: `intersect_triangle_watertight`'s operations
-/// (so the same t, u and v), and where an edge value is exactly 0, the
-/// crossing counts only for the triangle that `owns_edge`.
+/// = FAR where it does not: the watertight test (so the same t, u and v),
+/// and where an edge value is exactly 0, the crossing counts only for the
+/// triangle that `owns_edge`.
 #[inline(always)]
 pub fn crossing(ray: &Ray, shear: &Shear, a: Vec3, b: Vec3, c: Vec3) -> (Real, Real, Real) {
-    let [kx, ky, kz] = shear.axes;
-    let oa = (a - ray.origin).to_array();
-    let ob = (b - ray.origin).to_array();
-    let oc = (c - ray.origin).to_array();
-    let ax = oa[kx] - shear.s.x * oa[kz];
-    let ay = oa[ky] - shear.s.y * oa[kz];
-    let bx = ob[kx] - shear.s.x * ob[kz];
-    let by = ob[ky] - shear.s.y * ob[kz];
-    let cx = oc[kx] - shear.s.x * oc[kz];
-    let cy = oc[ky] - shear.s.y * oc[kz];
-    // u: edge c → b, v: a → c, w: b → a.
-    let u = cx * by - cy * bx;
-    let v = ax * cy - ay * cx;
-    let w = bx * ay - by * ax;
-    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
-        return NO_TRIANGLE_HIT;
-    }
-    let det = u + v + w;
-    if det == 0.0 {
-        return NO_TRIANGLE_HIT;
-    }
-    if (u == 0.0 && !owns_edge(bx - cx, by - cy, det))
-        || (v == 0.0 && !owns_edge(cx - ax, cy - ay, det))
-        || (w == 0.0 && !owns_edge(ax - bx, ay - by, det))
-    {
-        return NO_TRIANGLE_HIT;
-    }
-    let t_scaled = u * shear.s.z * oa[kz] + v * shear.s.z * ob[kz] + w * shear.s.z * oc[kz];
-    let t = t_scaled / det;
-    if !(t > ray.tmin && t < ray.tmax) {
-        return NO_TRIANGLE_HIT;
-    }
-    (t, v / det, w / det)
+    watertight_test(ray, shear, a, b, c, true)
 }
 
 /// Whether the ray enters box (lo, hi) grown by `pad` on every side

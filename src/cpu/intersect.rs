@@ -332,6 +332,21 @@ pub fn intersect_triangle_watertight(
     b: Vec3,
     c: Vec3,
 ) -> (Real, Real, Real) {
+    watertight_test(ray, shear, a, b, c, false)
+}
+
+/// The watertight test; with `owned_edges`, an edge value of exactly 0
+/// counts only for the triangle that `owns_edge` (every-hit queries, which
+/// must count a crossing once) rather than for both.
+#[inline(always)]
+pub fn watertight_test(
+    ray: &Ray,
+    shear: &Shear,
+    a: Vec3,
+    b: Vec3,
+    c: Vec3,
+    owned_edges: bool,
+) -> (Real, Real, Real) {
     let [kx, ky, kz] = shear.axes;
     // Arrays, not glam's Index (a match per access): this is the hot loop.
     let oa = (a - ray.origin).to_array();
@@ -343,6 +358,7 @@ pub fn intersect_triangle_watertight(
     let by = ob[ky] - shear.s.y * ob[kz];
     let cx = oc[kx] - shear.s.x * oc[kz];
     let cy = oc[ky] - shear.s.y * oc[kz];
+    // u: edge c → b, v: a → c, w: b → a.
     let u = cx * by - cy * bx;
     let v = ax * cy - ay * cx;
     let w = bx * ay - by * ax;
@@ -351,6 +367,13 @@ pub fn intersect_triangle_watertight(
     }
     let det = u + v + w;
     if det == 0.0 {
+        return NO_TRIANGLE_HIT;
+    }
+    if owned_edges
+        && ((u == 0.0 && !owns_edge(bx - cx, by - cy, det))
+            || (v == 0.0 && !owns_edge(cx - ax, cy - ay, det))
+            || (w == 0.0 && !owns_edge(ax - bx, ay - by, det)))
+    {
         return NO_TRIANGLE_HIT;
     }
     let t_scaled = u * shear.s.z * oa[kz] + v * shear.s.z * ob[kz] + w * shear.s.z * oc[kz];
