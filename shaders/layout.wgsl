@@ -59,7 +59,7 @@ override SHADOWS_FROM_QUEUE: bool = false;
 // Words of `shadow_blocked` a camera ray of the wavefront path has: one
 // bit a light (gpu::render's `wave_budget`).
 override SHADOW_WORDS: u32 = 1u;
-// lavapipe's compute threads (gpu::pipelines' `cpu_threads`; 1 on every
+// lavapipe's compute threads (`Gpu::cpu_threads`; 1 on every
 // other adapter): llvmpipe hands thread t the t-th contiguous 1/T of a
 // dispatch's workgroups (Mesa's lp_cs_tpool), so the entry points take
 // workgroups through `spread_workgroup`, which deals neighbouring blocks of
