@@ -251,7 +251,7 @@ fn workgroups_spread_over_any_thread_count_change_no_pixel_or_hit() {
             ..AdapterRequest::default()
         };
         let gpu = Gpu::open(&request, false).expect("an adapter (lavapipe on CI)");
-        if gpu.info.name.to_lowercase().contains("llvmpipe") {
+        if gpu.is_llvmpipe() {
             assert_eq!(
                 gpu.cpu_threads().to_string(),
                 threads,

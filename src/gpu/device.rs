@@ -60,10 +60,14 @@ pub struct Gpu {
 impl Gpu {
     /// The threads llvmpipe splits a dispatch between (the shader's
     /// `CPU_THREADS`, which deals them neighbouring blocks of work in
-    /// turn): Mesa's `LP_NUM_THREADS` or the CPUs it sees; 1 on other
-    /// adapters, which schedule workgroups themselves.
+    /// turn): Mesa's `LP_NUM_THREADS` or the CPUs it sees, at most its
+    /// `LP_MAX_THREADS`; 1 on other adapters, which schedule workgroups
+    /// themselves. A count that differs from llvmpipe's own still gives a
+    /// permutation of the work, only a less even one.
     pub fn cpu_threads(&self) -> u32 {
-        if !super::adapter::is_llvmpipe(&self.info) {
+        /// Mesa's LP_MAX_THREADS (gallium/drivers/llvmpipe/lp_limits.h).
+        const LLVMPIPE_MAX_THREADS: u32 = 32;
+        if !self.is_llvmpipe() {
             return 1;
         }
         let cpus = || std::thread::available_parallelism().map_or(1, |n| n.get() as u32);
@@ -71,7 +75,12 @@ impl Gpu {
             Some(v) => v.trim().parse().unwrap_or_else(|_| cpus()),
             None => cpus(),
         };
-        threads.max(1)
+        threads.clamp(1, LLVMPIPE_MAX_THREADS)
+    }
+
+    /// Mesa's llvmpipe (lavapipe, or through GL).
+    pub fn is_llvmpipe(&self) -> bool {
+        super::adapter::is_llvmpipe(&self.info)
     }
 
     /// Opens the best adapter matching `request`: hardware before software,

@@ -166,7 +166,7 @@ pub fn run_query(
     let start = Instant::now();
     let (queries, work): (usize, Work) = match job.kind {
         QueryKind::Points(query) => {
-            let points = crate::rays::read_points(job.input)?;
+            let points = rays::read_points(job.input)?;
             (
                 points.len(),
                 Box::new(move |r| point_records(r, query, &points)),
