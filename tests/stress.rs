@@ -391,6 +391,65 @@ fn parallel_in_plane_and_degenerate_cases_give_no_false_hits() {
     }
 }
 
+/// A ray with a NaN in its origin, direction or tmin (a shadow ray from a
+/// degenerate triangle's NaN normal, say: the library's own rays are not
+/// validated as a ray file is) misses on every path, closest and any hit.
+/// The shader and the twin answer it before traversal, where the slab
+/// test would enter every box (on an H200 a whole-tree walk of the dragon
+/// took 0.39 s for one such ray); this checks that the shortcut keeps the
+/// answer the traversal gives.
+#[test]
+fn nan_rays_miss_on_every_path() {
+    let unit = [Vec3::ZERO, Vec3::X, Vec3::Y];
+    let scene = scene_of(
+        vec![triangle(unit)],
+        vec![lambert::layout::Sphere {
+            center: [0.25, 0.25, -2.0],
+            radius: 0.5,
+            ..Default::default()
+        }],
+    );
+    let good = ray(Vec3::new(0.25, 0.25, 1.0), Vec3::NEG_Z);
+    let nan = f32::NAN;
+    let rays = [
+        good,
+        Ray {
+            origin: [0.25, nan, 1.0],
+            ..good
+        },
+        Ray {
+            dir: [0.0, 0.0, nan],
+            ..good
+        },
+        Ray {
+            dir: [nan; 3],
+            ..good
+        },
+        Ray { tmin: nan, ..good },
+    ];
+    for any_hit in [false, true] {
+        for (path, hits) in [
+            ("CPU", trace_cpu(&scene, &rays, any_hit)),
+            (
+                "twin",
+                cpu::trace_rays_gpu_twin(&scene, &rays, any_hit, scene.intersect),
+            ),
+            ("GPU", trace_gpu(&scene, &rays, any_hit)),
+        ] {
+            assert_eq!(
+                hits[0].prim, 0,
+                "{path}: the valid ray must hit the triangle"
+            );
+            for (i, h) in hits.iter().enumerate().skip(1) {
+                assert_eq!(
+                    h.prim, NO_HIT,
+                    "{path}, any_hit {any_hit}: NaN ray {i} hit {h:?}"
+                );
+            }
+        }
+    }
+}
+
 #[test]
 fn invalid_rays_are_rejected_with_the_ray_and_field_named() {
     let good = ray(Vec3::ZERO, Vec3::Z);

@@ -31,6 +31,12 @@ fn direction_scale(m: Real) -> (Real, Real) {
     (up as Real, down as Real)
 }
 
+/// Whether any component of `v` is a NaN.
+#[inline(always)]
+pub fn has_nan(v: Vec3) -> bool {
+    v.is_nan()
+}
+
 /// The ray as `trace` traces it (misses report FAR, so an infinite tmax must
 /// not let them through), and its shear.
 #[inline(always)]
@@ -172,6 +178,11 @@ impl<'a> Kernel<'a> {
 
     #[inline(always)]
     pub fn trace(&self, ray_in: Ray, any_hit: bool) -> Hit {
+        // As the shader: a NaN ray misses at once rather than entering
+        // every box of the tree on its way to missing.
+        if has_nan(ray_in.origin) || has_nan(ray_in.dir) || ray_in.tmin.is_nan() {
+            return miss();
+        }
         let (ray, shear) = prepare_ray(ray_in);
         let hit = match (self.scene.accel, self.compressed) {
             (Accel::Bvh, Some(nodes)) => self.trace_compressed(nodes, ray, &shear, any_hit),
