@@ -35,9 +35,9 @@ fn unpack_node(w: array<vec4<u32>, 5>) -> CompressedNode {
         array<vec2<u32>, 6>(w[2].xy, w[2].zw, w[3].xy, w[3].zw, w[4].xy, w[4].zw));
 }
 
-fn texel_at(texels: texture_2d<u32>, t: u32) -> vec4<u32> {
+fn texel_at(texels: texture_storage_2d<rgba32uint, read>, t: u32) -> vec4<u32> {
     let row_mask = (1u << TEXEL_ROW_BITS) - 1u;
-    return textureLoad(texels, vec2<u32>(t & row_mask, t >> TEXEL_ROW_BITS), 0);
+    return textureLoad(texels, vec2<u32>(t & row_mask, t >> TEXEL_ROW_BITS));
 }
 
 // Word k (0 to 4) of node i.

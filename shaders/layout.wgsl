@@ -301,9 +301,12 @@ struct Surface {
 @group(0) @binding(12) var<storage, read_write> loop_status: array<atomic<u32>>;
 // With BVH_TEXELS: node i's words at texels 5i to 5i + 4, block i's at 10i
 // to 10i + 9 (v[k][a] at 10i + 3k + a, prims at 10i + 9), texel t at
-// (t mod row, t / row).
-@group(0) @binding(13) var bvh_node_texels: texture_2d<u32>;
-@group(0) @binding(14) var bvh_block_texels: texture_2d<u32>;
+// (t mod row, t / row). Read-only storage textures, not sampled ones:
+// lavapipe's load from a sampled texture clamps and looks up a mip level
+// for each lane (row strides and offsets gathered lane by lane), an image
+// load has one level; 1.4x faster traversal there (docs/bvh.md).
+@group(0) @binding(13) var bvh_node_texels: texture_storage_2d<rgba32uint, read>;
+@group(0) @binding(14) var bvh_block_texels: texture_storage_2d<rgba32uint, read>;
 @group(0) @binding(15) var<storage, read> triangle_attributes: array<TriangleAttributes>;
 @group(0) @binding(16) var<storage, read> triangle_attributes_hi: array<TriangleAttributes>;
 // The scene's textures, all in one array of words (src/texture/store.rs).

@@ -39,10 +39,10 @@ fn shader_kind(
                 };
                 Ok(BindingKind::Image(format))
             }
-            ImageClass::Sampled {
-                kind: ScalarKind::Uint,
-                multi: false,
-            } => Ok(BindingKind::Texels),
+            ImageClass::Storage {
+                format: naga::StorageFormat::Rgba32Uint,
+                access,
+            } if *access == StorageAccess::LOAD => Ok(BindingKind::Texels),
             other => Err(format!("a 2D image of class {other:?}")),
         },
         (space, inner) => Err(format!("{space:?} {inner:?}")),

@@ -14,7 +14,7 @@ pub enum BindingKind {
     StorageWrite,
     /// A write-only storage texture of this format.
     Image(wgpu::TextureFormat),
-    /// A read-only rgba32uint texture (`BvhStorage::Texels`).
+    /// A read-only rgba32uint storage texture (`BvhStorage::Texels`).
     Texels,
 }
 
@@ -167,10 +167,10 @@ impl BindingTable {
                         format,
                         view_dimension: wgpu::TextureViewDimension::D2,
                     },
-                    Texels => wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Uint,
+                    Texels => wgpu::BindingType::StorageTexture {
+                        access: wgpu::StorageTextureAccess::ReadOnly,
+                        format: wgpu::TextureFormat::Rgba32Uint,
                         view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
                     },
                 },
                 count: None,

@@ -21,10 +21,11 @@ pub enum BvhStorage {
     /// Storage buffers, split over two bindings when large: what hardware
     /// GPUs get.
     Buffers,
-    /// rgba32uint textures read with `textureLoad`: what llvmpipe gets. It
+    /// rgba32uint read-only storage textures: what llvmpipe gets. It
     /// fetches a texel for its 8 SIMD lanes with vector instructions, where
     /// a storage-buffer load whose address differs between lanes is a loop
-    /// over them, a branch per word (docs/bvh.md).
+    /// over them, a branch per word; and a storage texture, unlike a sampled
+    /// one, has no mip level to look up for each lane (docs/bvh.md).
     Texels,
 }
 
@@ -273,7 +274,7 @@ impl Gpu {
         })
     }
 
-    /// `bytes` (whole 16-byte texels) as an rgba32uint texture of
+    /// `bytes` (whole 16-byte texels) as an rgba32uint storage texture of
     /// `TEXELS_PER_ROW` texels a row, texel i at (i % row, i / row).
     /// `BvhStorage::for_scene` checks first that they fit.
     fn texel_texture(&self, label: &str, bytes: &[u8]) -> Result<wgpu::Texture> {
@@ -305,7 +306,7 @@ impl Gpu {
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
             format: wgpu::TextureFormat::Rgba32Uint,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_DST,
             view_formats: &[],
         });
         // Whole rows straight from `bytes`, then the last one padded.
