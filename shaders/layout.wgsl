@@ -22,6 +22,9 @@ override HAS_TEXTURES: bool = true;
 // Some triangle has corner colours or texture coordinates
 // (FLAG_ATTRIBUTES). False: their interpolation is compiled out, likewise.
 override HAS_ATTRIBUTES: bool = true;
+// Some triangle has shading normals (FLAG_SMOOTH). False: their reads and
+// interpolation are compiled out, likewise.
+override HAS_SMOOTH: bool = true;
 // false: test every primitive (the reference that tests the BVH).
 override USE_BVH: bool = true;
 // Ray/triangle test: INTERSECT_SEED, INTERSECT_MOLLER_TRUMBORE or

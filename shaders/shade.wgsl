@@ -22,7 +22,9 @@ fn self_hit_bound(extent: vec3<f32>) -> vec3<f32> {
 }
 
 fn surface_at(ray: Ray, hit: Hit) -> Surface {
-    if hit.prim < params.num_triangles {
+    // The sphere's half below is compiled out where the scene has none (it
+    // would run masked on lavapipe even where no lane hit a sphere).
+    if !HAS_SPHERES || hit.prim < params.num_triangles {
         let tri = triangle_at(hit.prim);
         let w = 1.0 - hit.u - hit.v;
         // From barycentrics, not o + t·d: the point lies closer to the plane.
@@ -30,7 +32,7 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
         let error = self_hit_bound(max(max(abs(tri.v0), abs(tri.v1)), abs(tri.v2)));
         let geometric = face_forward(normalize(cross(tri.v1 - tri.v0, tri.v2 - tri.v0)), ray.dir);
         var shading = geometric;
-        if (tri.flags & FLAG_SMOOTH) != 0u {
+        if HAS_SMOOTH && (tri.flags & FLAG_SMOOTH) != 0u {
             let ns = triangle_normals_at(hit.prim);
             let interpolated = w * ns.n0.xyz + hit.u * ns.n1.xyz + hit.v * ns.n2.xyz;
             if dot(interpolated, interpolated) > 0.0 {
