@@ -16,7 +16,7 @@ fn shader_kind(
     module: &naga::Module,
     global: &naga::GlobalVariable,
 ) -> Result<BindingKind, String> {
-    use naga::{AddressSpace, ImageClass, ImageDimension, ScalarKind, StorageAccess, TypeInner};
+    use naga::{AddressSpace, ImageClass, ImageDimension, StorageAccess, TypeInner};
     match (global.space, &module.types[global.ty].inner) {
         (AddressSpace::Uniform, _) => Ok(BindingKind::Uniform),
         (AddressSpace::Storage { access }, _) if access.contains(StorageAccess::STORE) => {

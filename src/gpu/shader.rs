@@ -1,7 +1,7 @@
 //! The shader's source and the overrides that specialise it: the one place
 //! the host reads `shaders/` from.
 
-use crate::layout::{FLAG_SMOOTH, LIGHT_DIRECTIONAL, LIGHT_POINT};
+use crate::layout::{LIGHT_DIRECTIONAL, LIGHT_POINT};
 use crate::scene::{Accel, Scene};
 
 /// The kernel's source, validated by naga in tests/shaders.rs.
@@ -23,10 +23,8 @@ pub fn specialisation(scene: &Scene) -> Vec<(&'static str, f64)> {
         ("HAS_ALPHA_MASK", flag(scene.has_alpha_mask())),
         ("HAS_TEXTURES", flag(scene.has_textures())),
         ("HAS_ATTRIBUTES", flag(!scene.attributes.is_empty())),
-        (
-            "HAS_SMOOTH",
-            flag(scene.triangles.iter().any(|t| t.flags & FLAG_SMOOTH != 0)),
-        ),
+        // Normals are kept for every triangle once one mesh is smooth.
+        ("HAS_SMOOTH", flag(!scene.normals.is_empty())),
         ("USE_BVH", flag(scene.accel == Accel::Bvh)),
         ("INTERSECT", scene.intersect.shader_value() as f64),
     ]
