@@ -56,12 +56,6 @@ override RENDER_WORKGROUP_Y: u32 = 8u;
 // STACK_SPILLS: the stack's oldest entries then move to `stack_spill`.
 override STACK_ENTRIES: u32 = 8u;
 override STACK_SPILLS: bool = false;
-// `shade` takes its shadows from `shadow_blocked` (at `shade_blocked`)
-// rather than tracing them.
-override SHADOWS_FROM_QUEUE: bool = false;
-// Words of `shadow_blocked` a camera ray of the wavefront path has: one
-// bit a light (gpu::render's `wave_budget`).
-override SHADOW_WORDS: u32 = 1u;
 // lavapipe's compute threads (`Gpu::cpu_threads`; 1 on every
 // other adapter): llvmpipe hands thread t the t-th contiguous 1/T of a
 // dispatch's workgroups (Mesa's lp_cs_tpool), so the entry points take
@@ -166,7 +160,8 @@ struct Params {
     // A camera ray's cone's spread angle: its width at distance t is
     // t · cone_spread (texture::cone_spread; docs/textures.md).
     cone_spread: f32,
-    _pad1: u32,
+    // Always 0: what `rounded` and `camera_ray` select on.
+    zero: u32,
 }
 
 struct Triangle {
@@ -314,12 +309,6 @@ struct Surface {
 @group(0) @binding(16) var<storage, read> triangle_attributes_hi: array<TriangleAttributes>;
 // The scene's textures, all in one array of words (src/texture/store.rs).
 @group(0) @binding(17) var<storage, read> textures: array<u32>;
-// Each camera ray's blocked lights in the wavefront path (bit i of word
-// i / 32 for light i; SHADOW_WORDS words a ray), set by `render_shadows`.
-// In group 0 because `shade` reads it (under SHADOWS_FROM_QUEUE) and
-// every entry point that shades binds group 0; set apart from the
-// scene's numbers.
-@group(0) @binding(20) var<storage, read_write> shadow_blocked: array<atomic<u32>>;
 // Group 1 holds what one entry point reads and writes: an image tile for
 // `render`, a batch of rays for `trace_rays`.
 @group(1) @binding(0) var out_color: texture_storage_2d<rgba32float, write>;
@@ -335,20 +324,34 @@ struct Surface {
 @group(1) @binding(6) var<storage, read_write> tile_sums: array<vec4<f32>>;
 // Shadow rays in a dispatch of their own (`render_primary`,
 // `render_shadows`, `render_shade`; gpu::ShadowDispatch): each camera
-// ray's hit (`wave_ray` numbers them), the shadow rays to trace
-// (compacted; `slot` is the camera ray's number), and how many.
-struct ShadowQuery {
-    slot: u32,
-    light: u32,
-    _pad: vec2<u32>,
-    ray: Ray,
+// ray's shading but for its shadows (`wave_ray` numbers them), the shadow
+// rays to trace (compacted, each camera ray's together and in light
+// order), and how many. Members as wide as they can be: lavapipe moves
+// each member of a struct a lane at a time, a loop per member.
+struct WaveShading {
+    // The background on a miss; else the ambient term, to which the
+    // terms of the lights whose shadow rays are not blocked are added.
+    color: vec3<f32>,
+    // The camera ray's first shadow ray in `shadow_queue`.
+    first: u32,
+    // Added last, as `shade` adds it.
+    emission: vec3<f32>,
+    // How many shadow rays it queued.
+    count: u32,
 }
-@group(1) @binding(7) var<storage, read_write> split_hits: array<Hit>;
+struct ShadowQuery {
+    // A Ray's words: origin and tmin, direction and tmax.
+    origin_tmin: vec4<f32>,
+    dir_tmax: vec4<f32>,
+    // What the light adds (`light_term`) unless the ray is blocked.
+    term: vec3<f32>,
+    // 1 once `render_shadows` found the ray blocked.
+    blocked: u32,
+}
+@group(1) @binding(7) var<storage, read_write> wave_shading: array<WaveShading>;
 @group(1) @binding(8) var<storage, read_write> shadow_queue: array<ShadowQuery>;
 @group(1) @binding(9) var<storage, read_write> shadow_count: array<atomic<u32>, 1>;
 // `render_shadows`' indirect dispatch (workgroups x, y, z: one a
 // WORKGROUP_INVOCATIONS queued rays), apart from the count, which that
 // pass reads: a dispatch may not bind its indirect buffer.
 @group(1) @binding(10) var<storage, read_write> shadow_workgroups: array<atomic<u32>, 3>;
-// `render_shade`'s camera ray's first word of shadow_blocked.
-var<private> shade_blocked: u32;

@@ -9,9 +9,8 @@
 fn camera_ray(pixel: vec2<f32>) -> Ray {
     // Each operation rounded on its own, in the CPU twin's order, so both
     // paths shoot the same bits: a select on `guard`, which the compiler
-    // cannot know (as `rounded`'s, loaded once here), stops it fusing or
-    // reordering.
-    let guard = textures[0] != 0u;
+    // cannot know (as `rounded`'s), stops it fusing or reordering.
+    let guard = params.zero != 0u;
     let sx = select(select(2.0 * pixel.x / f32(params.width), 0.0, guard) - 1.0, 0.0, guard)
         * params.tan_half_x;
     let sy = select(1.0 - select(2.0 * pixel.y / f32(params.height), 0.0, guard), 0.0, guard)
@@ -143,9 +142,15 @@ fn store_samples(id: vec3<u32>, slot: u32, result: SampleSums) {
     if params.sample_begin == 0u {
         textureStore(out_prim, id.xy, vec4<u32>(result.prim, 0u, 0u, 0u));
     }
+    store_sums(id, slot, result.sums);
+}
+
+// A tile pixel's sums of samples so far: its mean after its last, else
+// the sums for the next dispatch.
+fn store_sums(id: vec3<u32>, slot: u32, sums: vec4<f32>) {
     if params.sample_end == params.spp {
-        textureStore(out_color, id.xy, pixel_mean(result.sums));
+        textureStore(out_color, id.xy, pixel_mean(sums));
     } else {
-        tile_sums[slot] = result.sums;
+        tile_sums[slot] = sums;
     }
 }

@@ -129,12 +129,11 @@ fn light_sample(surface: Surface, origin: vec3<f32>, light: Light) -> LightSampl
     return out;
 }
 
-fn shadowed(ray: Ray, light: u32) -> bool {
-    if SHADOWS_FROM_QUEUE {
-        let word = atomicLoad(&shadow_blocked[shade_blocked + light / 32u]);
-        return ((word >> (light % 32u)) & 1u) != 0u;
-    }
-    return trace_any(ray);
+// What a light adds to the colour where its shadow ray is not blocked:
+// rounded as one value, so that the wavefront, which adds it in a later
+// pass, sums the very bits `shade` sums (no multiply fused into the add).
+fn light_term(surface: Surface, sample: LightSample) -> vec3<f32> {
+    return rounded3(surface.albedo * sample.irradiance * sample.cos_theta);
 }
 
 // Lambert: ambient·k + Σ k·E·max(0, n·l)·visible + emission, linear RGB.
@@ -143,19 +142,20 @@ fn shade(ray: Ray, hit: Hit) -> vec3<f32> {
         return params.background;
     }
     let surface = surface_at(ray, hit);
-    var color = params.ambient * surface.albedo;
+    // Each addend rounded on its own, as the wavefront keeps them.
+    var color = rounded3(params.ambient * surface.albedo);
     let origin = offset_ray_origin(surface.position, surface.error, surface.geometric_normal);
     for (var i = 0u; i < params.num_lights; i++) {
         let sample = light_sample(surface, origin, lights[i]);
         if !sample.lit {
             continue;
         }
-        if HAS_SHADOWS && params.shadows != 0u && shadowed(sample.shadow_ray, i) {
+        if HAS_SHADOWS && params.shadows != 0u && trace_any(sample.shadow_ray) {
             continue;
         }
-        color += surface.albedo * sample.irradiance * sample.cos_theta;
+        color += light_term(surface, sample);
     }
     // Emission: the surface's own light, seen by the camera; it lights
     // nothing else (no light is sampled from it).
-    return color + surface.emission;
+    return color + rounded3(surface.emission);
 }

@@ -70,7 +70,10 @@ pub struct Params {
     /// A camera ray's cone's spread angle: its width at distance t is
     /// t · cone_spread (`texture::cone_spread`).
     pub cone_spread: f32,
-    pub _pad1: u32,
+    /// Always 0: the guard the shader's `rounded` and `camera_ray` select
+    /// on, a value no compiler can know; a uniform, so lavapipe reads it
+    /// once, not lane by lane as a storage word (docs/accuracy.md).
+    pub zero: u32,
 }
 
 #[repr(C)]

@@ -166,8 +166,8 @@ fn scenes_split_across_bindings_render_the_same() {
 /// shadows are traced) and the megakernel give the same image, bit for bit (colour, variance and
 /// primitive): at 1 and 3 spp on five scenes, at 40 spp (more than a
 /// dispatch takes on llvmpipe: the sums carried between dispatches), and
-/// with 40 lights (two words of blocked bits a ray), which also agree with
-/// the CPU path.
+/// with 40 lights (a camera ray's shadow rays queued together, their terms
+/// added in light order), which also agree with the CPU path.
 #[test]
 fn shadow_rays_apart_render_as_the_megakernel_does() {
     for name in ["cornell", "spheres", "bunny", "dragon", "edge_cases"] {

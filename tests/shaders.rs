@@ -74,6 +74,11 @@ fn host_structs_match_wgsl_layout() {
         lambert::gpu::SHADOW_QUERY_BYTES,
         "size of ShadowQuery"
     );
+    assert_eq!(
+        reflect(m, "WaveShading").0 as u64,
+        lambert::gpu::WAVE_SHADING_BYTES,
+        "size of WaveShading"
+    );
     check_layout!(
         m,
         Params {
@@ -99,7 +104,7 @@ fn host_structs_match_wgsl_layout() {
             sample_end,
             canary_loops,
             cone_spread,
-            _pad1,
+            zero,
         }
     );
     check_layout!(

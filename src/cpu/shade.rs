@@ -10,6 +10,13 @@ pub struct LightSample {
     pub shadow_ray: Ray,
 }
 
+/// The shader's `light_term`: what a light adds to the colour of
+/// `surface` where its shadow ray is not blocked.
+#[inline(always)]
+pub fn light_term(surface: &Surface, sample: &LightSample) -> Vec3 {
+    surface.albedo * sample.irradiance * sample.cos_theta
+}
+
 /// The shader's `light_sample`: what `light` gives the point `surface`
 /// (shadow rays leaving from `origin`), or `None` when nothing.
 #[inline(always)]
@@ -147,7 +154,7 @@ impl<'a> Kernel<'a> {
             if self.scene.shadows && self.trace_any(sample.shadow_ray) {
                 continue;
             }
-            color += surface.albedo * sample.irradiance * sample.cos_theta;
+            color += light_term(&surface, &sample);
         }
         // Emission: the surface's own light, seen by the camera; it lights
         // nothing else (no light is sampled from it).

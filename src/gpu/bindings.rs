@@ -67,7 +67,6 @@ pub const SCENE: BindingTable = BindingTable {
         bind("triangle_attributes", 15, Storage),
         bind("triangle_attributes_hi", 16, Storage),
         bind("textures", 17, Storage),
-        bind("shadow_blocked", 20, StorageWrite),
     ],
 };
 
@@ -83,8 +82,7 @@ pub const IMAGE_TILE: BindingTable = BindingTable {
     entries: &[OUT_COLOR, OUT_PRIM, TILE_SUMS],
 };
 
-/// Group 1 of `render_primary`, `render_shadows` and `render_shade` (the
-/// blocked bits are group 0's: `shade` reads them).
+/// Group 1 of `render_primary`, `render_shadows` and `render_shade`.
 pub const SHADOWS_APART: BindingTable = BindingTable {
     label: "image tile, shadows apart",
     group: 1,
@@ -92,7 +90,7 @@ pub const SHADOWS_APART: BindingTable = BindingTable {
         OUT_COLOR,
         OUT_PRIM,
         TILE_SUMS,
-        bind("split_hits", 7, StorageWrite),
+        bind("wave_shading", 7, StorageWrite),
         bind("shadow_queue", 8, StorageWrite),
         bind("shadow_count", 9, StorageWrite),
         bind("shadow_workgroups", 10, StorageWrite),

@@ -60,6 +60,8 @@ pub const WAVE_RAYS: u32 = 3 * TILE * TILE;
 /// than a megakernel tile with as many lights.
 pub const WAVE_SHADOW_RAYS: u32 = TILE * TILE * 8;
 
-/// Bytes of the shader's `ShadowQuery` (a queued shadow ray; GPU-only,
-/// checked against naga's layout in tests/shaders.rs).
+/// Bytes of the shader's `ShadowQuery` (a queued shadow ray) and
+/// `WaveShading` (a camera ray's shading but for its shadows): GPU-only,
+/// checked against naga's layout in tests/shaders.rs.
 pub const SHADOW_QUERY_BYTES: u64 = 48;
+pub const WAVE_SHADING_BYTES: u64 = 32;

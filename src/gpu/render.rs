@@ -6,7 +6,7 @@
 use std::time::{Duration, Instant};
 
 use crate::error::{Error, Result};
-use crate::layout::{Hit, WORKGROUP_INVOCATIONS};
+use crate::layout::WORKGROUP_INVOCATIONS;
 use crate::output::{Image, Rendered};
 use crate::progress::Progress;
 use crate::scene::Scene;
@@ -14,7 +14,10 @@ use crate::scene::Scene;
 use super::bindings::{IMAGE_TILE, SCENE, SHADOWS_APART};
 use super::device::SHADOW_DISPATCH_ENV;
 use super::timer::{GpuTimings, Timer};
-use super::{GpuRenderer, RENDER_WORKGROUP, SHADOW_QUERY_BYTES, TILE, WAVE_RAYS, WAVE_SHADOW_RAYS};
+use super::{
+    GpuRenderer, RENDER_WORKGROUP, SHADOW_QUERY_BYTES, TILE, WAVE_RAYS, WAVE_SHADING_BYTES,
+    WAVE_SHADOW_RAYS,
+};
 
 /// Samples a dispatch adds to each pixel on llvmpipe: the bundled scenes'
 /// pixels ran out of loop iterations from about 192 (a 3,674-triangle
@@ -72,16 +75,6 @@ fn wave_queue_bytes(lights: u32) -> u64 {
     wave_budget(lights) as u64 * lights.max(1) as u64 * SHADOW_QUERY_BYTES
 }
 
-/// Words of blocked bits a camera ray has (the shader's SHADOW_WORDS).
-fn shadow_words(lights: u32) -> u32 {
-    lights.div_ceil(32).max(1)
-}
-
-/// Bytes of `shadow_blocked` (group 0: `shade` reads it) for a scene of
-/// `lights` lights.
-pub(super) fn shadow_blocked_bytes(lights: u32) -> u64 {
-    wave_budget(lights) as u64 * shadow_words(lights) as u64 * 4
-}
 
 /// The three passes of a render with its shadow rays apart, and their
 /// buffers.
@@ -333,11 +326,7 @@ impl GpuRenderer {
             })
         };
         let none = wgpu::BufferUsages::empty();
-        let hits = buffer(
-            "primary hits",
-            rays * std::mem::size_of::<Hit>() as u64,
-            none,
-        );
+        let shading = buffer("wave shading", rays * WAVE_SHADING_BYTES, none);
         let queue = buffer("shadow queue", wave_queue_bytes(lights), none);
         let count = buffer("shadow count", 4, wgpu::BufferUsages::COPY_DST);
         let workgroups = buffer(
@@ -358,7 +347,7 @@ impl GpuRenderer {
                     ("out_color", wgpu::BindingResource::TextureView(&color)),
                     ("out_prim", wgpu::BindingResource::TextureView(&prim)),
                     ("tile_sums", self.resident.tile_sums.as_entire_binding()),
-                    ("split_hits", hits.as_entire_binding()),
+                    ("wave_shading", shading.as_entire_binding()),
                     ("shadow_queue", queue.as_entire_binding()),
                     ("shadow_count", count.as_entire_binding()),
                     ("shadow_workgroups", workgroups.as_entire_binding()),
@@ -368,14 +357,11 @@ impl GpuRenderer {
         let group = group_with(&workgroups);
         let shadows_group = group_with(&unused);
         let p = &self.pipelines;
-        let mut constants = p.constants.clone();
-        constants.push(("SHADOW_WORDS", shadow_words(lights) as f64));
-        let mut from_queue = constants.clone();
-        from_queue.push(("SHADOWS_FROM_QUEUE", 1.0));
+        let constants = &p.constants;
         Ok(SplitShadows {
-            primary: p.build(&self.gpu, "render_primary", &layout, &constants)?,
-            shadows: p.build(&self.gpu, "render_shadows", &layout, &constants)?,
-            shade: p.build(&self.gpu, "render_shade", &layout, &from_queue)?,
+            primary: p.build(&self.gpu, "render_primary", &layout, constants)?,
+            shadows: p.build(&self.gpu, "render_shadows", &layout, constants)?,
+            shade: p.build(&self.gpu, "render_shade", &layout, constants)?,
             group,
             shadows_group,
             count,

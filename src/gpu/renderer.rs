@@ -19,7 +19,7 @@ use super::device::Gpu;
 use super::pipelines::{Layouts, Pipelines, resident_constants};
 use super::query::ListState;
 use super::readback::{LoopStatus, TileTargets};
-use super::render::{LLVMPIPE_SAMPLES_PER_DISPATCH, ShadowDispatch, shadow_blocked_bytes};
+use super::render::{LLVMPIPE_SAMPLES_PER_DISPATCH, ShadowDispatch};
 use super::shader::{SHADER_SOURCE, specialisation};
 use super::timer::Timer;
 use super::upload::{BvhStorage, SceneBuffers};
@@ -161,19 +161,13 @@ impl GpuRenderer {
         });
         let loop_status = LoopStatus::new(device);
         let layouts = Layouts::new(device);
-        let shadow_blocked = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("shadow blocked"),
-            size: shadow_blocked_bytes(params.num_lights),
-            usage: wgpu::BufferUsages::STORAGE,
-            mapped_at_creation: false,
-        });
 
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let scene_group = scene_bind_group(
             device,
             &layouts,
             &buffers,
-            [&params_buffer, &loop_status.buffer, &shadow_blocked],
+            [&params_buffer, &loop_status.buffer],
         );
         let [color, prim] = tile.views();
         let image_group = IMAGE_TILE.bind_group(
@@ -243,12 +237,12 @@ impl GpuRenderer {
 }
 
 /// Group 0: the uniform, the scene's arrays (low and high ranges), the
-/// loop flag, the BVH's texels and the wavefront's blocked bits.
+/// loop flag and the BVH's texels.
 fn scene_bind_group(
     device: &wgpu::Device,
     layouts: &Layouts,
     buffers: &SceneBuffers,
-    [params_buffer, loop_status, shadow_blocked]: [&wgpu::Buffer; 3],
+    [params_buffer, loop_status]: [&wgpu::Buffer; 2],
 ) -> wgpu::BindGroup {
     let node_view = buffers.node_texture.create_view(&Default::default());
     let block_view = buffers.block_texture.create_view(&Default::default());
@@ -281,7 +275,6 @@ fn scene_bind_group(
                 "bvh_block_texels",
                 wgpu::BindingResource::TextureView(&block_view),
             ),
-            ("shadow_blocked", shadow_blocked.as_entire_binding()),
         ],
     )
 }
