@@ -1,20 +1,27 @@
 // Entry points: the wavefront render, its shadow rays in a dispatch of
 // their own (gpu::ShadowDispatch): `render_primary`, `render_shadows`,
-// `render_shade`, in that order, for `params.sample_begin` to
-// `params.sample_end` of each tile pixel at once. The primary pass shades
-// each hit but for its shadows, the shadow pass marks the blocked rays,
-// and the shade pass adds up what each pixel kept: a surface is looked up
-// and shaded once, where lavapipe ran all of `shade` for every pixel
-// again, masked, in the last pass (1.10x faster, docs/bvh.md).
+// then `render_resolve` (a dispatch of one sample a pixel) or
+// `render_shade` (of several), in that order, for `params.sample_begin`
+// to `params.sample_end` of each tile pixel at once. The primary pass
+// shades each hit but for its shadows, the shadow pass marks the blocked
+// rays, and the last pass adds up what each pixel kept: a surface is
+// looked up and shaded once (lavapipe runs all of a branch for every
+// lane, masked, so a pass that shaded again cost what shading every
+// pixel costs). With one sample a pixel, the primary pass finishes the
+// pixels that queued no shadow ray and lists the others, and only those
+// are resolved (docs/bvh.md).
 // Bindings (naga's reflection):
 // `render_primary`: all of group 0 (0 to 17); group 1's out_color (its
-// size), out_prim, wave_shading, shadow_queue, shadow_count,
-// shadow_workgroups (1:0, 1:1, 1:7 to 1:10).
+// size), out_prim, tile_sums, wave_shading, shadow_queue, wave_counts,
+// wave_workgroups, resolve_pixels (1:0, 1:1, 1:6 to 1:10, 1:19).
 // `render_shadows`: group 0 but for triangle_normals, materials, lights,
-// triangle_normals_hi and textures; group 1's shadow_queue,
-// shadow_count (1:8, 1:9).
+// triangle_normals_hi and textures; group 1's shadow_queue, wave_counts
+// (1:8, 1:9).
 // `render_shade`: group 0's params; group 1's out_color, tile_sums,
 // wave_shading, shadow_queue (1:0, 1:6 to 1:8).
+// `render_resolve`: group 0's params; group 1's out_color, tile_sums,
+// wave_shading, shadow_queue, wave_counts, resolve_pixels (1:0, 1:6 to
+// 1:9, 1:19).
 
 // The number of a camera ray of the wavefront path: sample `sample` of
 // the dispatch (0 for its first) of invocation `id`'s pixel, over the
@@ -24,6 +31,32 @@ fn wave_ray(id: vec3<u32>, groups: vec3<u32>, sample: u32) -> u32 {
     let columns = groups.x * RENDER_WORKGROUP_X;
     let rows = groups.y * RENDER_WORKGROUP_Y;
     return (sample * rows + id.y) * columns + id.x;
+}
+
+// Takes `n` items of wavefront list `list` (0: shadow rays, 1: pixels to
+// resolve); returns the first. The list's pass runs a workgroup for each
+// WORKGROUP_INVOCATIONS items: one more for each multiple of it the items
+// reach.
+fn enqueue(list: u32, n: u32) -> u32 {
+    let first = atomicAdd(&wave_counts[list], n);
+    let started = (first + WORKGROUP_INVOCATIONS - 1u) / WORKGROUP_INVOCATIONS;
+    let reached = (first + n + WORKGROUP_INVOCATIONS - 1u) / WORKGROUP_INVOCATIONS;
+    if reached != started {
+        atomicAdd(&wave_workgroups[3u * list], reached - started);
+    }
+    return first;
+}
+
+// The colour a camera ray's shading kept, with the terms of its lights
+// whose shadow rays were not blocked, added as `shade` adds them.
+fn resolved_color(kept: WaveShading) -> vec3<f32> {
+    var color = kept.color;
+    for (var q = kept.first; q < kept.first + kept.count; q++) {
+        if shadow_queue[q].blocked == 0u {
+            color += shadow_queue[q].term;
+        }
+    }
+    return color + kept.emission;
 }
 
 // `shade`'s work but for the shadow rays, which it queues, each with the
@@ -51,14 +84,7 @@ fn shade_but_shadows(ray: Ray, hit: Hit) -> WaveShading {
     if out.count == 0u {
         return out;
     }
-    out.first = atomicAdd(&shadow_count[0], out.count);
-    // `render_shadows` runs a workgroup for each WORKGROUP_INVOCATIONS
-    // queued rays: one more for each multiple of it the rays reach.
-    let started = (out.first + WORKGROUP_INVOCATIONS - 1u) / WORKGROUP_INVOCATIONS;
-    let reached = (out.first + out.count + WORKGROUP_INVOCATIONS - 1u) / WORKGROUP_INVOCATIONS;
-    if reached != started {
-        atomicAdd(&shadow_workgroups[0], reached - started);
-    }
+    out.first = enqueue(0u, out.count);
     var q = out.first;
     for (var i = 0u; i < params.num_lights; i++) {
         let sample = light_sample(surface, origin, lights[i]);
@@ -91,19 +117,29 @@ fn render_primary(
     if params.sample_begin == 0u && id.z == 0u {
         textureStore(out_prim, id.xy, vec4<u32>(hit.prim, 0u, 0u, 0u));
     }
-    wave_shading[wave_ray(id, groups, id.z)] = shade_but_shadows(ray, hit);
+    let kept = shade_but_shadows(ray, hit);
+    if params.sample_end - params.sample_begin != 1u {
+        wave_shading[wave_ray(id, groups, id.z)] = kept;
+    } else if kept.count == 0u {
+        let slot = tile_slot(id);
+        store_sums(id, slot, add_sample(sums_so_far(slot), resolved_color(kept)));
+    } else {
+        let n = enqueue(1u, 1u);
+        wave_shading[n] = kept;
+        resolve_pixels[n] = id.x | id.y << 16u;
+    }
     report_cut_loops();
 }
 
 // Pass 2: the queued shadow rays, side by side, one an invocation,
 // dispatched indirectly with as many workgroups as the queue fills
-// (`shadow_workgroups`): a workgroup a camera ray's worth cost lavapipe
+// (`wave_workgroups`): a workgroup a camera ray's worth cost lavapipe
 // about a tenth of the 1-spp dragon's render in empty workgroups.
 @compute @workgroup_size(WORKGROUP_INVOCATIONS)
 fn render_shadows(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
     let id = spread_invocation(group, groups, local, vec3<u32>(WORKGROUP_INVOCATIONS, 1u, 1u));
     stack_base = lane * STACK_ENTRIES;
-    if id.x >= atomicLoad(&shadow_count[0]) {
+    if id.x >= atomicLoad(&wave_counts[0]) {
         return;
     }
     let o = shadow_queue[id.x].origin_tmin;
@@ -114,10 +150,9 @@ fn render_shadows(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgrou
     report_cut_loops();
 }
 
-// Pass 3: each tile pixel's samples in turn: what the primary pass kept,
-// with the terms of its lights whose shadow rays were not blocked, added
-// as `shade` adds them, and the samples added and written as `render`
-// adds and writes them.
+// Pass 3 of a dispatch of several samples a pixel: each tile pixel's
+// samples in turn, resolved, added and written as `render` adds and
+// writes them.
 @compute @workgroup_size(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y)
 fn render_shade(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let id = spread_invocation(group, groups, local, vec3<u32>(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y, 1u));
@@ -128,13 +163,21 @@ fn render_shade(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocati
     var sums = sums_so_far(slot);
     for (var sample = params.sample_begin; sample < params.sample_end; sample++) {
         let kept = wave_shading[wave_ray(id, groups, sample - params.sample_begin)];
-        var color = kept.color;
-        for (var q = kept.first; q < kept.first + kept.count; q++) {
-            if shadow_queue[q].blocked == 0u {
-                color += shadow_queue[q].term;
-            }
-        }
-        sums = add_sample(sums, color + kept.emission);
+        sums = add_sample(sums, resolved_color(kept));
     }
     store_sums(id, slot, sums);
+}
+
+// Pass 3 of a dispatch of one sample a pixel: the listed pixels only,
+// dispatched indirectly (`wave_workgroups` 3 to 5), the others done.
+@compute @workgroup_size(WORKGROUP_INVOCATIONS)
+fn render_resolve(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
+    let n = spread_invocation(group, groups, local, vec3<u32>(WORKGROUP_INVOCATIONS, 1u, 1u)).x;
+    if n >= atomicLoad(&wave_counts[1]) {
+        return;
+    }
+    let packed = resolve_pixels[n];
+    let id = vec3<u32>(packed & 0xffffu, packed >> 16u, 0u);
+    let slot = tile_slot(id);
+    store_sums(id, slot, add_sample(sums_so_far(slot), resolved_color(wave_shading[n])));
 }

@@ -350,8 +350,13 @@ struct ShadowQuery {
 }
 @group(1) @binding(7) var<storage, read_write> wave_shading: array<WaveShading>;
 @group(1) @binding(8) var<storage, read_write> shadow_queue: array<ShadowQuery>;
-@group(1) @binding(9) var<storage, read_write> shadow_count: array<atomic<u32>, 1>;
-// `render_shadows`' indirect dispatch (workgroups x, y, z: one a
-// WORKGROUP_INVOCATIONS queued rays), apart from the count, which that
-// pass reads: a dispatch may not bind its indirect buffer.
-@group(1) @binding(10) var<storage, read_write> shadow_workgroups: array<atomic<u32>, 3>;
+// How many: [0] shadow rays queued, [1] pixels to resolve.
+@group(1) @binding(9) var<storage, read_write> wave_counts: array<atomic<u32>, 2>;
+// The indirect dispatches (workgroups x, y, z: one a WORKGROUP_INVOCATIONS
+// queued items) of `render_shadows` (0 to 2) and `render_resolve` (3 to
+// 5), apart from the counts, which those passes read: a dispatch may not
+// bind its indirect buffer.
+@group(1) @binding(10) var<storage, read_write> wave_workgroups: array<atomic<u32>, 6>;
+// A dispatch of one sample a pixel: the tile pixels (x | y << 16) whose
+// shading `render_resolve` finishes, the nth's kept in wave_shading[n].
+@group(1) @binding(19) var<storage, read_write> resolve_pixels: array<u32>;

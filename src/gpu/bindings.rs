@@ -82,7 +82,8 @@ pub const IMAGE_TILE: BindingTable = BindingTable {
     entries: &[OUT_COLOR, OUT_PRIM, TILE_SUMS],
 };
 
-/// Group 1 of `render_primary`, `render_shadows` and `render_shade`.
+/// Group 1 of `render_primary`, `render_shadows`, `render_shade` and
+/// `render_resolve`.
 pub const SHADOWS_APART: BindingTable = BindingTable {
     label: "image tile, shadows apart",
     group: 1,
@@ -92,8 +93,9 @@ pub const SHADOWS_APART: BindingTable = BindingTable {
         TILE_SUMS,
         bind("wave_shading", 7, StorageWrite),
         bind("shadow_queue", 8, StorageWrite),
-        bind("shadow_count", 9, StorageWrite),
-        bind("shadow_workgroups", 10, StorageWrite),
+        bind("wave_counts", 9, StorageWrite),
+        bind("wave_workgroups", 10, StorageWrite),
+        bind("resolve_pixels", 19, StorageWrite),
     ],
 };
 

@@ -76,16 +76,17 @@ fn wave_queue_bytes(lights: u32) -> u64 {
 }
 
 
-/// The three passes of a render with its shadow rays apart, and their
-/// buffers.
+/// The passes of a render with its shadow rays apart, and their buffers.
 pub(super) struct SplitShadows {
     primary: wgpu::ComputePipeline,
     shadows: wgpu::ComputePipeline,
+    /// The last pass of a dispatch of several samples a pixel, and of one.
     shade: wgpu::ComputePipeline,
+    resolve: wgpu::ComputePipeline,
     group: wgpu::BindGroup,
-    /// `group` but for `shadow_workgroups`: `render_shadows`'.
-    shadows_group: wgpu::BindGroup,
-    count: wgpu::Buffer,
+    /// `group` but for `wave_workgroups`: the indirect passes'.
+    indirect_group: wgpu::BindGroup,
+    counts: wgpu::Buffer,
     workgroups: wgpu::Buffer,
 }
 
@@ -272,11 +273,14 @@ impl GpuRenderer {
         let (groups_x, groups_y) = (width.div_ceil(wx), height.div_ceil(wy));
         if let (true, Some(split)) = (self.shadows_apart(), &self.pipelines.split) {
             let samples = self.params.sample_end - self.params.sample_begin;
-            // The queue empty, `render_shadows`' dispatch 0 × 1 × 1.
+            // The lists empty, their passes' dispatches 0 × 1 × 1.
             gpu.queue
-                .write_buffer(&split.count, 0, bytemuck::bytes_of(&0u32));
-            gpu.queue
-                .write_buffer(&split.workgroups, 0, bytemuck::cast_slice(&[0u32, 1, 1]));
+                .write_buffer(&split.counts, 0, bytemuck::cast_slice(&[0u32; 2]));
+            gpu.queue.write_buffer(
+                &split.workgroups,
+                0,
+                bytemuck::cast_slice(&[0u32, 1, 1, 0, 1, 1]),
+            );
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("render tile, shadows apart"),
                 timestamp_writes: self.timer.as_ref().map(Timer::writes),
@@ -288,11 +292,17 @@ impl GpuRenderer {
             // An invocation a queued shadow ray (the primary pass counts
             // the workgroups).
             pass.set_pipeline(&split.shadows);
-            pass.set_bind_group(SHADOWS_APART.group, &split.shadows_group, &[]);
+            pass.set_bind_group(SHADOWS_APART.group, &split.indirect_group, &[]);
             pass.dispatch_workgroups_indirect(&split.workgroups, 0);
-            pass.set_bind_group(SHADOWS_APART.group, &split.group, &[]);
-            pass.set_pipeline(&split.shade);
-            pass.dispatch_workgroups(groups_x, groups_y, 1);
+            if samples == 1 {
+                // An invocation a pixel the primary pass listed.
+                pass.set_pipeline(&split.resolve);
+                pass.dispatch_workgroups_indirect(&split.workgroups, 12);
+            } else {
+                pass.set_bind_group(SHADOWS_APART.group, &split.group, &[]);
+                pass.set_pipeline(&split.shade);
+                pass.dispatch_workgroups(groups_x, groups_y, 1);
+            }
         } else {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("render tile"),
@@ -328,15 +338,16 @@ impl GpuRenderer {
         let none = wgpu::BufferUsages::empty();
         let shading = buffer("wave shading", rays * WAVE_SHADING_BYTES, none);
         let queue = buffer("shadow queue", wave_queue_bytes(lights), none);
-        let count = buffer("shadow count", 4, wgpu::BufferUsages::COPY_DST);
+        let resolve_pixels = buffer("resolve pixels", rays * 4, none);
+        let counts = buffer("wave counts", 8, wgpu::BufferUsages::COPY_DST);
         let workgroups = buffer(
-            "shadow workgroups",
-            12,
+            "wave workgroups",
+            24,
             wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::INDIRECT,
         );
-        // What `render_shadows` binds in its place: a dispatch may not
+        // What the indirect passes bind in its place: a dispatch may not
         // bind the buffer it is dispatched by.
-        let unused = buffer("shadow workgroups, unused", 12, none);
+        let unused = buffer("wave workgroups, unused", 24, none);
         let [color, prim] = self.tile.views();
         let group_with = |workgroups: &wgpu::Buffer| {
             SHADOWS_APART.bind_group(
@@ -349,22 +360,24 @@ impl GpuRenderer {
                     ("tile_sums", self.resident.tile_sums.as_entire_binding()),
                     ("wave_shading", shading.as_entire_binding()),
                     ("shadow_queue", queue.as_entire_binding()),
-                    ("shadow_count", count.as_entire_binding()),
-                    ("shadow_workgroups", workgroups.as_entire_binding()),
+                    ("wave_counts", counts.as_entire_binding()),
+                    ("wave_workgroups", workgroups.as_entire_binding()),
+                    ("resolve_pixels", resolve_pixels.as_entire_binding()),
                 ],
             )
         };
         let group = group_with(&workgroups);
-        let shadows_group = group_with(&unused);
+        let indirect_group = group_with(&unused);
         let p = &self.pipelines;
         let constants = &p.constants;
         Ok(SplitShadows {
             primary: p.build(&self.gpu, "render_primary", &layout, constants)?,
             shadows: p.build(&self.gpu, "render_shadows", &layout, constants)?,
             shade: p.build(&self.gpu, "render_shade", &layout, constants)?,
+            resolve: p.build(&self.gpu, "render_resolve", &layout, constants)?,
             group,
-            shadows_group,
-            count,
+            indirect_group,
+            counts,
             workgroups,
         })
     }
