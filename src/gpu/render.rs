@@ -75,7 +75,6 @@ fn wave_queue_bytes(lights: u32) -> u64 {
     wave_budget(lights) as u64 * lights.max(1) as u64 * SHADOW_QUERY_BYTES
 }
 
-
 /// The passes of a render with its shadow rays apart, and their buffers.
 pub(super) struct SplitShadows {
     primary: wgpu::ComputePipeline,
