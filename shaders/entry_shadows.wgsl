@@ -1,37 +1,26 @@
 // Entry points: the wavefront render, its shadow rays in a dispatch of
-// their own (gpu::ShadowDispatch): `render_primary`, `render_shadows`,
-// then `render_resolve` (a dispatch of one sample a pixel) or
-// `render_shade` (of several), in that order, for `params.sample_begin`
-// to `params.sample_end` of each tile pixel at once. The primary pass
-// shades each hit but for its shadows, the shadow pass marks the blocked
-// rays, and the last pass adds up what each pixel kept: a surface is
-// looked up and shaded once (lavapipe runs all of a branch for every
-// lane, masked, so a pass that shaded again cost what shading every
-// pixel costs). With one sample a pixel, the primary pass finishes the
-// pixels that queued no shadow ray and lists the others, and only those
-// are resolved (docs/bvh.md).
+// their own (gpu::ShadowDispatch): `render_primary` (or
+// `render_primary_samples`), `render_shadows`, `render_resolve`, in that
+// order, for `params.sample_begin` to
+// `params.sample_end` of each tile pixel, in one submission. The primary
+// pass shades each hit but for its shadows and queues them, and finishes
+// the pixels none of whose samples queued any; the shadow pass marks the
+// blocked rays; the last pass adds up what each listed pixel kept. A
+// surface is looked up and shaded once (lavapipe runs all of a branch for
+// every lane, masked, so a pass that shaded again cost what shading every
+// pixel costs), and the last pass runs for the listed pixels only
+// (docs/bvh.md).
 // Bindings (naga's reflection):
-// `render_primary`: all of group 0 (0 to 17); group 1's out_color (its
-// size), out_prim, tile_sums, wave_shading, shadow_queue, wave_counts,
-// wave_workgroups, resolve_pixels (1:0, 1:1, 1:6 to 1:10, 1:19).
+// `render_primary`, `render_primary_samples`: all of group 0 (0 to 17);
+// group 1's out_color, out_prim, tile_sums, wave_shading, shadow_queue,
+// wave_counts, wave_workgroups, resolve_pixels (1:0, 1:1, 1:6 to 1:10,
+// 1:19).
 // `render_shadows`: group 0 but for triangle_normals, materials, lights,
 // triangle_normals_hi and textures; group 1's shadow_queue, wave_counts
 // (1:8, 1:9).
-// `render_shade`: group 0's params; group 1's out_color, tile_sums,
-// wave_shading, shadow_queue (1:0, 1:6 to 1:8).
 // `render_resolve`: group 0's params; group 1's out_color, tile_sums,
 // wave_shading, shadow_queue, wave_counts, resolve_pixels (1:0, 1:6 to
 // 1:9, 1:19).
-
-// The number of a camera ray of the wavefront path: sample `sample` of
-// the dispatch (0 for its first) of invocation `id`'s pixel, over the
-// dispatch's grid (`groups` workgroups), so that a dispatch's rays are
-// numbered densely from 0: its index in wave_shading.
-fn wave_ray(id: vec3<u32>, groups: vec3<u32>, sample: u32) -> u32 {
-    let columns = groups.x * RENDER_WORKGROUP_X;
-    let rows = groups.y * RENDER_WORKGROUP_Y;
-    return (sample * rows + id.y) * columns + id.x;
-}
 
 // Takes `n` items of wavefront list `list` (0: shadow rays, 1: pixels to
 // resolve); returns the first. The list's pass runs a workgroup for each
@@ -61,7 +50,7 @@ fn resolved_color(kept: WaveShading) -> vec3<f32> {
 
 // `shade`'s work but for the shadow rays, which it queues, each with the
 // term its light adds unless the ray is blocked: in light order, together
-// (one atomic add for all of them), so `render_shade` sums what `shade`
+// (one atomic add for all of them), so `resolved_color` sums what `shade`
 // sums in its order.
 fn shade_but_shadows(ray: Ray, hit: Hit) -> WaveShading {
     // A miss: the background plus −0, which leaves every value's bits as
@@ -98,8 +87,29 @@ fn shade_but_shadows(ray: Ray, hit: Hit) -> WaveShading {
     return out;
 }
 
-// Pass 1: a camera ray a sample (id.z) of each tile pixel, shaded but for
-// its shadows, which it queues.
+// Sample `sample` of invocation `id`'s pixel: its camera ray traced and
+// shaded but for its shadows, which it queues; the pixel's primitive
+// stored from its first sample.
+fn primary_sample(id: vec3<u32>, sample: u32) -> WaveShading {
+    let ray = camera_ray(sample_position(params.tile_origin + id.xy, sample));
+    let hit = trace_closest(ray);
+    if sample == 0u {
+        textureStore(out_prim, id.xy, vec4<u32>(hit.prim, 0u, 0u, 0u));
+    }
+    return shade_but_shadows(ray, hit);
+}
+
+// Lists invocation `id`'s pixel for `render_resolve` from sample `sample`
+// on, with its sums before it; returns its place in the list.
+fn list_pixel(id: vec3<u32>, slot: u32, sums: vec4<f32>, sample: u32) -> u32 {
+    let listed = enqueue(1u, 1u);
+    resolve_pixels[listed] = vec2<u32>(id.x | id.y << 16u, sample);
+    tile_sums[slot] = sums;
+    return listed;
+}
+
+// Pass 1 of a dispatch of one sample a pixel: the pixel finished if its
+// sample queued no shadow ray, else listed with its shading kept.
 @compute @workgroup_size(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y)
 fn render_primary(
     @builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>,
@@ -108,25 +118,56 @@ fn render_primary(
 ) {
     let id = spread_invocation(group, groups, local, vec3<u32>(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y, 1u));
     stack_base = lane * STACK_ENTRIES;
-    if tile_slot(id) == NO_HIT {
+    let slot = tile_slot(id);
+    if slot == NO_HIT {
         return;
     }
-    let ray = camera_ray(sample_position(params.tile_origin + id.xy, params.sample_begin + id.z));
-    let hit = trace_closest(ray);
-    // What the pixel's first sample hit.
-    if params.sample_begin == 0u && id.z == 0u {
-        textureStore(out_prim, id.xy, vec4<u32>(hit.prim, 0u, 0u, 0u));
-    }
-    let kept = shade_but_shadows(ray, hit);
-    if params.sample_end - params.sample_begin != 1u {
-        wave_shading[wave_ray(id, groups, id.z)] = kept;
-    } else if kept.count == 0u {
-        let slot = tile_slot(id);
+    let kept = primary_sample(id, params.sample_begin);
+    if kept.count == 0u {
         store_sums(id, slot, add_sample(sums_so_far(slot), resolved_color(kept)));
     } else {
-        let n = enqueue(1u, 1u);
-        wave_shading[n] = kept;
-        resolve_pixels[n] = id.x | id.y << 16u;
+        wave_shading[list_pixel(id, slot, sums_so_far(slot), params.sample_begin)] = kept;
+    }
+    report_cut_loops();
+}
+
+// Pass 1 of a dispatch of several: each tile pixel's samples in turn, as
+// `render` takes them. While none has queued a shadow ray the pixel's
+// sums grow here, as `add_samples` grows them; from the first that has,
+// the samples' shading is kept (the nth listed pixel's from
+// n · samples) and the pixel listed. A loop over the samples rather than
+// an invocation a sample: each sample then does not pay an invocation's
+// fixed work, which made this 1.04–1.13× the megakernel's time at 4 to
+// 64 spp; the loop around the trace costs one sample's pass a fifth more
+// on lavapipe, hence `render_primary` (docs/bvh.md).
+@compute @workgroup_size(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y)
+fn render_primary_samples(
+    @builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>,
+    @builtin(local_invocation_index) lane: u32,
+    @builtin(num_workgroups) groups: vec3<u32>,
+) {
+    let id = spread_invocation(group, groups, local, vec3<u32>(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y, 1u));
+    stack_base = lane * STACK_ENTRIES;
+    let slot = tile_slot(id);
+    if slot == NO_HIT {
+        return;
+    }
+    let samples = params.sample_end - params.sample_begin;
+    var sums = sums_so_far(slot);
+    var listed = NO_HIT;
+    for (var sample = params.sample_begin; sample < params.sample_end; sample++) {
+        let kept = primary_sample(id, sample);
+        if listed == NO_HIT {
+            if kept.count == 0u {
+                sums = add_sample(sums, resolved_color(kept));
+                continue;
+            }
+            listed = list_pixel(id, slot, sums, sample);
+        }
+        wave_shading[listed * samples + sample - params.sample_begin] = kept;
+    }
+    if listed == NO_HIT {
+        store_sums(id, slot, sums);
     }
     report_cut_loops();
 }
@@ -150,34 +191,23 @@ fn render_shadows(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgrou
     report_cut_loops();
 }
 
-// Pass 3 of a dispatch of several samples a pixel: each tile pixel's
-// samples in turn, resolved, added and written as `render` adds and
-// writes them.
-@compute @workgroup_size(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y)
-fn render_shade(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let id = spread_invocation(group, groups, local, vec3<u32>(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y, 1u));
-    let slot = tile_slot(id);
-    if slot == NO_HIT {
-        return;
-    }
-    var sums = sums_so_far(slot);
-    for (var sample = params.sample_begin; sample < params.sample_end; sample++) {
-        let kept = wave_shading[wave_ray(id, groups, sample - params.sample_begin)];
-        sums = add_sample(sums, resolved_color(kept));
-    }
-    store_sums(id, slot, sums);
-}
-
-// Pass 3 of a dispatch of one sample a pixel: the listed pixels only,
-// dispatched indirectly (`wave_workgroups` 3 to 5), the others done.
+// Pass 3: the listed pixels, dispatched indirectly (`wave_workgroups` 3
+// to 5): from their sums so far, their kept samples resolved in turn,
+// added and written as `render` adds and writes them.
 @compute @workgroup_size(WORKGROUP_INVOCATIONS)
 fn render_resolve(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>) {
     let n = spread_invocation(group, groups, local, vec3<u32>(WORKGROUP_INVOCATIONS, 1u, 1u)).x;
     if n >= atomicLoad(&wave_counts[1]) {
         return;
     }
-    let packed = resolve_pixels[n];
-    let id = vec3<u32>(packed & 0xffffu, packed >> 16u, 0u);
+    let listed = resolve_pixels[n];
+    let id = vec3<u32>(listed.x & 0xffffu, listed.x >> 16u, 0u);
     let slot = tile_slot(id);
-    store_sums(id, slot, add_sample(sums_so_far(slot), resolved_color(wave_shading[n])));
+    let samples = params.sample_end - params.sample_begin;
+    var sums = tile_sums[slot];
+    for (var sample = listed.y; sample < params.sample_end; sample++) {
+        let kept = wave_shading[n * samples + sample - params.sample_begin];
+        sums = add_sample(sums, resolved_color(kept));
+    }
+    store_sums(id, slot, sums);
 }

@@ -323,11 +323,12 @@ struct Surface {
 // between the dispatches that add its samples in turn.
 @group(1) @binding(6) var<storage, read_write> tile_sums: array<vec4<f32>>;
 // Shadow rays in a dispatch of their own (`render_primary`,
-// `render_shadows`, `render_shade`; gpu::ShadowDispatch): each camera
-// ray's shading but for its shadows (`wave_ray` numbers them), the shadow
-// rays to trace (compacted, each camera ray's together and in light
-// order), and how many. Members as wide as they can be: lavapipe moves
-// each member of a struct a lane at a time, a loop per member.
+// `render_shadows`, `render_resolve`; gpu::ShadowDispatch): the kept
+// shading of the listed pixels' samples (a dispatch's samples of the nth
+// from n · samples), the shadow rays to trace (compacted, each camera
+// ray's together and in light order), and how many. Members as wide as
+// they can be: lavapipe moves each member of a struct a lane at a time,
+// a loop per member.
 struct WaveShading {
     // The background on a miss; else the ambient term, to which the
     // terms of the lights whose shadow rays are not blocked are added.
@@ -357,6 +358,6 @@ struct ShadowQuery {
 // 5), apart from the counts, which those passes read: a dispatch may not
 // bind its indirect buffer.
 @group(1) @binding(10) var<storage, read_write> wave_workgroups: array<atomic<u32>, 6>;
-// A dispatch of one sample a pixel: the tile pixels (x | y << 16) whose
-// shading `render_resolve` finishes, the nth's kept in wave_shading[n].
-@group(1) @binding(19) var<storage, read_write> resolve_pixels: array<u32>;
+// The tile pixels whose shading `render_resolve` finishes: x | y << 16,
+// and the first sample it resolves.
+@group(1) @binding(19) var<storage, read_write> resolve_pixels: array<vec2<u32>>;

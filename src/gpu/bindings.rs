@@ -82,8 +82,7 @@ pub const IMAGE_TILE: BindingTable = BindingTable {
     entries: &[OUT_COLOR, OUT_PRIM, TILE_SUMS],
 };
 
-/// Group 1 of `render_primary`, `render_shadows`, `render_shade` and
-/// `render_resolve`.
+/// Group 1 of `render_primary`, `render_shadows` and `render_resolve`.
 pub const SHADOWS_APART: BindingTable = BindingTable {
     label: "image tile, shadows apart",
     group: 1,

@@ -1,6 +1,7 @@
 //! The render passes: tile by tile, in the `render` megakernel or as a
 //! wavefront with the shadow rays apart (`render_primary`,
-//! `render_shadows`, `render_shade`: every sample of a dispatch at once),
+//! `render_shadows`, `render_resolve`: every sample of a dispatch at
+//! once),
 //! each tile read back before the next.
 
 use std::time::{Duration, Instant};
@@ -26,10 +27,11 @@ pub(super) const LLVMPIPE_SAMPLES_PER_DISPATCH: u32 = 32;
 
 /// How a render traces its shadow rays: in the `render` megakernel, each
 /// invocation after its own primary hit, or apart, the wavefront
-/// (`render_primary` traces a dispatch's camera rays and queues their
-/// shadow rays, `render_shadows` traces the queue side by side,
-/// `render_shade` shades and adds the samples; the same image, bit for
-/// bit, at any spp and any number of lights).
+/// (`render_primary` traces a dispatch's camera rays, shades their hits
+/// but for their shadows and queues their shadow rays, `render_shadows`
+/// traces the queue side by side, `render_resolve` adds up the pixels
+/// that waited on them; the same image, bit for bit, at any spp and any
+/// number of lights).
 /// LAMBERT_SHADOW_DISPATCH=megakernel|apart chooses (`GpuOptions`);
 /// unset, apart wherever it applies: on a quiet machine it measured
 /// faster than the megakernel at every spp (lavapipe, the dragon, one
@@ -77,10 +79,10 @@ fn wave_queue_bytes(lights: u32) -> u64 {
 
 /// The passes of a render with its shadow rays apart, and their buffers.
 pub(super) struct SplitShadows {
+    /// The first pass of a dispatch of one sample a pixel, and of several.
     primary: wgpu::ComputePipeline,
+    primary_samples: wgpu::ComputePipeline,
     shadows: wgpu::ComputePipeline,
-    /// The last pass of a dispatch of several samples a pixel, and of one.
-    shade: wgpu::ComputePipeline,
     resolve: wgpu::ComputePipeline,
     group: wgpu::BindGroup,
     /// `group` but for `wave_workgroups`: the indirect passes'.
@@ -271,7 +273,6 @@ impl GpuRenderer {
         let [wx, wy] = RENDER_WORKGROUP;
         let (groups_x, groups_y) = (width.div_ceil(wx), height.div_ceil(wy));
         if let (true, Some(split)) = (self.shadows_apart(), &self.pipelines.split) {
-            let samples = self.params.sample_end - self.params.sample_begin;
             // The lists empty, their passes' dispatches 0 × 1 × 1.
             gpu.queue
                 .write_buffer(&split.counts, 0, bytemuck::cast_slice(&[0u32; 2]));
@@ -286,22 +287,20 @@ impl GpuRenderer {
             });
             pass.set_bind_group(SCENE.group, &resident.scene_group, &[]);
             pass.set_bind_group(SHADOWS_APART.group, &split.group, &[]);
-            pass.set_pipeline(&split.primary);
-            pass.dispatch_workgroups(groups_x, groups_y, samples);
+            if self.params.sample_end - self.params.sample_begin == 1 {
+                pass.set_pipeline(&split.primary);
+            } else {
+                pass.set_pipeline(&split.primary_samples);
+            }
+            pass.dispatch_workgroups(groups_x, groups_y, 1);
             // An invocation a queued shadow ray (the primary pass counts
             // the workgroups).
             pass.set_pipeline(&split.shadows);
             pass.set_bind_group(SHADOWS_APART.group, &split.indirect_group, &[]);
             pass.dispatch_workgroups_indirect(&split.workgroups, 0);
-            if samples == 1 {
-                // An invocation a pixel the primary pass listed.
-                pass.set_pipeline(&split.resolve);
-                pass.dispatch_workgroups_indirect(&split.workgroups, 12);
-            } else {
-                pass.set_bind_group(SHADOWS_APART.group, &split.group, &[]);
-                pass.set_pipeline(&split.shade);
-                pass.dispatch_workgroups(groups_x, groups_y, 1);
-            }
+            // An invocation a pixel the primary pass listed.
+            pass.set_pipeline(&split.resolve);
+            pass.dispatch_workgroups_indirect(&split.workgroups, 12);
         } else {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("render tile"),
@@ -337,7 +336,7 @@ impl GpuRenderer {
         let none = wgpu::BufferUsages::empty();
         let shading = buffer("wave shading", rays * WAVE_SHADING_BYTES, none);
         let queue = buffer("shadow queue", wave_queue_bytes(lights), none);
-        let resolve_pixels = buffer("resolve pixels", rays * 4, none);
+        let resolve_pixels = buffer("resolve pixels", rays * 8, none);
         let counts = buffer("wave counts", 8, wgpu::BufferUsages::COPY_DST);
         let workgroups = buffer(
             "wave workgroups",
@@ -371,8 +370,8 @@ impl GpuRenderer {
         let constants = &p.constants;
         Ok(SplitShadows {
             primary: p.build(&self.gpu, "render_primary", &layout, constants)?,
+            primary_samples: p.build(&self.gpu, "render_primary_samples", &layout, constants)?,
             shadows: p.build(&self.gpu, "render_shadows", &layout, constants)?,
-            shade: p.build(&self.gpu, "render_shade", &layout, constants)?,
             resolve: p.build(&self.gpu, "render_resolve", &layout, constants)?,
             group,
             indirect_group,
