@@ -273,6 +273,10 @@ struct Footprint { p0: vec4<f32>, p1: vec4<f32>, p2: vec4<f32>, dir: vec4<f32>, 
 @group(0) @binding(2) var<storage, read> footprints: array<Footprint>;
 @group(0) @binding(3) var<storage, read_write> sampled: array<vec4<f32>>;
 @group(0) @binding(4) var<storage, read_write> lods: array<vec4<u32>>;
+// What `rounded` selects on (the kernel's uniform `params.zero`): 0, read
+// from a buffer so that no compiler knows it.
+struct Params { zero: u32 }
+@group(0) @binding(5) var<storage, read> params: Params;
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if id.x < arrayLength(&samples) {
@@ -343,6 +347,7 @@ fn run_twin_shader(
         input(bytemuck::cast_slice(footprints)),
         output(sampled_bytes),
         output(lod_bytes),
+        input(bytemuck::bytes_of(&0u32)),
     ];
     let entries: Vec<wgpu::BindGroupEntry> = buffers
         .iter()
