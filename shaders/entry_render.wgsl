@@ -8,8 +8,7 @@
 
 @compute @workgroup_size(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y)
 fn render(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
-    let id = spread_invocation(group, groups, local, vec3<u32>(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y, 1u));
-    stack_base = lane * STACK_ENTRIES;
+    let id = tile_invocation(group, groups, local, lane);
     let slot = tile_slot(id);
     if slot == NO_HIT {
         return;

@@ -116,17 +116,18 @@ fn render_primary(
     @builtin(local_invocation_index) lane: u32,
     @builtin(num_workgroups) groups: vec3<u32>,
 ) {
-    let id = spread_invocation(group, groups, local, vec3<u32>(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y, 1u));
-    stack_base = lane * STACK_ENTRIES;
+    let id = tile_invocation(group, groups, local, lane);
     let slot = tile_slot(id);
     if slot == NO_HIT {
         return;
     }
     let kept = primary_sample(id, params.sample_begin);
+    // Read once: lavapipe runs both branches below.
+    let sums = sums_so_far(slot);
     if kept.count == 0u {
-        store_sums(id, slot, add_sample(sums_so_far(slot), resolved_color(kept)));
+        store_sums(id, slot, add_sample(sums, resolved_color(kept)));
     } else {
-        wave_shading[list_pixel(id, slot, sums_so_far(slot), params.sample_begin)] = kept;
+        wave_shading[list_pixel(id, slot, sums, params.sample_begin)] = kept;
     }
     report_cut_loops();
 }
@@ -146,8 +147,7 @@ fn render_primary_samples(
     @builtin(local_invocation_index) lane: u32,
     @builtin(num_workgroups) groups: vec3<u32>,
 ) {
-    let id = spread_invocation(group, groups, local, vec3<u32>(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y, 1u));
-    stack_base = lane * STACK_ENTRIES;
+    let id = tile_invocation(group, groups, local, lane);
     let slot = tile_slot(id);
     if slot == NO_HIT {
         return;

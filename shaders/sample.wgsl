@@ -117,6 +117,14 @@ fn pixel_mean(sums: vec4<f32>) -> vec4<f32> {
     return vec4<f32>(mean, variance);
 }
 
+// A render entry point's invocation (8×8 workgroups over the tile): its
+// place in the tile, spread over lavapipe's threads, with its traversal
+// stack placed.
+fn tile_invocation(group: vec3<u32>, groups: vec3<u32>, local: vec3<u32>, lane: u32) -> vec3<u32> {
+    stack_base = lane * STACK_ENTRIES;
+    return spread_invocation(group, groups, local, vec3<u32>(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y, 1u));
+}
+
 // The tile pixel of a render invocation, or none.
 fn tile_slot(id: vec3<u32>) -> u32 {
     let size = textureDimensions(out_color);

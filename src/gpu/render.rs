@@ -73,6 +73,16 @@ fn wave_budget(lights: u32) -> u32 {
 
 /// Bytes of a wavefront dispatch's shadow queue: a ray for each light of
 /// each camera ray.
+/// `wave_counts` (shadow rays queued, pixels listed) and `wave_workgroups`
+/// (the indirect dispatches of `render_shadows`, then `render_resolve`)
+/// as each tile starts them: the lists empty, each dispatch 0 × 1 × 1.
+const EMPTY_COUNTS: [u32; 2] = [0; 2];
+const EMPTY_WORKGROUPS: [u32; 6] = [0, 1, 1, 0, 1, 1];
+/// Where `render_resolve`'s dispatch lies in `wave_workgroups`.
+const RESOLVE_WORKGROUPS_OFFSET: u64 = 12;
+/// Bytes of a `resolve_pixels` entry (pixel, first sample to resolve).
+const RESOLVE_PIXEL_BYTES: u64 = 8;
+
 fn wave_queue_bytes(lights: u32) -> u64 {
     wave_budget(lights) as u64 * lights.max(1) as u64 * SHADOW_QUERY_BYTES
 }
@@ -273,13 +283,12 @@ impl GpuRenderer {
         let [wx, wy] = RENDER_WORKGROUP;
         let (groups_x, groups_y) = (width.div_ceil(wx), height.div_ceil(wy));
         if let (true, Some(split)) = (self.shadows_apart(), &self.pipelines.split) {
-            // The lists empty, their passes' dispatches 0 × 1 × 1.
             gpu.queue
-                .write_buffer(&split.counts, 0, bytemuck::cast_slice(&[0u32; 2]));
+                .write_buffer(&split.counts, 0, bytemuck::cast_slice(&EMPTY_COUNTS));
             gpu.queue.write_buffer(
                 &split.workgroups,
                 0,
-                bytemuck::cast_slice(&[0u32, 1, 1, 0, 1, 1]),
+                bytemuck::cast_slice(&EMPTY_WORKGROUPS),
             );
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("render tile, shadows apart"),
@@ -300,7 +309,7 @@ impl GpuRenderer {
             pass.dispatch_workgroups_indirect(&split.workgroups, 0);
             // An invocation a pixel the primary pass listed.
             pass.set_pipeline(&split.resolve);
-            pass.dispatch_workgroups_indirect(&split.workgroups, 12);
+            pass.dispatch_workgroups_indirect(&split.workgroups, RESOLVE_WORKGROUPS_OFFSET);
         } else {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("render tile"),
@@ -336,16 +345,21 @@ impl GpuRenderer {
         let none = wgpu::BufferUsages::empty();
         let shading = buffer("wave shading", rays * WAVE_SHADING_BYTES, none);
         let queue = buffer("shadow queue", wave_queue_bytes(lights), none);
-        let resolve_pixels = buffer("resolve pixels", rays * 8, none);
-        let counts = buffer("wave counts", 8, wgpu::BufferUsages::COPY_DST);
+        let resolve_pixels = buffer("resolve pixels", rays * RESOLVE_PIXEL_BYTES, none);
+        let bytes = |words: &[u32]| std::mem::size_of_val(words) as u64;
+        let counts = buffer(
+            "wave counts",
+            bytes(&EMPTY_COUNTS),
+            wgpu::BufferUsages::COPY_DST,
+        );
         let workgroups = buffer(
             "wave workgroups",
-            24,
+            bytes(&EMPTY_WORKGROUPS),
             wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::INDIRECT,
         );
         // What the indirect passes bind in its place: a dispatch may not
         // bind the buffer it is dispatched by.
-        let unused = buffer("wave workgroups, unused", 24, none);
+        let unused = buffer("wave workgroups, unused", bytes(&EMPTY_WORKGROUPS), none);
         let [color, prim] = self.tile.views();
         let group_with = |workgroups: &wgpu::Buffer| {
             SHADOWS_APART.bind_group(
