@@ -36,13 +36,37 @@ fn enqueue(list: u32, n: u32) -> u32 {
     return first;
 }
 
+// A camera ray's kept shading, `wave_shading[i]`, as two words.
+fn store_wave_shading(i: u32, kept: WaveShading) {
+    wave_shading[i] = array<vec4<u32>, 2>(vec4<u32>(bitcast<vec3<u32>>(kept.color), kept.first),
+        vec4<u32>(bitcast<vec3<u32>>(kept.emission), kept.count));
+}
+
+fn wave_shading_at(i: u32) -> WaveShading {
+    let w = wave_shading[i];
+    return WaveShading(bitcast<vec3<f32>>(w[0].xyz), w[0].w, bitcast<vec3<f32>>(w[1].xyz), w[1].w);
+}
+
+// Queued shadow ray q, as three words (`term` and `blocked` the last).
+fn store_shadow_query(q: u32, query: ShadowQuery) {
+    shadow_queue[q] = array<vec4<u32>, 3>(bitcast<vec4<u32>>(query.origin_tmin),
+        bitcast<vec4<u32>>(query.dir_tmax), vec4<u32>(bitcast<vec3<u32>>(query.term), query.blocked));
+}
+
+// `resolved_color` of a camera ray that queued no shadow ray, without
+// its loop over the queue, which lavapipe would run, masked, all the same.
+fn unshadowed_color(kept: WaveShading) -> vec3<f32> {
+    return kept.color + kept.emission;
+}
+
 // The colour a camera ray's shading kept, with the terms of its lights
 // whose shadow rays were not blocked, added as `shade` adds them.
 fn resolved_color(kept: WaveShading) -> vec3<f32> {
     var color = kept.color;
     for (var q = kept.first; q < kept.first + kept.count; q++) {
-        if shadow_queue[q].blocked == 0u {
-            color += shadow_queue[q].term;
+        let term_blocked = shadow_queue[q][2];
+        if term_blocked.w == 0u {
+            color += bitcast<vec3<f32>>(term_blocked.xyz);
         }
     }
     return color + kept.emission;
@@ -79,8 +103,8 @@ fn shade_but_shadows(ray: Ray, hit: Hit) -> WaveShading {
         let sample = light_sample(surface, origin, lights[i]);
         if sample.lit {
             let r = sample.shadow_ray;
-            shadow_queue[q] = ShadowQuery(vec4<f32>(r.origin, r.tmin), vec4<f32>(r.dir, r.tmax),
-                light_term(surface, sample), 0u);
+            store_shadow_query(q, ShadowQuery(vec4<f32>(r.origin, r.tmin),
+                vec4<f32>(r.dir, r.tmax), light_term(surface, sample), 0u));
             q += 1u;
         }
     }
@@ -125,9 +149,9 @@ fn render_primary(
     // Read once: lavapipe runs both branches below.
     let sums = sums_so_far(slot);
     if kept.count == 0u {
-        store_sums(id, slot, add_sample(sums, resolved_color(kept)));
+        store_sums(id, slot, add_sample(sums, unshadowed_color(kept)));
     } else {
-        wave_shading[list_pixel(id, slot, sums, params.sample_begin)] = kept;
+        store_wave_shading(list_pixel(id, slot, sums, params.sample_begin), kept);
     }
     report_cut_loops();
 }
@@ -159,12 +183,12 @@ fn render_primary_samples(
         let kept = primary_sample(id, sample);
         if listed == NO_HIT {
             if kept.count == 0u {
-                sums = add_sample(sums, resolved_color(kept));
+                sums = add_sample(sums, unshadowed_color(kept));
                 continue;
             }
             listed = list_pixel(id, slot, sums, sample);
         }
-        wave_shading[listed * samples + sample - params.sample_begin] = kept;
+        store_wave_shading(listed * samples + sample - params.sample_begin, kept);
     }
     if listed == NO_HIT {
         store_sums(id, slot, sums);
@@ -183,10 +207,10 @@ fn render_shadows(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgrou
     if id.x >= atomicLoad(&wave_counts[0]) {
         return;
     }
-    let o = shadow_queue[id.x].origin_tmin;
-    let d = shadow_queue[id.x].dir_tmax;
+    let o = bitcast<vec4<f32>>(shadow_queue[id.x][0]);
+    let d = bitcast<vec4<f32>>(shadow_queue[id.x][1]);
     if trace_any(Ray(o.xyz, o.w, d.xyz, d.w)) {
-        shadow_queue[id.x].blocked = 1u;
+        shadow_queue[id.x][2].w = 1u;
     }
     report_cut_loops();
 }
@@ -206,7 +230,7 @@ fn render_resolve(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgrou
     let samples = params.sample_end - params.sample_begin;
     var sums = tile_sums[slot];
     for (var sample = listed.y; sample < params.sample_end; sample++) {
-        let kept = wave_shading[n * samples + sample - params.sample_begin];
+        let kept = wave_shading_at(n * samples + sample - params.sample_begin);
         sums = add_sample(sums, resolved_color(kept));
     }
     store_sums(id, slot, sums);

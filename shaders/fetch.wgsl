@@ -5,6 +5,13 @@
 
 // Storage access across the split (no CPU twin: the CPU reads one array).
 fn triangle_at(i: u32) -> Triangle {
+    if BVH_TEXELS {
+        let a = texel_at(triangle_texels, 3u * i);
+        let b = texel_at(triangle_texels, 3u * i + 1u);
+        let c = texel_at(triangle_texels, 3u * i + 2u);
+        return Triangle(bitcast<vec3<f32>>(a.xyz), a.w, bitcast<vec3<f32>>(b.xyz), b.w,
+            bitcast<vec3<f32>>(c.xyz), c.w);
+    }
     if i < TRIANGLES_PER_BINDING {
         return triangles[i];
     }

@@ -309,6 +309,9 @@ struct Surface {
 @group(0) @binding(16) var<storage, read> triangle_attributes_hi: array<TriangleAttributes>;
 // The scene's textures, all in one array of words (src/texture/store.rs).
 @group(0) @binding(17) var<storage, read> textures: array<u32>;
+// With BVH_TEXELS, the triangles too (the hits' surfaces, read once a hit
+// in shading): triangle i's words at texels 3i to 3i + 2.
+@group(0) @binding(18) var triangle_texels: texture_storage_2d<rgba32uint, read>;
 // Group 1 holds what one entry point reads and writes: an image tile for
 // `render`, a batch of rays for `trace_rays`.
 @group(1) @binding(0) var out_color: texture_storage_2d<rgba32float, write>;
@@ -326,9 +329,10 @@ struct Surface {
 // `render_shadows`, `render_resolve`; gpu::ShadowDispatch): the kept
 // shading of the listed pixels' samples (a dispatch's samples of the nth
 // from n · samples), the shadow rays to trace (compacted, each camera
-// ray's together and in light order), and how many. Members as wide as
-// they can be: lavapipe moves each member of a struct a lane at a time,
-// a loop per member.
+// ray's together and in light order), and how many. Read and written as
+// whole vec4 words (shaders/entry_shadows.wgsl): lavapipe moves each
+// member of a struct, as each load or store, a lane at a time, a loop
+// each.
 struct WaveShading {
     // The background on a miss; else the ambient term, to which the
     // terms of the lights whose shadow rays are not blocked are added.
@@ -349,8 +353,8 @@ struct ShadowQuery {
     // 1 once `render_shadows` found the ray blocked.
     blocked: u32,
 }
-@group(1) @binding(7) var<storage, read_write> wave_shading: array<WaveShading>;
-@group(1) @binding(8) var<storage, read_write> shadow_queue: array<ShadowQuery>;
+@group(1) @binding(7) var<storage, read_write> wave_shading: array<array<vec4<u32>, 2>>; // WaveShading
+@group(1) @binding(8) var<storage, read_write> shadow_queue: array<array<vec4<u32>, 3>>; // ShadowQuery
 // How many: [0] shadow rays queued, [1] pixels to resolve.
 @group(1) @binding(9) var<storage, read_write> wave_counts: array<atomic<u32>, 2>;
 // The indirect dispatches (workgroups x, y, z: one a WORKGROUP_INVOCATIONS

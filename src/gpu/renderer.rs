@@ -246,6 +246,7 @@ fn scene_bind_group(
 ) -> wgpu::BindGroup {
     let node_view = buffers.node_texture.create_view(&Default::default());
     let block_view = buffers.block_texture.create_view(&Default::default());
+    let triangle_view = buffers.triangle_texture.create_view(&Default::default());
     SCENE.bind_group(
         device,
         SCENE.label,
@@ -274,6 +275,10 @@ fn scene_bind_group(
             (
                 "bvh_block_texels",
                 wgpu::BindingResource::TextureView(&block_view),
+            ),
+            (
+                "triangle_texels",
+                wgpu::BindingResource::TextureView(&triangle_view),
             ),
         ],
     )

@@ -41,7 +41,8 @@ impl BvhStorage {
         let words = |bytes: usize| bytes / 16;
         let nodes = words(scene.bvh.nodes.len() * size_of::<CompressedNode>());
         let blocks = words(std::mem::size_of_val(scene.bvh.blocks.as_slice()));
-        if is_llvmpipe(&gpu.info) && fits(nodes) && fits(blocks) {
+        let triangles = words(std::mem::size_of_val(scene.triangles.as_slice()));
+        if is_llvmpipe(&gpu.info) && fits(nodes) && fits(blocks) && fits(triangles) {
             BvhStorage::Texels
         } else {
             BvhStorage::Buffers
@@ -66,6 +67,8 @@ pub(super) struct SceneBuffers {
     pub lights: wgpu::Buffer,
     pub node_texture: wgpu::Texture,
     pub block_texture: wgpu::Texture,
+    /// The triangles, with `BvhStorage::Texels` (3 texels each).
+    pub triangle_texture: wgpu::Texture,
     /// `texture::TextureStore::words`.
     pub textures: wgpu::Buffer,
     /// Bytes of all of them.
@@ -80,8 +83,15 @@ impl SceneBuffers {
         // memory, which wgpu reports as an out-of-memory error.
         let memory = gpu.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let limit = gpu.binding_limit();
-        let triangles =
-            gpu.split_buffer("triangles", &non_empty::<Triangle>(&scene.triangles), 48)?;
+        let texels = storage == BvhStorage::Texels;
+        // In one place only: texels or buffer.
+        let (buffer_triangles, texel_triangles): (&[Triangle], &[u8]) = if texels {
+            (&[], bytemuck::cast_slice(&scene.triangles))
+        } else {
+            (&scene.triangles, &[])
+        };
+        let triangles = gpu.split_buffer("triangles", &non_empty(buffer_triangles), 48)?;
+        let triangle_texture = gpu.texel_texture("triangle texels", texel_triangles)?;
         let normals =
             gpu.split_buffer("normals", &non_empty::<TriangleNormals>(&scene.normals), 48)?;
         let attributes = gpu.split_buffer(
@@ -90,7 +100,6 @@ impl SceneBuffers {
             size_of::<TriangleAttributes>() as u64,
         )?;
         let compressed = crate::cwbvh::compress(&scene.bvh);
-        let texels = storage == BvhStorage::Texels;
         let (buffer_nodes, buffer_blocks): (&[CompressedNode], &[PrimBlock]) = if texels {
             (&[], &[])
         } else {
@@ -139,7 +148,7 @@ impl SceneBuffers {
         .iter()
         .map(|b| b.size())
         .sum::<u64>()
-            + [&node_texture, &block_texture]
+            + [&node_texture, &block_texture, &triangle_texture]
                 .iter()
                 .map(|t| 16 * t.width() as u64 * t.height() as u64)
                 .sum::<u64>();
@@ -164,6 +173,7 @@ impl SceneBuffers {
             lights,
             node_texture,
             block_texture,
+            triangle_texture,
             textures,
             device_bytes,
         })
