@@ -13,7 +13,7 @@ fn render(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) grou
     if slot == NO_HIT {
         return;
     }
-    store_samples(id, slot, add_samples(params.tile_origin + id.xy, sums_so_far(slot)));
+    store_samples(slot, add_samples(params.tile_origin + id.xy, sums_so_far(slot)));
     report_cut_loops();
 }
 

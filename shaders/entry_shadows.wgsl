@@ -114,11 +114,11 @@ fn shade_but_shadows(ray: Ray, hit: Hit) -> WaveShading {
 // Sample `sample` of invocation `id`'s pixel: its camera ray traced and
 // shaded but for its shadows, which it queues; the pixel's primitive
 // stored from its first sample.
-fn primary_sample(id: vec3<u32>, sample: u32) -> WaveShading {
+fn primary_sample(id: vec3<u32>, slot: u32, sample: u32) -> WaveShading {
     let ray = camera_ray(sample_position(params.tile_origin + id.xy, sample));
     let hit = trace_closest(ray);
     if sample == 0u {
-        textureStore(out_prim, id.xy, vec4<u32>(hit.prim, 0u, 0u, 0u));
+        out_prim[slot] = hit.prim;
     }
     return shade_but_shadows(ray, hit);
 }
@@ -145,11 +145,11 @@ fn render_primary(
     if slot == NO_HIT {
         return;
     }
-    let kept = primary_sample(id, params.sample_begin);
+    let kept = primary_sample(id, slot, params.sample_begin);
     // Read once: lavapipe runs both branches below.
     let sums = sums_so_far(slot);
     if kept.count == 0u {
-        store_sums(id, slot, add_sample(sums, unshadowed_color(kept)));
+        store_sums(slot, add_sample(sums, unshadowed_color(kept)));
     } else {
         store_wave_shading(list_pixel(id, slot, sums, params.sample_begin), kept);
     }
@@ -180,7 +180,7 @@ fn render_primary_samples(
     var sums = sums_so_far(slot);
     var listed = NO_HIT;
     for (var sample = params.sample_begin; sample < params.sample_end; sample++) {
-        let kept = primary_sample(id, sample);
+        let kept = primary_sample(id, slot, sample);
         if listed == NO_HIT {
             if kept.count == 0u {
                 sums = add_sample(sums, unshadowed_color(kept));
@@ -191,7 +191,7 @@ fn render_primary_samples(
         store_wave_shading(listed * samples + sample - params.sample_begin, kept);
     }
     if listed == NO_HIT {
-        store_sums(id, slot, sums);
+        store_sums(slot, sums);
     }
     report_cut_loops();
 }
@@ -233,5 +233,5 @@ fn render_resolve(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgrou
         let kept = wave_shading_at(n * samples + sample - params.sample_begin);
         sums = add_sample(sums, resolved_color(kept));
     }
-    store_sums(id, slot, sums);
+    store_sums(slot, sums);
 }

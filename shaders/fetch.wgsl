@@ -4,6 +4,12 @@
 // array, so only the prefetch of what traversal visits next is there).
 
 // Storage access across the split (no CPU twin: the CPU reads one array).
+// Which binding element i lies in: the low one, or the `_hi` one after it
+// where the array is split (`..._PER_BINDING` elements in the low one;
+// UNSPLIT where not, which compiles the `_hi` load out: lavapipe would run
+// it, masked, all the same).
+const UNSPLIT: u32 = 0xffffffffu;
+
 fn triangle_at(i: u32) -> Triangle {
     if BVH_TEXELS {
         let a = texel_at(triangle_texels, 3u * i);
@@ -12,21 +18,21 @@ fn triangle_at(i: u32) -> Triangle {
         return Triangle(bitcast<vec3<f32>>(a.xyz), a.w, bitcast<vec3<f32>>(b.xyz), b.w,
             bitcast<vec3<f32>>(c.xyz), c.w);
     }
-    if i < TRIANGLES_PER_BINDING {
+    if TRIANGLES_PER_BINDING == UNSPLIT || i < TRIANGLES_PER_BINDING {
         return triangles[i];
     }
     return triangles_hi[i - TRIANGLES_PER_BINDING];
 }
 
 fn triangle_normals_at(i: u32) -> TriangleNormals {
-    if i < TRIANGLES_PER_BINDING {
+    if NORMALS_PER_BINDING == UNSPLIT || i < NORMALS_PER_BINDING {
         return triangle_normals[i];
     }
-    return triangle_normals_hi[i - TRIANGLES_PER_BINDING];
+    return triangle_normals_hi[i - NORMALS_PER_BINDING];
 }
 
 fn triangle_attributes_at(i: u32) -> TriangleAttributes {
-    if i < ATTRIBUTES_PER_BINDING {
+    if ATTRIBUTES_PER_BINDING == UNSPLIT || i < ATTRIBUTES_PER_BINDING {
         return triangle_attributes[i];
     }
     return triangle_attributes_hi[i - ATTRIBUTES_PER_BINDING];
@@ -52,7 +58,7 @@ fn node_word(i: u32, k: u32) -> vec4<u32> {
     if BVH_TEXELS {
         return texel_at(bvh_node_texels, 5u * i + k);
     }
-    if i < NODES_PER_BINDING {
+    if NODES_PER_BINDING == UNSPLIT || i < NODES_PER_BINDING {
         return bvh_nodes[i][k];
     }
     return bvh_nodes_hi[i - NODES_PER_BINDING][k];
@@ -69,7 +75,7 @@ fn block_lanes(i: u32, k: u32, a: u32) -> vec4<f32> {
     if BVH_TEXELS {
         return bitcast<vec4<f32>>(texel_at(bvh_block_texels, 10u * i + 3u * k + a));
     }
-    if i < BLOCKS_PER_BINDING {
+    if BLOCKS_PER_BINDING == UNSPLIT || i < BLOCKS_PER_BINDING {
         return bvh_blocks[i].v[k][a];
     }
     return bvh_blocks_hi[i - BLOCKS_PER_BINDING].v[k][a];
@@ -79,7 +85,7 @@ fn block_prims(i: u32) -> vec4<u32> {
     if BVH_TEXELS {
         return texel_at(bvh_block_texels, 10u * i + 9u);
     }
-    if i < BLOCKS_PER_BINDING {
+    if BLOCKS_PER_BINDING == UNSPLIT || i < BLOCKS_PER_BINDING {
         return bvh_blocks[i].prims;
     }
     return bvh_blocks_hi[i - BLOCKS_PER_BINDING].prims;

@@ -34,22 +34,26 @@ override INTERSECT: u32 = 2u;
 // closest.
 override ANY_HIT: bool = false;
 // Arrays too large for one storage binding are split over two: the first
-// this many elements in `triangles` (and `triangle_normals`),
-// `triangle_attributes`, `bvh_nodes`
-// or `bvh_blocks`, the rest in the `_hi` binding. Unsplit: all.
+// this many elements in `triangles`, `triangle_normals`,
+// `triangle_attributes`, `bvh_nodes` or `bvh_blocks`, the rest in the
+// `_hi` binding. Unsplit: all.
 override TRIANGLES_PER_BINDING: u32 = 0xffffffffu;
+override NORMALS_PER_BINDING: u32 = 0xffffffffu;
 override ATTRIBUTES_PER_BINDING: u32 = 0xffffffffu;
 override NODES_PER_BINDING: u32 = 0xffffffffu;
 override BLOCKS_PER_BINDING: u32 = 0xffffffffu;
-// Read the BVH's nodes and blocks from `bvh_node_texels` and
-// `bvh_block_texels` rather than the storage buffers (gpu::BvhStorage:
-// lavapipe fetches texels with vector gathers, storage words a lane at a
-// time).
+// Read the BVH's nodes and blocks, and the triangles, from
+// `bvh_node_texels`, `bvh_block_texels` and `triangle_texels` rather than
+// the storage buffers (gpu::BvhStorage: lavapipe fetches texels with
+// vector gathers, storage words a lane at a time).
 override BVH_TEXELS: bool = false;
 // The `render` entry point's workgroup: gpu::RENDER_WORKGROUP, measured
 // (docs/bvh.md).
 override RENDER_WORKGROUP_X: u32 = 8u;
 override RENDER_WORKGROUP_Y: u32 = 8u;
+// Side of the square render tile (gpu::TILE): the row stride of the tile
+// buffers (`out_color`, `out_prim`, `tile_sums`).
+override TILE: u32 = 256u;
 // Traversal stack entries per invocation in workgroup memory (gpu.rs):
 // the scene's BVH depth − 1, the most `trace_compressed` can push (see
 // MAX_DEPTH), up to cwbvh::SHORT_STACK_ENTRIES. A deeper tree sets
@@ -162,6 +166,9 @@ struct Params {
     cone_spread: f32,
     // Always 0: what `rounded` and `camera_ray` select on.
     zero: u32,
+    // The tile's width and height in pixels (at most TILE).
+    tile_size: vec2<u32>,
+    _pad: vec2<u32>,
 }
 
 struct Triangle {
@@ -314,8 +321,12 @@ struct Surface {
 @group(0) @binding(18) var triangle_texels: texture_storage_2d<rgba32uint, read>;
 // Group 1 holds what one entry point reads and writes: an image tile for
 // `render`, a batch of rays for `trace_rays`.
-@group(1) @binding(0) var out_color: texture_storage_2d<rgba32float, write>;
-@group(1) @binding(1) var out_prim: texture_storage_2d<r32uint, write>;
+// A tile's pixels' means (colour, variance of the mean luminance) and
+// first primitives, pixel (x, y) at y · TILE + x. Storage buffers, not
+// storage textures: lavapipe stores a texel's channels a loop over the
+// lanes each, a buffer's vec4 in one.
+@group(1) @binding(0) var<storage, read_write> out_color: array<vec4<f32>>;
+@group(1) @binding(1) var<storage, read_write> out_prim: array<u32>;
 @group(1) @binding(2) var<storage, read> rays: array<Ray>;
 @group(1) @binding(3) var<storage, read_write> hits: array<Hit>;
 // `render_pixel_list`: pixels to (re)sample, and their mean colours with the

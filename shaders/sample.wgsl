@@ -118,21 +118,25 @@ fn pixel_mean(sums: vec4<f32>) -> vec4<f32> {
 }
 
 // A render entry point's invocation (8×8 workgroups over the tile): its
-// place in the tile, spread over lavapipe's threads, with its traversal
-// stack placed.
+// place in the tile, with its traversal stack placed. The host dispatches
+// CPU_THREADS layers (z) of every CPU_THREADS-th row of workgroups, and
+// llvmpipe, which hands each of its threads a contiguous share of a
+// dispatch's workgroups, gives thread t layer t: rows t, t + T, t + 2T, …,
+// a share of each part of the image, as `spread_invocation` deals them,
+// without its integer divisions, which llvmpipe runs a lane at a time.
 fn tile_invocation(group: vec3<u32>, groups: vec3<u32>, local: vec3<u32>, lane: u32) -> vec3<u32> {
     stack_base = lane * STACK_ENTRIES;
-    return spread_invocation(group, groups, local, vec3<u32>(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y, 1u));
+    let row = group.y * groups.z + group.z;
+    return vec3<u32>(group.x * RENDER_WORKGROUP_X + local.x, row * RENDER_WORKGROUP_Y + local.y, 0u);
 }
 
-// The tile pixel of a render invocation, or none.
+// The tile pixel of a render invocation (its index in the tile buffers),
+// or none.
 fn tile_slot(id: vec3<u32>) -> u32 {
-    let size = textureDimensions(out_color);
-    let pixel = params.tile_origin + id.xy;
-    if id.x >= size.x || id.y >= size.y || pixel.x >= params.width || pixel.y >= params.height {
+    if id.x >= params.tile_size.x || id.y >= params.tile_size.y {
         return NO_HIT;
     }
-    return id.y * size.x + id.x;
+    return id.y * TILE + id.x;
 }
 
 // A tile pixel's sums of the samples before `params.sample_begin`, kept
@@ -146,18 +150,18 @@ fn sums_so_far(slot: u32) -> vec4<f32> {
 
 // A tile pixel's samples so far: its primitive after its first sample,
 // its mean after its last, else its sums for the next dispatch.
-fn store_samples(id: vec3<u32>, slot: u32, result: SampleSums) {
+fn store_samples(slot: u32, result: SampleSums) {
     if params.sample_begin == 0u {
-        textureStore(out_prim, id.xy, vec4<u32>(result.prim, 0u, 0u, 0u));
+        out_prim[slot] = result.prim;
     }
-    store_sums(id, slot, result.sums);
+    store_sums(slot, result.sums);
 }
 
 // A tile pixel's sums of samples so far: its mean after its last, else
 // the sums for the next dispatch.
-fn store_sums(id: vec3<u32>, slot: u32, sums: vec4<f32>) {
+fn store_sums(slot: u32, sums: vec4<f32>) {
     if params.sample_end == params.spp {
-        textureStore(out_color, id.xy, pixel_mean(sums));
+        out_color[slot] = pixel_mean(sums);
     } else {
         tile_sums[slot] = sums;
     }

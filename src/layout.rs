@@ -74,6 +74,9 @@ pub struct Params {
     /// on, a value no compiler can know; a uniform, so lavapipe reads it
     /// once, not lane by lane as a storage word (docs/accuracy.md).
     pub zero: u32,
+    /// The current tile's width and height in pixels (at most gpu::TILE).
+    pub tile_size: [u32; 2],
+    pub _pad: [u32; 2],
 }
 
 #[repr(C)]

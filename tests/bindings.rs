@@ -31,14 +31,6 @@ fn shader_kind(
                 class,
             },
         ) => match class {
-            ImageClass::Storage { format, access } if *access == StorageAccess::STORE => {
-                let format = match format {
-                    naga::StorageFormat::Rgba32Float => wgpu::TextureFormat::Rgba32Float,
-                    naga::StorageFormat::R32Uint => wgpu::TextureFormat::R32Uint,
-                    other => return Err(format!("a storage texture of format {other:?}")),
-                };
-                Ok(BindingKind::Image(format))
-            }
             ImageClass::Storage {
                 format: naga::StorageFormat::Rgba32Uint,
                 access,

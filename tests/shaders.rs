@@ -105,6 +105,8 @@ fn host_structs_match_wgsl_layout() {
             canary_loops,
             cone_spread,
             zero,
+            tile_size,
+            _pad,
         }
     );
     check_layout!(

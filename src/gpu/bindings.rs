@@ -12,8 +12,6 @@ pub enum BindingKind {
     Storage,
     /// A read-write storage buffer.
     StorageWrite,
-    /// A write-only storage texture of this format.
-    Image(wgpu::TextureFormat),
     /// A read-only rgba32uint storage texture (`BvhStorage::Texels`).
     Texels,
 }
@@ -42,7 +40,7 @@ const fn bind(name: &'static str, binding: u32, kind: BindingKind) -> Binding {
     }
 }
 
-use BindingKind::{Image, Storage, StorageWrite, Texels, Uniform};
+use BindingKind::{Storage, StorageWrite, Texels, Uniform};
 
 /// Group 0 of every pipeline: the resident scene.
 pub const SCENE: BindingTable = BindingTable {
@@ -71,8 +69,8 @@ pub const SCENE: BindingTable = BindingTable {
     ],
 };
 
-const OUT_COLOR: Binding = bind("out_color", 0, Image(wgpu::TextureFormat::Rgba32Float));
-const OUT_PRIM: Binding = bind("out_prim", 1, Image(wgpu::TextureFormat::R32Uint));
+const OUT_COLOR: Binding = bind("out_color", 0, StorageWrite);
+const OUT_PRIM: Binding = bind("out_prim", 1, StorageWrite);
 
 const TILE_SUMS: Binding = bind("tile_sums", 6, StorageWrite);
 
@@ -162,11 +160,6 @@ impl BindingTable {
                     Uniform => buffer(wgpu::BufferBindingType::Uniform),
                     Storage => buffer(wgpu::BufferBindingType::Storage { read_only: true }),
                     StorageWrite => buffer(wgpu::BufferBindingType::Storage { read_only: false }),
-                    Image(format) => wgpu::BindingType::StorageTexture {
-                        access: wgpu::StorageTextureAccess::WriteOnly,
-                        format,
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                    },
                     Texels => wgpu::BindingType::StorageTexture {
                         access: wgpu::StorageTextureAccess::ReadOnly,
                         format: wgpu::TextureFormat::Rgba32Uint,

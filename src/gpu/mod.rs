@@ -31,7 +31,6 @@ mod upload;
 
 pub use adapter::{AdapterRequest, Presenting, enumerate_adapters};
 pub use device::{Gpu, GpuOptions, MAX_BUFFER_ENV, SHADOW_DISPATCH_ENV};
-pub use readback::padded_bytes_per_row;
 pub use render::ShadowDispatch;
 pub use renderer::GpuRenderer;
 pub use shader::{SHADER_SOURCE, specialisation};

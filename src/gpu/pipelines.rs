@@ -117,6 +117,7 @@ pub(super) fn resident_constants(
         "TRIANGLES_PER_BINDING",
         buffers.triangles.per_binding as f64,
     ));
+    constants.push(("NORMALS_PER_BINDING", buffers.normals.per_binding as f64));
     constants.push((
         "ATTRIBUTES_PER_BINDING",
         buffers.attributes.per_binding as f64,
@@ -126,6 +127,7 @@ pub(super) fn resident_constants(
     constants.push(("BVH_TEXELS", (storage == BvhStorage::Texels) as u32 as f64));
     constants.push(("RENDER_WORKGROUP_X", RENDER_WORKGROUP[0] as f64));
     constants.push(("RENDER_WORKGROUP_Y", RENDER_WORKGROUP[1] as f64));
+    constants.push(("TILE", super::TILE as f64));
     let (stack_entries, spills) = crate::cwbvh::short_stack(
         scene.bvh.depth(),
         gpu.limits.max_compute_workgroup_storage_size,

@@ -1,5 +1,5 @@
 //! Getting results back from the device: mapped buffers, the render tile's
-//! textures, and the shader's flag that the driver cut its loops short.
+//! buffers, and the shader's flag that the driver cut its loops short.
 
 use std::sync::mpsc;
 
@@ -40,65 +40,41 @@ impl Gpu {
     }
 }
 
-/// Bytes per row of a texture copy: wgpu requires a multiple of 256.
-pub fn padded_bytes_per_row(width: u32, bytes_per_pixel: u32) -> u32 {
-    let align = wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-    (width * bytes_per_pixel).div_ceil(align) * align
-}
-
-/// The textures a render tile is written to, and their readback buffers.
+/// The buffers a render tile is written to (`out_color`, `out_prim`:
+/// pixel (x, y) at y · TILE + x), and their readback buffers.
 pub(super) struct TileTargets {
-    pub color: wgpu::Texture,
-    pub prim: wgpu::Texture,
+    pub color: wgpu::Buffer,
+    pub prim: wgpu::Buffer,
     color_staging: wgpu::Buffer,
     prim_staging: wgpu::Buffer,
 }
 
+/// Bytes of a tile pixel's mean (colour, variance) and of its primitive.
+const COLOR_BYTES: u64 = 16;
+const PRIM_BYTES: u64 = 4;
+
 impl TileTargets {
     pub fn new(device: &wgpu::Device) -> TileTargets {
-        let texture = |label, format| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d {
-                    width: TILE,
-                    height: TILE,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
-                view_formats: &[],
-            })
-        };
-        let staging = |label, bytes_per_pixel| {
+        let buffer = |label, bytes_per_pixel: u64, usage| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
-                size: (padded_bytes_per_row(TILE, bytes_per_pixel) * TILE) as u64,
-                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                size: bytes_per_pixel * (TILE * TILE) as u64,
+                usage,
                 mapped_at_creation: false,
             })
         };
+        let target = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+        let staging = wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ;
         TileTargets {
-            color: texture("color", wgpu::TextureFormat::Rgba32Float),
-            prim: texture("prim", wgpu::TextureFormat::R32Uint),
-            color_staging: staging("color readback", 16),
-            prim_staging: staging("prim readback", 4),
+            color: buffer("color", COLOR_BYTES, target),
+            prim: buffer("prim", PRIM_BYTES, target),
+            color_staging: buffer("color readback", COLOR_BYTES, staging),
+            prim_staging: buffer("prim readback", PRIM_BYTES, staging),
         }
     }
 
-    /// The colour and primitive textures, as bound at `out_color` and
-    /// `out_prim`.
-    pub fn views(&self) -> [wgpu::TextureView; 2] {
-        [
-            self.color.create_view(&Default::default()),
-            self.prim.create_view(&Default::default()),
-        ]
-    }
-
-    /// Copies the tile's textures to the staging buffers (rows padded as
-    /// wgpu requires), maps them and hands each row to `row_sink`.
+    /// Copies the tile's first `height` rows to the staging buffers, maps
+    /// them and hands the first `width` pixels of each row to `row_sink`.
     pub fn read(
         &self,
         gpu: &Gpu,
@@ -106,37 +82,23 @@ impl TileTargets {
         height: u32,
         mut row_sink: impl FnMut(u32, &[f32], &[u32]),
     ) -> Result<()> {
-        let color_row = padded_bytes_per_row(TILE, 16);
-        let prim_row = padded_bytes_per_row(TILE, 4);
+        let rows = (height * TILE) as u64;
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        let extent = wgpu::Extent3d {
-            width,
-            height,
-            depth_or_array_layers: 1,
-        };
-        for (texture, buffer, row_bytes) in [
-            (&self.color, &self.color_staging, color_row),
-            (&self.prim, &self.prim_staging, prim_row),
+        for (buffer, staging, bytes) in [
+            (&self.color, &self.color_staging, COLOR_BYTES),
+            (&self.prim, &self.prim_staging, PRIM_BYTES),
         ] {
-            encoder.copy_texture_to_buffer(
-                texture.as_image_copy(),
-                wgpu::TexelCopyBufferInfo {
-                    buffer,
-                    layout: wgpu::TexelCopyBufferLayout {
-                        offset: 0,
-                        bytes_per_row: Some(row_bytes),
-                        rows_per_image: Some(height),
-                    },
-                },
-                extent,
-            );
+            encoder.copy_buffer_to_buffer(buffer, 0, staging, 0, rows * bytes);
         }
         gpu.queue.submit([encoder.finish()]);
 
         let (sender, receiver) = mpsc::channel();
-        for buffer in [&self.color_staging, &self.prim_staging] {
+        for (buffer, bytes) in [
+            (&self.color_staging, COLOR_BYTES),
+            (&self.prim_staging, PRIM_BYTES),
+        ] {
             let sender = sender.clone();
-            buffer.map_async(wgpu::MapMode::Read, .., move |r| {
+            buffer.map_async(wgpu::MapMode::Read, ..rows * bytes, move |r| {
                 let _ = sender.send(r);
             });
         }
@@ -148,20 +110,21 @@ impl TileTargets {
                 .map_err(|e| Error::Gpu(format!("readback: {e}")))?;
         }
         {
-            let map = |buffer: &wgpu::Buffer| {
+            let map = |buffer: &wgpu::Buffer, bytes: u64| {
                 buffer
-                    .get_mapped_range(..)
+                    .get_mapped_range(..rows * bytes)
                     .map_err(|e| Error::Gpu(format!("readback: {e}")))
             };
-            let colors = map(&self.color_staging)?;
-            let ids = map(&self.prim_staging)?;
+            let colors = map(&self.color_staging, COLOR_BYTES)?;
+            let ids = map(&self.prim_staging, PRIM_BYTES)?;
+            let colors: &[[f32; 4]] = bytemuck::cast_slice(&colors);
+            let ids: &[u32] = bytemuck::cast_slice(&ids);
             for row in 0..height {
-                let c = (row * color_row) as usize;
-                let p = (row * prim_row) as usize;
+                let at = (row * TILE) as usize;
                 row_sink(
                     row,
-                    bytemuck::cast_slice(&colors[c..c + width as usize * 16]),
-                    bytemuck::cast_slice(&ids[p..p + width as usize * 4]),
+                    bytemuck::cast_slice(&colors[at..at + width as usize]),
+                    &ids[at..at + width as usize],
                 );
             }
         }

@@ -87,6 +87,20 @@ fn wave_queue_bytes(lights: u32) -> u64 {
     wave_budget(lights) as u64 * lights.max(1) as u64 * SHADOW_QUERY_BYTES
 }
 
+/// The workgroups of a render dispatch over a `width` × `height` tile, on
+/// an adapter that runs a dispatch on `threads` CPU threads: every
+/// `threads`-th row of them in each of `threads` layers, as the shader's
+/// `tile_invocation` takes them.
+fn tile_workgroups(width: u32, height: u32, threads: u32) -> [u32; 3] {
+    let [wx, wy] = RENDER_WORKGROUP;
+    let threads = threads.max(1);
+    [
+        width.div_ceil(wx),
+        height.div_ceil(wy).div_ceil(threads),
+        threads,
+    ]
+}
+
 /// The passes of a render with its shadow rays apart, and their buffers.
 pub(super) struct SplitShadows {
     /// The first pass of a dispatch of one sample a pixel, and of several.
@@ -275,13 +289,13 @@ impl GpuRenderer {
         height: u32,
     ) -> Result<Option<Duration>> {
         self.params.tile_origin = [x, y];
+        self.params.tile_size = [width, height];
         let gpu = &self.gpu;
         let resident = &self.resident;
         gpu.queue
             .write_buffer(&resident.params_buffer, 0, bytemuck::bytes_of(&self.params));
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        let [wx, wy] = RENDER_WORKGROUP;
-        let (groups_x, groups_y) = (width.div_ceil(wx), height.div_ceil(wy));
+        let [groups_x, groups_y, layers] = tile_workgroups(width, height, gpu.cpu_threads());
         if let (true, Some(split)) = (self.shadows_apart(), &self.pipelines.split) {
             gpu.queue
                 .write_buffer(&split.counts, 0, bytemuck::cast_slice(&EMPTY_COUNTS));
@@ -301,7 +315,7 @@ impl GpuRenderer {
             } else {
                 pass.set_pipeline(&split.primary_samples);
             }
-            pass.dispatch_workgroups(groups_x, groups_y, 1);
+            pass.dispatch_workgroups(groups_x, groups_y, layers);
             // An invocation a queued shadow ray (the primary pass counts
             // the workgroups).
             pass.set_pipeline(&split.shadows);
@@ -318,7 +332,7 @@ impl GpuRenderer {
             pass.set_pipeline(self.pipelines.render.as_ref().expect("prepared"));
             pass.set_bind_group(SCENE.group, &resident.scene_group, &[]);
             pass.set_bind_group(IMAGE_TILE.group, &resident.image_group, &[]);
-            pass.dispatch_workgroups(groups_x, groups_y, 1);
+            pass.dispatch_workgroups(groups_x, groups_y, layers);
         }
         if let Some(timer) = &self.timer {
             timer.resolve(&mut encoder);
@@ -360,15 +374,14 @@ impl GpuRenderer {
         // What the indirect passes bind in its place: a dispatch may not
         // bind the buffer it is dispatched by.
         let unused = buffer("wave workgroups, unused", bytes(&EMPTY_WORKGROUPS), none);
-        let [color, prim] = self.tile.views();
         let group_with = |workgroups: &wgpu::Buffer| {
             SHADOWS_APART.bind_group(
                 device,
                 SHADOWS_APART.label,
                 &layout,
                 vec![
-                    ("out_color", wgpu::BindingResource::TextureView(&color)),
-                    ("out_prim", wgpu::BindingResource::TextureView(&prim)),
+                    ("out_color", self.tile.color.as_entire_binding()),
+                    ("out_prim", self.tile.prim.as_entire_binding()),
                     ("tile_sums", self.resident.tile_sums.as_entire_binding()),
                     ("wave_shading", shading.as_entire_binding()),
                     ("shadow_queue", queue.as_entire_binding()),

@@ -46,8 +46,7 @@ pub struct GpuRenderer {
     pub shadow_dispatch: ShadowDispatch,
     /// Bytes of the scene's buffers on the device.
     pub device_bytes: u64,
-    /// The arrays split over two bindings ("triangles" also stands for
-    /// their normals).
+    /// The arrays split over two bindings.
     pub split_arrays: Vec<&'static str>,
     /// Where the shader reads the BVH from.
     pub bvh_storage: BvhStorage,
@@ -169,14 +168,13 @@ impl GpuRenderer {
             &buffers,
             [&params_buffer, &loop_status.buffer],
         );
-        let [color, prim] = tile.views();
         let image_group = IMAGE_TILE.bind_group(
             device,
             IMAGE_TILE.label,
             &layouts.image,
             vec![
-                ("out_color", wgpu::BindingResource::TextureView(&color)),
-                ("out_prim", wgpu::BindingResource::TextureView(&prim)),
+                ("out_color", tile.color.as_entire_binding()),
+                ("out_prim", tile.prim.as_entire_binding()),
                 ("tile_sums", tile_sums.as_entire_binding()),
             ],
         );

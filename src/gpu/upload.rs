@@ -179,11 +179,11 @@ impl SceneBuffers {
         })
     }
 
-    /// The arrays split over two bindings ("triangles" also stands for
-    /// their normals).
+    /// The arrays split over two bindings.
     pub fn split_arrays(&self) -> Vec<&'static str> {
         [
             ("triangles", &self.triangles),
+            ("triangle normals", &self.normals),
             ("triangle attributes", &self.attributes),
             ("BVH nodes", &self.nodes),
             ("BVH leaf blocks", &self.blocks),
