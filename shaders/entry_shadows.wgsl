@@ -124,12 +124,22 @@ fn primary_sample(id: vec3<u32>, slot: u32, sample: u32) -> WaveShading {
 }
 
 // Lists invocation `id`'s pixel for `render_resolve` from sample `sample`
-// on, with its sums before it; returns its place in the list.
-fn list_pixel(id: vec3<u32>, slot: u32, sums: vec4<f32>, sample: u32) -> u32 {
+// on; returns its place in the list. Its sums before that sample are in
+// `tile_sums` (`sums_before_kept`).
+fn list_pixel(id: vec3<u32>, sample: u32) -> u32 {
     let listed = enqueue(1u, 1u);
     resolve_pixels[listed] = vec2<u32>(id.x | id.y << 16u, sample);
-    tile_sums[slot] = sums;
     return listed;
+}
+
+// A listed pixel's sums before its first kept sample `first`: those of
+// the dispatches before (none before the first), unless samples of this
+// one came before it, whose sums the pixel stored when listed.
+fn sums_before_kept(slot: u32, first: u32) -> vec4<f32> {
+    if first == params.sample_begin {
+        return sums_so_far(slot);
+    }
+    return tile_sums[slot];
 }
 
 // Pass 1 of a dispatch of one sample a pixel: the pixel finished if its
@@ -146,12 +156,10 @@ fn render_primary(
         return;
     }
     let kept = primary_sample(id, slot, params.sample_begin);
-    // Read once: lavapipe runs both branches below.
-    let sums = sums_so_far(slot);
     if kept.count == 0u {
-        store_sums(slot, add_sample(sums, unshadowed_color(kept)));
+        store_sums(slot, add_sample(sums_so_far(slot), unshadowed_color(kept)));
     } else {
-        store_wave_shading(list_pixel(id, slot, sums, params.sample_begin), kept);
+        store_wave_shading(list_pixel(id, params.sample_begin), kept);
     }
     report_cut_loops();
 }
@@ -186,7 +194,10 @@ fn render_primary_samples(
                 sums = add_sample(sums, unshadowed_color(kept));
                 continue;
             }
-            listed = list_pixel(id, slot, sums, sample);
+            listed = list_pixel(id, sample);
+            if sample != params.sample_begin {
+                tile_sums[slot] = sums;
+            }
         }
         store_wave_shading(listed * samples + sample - params.sample_begin, kept);
     }
@@ -228,7 +239,7 @@ fn render_resolve(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgrou
     let id = vec3<u32>(listed.x & 0xffffu, listed.x >> 16u, 0u);
     let slot = tile_slot(id);
     let samples = params.sample_end - params.sample_begin;
-    var sums = tile_sums[slot];
+    var sums = sums_before_kept(slot, listed.y);
     for (var sample = listed.y; sample < params.sample_end; sample++) {
         let kept = wave_shading_at(n * samples + sample - params.sample_begin);
         sums = add_sample(sums, resolved_color(kept));

@@ -234,10 +234,11 @@ fn apart_as_megakernel(scene: &lambert::Scene, label: &str) -> lambert::output::
 }
 
 /// The workgroups dealt to llvmpipe's threads in turn (the shader's
-/// `spread_workgroup`, sized by `Gpu::cpu_threads`) are a permutation of
-/// the dispatch's work, whatever the number of threads assumed: renders in
-/// both paths and ray queries come out the same bits for 1 to 7 of them,
-/// remainders included (a wrong permutation drops or repeats pixels).
+/// `spread_workgroup` for lists of rays, a render tile's rows in layers
+/// for `tile_invocation`, both sized by `Gpu::cpu_threads`) cover the
+/// dispatch's work once, whatever the number of threads assumed: renders
+/// in both paths and ray queries come out the same bits for 1 to 7 of
+/// them, remainders included (a wrong deal drops or repeats pixels).
 #[test]
 fn workgroups_spread_over_any_thread_count_change_no_pixel_or_hit() {
     use lambert::gpu::{AdapterRequest, Gpu, GpuOptions, GpuRenderer, ShadowDispatch};
