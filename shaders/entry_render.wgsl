@@ -1,10 +1,10 @@
 // Entry points: the render megakernel, every sample of a pixel in one
 // invocation (`render`), and adaptive sampling's later passes over a list
 // of pixels (`render_pixel_list`).
-// Bindings (naga's reflection): both use all of group 0, 0 to 14. Group 1:
-// `render` writes out_color and out_prim and keeps tile_sums between its
-// dispatches; `render_pixel_list` reads pixel_list and writes
-// pixel_results.
+// Bindings (naga's reflection): both use all of group 0. Group 1:
+// `render` writes out_prim and tile_sums (the sums between its
+// dispatches, the means after the last); `render_pixel_list` reads
+// pixel_list and writes pixel_results.
 
 @compute @workgroup_size(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y)
 fn render(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>, @builtin(local_invocation_index) lane: u32) {

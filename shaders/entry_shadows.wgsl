@@ -11,16 +11,14 @@
 // pixel costs), and the last pass runs for the listed pixels only
 // (docs/bvh.md).
 // Bindings (naga's reflection):
-// `render_primary`, `render_primary_samples`: all of group 0 (0 to 17);
-// group 1's out_color, out_prim, tile_sums, wave_shading, shadow_queue,
-// wave_counts, wave_workgroups, resolve_pixels (1:0, 1:1, 1:6 to 1:10,
-// 1:19).
+// `render_primary`, `render_primary_samples`: all of group 0 (0 to 18);
+// group 1's out_prim, tile_sums, wave_shading, shadow_queue, wave_counts,
+// wave_workgroups, resolve_pixels (1:1, 1:6 to 1:10, 1:19).
 // `render_shadows`: group 0 but for triangle_normals, materials, lights,
 // triangle_normals_hi and textures; group 1's shadow_queue, wave_counts
 // (1:8, 1:9).
-// `render_resolve`: group 0's params; group 1's out_color, tile_sums,
-// wave_shading, shadow_queue, wave_counts, resolve_pixels (1:0, 1:6 to
-// 1:9, 1:19).
+// `render_resolve`: group 0's params; group 1's tile_sums, wave_shading,
+// shadow_queue, wave_counts, resolve_pixels (1:6 to 1:9, 1:19).
 
 // Takes `n` items of wavefront list `list` (0: shadow rays, 1: pixels to
 // resolve); returns the first. The list's pass runs a workgroup for each

@@ -52,7 +52,7 @@ override BVH_TEXELS: bool = false;
 override RENDER_WORKGROUP_X: u32 = 8u;
 override RENDER_WORKGROUP_Y: u32 = 8u;
 // Side of the square render tile (gpu::TILE): the row stride of the tile
-// buffers (`out_color`, `out_prim`, `tile_sums`).
+// buffers (`out_prim`, `tile_sums`).
 override TILE: u32 = 256u;
 // Traversal stack entries per invocation in workgroup memory (gpu.rs):
 // the scene's BVH depth − 1, the most `trace_compressed` can push (see
@@ -321,11 +321,10 @@ struct Surface {
 @group(0) @binding(18) var triangle_texels: texture_storage_2d<rgba32uint, read>;
 // Group 1 holds what one entry point reads and writes: an image tile for
 // `render`, a batch of rays for `trace_rays`.
-// A tile's pixels' means (colour, variance of the mean luminance) and
-// first primitives, pixel (x, y) at y · TILE + x. Storage buffers, not
-// storage textures: lavapipe stores a texel's channels a loop over the
-// lanes each, a buffer's vec4 in one.
-@group(1) @binding(0) var<storage, read_write> out_color: array<vec4<f32>>;
+// A render tile's pixels' first primitives, pixel (x, y) at y · TILE + x.
+// Storage buffers, not storage textures (as were this and the means):
+// lavapipe stores a texel's channels a loop over the lanes each, a
+// buffer's vec4 in one.
 @group(1) @binding(1) var<storage, read_write> out_prim: array<u32>;
 @group(1) @binding(2) var<storage, read> rays: array<Ray>;
 @group(1) @binding(3) var<storage, read_write> hits: array<Hit>;
@@ -333,8 +332,11 @@ struct Surface {
 // variance of the mean (in w).
 @group(1) @binding(4) var<storage, read> pixel_list: array<vec2<u32>>;
 @group(1) @binding(5) var<storage, read_write> pixel_results: array<vec4<f32>>;
-// `render`: each tile pixel's running sums (colour, squared luminance)
-// between the dispatches that add its samples in turn.
+// A render tile's pixels (as `out_prim`): their running sums (colour,
+// squared luminance) between the dispatches that add their samples in
+// turn, their means (colour, variance of the mean luminance) after the
+// last. One buffer for both: a pixel's store then is one, where lavapipe
+// would run both of two, a loop over the lanes each.
 @group(1) @binding(6) var<storage, read_write> tile_sums: array<vec4<f32>>;
 // Shadow rays in a dispatch of their own (`render_primary`,
 // `render_shadows`, `render_resolve`; gpu::ShadowDispatch): the kept

@@ -160,9 +160,5 @@ fn store_samples(slot: u32, result: SampleSums) {
 // A tile pixel's sums of samples so far: its mean after its last, else
 // the sums for the next dispatch.
 fn store_sums(slot: u32, sums: vec4<f32>) {
-    if params.sample_end == params.spp {
-        out_color[slot] = pixel_mean(sums);
-    } else {
-        tile_sums[slot] = sums;
-    }
+    tile_sums[slot] = select(sums, pixel_mean(sums), params.sample_end == params.spp);
 }

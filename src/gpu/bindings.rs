@@ -69,7 +69,6 @@ pub const SCENE: BindingTable = BindingTable {
     ],
 };
 
-const OUT_COLOR: Binding = bind("out_color", 0, StorageWrite);
 const OUT_PRIM: Binding = bind("out_prim", 1, StorageWrite);
 
 const TILE_SUMS: Binding = bind("tile_sums", 6, StorageWrite);
@@ -78,7 +77,7 @@ const TILE_SUMS: Binding = bind("tile_sums", 6, StorageWrite);
 pub const IMAGE_TILE: BindingTable = BindingTable {
     label: "image tile",
     group: 1,
-    entries: &[OUT_COLOR, OUT_PRIM, TILE_SUMS],
+    entries: &[OUT_PRIM, TILE_SUMS],
 };
 
 /// Group 1 of `render_primary`, `render_shadows` and `render_resolve`.
@@ -86,7 +85,6 @@ pub const SHADOWS_APART: BindingTable = BindingTable {
     label: "image tile, shadows apart",
     group: 1,
     entries: &[
-        OUT_COLOR,
         OUT_PRIM,
         TILE_SUMS,
         bind("wave_shading", 7, StorageWrite),

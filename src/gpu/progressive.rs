@@ -10,10 +10,8 @@ use crate::error::{Error, Result};
 use crate::output::Image;
 use crate::progress::Progress;
 
+use super::readback::SUMS_BYTES;
 use super::{GpuRenderer, TILE};
-
-/// Bytes of one pixel's sums (colour, squared luminance) in `tile_sums`.
-const SUMS_BYTES: u64 = 16;
 
 impl GpuRenderer {
     /// Adds samples `samples` of the current view (of its `spp`) to `sums`
@@ -75,9 +73,7 @@ impl GpuRenderer {
                             .copy_from_slice(&sums[at(row)..][..tile_width]);
                     }
                     let bytes = bytemuck::cast_slice(&block);
-                    self.gpu
-                        .queue
-                        .write_buffer(&self.resident.tile_sums, 0, bytes);
+                    self.gpu.queue.write_buffer(&self.tile.sums, 0, bytes);
                 }
                 let extent = [tile_width as u32, tile_height];
                 self.render_tile(tile_x, tile_y, extent[0], extent[1], samples.clone())?;
@@ -92,7 +88,7 @@ impl GpuRenderer {
                 }
                 let len = slot(tile_height) as u64 * SUMS_BYTES;
                 let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-                encoder.copy_buffer_to_buffer(&self.resident.tile_sums, 0, &staging, 0, len);
+                encoder.copy_buffer_to_buffer(&self.tile.sums, 0, &staging, 0, len);
                 self.gpu.queue.submit([encoder.finish()]);
                 self.gpu.read_mapped(&staging, len, "tile sums", |bytes| {
                     let block: &[[f32; 4]] = bytemuck::cast_slice(bytes);

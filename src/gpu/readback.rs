@@ -40,17 +40,20 @@ impl Gpu {
     }
 }
 
-/// The buffers a render tile is written to (`out_color`, `out_prim`:
+/// The buffers a render tile is written to (`tile_sums`, `out_prim`:
 /// pixel (x, y) at y · TILE + x), and their readback buffers.
 pub(super) struct TileTargets {
-    pub color: wgpu::Buffer,
+    /// The pixels' sums between a tile's dispatches, their means after
+    /// the last; copied both ways by a progressive render (`add_samples`).
+    pub sums: wgpu::Buffer,
     pub prim: wgpu::Buffer,
     color_staging: wgpu::Buffer,
     prim_staging: wgpu::Buffer,
 }
 
-/// Bytes of a tile pixel's mean (colour, variance) and of its primitive.
-const COLOR_BYTES: u64 = 16;
+/// Bytes of a tile pixel's sums or mean (colour and squared luminance, or
+/// colour and variance), and of its primitive.
+pub(super) const SUMS_BYTES: u64 = 16;
 const PRIM_BYTES: u64 = 4;
 
 impl TileTargets {
@@ -66,15 +69,20 @@ impl TileTargets {
         let target = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
         let staging = wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ;
         TileTargets {
-            color: buffer("color", COLOR_BYTES, target),
+            sums: buffer(
+                "tile sums",
+                SUMS_BYTES,
+                target | wgpu::BufferUsages::COPY_DST,
+            ),
             prim: buffer("prim", PRIM_BYTES, target),
-            color_staging: buffer("color readback", COLOR_BYTES, staging),
+            color_staging: buffer("color readback", SUMS_BYTES, staging),
             prim_staging: buffer("prim readback", PRIM_BYTES, staging),
         }
     }
 
-    /// Copies the tile's first `height` rows to the staging buffers, maps
-    /// them and hands the first `width` pixels of each row to `row_sink`.
+    /// Copies the tile's first `height` rows (its means, after its last
+    /// dispatch) to the staging buffers, maps them and hands the first
+    /// `width` pixels of each row to `row_sink`.
     pub fn read(
         &self,
         gpu: &Gpu,
@@ -85,7 +93,7 @@ impl TileTargets {
         let rows = (height * TILE) as u64;
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         for (buffer, staging, bytes) in [
-            (&self.color, &self.color_staging, COLOR_BYTES),
+            (&self.sums, &self.color_staging, SUMS_BYTES),
             (&self.prim, &self.prim_staging, PRIM_BYTES),
         ] {
             encoder.copy_buffer_to_buffer(buffer, 0, staging, 0, rows * bytes);
@@ -94,7 +102,7 @@ impl TileTargets {
 
         let (sender, receiver) = mpsc::channel();
         for (buffer, bytes) in [
-            (&self.color_staging, COLOR_BYTES),
+            (&self.color_staging, SUMS_BYTES),
             (&self.prim_staging, PRIM_BYTES),
         ] {
             let sender = sender.clone();
@@ -115,7 +123,7 @@ impl TileTargets {
                     .get_mapped_range(..rows * bytes)
                     .map_err(|e| Error::Gpu(format!("readback: {e}")))
             };
-            let colors = map(&self.color_staging, COLOR_BYTES)?;
+            let colors = map(&self.color_staging, SUMS_BYTES)?;
             let ids = map(&self.prim_staging, PRIM_BYTES)?;
             let colors: &[[f32; 4]] = bytemuck::cast_slice(&colors);
             let ids: &[u32] = bytemuck::cast_slice(&ids);

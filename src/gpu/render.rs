@@ -380,9 +380,8 @@ impl GpuRenderer {
                 SHADOWS_APART.label,
                 &layout,
                 vec![
-                    ("out_color", self.tile.color.as_entire_binding()),
                     ("out_prim", self.tile.prim.as_entire_binding()),
-                    ("tile_sums", self.resident.tile_sums.as_entire_binding()),
+                    ("tile_sums", self.tile.sums.as_entire_binding()),
                     ("wave_shading", shading.as_entire_binding()),
                     ("shadow_queue", queue.as_entire_binding()),
                     ("wave_counts", counts.as_entire_binding()),

@@ -12,7 +12,6 @@ use crate::error::{Error, Result};
 use crate::layout::Params;
 use crate::scene::Scene;
 
-use super::TILE;
 use super::adapter::is_llvmpipe;
 use super::bindings::{IMAGE_TILE, SCENE};
 use super::device::Gpu;
@@ -56,14 +55,10 @@ pub struct GpuRenderer {
 }
 
 /// The bind groups every pass binds (the scene's buffers live on in
-/// them), the uniform, the shader's loop flag, and the tile's sums of
-/// samples (which `render` keeps between a tile's dispatches).
+/// them), the uniform and the shader's loop flag.
 pub(super) struct Resident {
     pub scene_group: wgpu::BindGroup,
     pub image_group: wgpu::BindGroup,
-    /// Each tile pixel's sums between the dispatches that add its samples
-    /// (both render paths').
-    pub tile_sums: wgpu::Buffer,
     pub params_buffer: wgpu::Buffer,
     pub loop_status: LoopStatus,
 }
@@ -149,15 +144,6 @@ impl GpuRenderer {
         let buffers = SceneBuffers::upload(&gpu, scene, storage)?;
         let constants = resident_constants(constants, &buffers, storage, scene, &gpu);
         let tile = TileTargets::new(device);
-        let tile_sums = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("tile sums"),
-            size: (TILE * TILE * 16) as u64,
-            // Copied both ways by a progressive render (`add_samples`).
-            usage: wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::COPY_SRC
-                | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
         let loop_status = LoopStatus::new(device);
         let layouts = Layouts::new(device);
 
@@ -173,9 +159,8 @@ impl GpuRenderer {
             IMAGE_TILE.label,
             &layouts.image,
             vec![
-                ("out_color", tile.color.as_entire_binding()),
                 ("out_prim", tile.prim.as_entire_binding()),
-                ("tile_sums", tile_sums.as_entire_binding()),
+                ("tile_sums", tile.sums.as_entire_binding()),
             ],
         );
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -203,7 +188,6 @@ impl GpuRenderer {
             resident: Resident {
                 scene_group,
                 image_group,
-                tile_sums,
                 params_buffer,
                 loop_status,
             },
