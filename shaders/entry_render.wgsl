@@ -7,8 +7,8 @@
 // pixel_list and writes pixel_results.
 
 @compute @workgroup_size(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y)
-fn render(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
-    let id = tile_invocation(group, groups, local, lane);
+fn render(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    let id = tile_invocation(group, local, lane);
     let slot = tile_slot(id);
     if slot == NO_HIT {
         return;

@@ -146,9 +146,8 @@ fn sums_before_kept(slot: u32, first: u32) -> vec4<f32> {
 fn render_primary(
     @builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>,
     @builtin(local_invocation_index) lane: u32,
-    @builtin(num_workgroups) groups: vec3<u32>,
 ) {
-    let id = tile_invocation(group, groups, local, lane);
+    let id = tile_invocation(group, local, lane);
     let slot = tile_slot(id);
     if slot == NO_HIT {
         return;
@@ -175,9 +174,8 @@ fn render_primary(
 fn render_primary_samples(
     @builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>,
     @builtin(local_invocation_index) lane: u32,
-    @builtin(num_workgroups) groups: vec3<u32>,
 ) {
-    let id = tile_invocation(group, groups, local, lane);
+    let id = tile_invocation(group, local, lane);
     let slot = tile_slot(id);
     if slot == NO_HIT {
         return;

@@ -119,15 +119,19 @@ fn pixel_mean(sums: vec4<f32>) -> vec4<f32> {
 
 // A render entry point's invocation (8×8 workgroups over the tile): its
 // place in the tile, with its traversal stack placed. The host dispatches
-// CPU_THREADS layers (z) of every CPU_THREADS-th row of workgroups, and
+// T = CPU_THREADS layers (z) of every T-th column of workgroups, and
 // llvmpipe, which hands each of its threads a contiguous share of a
-// dispatch's workgroups, gives thread t layer t: rows t, t + T, t + 2T, …,
-// a share of each part of the image, as `spread_invocation` deals them,
-// without its integer divisions, which llvmpipe runs a lane at a time.
-fn tile_invocation(group: vec3<u32>, groups: vec3<u32>, local: vec3<u32>, lane: u32) -> vec3<u32> {
+// dispatch's workgroups, gives thread t layer t: the workgroups whose
+// column and row add up to t modulo T (for T = 2, the squares of one
+// colour of a chessboard), a share of each part of the image, as
+// `spread_invocation` deals them, without its integer divisions by
+// values known only at run time, which llvmpipe runs a lane at a time.
+// Every T-th row alone left a thread a row more than the other on a
+// small tile (4 rows of 7 against 3 at 64 spp).
+fn tile_invocation(group: vec3<u32>, local: vec3<u32>, lane: u32) -> vec3<u32> {
     stack_base = lane * STACK_ENTRIES;
-    let row = group.y * groups.z + group.z;
-    return vec3<u32>(group.x * RENDER_WORKGROUP_X + local.x, row * RENDER_WORKGROUP_Y + local.y, 0u);
+    let column = group.x * CPU_THREADS + (group.y + group.z) % CPU_THREADS;
+    return vec3<u32>(column * RENDER_WORKGROUP_X + local.x, group.y * RENDER_WORKGROUP_Y + local.y, 0u);
 }
 
 // The tile pixel of a render invocation (its index in the tile buffers),

@@ -88,15 +88,14 @@ fn wave_queue_bytes(lights: u32) -> u64 {
 }
 
 /// The workgroups of a render dispatch over a `width` × `height` tile, on
-/// an adapter that runs a dispatch on `threads` CPU threads: every
-/// `threads`-th row of them in each of `threads` layers, as the shader's
-/// `tile_invocation` takes them.
+/// an adapter that runs a dispatch on `threads` CPU threads (the shader's
+/// CPU_THREADS): every `threads`-th column of them in each of `threads`
+/// layers, as the shader's `tile_invocation` takes them.
 fn tile_workgroups(width: u32, height: u32, threads: u32) -> [u32; 3] {
     let [wx, wy] = RENDER_WORKGROUP;
-    let threads = threads.max(1);
     [
-        width.div_ceil(wx),
-        height.div_ceil(wy).div_ceil(threads),
+        width.div_ceil(wx).div_ceil(threads),
+        height.div_ceil(wy),
         threads,
     ]
 }
