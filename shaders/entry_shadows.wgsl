@@ -1,8 +1,9 @@
 // Entry points: the wavefront render, its shadow rays in a dispatch of
 // their own (gpu::ShadowDispatch): `render_primary` (or
-// `render_primary_samples`), `render_shadows`, `render_resolve`, in that
-// order, for `params.sample_begin` to
-// `params.sample_end` of each tile pixel, in one submission. The primary
+// `render_primary_samples`, or over a pixel list `render_list_primary`),
+// `render_shadows`, `render_resolve`, in that order, for
+// `params.sample_begin` to `params.sample_end` of each tile (or listed)
+// pixel, in one submission. The primary
 // pass shades each hit but for its shadows and queues them, and finishes
 // the pixels none of whose samples queued any; the shadow pass marks the
 // blocked rays; the last pass adds up what each listed pixel kept. A
@@ -14,6 +15,7 @@
 // `render_primary`, `render_primary_samples`: all of group 0 (0 to 18);
 // group 1's out_prim, tile_sums, wave_shading, shadow_queue, wave_counts,
 // wave_workgroups, resolve_pixels (1:1, 1:6 to 1:10, 1:19).
+// `render_list_primary`: the same but out_prim, and pixel_list (1:4).
 // `render_shadows`: group 0 but for triangle_normals, materials, lights,
 // triangle_normals_hi and textures; group 1's shadow_queue, wave_counts
 // (1:8, 1:9).
@@ -109,24 +111,24 @@ fn shade_but_shadows(ray: Ray, hit: Hit) -> WaveShading {
     return out;
 }
 
-// Sample `sample` of invocation `id`'s pixel: its camera ray traced and
-// shaded but for its shadows, which it queues; the pixel's primitive
-// stored from its first sample.
-fn primary_sample(id: vec3<u32>, slot: u32, sample: u32) -> WaveShading {
-    let ray = camera_ray(sample_position(params.tile_origin + id.xy, sample));
+// Sample `sample` of `pixel` (at `slot`): its camera ray traced and
+// shaded but for its shadows, which it queues; with `store_prim` (a
+// tile's, not a pixel list's), the primitive stored from its first sample.
+fn primary_sample(pixel: vec2<u32>, slot: u32, sample: u32, store_prim: bool) -> WaveShading {
+    let ray = camera_ray(sample_position(pixel, sample));
     let hit = trace_closest(ray);
-    if sample == 0u {
+    if store_prim && sample == 0u {
         out_prim[slot] = hit.prim;
     }
     return shade_but_shadows(ray, hit);
 }
 
-// Lists invocation `id`'s pixel for `render_resolve` from sample `sample`
-// on; returns its place in the list. Its sums before that sample are in
+// Lists the pixel at `slot` for `render_resolve` from sample `sample` on;
+// returns its place in the list. Its sums before that sample are in
 // `tile_sums` (`sums_before_kept`).
-fn list_pixel(id: vec3<u32>, sample: u32) -> u32 {
+fn list_pixel(slot: u32, sample: u32) -> u32 {
     let listed = enqueue(1u, 1u);
-    resolve_pixels[listed] = vec2<u32>(id.x | id.y << 16u, sample);
+    resolve_pixels[listed] = vec2<u32>(slot, sample);
     return listed;
 }
 
@@ -152,45 +154,36 @@ fn render_primary(
     if slot == NO_HIT {
         return;
     }
-    let kept = primary_sample(id, slot, params.sample_begin);
+    let kept = primary_sample(params.tile_origin + id.xy, slot, params.sample_begin, true);
     if kept.count == 0u {
         store_sums(slot, add_sample(sums_so_far(slot), unshadowed_color(kept)));
     } else {
-        store_wave_shading(list_pixel(id, params.sample_begin), kept);
+        store_wave_shading(list_pixel(slot, params.sample_begin), kept);
     }
     report_cut_loops();
 }
 
-// Pass 1 of a dispatch of several: each tile pixel's samples in turn, as
-// `render` takes them. While none has queued a shadow ray the pixel's
-// sums grow here, as `add_samples` grows them; from the first that has,
-// the samples' shading is kept (the nth listed pixel's from
+// Pass 1 of a dispatch of several samples of `pixel` (at `slot`), in
+// turn, as `add_samples` takes them. While none has queued a shadow ray
+// the pixel's sums grow here, as `add_samples` grows them; from the first
+// that has, the samples' shading is kept (the nth listed pixel's from
 // n · samples) and the pixel listed. A loop over the samples rather than
 // an invocation a sample: each sample then does not pay an invocation's
 // fixed work, which made this 1.04–1.13× the megakernel's time at 4 to
 // 64 spp; the loop around the trace costs one sample's pass a fifth more
 // on lavapipe, hence `render_primary` (docs/bvh.md).
-@compute @workgroup_size(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y)
-fn render_primary_samples(
-    @builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>,
-    @builtin(local_invocation_index) lane: u32,
-) {
-    let id = tile_invocation(group, local, lane);
-    let slot = tile_slot(id);
-    if slot == NO_HIT {
-        return;
-    }
+fn primary_samples(pixel: vec2<u32>, slot: u32, store_prim: bool) {
     let samples = params.sample_end - params.sample_begin;
     var sums = sums_so_far(slot);
     var listed = NO_HIT;
     for (var sample = params.sample_begin; sample < params.sample_end; sample++) {
-        let kept = primary_sample(id, slot, sample);
+        let kept = primary_sample(pixel, slot, sample, store_prim);
         if listed == NO_HIT {
             if kept.count == 0u {
                 sums = add_sample(sums, unshadowed_color(kept));
                 continue;
             }
-            listed = list_pixel(id, sample);
+            listed = list_pixel(slot, sample);
             if sample != params.sample_begin {
                 tile_sums[slot] = sums;
             }
@@ -201,6 +194,34 @@ fn render_primary_samples(
         store_sums(slot, sums);
     }
     report_cut_loops();
+}
+
+// Pass 1 of a tile's dispatch of several samples a pixel.
+@compute @workgroup_size(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y)
+fn render_primary_samples(
+    @builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>,
+    @builtin(local_invocation_index) lane: u32,
+) {
+    let id = tile_invocation(group, local, lane);
+    let slot = tile_slot(id);
+    if slot == NO_HIT {
+        return;
+    }
+    primary_samples(params.tile_origin + id.xy, slot, true);
+}
+
+// Pass 1 over a list of pixels (adaptive sampling's later passes, as
+// `render_pixel_list` renders them): `params.spp` more samples of each,
+// in parts, its sums and then its mean in `tile_sums` (bound to the
+// list's results) at its place in `pixel_list`.
+@compute @workgroup_size(WORKGROUP_INVOCATIONS)
+fn render_list_primary(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    let slot = spread_invocation(group, groups, local, vec3<u32>(WORKGROUP_INVOCATIONS, 1u, 1u)).x;
+    stack_base = lane * STACK_ENTRIES;
+    if slot >= arrayLength(&pixel_list) {
+        return;
+    }
+    primary_samples(pixel_list[slot], slot, false);
 }
 
 // Pass 2: the queued shadow rays, side by side, one an invocation,
@@ -232,8 +253,7 @@ fn render_resolve(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgrou
         return;
     }
     let listed = resolve_pixels[n];
-    let id = vec3<u32>(listed.x & 0xffffu, listed.x >> 16u, 0u);
-    let slot = tile_slot(id);
+    let slot = listed.x;
     let samples = params.sample_end - params.sample_begin;
     var sums = sums_before_kept(slot, listed.y);
     for (var sample = listed.y; sample < params.sample_end; sample++) {

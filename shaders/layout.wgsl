@@ -328,8 +328,9 @@ struct Surface {
 @group(1) @binding(1) var<storage, read_write> out_prim: array<u32>;
 @group(1) @binding(2) var<storage, read> rays: array<Ray>;
 @group(1) @binding(3) var<storage, read_write> hits: array<Hit>;
-// `render_pixel_list`: pixels to (re)sample, and their mean colours with the
-// variance of the mean (in w).
+// `render_pixel_list` (and the wavefront's `render_list_primary`, whose
+// results are bound at `tile_sums`): pixels to (re)sample, and their mean
+// colours with the variance of the mean (in w).
 @group(1) @binding(4) var<storage, read> pixel_list: array<vec2<u32>>;
 @group(1) @binding(5) var<storage, read_write> pixel_results: array<vec4<f32>>;
 // A render tile's pixels (as `out_prim`): their running sums (colour,
@@ -375,6 +376,6 @@ struct ShadowQuery {
 // 5), apart from the counts, which those passes read: a dispatch may not
 // bind its indirect buffer.
 @group(1) @binding(10) var<storage, read_write> wave_workgroups: array<atomic<u32>, 6>;
-// The tile pixels whose shading `render_resolve` finishes: x | y << 16,
-// and the first sample it resolves.
+// The pixels whose shading `render_resolve` finishes: each one's place in
+// `tile_sums`, and the first sample it resolves.
 @group(1) @binding(19) var<storage, read_write> resolve_pixels: array<vec2<u32>>;

@@ -208,6 +208,67 @@ fn shadow_rays_apart_render_as_the_megakernel_does() {
     }
 }
 
+/// Adaptive sampling's later passes, a list of pixels rendered again with
+/// another seed, go through the wavefront too: the same bits as the
+/// megakernel's `render_pixel_list`, at 1, 3 and 40 samples (more than a
+/// dispatch takes on llvmpipe), on scattered and repeated pixels, with one
+/// light and with 40; and within tolerance of the CPU path.
+#[test]
+fn pixel_lists_render_apart_as_the_megakernel_does() {
+    use lambert::gpu::{GpuRenderer, ShadowDispatch};
+    let lights: String = (0..40)
+        .map(|i| {
+            let a = i as f32 * std::f32::consts::TAU / 40.0;
+            let (x, z) = (2.0 * a.cos(), 2.0 * a.sin());
+            format!("[[point_light]]\nposition = [{x}, 3.0, {z}]\nintensity = [0.5, 0.5, 0.5]\n")
+        })
+        .collect();
+    let many = scene(&format!(
+        "[camera]\neye = [0.0, 2.5, 3.0]\nlook_at = [0.0, 0.0, 0.0]\nvfov = 40.0\nwidth = 48\nheight = 40\n\
+         [[sphere]]\ncenter = [0.0, 0.0, 0.0]\nradius = 1.0\n\
+         [[sphere]]\ncenter = [0.0, 1.6, 0.0]\nradius = 0.3\n{lights}"
+    ));
+    for (name, scene) in [
+        ("bunny", load("bunny")),
+        ("spheres", load("spheres")),
+        ("40 lights", many),
+    ] {
+        let (w, h) = (scene.view.camera.width, scene.view.camera.height);
+        // Every 7th pixel, then some twice, out of order.
+        let mut pixels: Vec<[u32; 2]> = (0..w * h).step_by(7).map(|i| [i % w, i / w]).collect();
+        pixels.extend([[w / 2, h / 2], [0, 0], [w / 2, h / 2], [w - 1, h - 1]]);
+        let mut renderer = GpuRenderer::new(open_gpu(), &scene).expect("scene uploads");
+        for spp in [1, 3, 40] {
+            let view = lambert::camera::View {
+                spp,
+                seed: 0x5eed + spp,
+                ..scene.view.clone()
+            };
+            renderer.set_view(&view);
+            renderer.shadow_dispatch = ShadowDispatch::Apart;
+            let apart = renderer.render_pixel_list(&pixels).unwrap();
+            renderer.shadow_dispatch = ShadowDispatch::Megakernel;
+            let mega = renderer.render_pixel_list(&pixels).unwrap();
+            let bits =
+                |r: &[[f32; 4]]| -> Vec<u32> { r.iter().flatten().map(|c| c.to_bits()).collect() };
+            assert!(
+                bits(&apart) == bits(&mega),
+                "{name} at {spp} spp: the pixel list apart differs from the megakernel's"
+            );
+            let cpu = lambert::cpu::render_pixel_list(&scene, &view, &pixels);
+            for (i, (g, c)) in apart.iter().zip(&cpu).enumerate() {
+                for k in 0..3 {
+                    assert!(
+                        (g[k] - c[k]).abs() <= 1e-3 * c[k].abs().max(1.0),
+                        "{name} at {spp} spp, pixel {:?}: GPU {g:?}, CPU {c:?}",
+                        pixels[i]
+                    );
+                }
+            }
+        }
+    }
+}
+
 /// Renders `scene` in the wavefront (its default) and in the megakernel;
 /// fails unless they are the same bits. Returns the image.
 fn apart_as_megakernel(scene: &lambert::Scene, label: &str) -> lambert::output::Rendered {

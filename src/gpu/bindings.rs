@@ -72,6 +72,7 @@ pub const SCENE: BindingTable = BindingTable {
 const OUT_PRIM: Binding = bind("out_prim", 1, StorageWrite);
 
 const TILE_SUMS: Binding = bind("tile_sums", 6, StorageWrite);
+const PIXEL_LIST_INPUT: Binding = bind("pixel_list", 4, Storage);
 
 /// Group 1 of `render`: a tile's pixels.
 pub const IMAGE_TILE: BindingTable = BindingTable {
@@ -87,6 +88,7 @@ pub const SHADOWS_APART: BindingTable = BindingTable {
     entries: &[
         OUT_PRIM,
         TILE_SUMS,
+        PIXEL_LIST_INPUT,
         bind("wave_shading", 7, StorageWrite),
         bind("shadow_queue", 8, StorageWrite),
         bind("wave_counts", 9, StorageWrite),
@@ -106,10 +108,7 @@ pub const RAYS: BindingTable = BindingTable {
 pub const PIXEL_LIST: BindingTable = BindingTable {
     label: "pixel list",
     group: 1,
-    entries: &[
-        bind("pixel_list", 4, Storage),
-        bind("pixel_results", 5, StorageWrite),
-    ],
+    entries: &[PIXEL_LIST_INPUT, bind("pixel_results", 5, StorageWrite)],
 };
 
 /// Group 1 of the geometric queries (`closest_points`, `winding_numbers`,

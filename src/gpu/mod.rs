@@ -10,6 +10,7 @@
 //! - `pipelines`: the module's layouts and pipelines, built on first use;
 //! - `renderer`: `GpuRenderer`, a scene resident on the device;
 //! - `render`: the render passes (megakernel, or shadows apart);
+//! - `wave_list`: adaptive sampling's pixel lists with shadows apart;
 //! - `progressive`: a render's samples added a few at a time (the viewer);
 //! - `query`: ray queries and pixel lists;
 //! - `proximity`: closest points, winding numbers, every hit along rays;
@@ -28,6 +29,7 @@ mod renderer;
 mod shader;
 mod timer;
 mod upload;
+mod wave_list;
 
 pub use adapter::{AdapterRequest, Presenting, enumerate_adapters};
 pub use device::{Gpu, GpuOptions, MAX_BUFFER_ENV, SHADOW_DISPATCH_ENV};

@@ -70,8 +70,13 @@ impl GpuRenderer {
     }
 
     /// Renders the listed pixels with the current sampling (adaptive
-    /// sampling's later passes): mean colour and variance of the mean.
+    /// sampling's later passes): mean colour and variance of the mean. In
+    /// the wavefront where the render is (`shadows_apart`), else in one
+    /// pass; the same bits either way.
     pub fn render_pixel_list(&mut self, pixels: &[[u32; 2]]) -> Result<Vec<[f32; 4]>> {
+        if self.shadows_apart() {
+            return self.render_list_apart(pixels);
+        }
         self.prepare_pixel_list()?;
         loop {
             let pipeline = self.pipelines.pixel_list.as_ref().expect("built");

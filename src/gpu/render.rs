@@ -67,12 +67,10 @@ impl ShadowDispatch {
 /// Camera rays a wavefront dispatch takes with `lights` lights:
 /// `WAVE_RAYS`, fewer where their shadow rays would pass
 /// `WAVE_SHADOW_RAYS`, a workgroup's at the least.
-fn wave_budget(lights: u32) -> u32 {
+pub(super) fn wave_budget(lights: u32) -> u32 {
     (WAVE_SHADOW_RAYS / lights.max(1)).clamp(WORKGROUP_INVOCATIONS, WAVE_RAYS)
 }
 
-/// Bytes of a wavefront dispatch's shadow queue: a ray for each light of
-/// each camera ray.
 /// `wave_counts` (shadow rays queued, pixels listed) and `wave_workgroups`
 /// (the indirect dispatches of `render_shadows`, then `render_resolve`)
 /// as each tile starts them: the lists empty, each dispatch 0 × 1 × 1.
@@ -83,6 +81,8 @@ const RESOLVE_WORKGROUPS_OFFSET: u64 = 12;
 /// Bytes of a `resolve_pixels` entry (pixel, first sample to resolve).
 const RESOLVE_PIXEL_BYTES: u64 = 8;
 
+/// Bytes of a wavefront dispatch's shadow queue: a ray for each light of
+/// each camera ray.
 fn wave_queue_bytes(lights: u32) -> u64 {
     wave_budget(lights) as u64 * lights.max(1) as u64 * SHADOW_QUERY_BYTES
 }
@@ -105,13 +105,95 @@ pub(super) struct SplitShadows {
     /// The first pass of a dispatch of one sample a pixel, and of several.
     primary: wgpu::ComputePipeline,
     primary_samples: wgpu::ComputePipeline,
+    /// The first pass over a pixel list, built on first use.
+    pub list_primary: Option<wgpu::ComputePipeline>,
     shadows: wgpu::ComputePipeline,
     resolve: wgpu::ComputePipeline,
+    pub buffers: WaveBuffers,
+    /// The tile's group 1, for the primary pass and the indirect ones.
     group: wgpu::BindGroup,
-    /// `group` but for `wave_workgroups`: the indirect passes'.
     indirect_group: wgpu::BindGroup,
+}
+
+/// The wavefront's lists between its passes, and the layout that binds
+/// them.
+pub(super) struct WaveBuffers {
+    pub layout: wgpu::BindGroupLayout,
+    shading: wgpu::Buffer,
+    queue: wgpu::Buffer,
+    resolve_pixels: wgpu::Buffer,
     counts: wgpu::Buffer,
     workgroups: wgpu::Buffer,
+    /// What the indirect passes bind at `wave_workgroups`: a dispatch may
+    /// not bind the buffer it is dispatched by.
+    unused: wgpu::Buffer,
+}
+
+impl WaveBuffers {
+    /// The wavefront's group 1 with `prim`, `sums` and `list` at
+    /// `out_prim`, `tile_sums` and `pixel_list`: for the primary pass
+    /// (`indirect` false) or the indirect ones.
+    pub fn bind_group(
+        &self,
+        device: &wgpu::Device,
+        [prim, sums, list]: [wgpu::BindingResource<'_>; 3],
+        indirect: bool,
+    ) -> wgpu::BindGroup {
+        let workgroups = if indirect {
+            &self.unused
+        } else {
+            &self.workgroups
+        };
+        SHADOWS_APART.bind_group(
+            device,
+            SHADOWS_APART.label,
+            &self.layout,
+            vec![
+                ("out_prim", prim),
+                ("tile_sums", sums),
+                ("pixel_list", list),
+                ("wave_shading", self.shading.as_entire_binding()),
+                ("shadow_queue", self.queue.as_entire_binding()),
+                ("wave_counts", self.counts.as_entire_binding()),
+                ("wave_workgroups", workgroups.as_entire_binding()),
+                ("resolve_pixels", self.resolve_pixels.as_entire_binding()),
+            ],
+        )
+    }
+}
+
+impl SplitShadows {
+    /// Records one dispatch of the wavefront: `primary` over `workgroups`
+    /// with `group`, then the shadow rays and the listed pixels, dispatched
+    /// indirectly with `indirect_group`; the lists emptied first.
+    pub fn dispatch(
+        &self,
+        gpu: &super::device::Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        primary: &wgpu::ComputePipeline,
+        [group, indirect_group]: [&wgpu::BindGroup; 2],
+        [x, y, z]: [u32; 3],
+    ) {
+        let lists = &self.buffers;
+        gpu.queue
+            .write_buffer(&lists.counts, 0, bytemuck::cast_slice(&EMPTY_COUNTS));
+        gpu.queue.write_buffer(
+            &lists.workgroups,
+            0,
+            bytemuck::cast_slice(&EMPTY_WORKGROUPS),
+        );
+        pass.set_bind_group(SHADOWS_APART.group, group, &[]);
+        pass.set_pipeline(primary);
+        pass.dispatch_workgroups(x, y, z);
+        // An invocation a queued shadow ray (the primary pass counts the
+        // workgroups).
+        pass.set_pipeline(&self.shadows);
+        pass.set_bind_group(SHADOWS_APART.group, indirect_group, &[]);
+        pass.dispatch_workgroups_indirect(&lists.workgroups, 0);
+        // An invocation a pixel the primary pass listed.
+        pass.set_pipeline(&self.resolve);
+        pass.dispatch_workgroups_indirect(&lists.workgroups, RESOLVE_WORKGROUPS_OFFSET);
+    }
 }
 
 impl GpuRenderer {
@@ -239,7 +321,7 @@ impl GpuRenderer {
 
     /// Samples a render dispatch adds to a pixel; in the wavefront, no
     /// more than leave a workgroup's pixels within its buffers.
-    fn samples_per_dispatch(&self) -> u32 {
+    pub(super) fn samples_per_dispatch(&self) -> u32 {
         if self.shadows_apart() {
             let budget = wave_budget(self.params.num_lights);
             self.samples_per_dispatch
@@ -296,33 +378,23 @@ impl GpuRenderer {
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         let [groups_x, groups_y, layers] = tile_workgroups(width, height, gpu.cpu_threads());
         if let (true, Some(split)) = (self.shadows_apart(), &self.pipelines.split) {
-            gpu.queue
-                .write_buffer(&split.counts, 0, bytemuck::cast_slice(&EMPTY_COUNTS));
-            gpu.queue.write_buffer(
-                &split.workgroups,
-                0,
-                bytemuck::cast_slice(&EMPTY_WORKGROUPS),
-            );
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("render tile, shadows apart"),
                 timestamp_writes: self.timer.as_ref().map(Timer::writes),
             });
             pass.set_bind_group(SCENE.group, &resident.scene_group, &[]);
-            pass.set_bind_group(SHADOWS_APART.group, &split.group, &[]);
-            if self.params.sample_end - self.params.sample_begin == 1 {
-                pass.set_pipeline(&split.primary);
+            let primary = if self.params.sample_end - self.params.sample_begin == 1 {
+                &split.primary
             } else {
-                pass.set_pipeline(&split.primary_samples);
-            }
-            pass.dispatch_workgroups(groups_x, groups_y, layers);
-            // An invocation a queued shadow ray (the primary pass counts
-            // the workgroups).
-            pass.set_pipeline(&split.shadows);
-            pass.set_bind_group(SHADOWS_APART.group, &split.indirect_group, &[]);
-            pass.dispatch_workgroups_indirect(&split.workgroups, 0);
-            // An invocation a pixel the primary pass listed.
-            pass.set_pipeline(&split.resolve);
-            pass.dispatch_workgroups_indirect(&split.workgroups, RESOLVE_WORKGROUPS_OFFSET);
+                &split.primary_samples
+            };
+            split.dispatch(
+                gpu,
+                &mut pass,
+                primary,
+                [&split.group, &split.indirect_group],
+                [groups_x, groups_y, layers],
+            );
         } else {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("render tile"),
@@ -370,38 +442,41 @@ impl GpuRenderer {
             bytes(&EMPTY_WORKGROUPS),
             wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::INDIRECT,
         );
-        // What the indirect passes bind in its place: a dispatch may not
-        // bind the buffer it is dispatched by.
         let unused = buffer("wave workgroups, unused", bytes(&EMPTY_WORKGROUPS), none);
-        let group_with = |workgroups: &wgpu::Buffer| {
-            SHADOWS_APART.bind_group(
-                device,
-                SHADOWS_APART.label,
-                &layout,
-                vec![
-                    ("out_prim", self.tile.prim.as_entire_binding()),
-                    ("tile_sums", self.tile.sums.as_entire_binding()),
-                    ("wave_shading", shading.as_entire_binding()),
-                    ("shadow_queue", queue.as_entire_binding()),
-                    ("wave_counts", counts.as_entire_binding()),
-                    ("wave_workgroups", workgroups.as_entire_binding()),
-                    ("resolve_pixels", resolve_pixels.as_entire_binding()),
-                ],
-            )
-        };
-        let group = group_with(&workgroups);
-        let indirect_group = group_with(&unused);
-        let p = &self.pipelines;
-        let constants = &p.constants;
-        Ok(SplitShadows {
-            primary: p.build(&self.gpu, "render_primary", &layout, constants)?,
-            primary_samples: p.build(&self.gpu, "render_primary_samples", &layout, constants)?,
-            shadows: p.build(&self.gpu, "render_shadows", &layout, constants)?,
-            resolve: p.build(&self.gpu, "render_resolve", &layout, constants)?,
-            group,
-            indirect_group,
+        // A tile's render binds no pixel list: one entry, never read.
+        let no_list = buffer("no pixel list", RESOLVE_PIXEL_BYTES, none);
+        let buffers = WaveBuffers {
+            layout,
+            shading,
+            queue,
+            resolve_pixels,
             counts,
             workgroups,
+            unused,
+        };
+        let tile = |indirect| {
+            buffers.bind_group(
+                device,
+                [
+                    self.tile.prim.as_entire_binding(),
+                    self.tile.sums.as_entire_binding(),
+                    no_list.as_entire_binding(),
+                ],
+                indirect,
+            )
+        };
+        let (group, indirect_group) = (tile(false), tile(true));
+        let p = &self.pipelines;
+        let (constants, layout) = (&p.constants, &buffers.layout);
+        Ok(SplitShadows {
+            primary: p.build(&self.gpu, "render_primary", layout, constants)?,
+            primary_samples: p.build(&self.gpu, "render_primary_samples", layout, constants)?,
+            list_primary: None,
+            shadows: p.build(&self.gpu, "render_shadows", layout, constants)?,
+            resolve: p.build(&self.gpu, "render_resolve", layout, constants)?,
+            buffers,
+            group,
+            indirect_group,
         })
     }
 }
