@@ -8,12 +8,11 @@
 
 @compute @workgroup_size(RENDER_WORKGROUP_X, RENDER_WORKGROUP_Y)
 fn render(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
-    let id = tile_invocation(group, local, lane);
-    let slot = tile_slot(id);
-    if slot == NO_HIT {
+    let pixel = tile_pixel(group, local, lane);
+    if pixel.z == NO_HIT {
         return;
     }
-    store_samples(slot, add_samples(params.tile_origin + id.xy, sums_so_far(slot)));
+    store_samples(pixel.z, add_samples(pixel.xy, sums_so_far(pixel.z)));
     report_cut_loops();
 }
 

@@ -149,12 +149,12 @@ fn render_primary(
     @builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>,
     @builtin(local_invocation_index) lane: u32,
 ) {
-    let id = tile_invocation(group, local, lane);
-    let slot = tile_slot(id);
+    let pixel = tile_pixel(group, local, lane);
+    let slot = pixel.z;
     if slot == NO_HIT {
         return;
     }
-    let kept = primary_sample(params.tile_origin + id.xy, slot, params.sample_begin, true);
+    let kept = primary_sample(pixel.xy, slot, params.sample_begin, true);
     if kept.count == 0u {
         store_sums(slot, add_sample(sums_so_far(slot), unshadowed_color(kept)));
     } else {
@@ -202,12 +202,11 @@ fn render_primary_samples(
     @builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocation_id) local: vec3<u32>,
     @builtin(local_invocation_index) lane: u32,
 ) {
-    let id = tile_invocation(group, local, lane);
-    let slot = tile_slot(id);
-    if slot == NO_HIT {
+    let pixel = tile_pixel(group, local, lane);
+    if pixel.z == NO_HIT {
         return;
     }
-    primary_samples(params.tile_origin + id.xy, slot, true);
+    primary_samples(pixel.xy, pixel.z, true);
 }
 
 // Pass 1 over a list of pixels (adaptive sampling's later passes, as

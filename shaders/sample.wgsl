@@ -118,7 +118,9 @@ fn pixel_mean(sums: vec4<f32>) -> vec4<f32> {
 }
 
 // A render entry point's invocation (8×8 workgroups over the tile): its
-// place in the tile, with its traversal stack placed. The host dispatches
+// pixel (x, y in the image) and that pixel's place in the tile buffers,
+// NO_HIT in z where it lies outside the tile; its traversal stack placed.
+// The host dispatches
 // T = CPU_THREADS layers (z) of every T-th column of workgroups, and
 // llvmpipe, which hands each of its threads a contiguous share of a
 // dispatch's workgroups, gives thread t layer t: the workgroups whose
@@ -128,19 +130,12 @@ fn pixel_mean(sums: vec4<f32>) -> vec4<f32> {
 // values known only at run time, which llvmpipe runs a lane at a time.
 // Every T-th row alone left a thread a row more than the other on a
 // small tile (4 rows of 7 against 3 at 64 spp).
-fn tile_invocation(group: vec3<u32>, local: vec3<u32>, lane: u32) -> vec3<u32> {
+fn tile_pixel(group: vec3<u32>, local: vec3<u32>, lane: u32) -> vec3<u32> {
     stack_base = lane * STACK_ENTRIES;
     let column = group.x * CPU_THREADS + (group.y + group.z) % CPU_THREADS;
-    return vec3<u32>(column * RENDER_WORKGROUP_X + local.x, group.y * RENDER_WORKGROUP_Y + local.y, 0u);
-}
-
-// The tile pixel of a render invocation (its index in the tile buffers),
-// or none.
-fn tile_slot(id: vec3<u32>) -> u32 {
-    if id.x >= params.tile_size.x || id.y >= params.tile_size.y {
-        return NO_HIT;
-    }
-    return id.y * TILE + id.x;
+    let id = vec2<u32>(column * RENDER_WORKGROUP_X + local.x, group.y * RENDER_WORKGROUP_Y + local.y);
+    let inside = id.x < params.tile_size.x && id.y < params.tile_size.y;
+    return vec3<u32>(params.tile_origin + id, select(NO_HIT, id.y * TILE + id.x, inside));
 }
 
 // A tile pixel's sums of the samples before `params.sample_begin`, kept

@@ -187,7 +187,19 @@ fn shadow_rays_apart_render_as_the_megakernel_does() {
         scene.view.spp = 40;
         apart_as_megakernel(&scene, &format!("{name} at 40 spp"));
     }
-    // A ring of lights above a ball that shades a larger one below.
+    let mut many = ring_of_lights();
+    for spp in [1, 4] {
+        many.view.spp = spp;
+        let apart = apart_as_megakernel(&many, &format!("40 lights at {spp} spp"));
+        let stats = compare(&apart, &render_cpu(&many), &Tolerance::default()).unwrap();
+        assert!(stats.passed, "40 lights at {spp} spp: GPU vs CPU\n{stats}");
+    }
+}
+
+/// 40 point lights in a ring above a ball that shades a larger one below:
+/// a camera ray's shadow rays queued together, their terms added in light
+/// order.
+fn ring_of_lights() -> lambert::Scene {
     let lights: String = (0..40)
         .map(|i| {
             let a = i as f64 * std::f64::consts::TAU / 40.0;
@@ -195,17 +207,11 @@ fn shadow_rays_apart_render_as_the_megakernel_does() {
             format!("[[point_light]]\nposition = [{x}, 3.0, {z}]\nintensity = [0.5, 0.5, 0.5]\n")
         })
         .collect();
-    let mut many = scene(&format!(
+    scene(&format!(
         "[camera]\neye = [0.0, 2.5, 3.0]\nlook_at = [0.0, 0.0, 0.0]\nvfov = 40.0\nwidth = 48\nheight = 40\n\
          [[sphere]]\ncenter = [0.0, 0.0, 0.0]\nradius = 1.0\n\
          [[sphere]]\ncenter = [0.0, 1.6, 0.0]\nradius = 0.3\n{lights}"
-    ));
-    for spp in [1, 4] {
-        many.view.spp = spp;
-        let apart = apart_as_megakernel(&many, &format!("40 lights at {spp} spp"));
-        let stats = compare(&apart, &render_cpu(&many), &Tolerance::default()).unwrap();
-        assert!(stats.passed, "40 lights at {spp} spp: GPU vs CPU\n{stats}");
-    }
+    ))
 }
 
 /// Adaptive sampling's later passes, a list of pixels rendered again with
@@ -216,18 +222,7 @@ fn shadow_rays_apart_render_as_the_megakernel_does() {
 #[test]
 fn pixel_lists_render_apart_as_the_megakernel_does() {
     use lambert::gpu::{GpuRenderer, ShadowDispatch};
-    let lights: String = (0..40)
-        .map(|i| {
-            let a = i as f32 * std::f32::consts::TAU / 40.0;
-            let (x, z) = (2.0 * a.cos(), 2.0 * a.sin());
-            format!("[[point_light]]\nposition = [{x}, 3.0, {z}]\nintensity = [0.5, 0.5, 0.5]\n")
-        })
-        .collect();
-    let many = scene(&format!(
-        "[camera]\neye = [0.0, 2.5, 3.0]\nlook_at = [0.0, 0.0, 0.0]\nvfov = 40.0\nwidth = 48\nheight = 40\n\
-         [[sphere]]\ncenter = [0.0, 0.0, 0.0]\nradius = 1.0\n\
-         [[sphere]]\ncenter = [0.0, 1.6, 0.0]\nradius = 0.3\n{lights}"
-    ));
+    let many = ring_of_lights();
     for (name, scene) in [
         ("bunny", load("bunny")),
         ("spheres", load("spheres")),
@@ -296,7 +291,7 @@ fn apart_as_megakernel(scene: &lambert::Scene, label: &str) -> lambert::output::
 
 /// The workgroups dealt to llvmpipe's threads in turn (the shader's
 /// `spread_workgroup` for lists of rays, a render tile's rows in layers
-/// for `tile_invocation`, both sized by `Gpu::cpu_threads`) cover the
+/// for `tile_pixel`, both sized by `Gpu::cpu_threads`) cover the
 /// dispatch's work once, whatever the number of threads assumed: renders
 /// in both paths and ray queries come out the same bits for 1 to 7 of
 /// them, remainders included (a wrong deal drops or repeats pixels).

@@ -32,6 +32,16 @@ pub struct BindingTable {
     pub entries: &'static [Binding],
 }
 
+/// The first `size` bytes of `buffer` as a binding: the list entry points
+/// stop at `arrayLength`, so a batch is bound to its own length.
+pub(super) fn leading_bytes(buffer: &wgpu::Buffer, size: u64) -> wgpu::BindingResource<'_> {
+    wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+        buffer,
+        offset: 0,
+        size: wgpu::BufferSize::new(size),
+    })
+}
+
 const fn bind(name: &'static str, binding: u32, kind: BindingKind) -> Binding {
     Binding {
         name,

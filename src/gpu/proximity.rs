@@ -13,7 +13,7 @@ use crate::layout::{ClosestPoint, ListedHit, NO_HIT, Ray, WORKGROUP_INVOCATIONS}
 use crate::scene::Scene;
 
 use super::GpuRenderer;
-use super::bindings::{PROXIMITY, SCENE};
+use super::bindings::{PROXIMITY, SCENE, leading_bytes};
 
 /// Items per dispatch at most: no dispatch runs long enough for a watchdog,
 /// and the workgroup count stays within every device's limit.
@@ -124,14 +124,7 @@ impl GpuRenderer {
                         64,
                     ),
                 };
-                (
-                    e.name,
-                    wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                        buffer,
-                        offset: 0,
-                        size: wgpu::BufferSize::new(size),
-                    }),
-                )
+                (e.name, leading_bytes(buffer, size))
             })
             .collect();
         let layout = self.proximity.layout.as_ref().expect("built");

@@ -8,7 +8,7 @@ use crate::error::{Error, Result};
 use crate::layout::{Hit, NO_HIT, Params, Ray, WORKGROUP_INVOCATIONS};
 use crate::scene::Intersect;
 
-use super::bindings::SCENE;
+use super::bindings::{SCENE, leading_bytes};
 use super::pipelines::ListLayout;
 use super::timer::Timer;
 use super::{GpuRenderer, RENDER_WORKGROUP, TILE};
@@ -93,6 +93,19 @@ impl GpuRenderer {
         }
     }
 
+    /// Uploads the uniform with `samples` (of the view's spp) as the next
+    /// dispatch's: a pixel list's samples, a dispatch at a time.
+    pub(super) fn upload_samples(&self, samples: std::ops::Range<u32>) {
+        let params = Params {
+            sample_begin: samples.start,
+            sample_end: samples.end,
+            ..self.params
+        };
+        self.gpu
+            .queue
+            .write_buffer(&self.resident.params_buffer, 0, bytemuck::bytes_of(&params));
+    }
+
     /// Device time of the last `trace_rays`, from timestamp queries (None
     /// where the adapter has none).
     pub fn trace_device_time(&self) -> Option<Duration> {
@@ -157,36 +170,19 @@ impl GpuRenderer {
             let out_len = (chunk.len() * size_of::<O>()) as u64;
             gpu.queue
                 .write_buffer(&in_buffer, 0, bytemuck::cast_slice(chunk));
-            // Bound to the batch's length: the shader stops at arrayLength.
-            let range = |buffer, size| {
-                wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                    buffer,
-                    offset: 0,
-                    size: wgpu::BufferSize::new(size),
-                })
-            };
             let group = table.bind_group(
                 &gpu.device,
                 "list",
                 &list.layout,
                 vec![
-                    (input.name, range(&in_buffer, in_len)),
-                    (output.name, range(&out_buffer, out_len)),
+                    (input.name, leading_bytes(&in_buffer, in_len)),
+                    (output.name, leading_bytes(&out_buffer, out_len)),
                 ],
             );
             let spp = self.params.spp;
             let step = step.unwrap_or(spp);
             for begin in (0..spp).step_by(step as usize) {
-                let params = Params {
-                    sample_begin: begin,
-                    sample_end: (begin + step).min(spp),
-                    ..self.params
-                };
-                gpu.queue.write_buffer(
-                    &self.resident.params_buffer,
-                    0,
-                    bytemuck::bytes_of(&params),
-                );
+                self.upload_samples(begin..(begin + step).min(spp));
                 let mut encoder = gpu.device.create_command_encoder(&Default::default());
                 {
                     let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {

@@ -90,7 +90,7 @@ fn wave_queue_bytes(lights: u32) -> u64 {
 /// The workgroups of a render dispatch over a `width` × `height` tile, on
 /// an adapter that runs a dispatch on `threads` CPU threads (the shader's
 /// CPU_THREADS): every `threads`-th column of them in each of `threads`
-/// layers, as the shader's `tile_invocation` takes them.
+/// layers, as the shader's `tile_pixel` takes them.
 fn tile_workgroups(width: u32, height: u32, threads: u32) -> [u32; 3] {
     let [wx, wy] = RENDER_WORKGROUP;
     [

@@ -4,10 +4,10 @@
 //! submission a dispatch, the same bits as `render_pixel_list`.
 
 use crate::error::Result;
-use crate::layout::{Params, WORKGROUP_INVOCATIONS};
+use crate::layout::WORKGROUP_INVOCATIONS;
 
 use super::GpuRenderer;
-use super::bindings::SCENE;
+use super::bindings::{SCENE, leading_bytes};
 use super::readback::SUMS_BYTES;
 use super::render::wave_budget;
 
@@ -76,21 +76,13 @@ impl GpuRenderer {
             let n = chunk.len() as u64;
             gpu.queue
                 .write_buffer(&list, 0, bytemuck::cast_slice(chunk));
-            // Bound to the batch's length: the shader stops at arrayLength.
-            let range = |buffer, size| {
-                wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                    buffer,
-                    offset: 0,
-                    size: wgpu::BufferSize::new(size),
-                })
-            };
             let group = |indirect| {
                 split.buffers.bind_group(
                     &gpu.device,
                     [
                         self.tile.prim.as_entire_binding(),
-                        range(&sums, n * SUMS_BYTES),
-                        range(&list, n * PIXEL_BYTES),
+                        leading_bytes(&sums, n * SUMS_BYTES),
+                        leading_bytes(&list, n * PIXEL_BYTES),
                     ],
                     indirect,
                 )
@@ -98,16 +90,7 @@ impl GpuRenderer {
             let groups = [group(false), group(true)];
             let workgroups = n.div_ceil(WORKGROUP_INVOCATIONS as u64) as u32;
             for begin in (0..spp).step_by(step as usize) {
-                let params = Params {
-                    sample_begin: begin,
-                    sample_end: (begin + step).min(spp),
-                    ..self.params
-                };
-                gpu.queue.write_buffer(
-                    &self.resident.params_buffer,
-                    0,
-                    bytemuck::bytes_of(&params),
-                );
+                self.upload_samples(begin..(begin + step).min(spp));
                 let mut encoder = gpu.device.create_command_encoder(&Default::default());
                 {
                     let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
