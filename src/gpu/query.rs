@@ -16,7 +16,8 @@ use super::{GpuRenderer, RENDER_WORKGROUP, TILE};
 /// What the list passes keep between calls.
 #[derive(Default)]
 pub(super) struct ListState {
-    /// `run_list`'s input, output and readback buffers, by label.
+    /// The list passes' input, output and readback buffers, by label
+    /// (`list_buffers`).
     buffers: RefCell<HashMap<&'static str, wgpu::Buffer>>,
     /// Device time of the last `trace_rays` (its dispatches, summed), where
     /// timestamps work.
@@ -93,6 +94,34 @@ impl GpuRenderer {
         }
     }
 
+    /// A list pass's input (written by the host, read by the shader),
+    /// output (written by the shader) and readback buffers, of at least
+    /// `input` and `output` bytes: kept between calls and grown as needed,
+    /// since creating them anew cost lavapipe a sixth of a million-ray
+    /// query.
+    pub(super) fn list_buffers(&self, input: u64, output: u64) -> [wgpu::Buffer; 3] {
+        use wgpu::BufferUsages as U;
+        let mut cache = self.lists.buffers.borrow_mut();
+        [
+            ("list input", input, U::STORAGE | U::COPY_DST),
+            ("list output", output, U::STORAGE | U::COPY_SRC),
+            ("list readback", output, U::COPY_DST | U::MAP_READ),
+        ]
+        .map(|(label, size, usage)| {
+            let kept = cache.get(label).filter(|b| b.size() >= size).cloned();
+            kept.unwrap_or_else(|| {
+                let buffer = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size,
+                    usage,
+                    mapped_at_creation: false,
+                });
+                cache.insert(label, buffer.clone());
+                buffer
+            })
+        })
+    }
+
     /// Uploads the uniform with `samples` (of the view's spp) as the next
     /// dispatch's: a pixel list's samples, a dispatch at a time.
     pub(super) fn upload_samples(&self, samples: std::ops::Range<u32>) {
@@ -136,34 +165,10 @@ impl GpuRenderer {
         let mut device = timer.map(|_| Duration::ZERO);
         let gpu = &self.gpu;
         let batch = batch.min(inputs.len()).max(1);
-        use wgpu::BufferUsages as U;
-        let out_bytes = (batch * size_of::<O>()) as u64;
-        let mut cache = self.lists.buffers.borrow_mut();
-        let [in_buffer, out_buffer, staging] = [
-            (
-                "list input",
-                (batch * size_of::<I>()) as u64,
-                U::STORAGE | U::COPY_DST,
-            ),
-            ("list output", out_bytes, U::STORAGE | U::COPY_SRC),
-            ("list readback", out_bytes, U::COPY_DST | U::MAP_READ),
-        ]
-        .map(|(label, size, usage)| {
-            // Kept between calls and grown as needed: creating them anew
-            // cost lavapipe a sixth of a million-ray query.
-            let kept = cache.get(label).filter(|b| b.size() >= size).cloned();
-            kept.unwrap_or_else(|| {
-                let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some(label),
-                    size,
-                    usage,
-                    mapped_at_creation: false,
-                });
-                cache.insert(label, buffer.clone());
-                buffer
-            })
-        });
-        drop(cache);
+        let [in_buffer, out_buffer, staging] = self.list_buffers(
+            (batch * size_of::<I>()) as u64,
+            (batch * size_of::<O>()) as u64,
+        );
         let mut outputs = Vec::with_capacity(inputs.len());
         for chunk in inputs.chunks(batch) {
             let in_len = std::mem::size_of_val(chunk) as u64;

@@ -54,23 +54,8 @@ impl GpuRenderer {
         // As many camera rays a dispatch as the wavefront's lists hold.
         let batch = (wave_budget(self.params.num_lights) / step) as usize;
         let batch = batch.min(pixels.len()).max(1);
-        use wgpu::BufferUsages as U;
-        let buffer = |label, size, usage| {
-            gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size,
-                usage,
-                mapped_at_creation: false,
-            })
-        };
-        let sums_bytes = batch as u64 * SUMS_BYTES;
-        let list = buffer(
-            "pixel list",
-            batch as u64 * PIXEL_BYTES,
-            U::STORAGE | U::COPY_DST,
-        );
-        let sums = buffer("pixel list sums", sums_bytes, U::STORAGE | U::COPY_SRC);
-        let staging = buffer("pixel list readback", sums_bytes, U::COPY_DST | U::MAP_READ);
+        let [list, sums, staging] =
+            self.list_buffers(batch as u64 * PIXEL_BYTES, batch as u64 * SUMS_BYTES);
         let mut results = Vec::with_capacity(pixels.len());
         for chunk in pixels.chunks(batch) {
             let n = chunk.len() as u64;
