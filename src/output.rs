@@ -122,7 +122,7 @@ static TEMPORARIES: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::
 /// SIGTERM and SIGHUP handler calls it before exiting. Holds the registry
 /// until the process exits, so no rename can complete behind it.
 pub fn remove_temporaries_and_exit(code: i32) -> ! {
-    let guard = TEMPORARIES.lock().unwrap_or_else(|e| e.into_inner());
+    let guard = registry();
     for path in guard.iter() {
         let _ = std::fs::remove_file(path);
     }
@@ -189,19 +189,10 @@ pub fn prepare_output_for(path: &Path, inputs: &[&Path]) -> Result<()> {
     }
     let folder = folder_of(&target);
     std::fs::create_dir_all(folder).map_err(|e| Error::io(folder, e))?;
-    let probe = temporary_beside(&target, "probe")?;
-    // Registered as a temporary, so that a signal between its creation and
-    // removal does not leave it behind.
-    TEMPORARIES
-        .lock()
-        .unwrap_or_else(|e| e.into_inner())
-        .push(probe.clone());
-    let created = std::fs::File::create(&probe);
-    let _ = std::fs::remove_file(&probe);
-    TEMPORARIES
-        .lock()
-        .unwrap_or_else(|e| e.into_inner())
-        .retain(|p| p != &probe);
+    let created = create_temporary(&target, "probe").map(|(probe, _)| {
+        let _ = std::fs::remove_file(&probe);
+        unregister(&probe);
+    });
     created.map_err(|e| {
         Error::Usage(format!(
             "{}: cannot write in {}: {e}",
@@ -250,15 +241,68 @@ fn canonical(path: &Path) -> Option<PathBuf> {
     Some(folder.join(target.file_name()?))
 }
 
-fn temporary_beside(target: &Path, kind: &str) -> Result<PathBuf> {
-    let name = target
-        .file_name()
-        .ok_or_else(|| Error::Usage(format!("{}: not a file name", target.display())))?;
-    Ok(folder_of(target).join(format!(
-        ".{}.{}.{kind}",
-        name.to_string_lossy(),
-        std::process::id()
-    )))
+fn registry() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    TEMPORARIES.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+fn unregister(path: &Path) {
+    registry().retain(|p| p != path);
+}
+
+/// How many names `create_temporary` tries before it gives up: each is
+/// 64 random bits, so a second collision means something else is wrong.
+const TEMPORARY_TRIES: usize = 8;
+
+/// Creates a new file beside `target`, `.NAME.PID.RANDOM.kind`, with
+/// O_EXCL (`create_new`), registered for `remove_temporaries_and_exit`.
+/// The pid alone is not unique: two containers both run lambert as pid 1
+/// and may write to one shared folder; the random part tells them apart,
+/// and O_EXCL means a name already taken is never opened (another name is
+/// tried), so no writer's bytes land in another's file.
+fn create_temporary(target: &Path, kind: &str) -> std::io::Result<(PathBuf, std::fs::File)> {
+    use std::hash::{BuildHasher, Hasher};
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let name = target.file_name().ok_or_else(|| {
+        std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a file name")
+    })?;
+    let mut last = None;
+    for _ in 0..TEMPORARY_TRIES {
+        // RandomState's keys come from the OS's random source once per
+        // process; the time and a counter vary them within one.
+        let mut hasher = std::collections::hash_map::RandomState::new().build_hasher();
+        let now = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_nanos());
+        hasher.write_u128(now);
+        hasher.write_u32(std::process::id());
+        hasher.write_u64(COUNTER.fetch_add(1, Ordering::Relaxed));
+        let path = folder_of(target).join(format!(
+            ".{}.{}.{:016x}.{kind}",
+            name.to_string_lossy(),
+            std::process::id(),
+            hasher.finish()
+        ));
+        // Registered before it exists, so that a signal between its
+        // creation and its registration cannot leave it behind.
+        registry().push(path.clone());
+        match std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&path)
+        {
+            Ok(file) => return Ok((path, file)),
+            Err(e) => {
+                // Not ours to remove: another writer's, or nothing.
+                unregister(&path);
+                if e.kind() != std::io::ErrorKind::AlreadyExists {
+                    return Err(e);
+                }
+                last = Some(e);
+            }
+        }
+    }
+    Err(last.expect("at least one try"))
 }
 
 /// Writes `bytes` to `path` atomically: a temporary file beside its target
@@ -278,14 +322,11 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
             .and_then(|_| file.flush())
             .map_err(|e| Error::io(path, e));
     }
-    let temporary = temporary_beside(&target, "tmp")?;
-    let registry = || TEMPORARIES.lock().unwrap_or_else(|e| e.into_inner());
-    registry().push(temporary.clone());
-    let written = (|| {
-        let mut file = std::fs::File::create(&temporary)?;
-        file.write_all(bytes)?;
-        file.sync_all()
-    })();
+    let (temporary, mut file) = create_temporary(&target, "tmp").map_err(|e| Error::io(path, e))?;
+    let written = file.write_all(bytes).and_then(|_| file.sync_all());
+    drop(file);
+    // The registry is held across the rename, so that a signal's cleanup
+    // cannot run between the rename and the unregistering.
     let mut live = registry();
     let result = written.and_then(|_| std::fs::rename(&temporary, &target));
     live.retain(|p| p != &temporary);

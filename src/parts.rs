@@ -72,13 +72,21 @@ impl Fingerprint {
     }
 }
 
-/// The hash a part records: the scene's geometry, materials, lights,
+/// The hash a part records: everything that reaches a pixel. The scene's
+/// geometry and its offset (the geometry is stored relative to the
+/// scene's centre, so a far scene moved whole keeps its local numbers and
+/// differs only there), materials, texture texels (the store's words: an
+/// image's pixels changed at the same size change nothing else), lights,
 /// background, ambient, shadows, intersection test and acceleration; the
 /// view's camera, image size, samples and seed; and which path renders
 /// (the GPU's pixels differ from the CPU's within tolerance, so parts of
 /// the two do not mix).
 pub fn settings_hash(scene: &Scene, view: &View, device: &str) -> String {
     let mut h = Fingerprint(0xcbf2_9ce4_8422_2325);
+    for v in scene.offset.to_array() {
+        h.add(&v.to_le_bytes());
+    }
+    h.add(bytemuck::cast_slice(scene.textures.words()));
     h.add(bytemuck::cast_slice(&scene.triangles));
     h.add(bytemuck::cast_slice(&scene.normals));
     h.add(bytemuck::cast_slice(&scene.attributes));

@@ -129,6 +129,42 @@ pub fn validate_camera(camera: &Camera) -> Result<(), String> {
     validate_resolution(camera.width, camera.height).map_err(|e| format!("camera: {e}"))
 }
 
+/// `camera` checked in the precision the renderer uses: its eye and
+/// look_at moved into the local frame of a scene at `offset` and rounded
+/// to f32, as every kernel's basis is built (`f32::CameraBasis`). Two
+/// points apart in f64 can round to one in f32 (a view direction of zero:
+/// every pixel NaN, rendered black), and an up barely off the view
+/// direction can become parallel to it.
+pub fn validate_camera_f32(camera: &Camera, offset: DVec3) -> Result<(), String> {
+    let local = camera.relative_to(offset);
+    let rounded = |p: [f64; 3]| DVec3::from(p).as_vec3();
+    if rounded(local.eye) == rounded(local.look_at) {
+        let frame = if offset == DVec3::ZERO {
+            String::new()
+        } else {
+            format!(" relative to the scene's centre {}", vector_text(offset))
+        };
+        return Err(format!(
+            "camera.eye = {} and camera.look_at = {} are the same point in f32, the precision \
+             the renderer uses{frame}; move look_at further from eye",
+            vector_text(DVec3::from(camera.eye)),
+            vector_text(DVec3::from(camera.look_at))
+        ));
+    }
+    let basis = f32::CameraBasis::new(&local);
+    if ![basis.right, basis.up, basis.forward]
+        .iter()
+        .all(|v| v.is_finite())
+    {
+        return Err(format!(
+            "camera.up = {} is parallel to the view direction (look_at − eye) in f32, the \
+             precision the renderer uses",
+            vector_text(DVec3::from(camera.up))
+        ));
+    }
+    Ok(())
+}
+
 /// A model rendered alone: its resolution unless its camera's aspect ratio
 /// or --width/--height say otherwise.
 pub const DEFAULT_WIDTH: u32 = 1024;

@@ -34,7 +34,9 @@ pub use query::{
 // The point file is a file format beside the ray file (crate::rays).
 pub use crate::rays::{POINT_BYTES, parse_points, read_points};
 pub use tile::{TileJob, TileReport, render_tile};
-pub use turntable::{FrameReport, TurntableJob, TurntableReport, frame_path, render_turntable};
+pub use turntable::{
+    FrameReport, TurntableJob, TurntableReport, frame_path, frame_paths, render_turntable,
+};
 
 /// The f64 oracle's version of `scene`: the watertight test, in double
 /// precision, is the reference every variant and device is measured against.

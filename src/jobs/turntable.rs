@@ -2,6 +2,7 @@
 //! its look_at, the scene uploaded once, each frame written as it is done
 //! under a name made from a pattern.
 
+use std::collections::HashMap;
 use std::ops::RangeInclusive;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -59,21 +60,24 @@ pub fn render_turntable(
     job: &TurntableJob,
     sink: Option<&dyn ProgressSink>,
 ) -> Result<TurntableReport> {
+    let paths = frame_paths(job.pattern, job.range.clone())?;
     let mut view = scene.view.clone();
     let (mut renderer, _) = open(Arc::new(scene), job.device, job.adapter, sink)?;
     let device = renderer.describe();
-    say(
-        sink,
-        &format!("rendering {} frames on {device}", job.frames),
-    );
+    let count = paths.len();
+    let of = if count as u32 == job.frames {
+        String::new()
+    } else {
+        format!(" of {}", job.frames)
+    };
+    say(sink, &format!("rendering {count}{of} frames on {device}"));
     let camera = view.camera.clone();
     let mut written = Vec::new();
-    for frame in job.range.clone() {
+    for (frame, path) in job.range.clone().zip(paths) {
         view.camera = orbit(&camera, frame, job.frames);
         let start = Instant::now();
         let (rendered, _) = renderer.render(&view, None)?;
         let elapsed = start.elapsed();
-        let path = frame_path(job.pattern, frame)?;
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
         }
@@ -93,6 +97,50 @@ pub fn render_turntable(
         written,
         device,
     })
+}
+
+/// The names of frames `range` of `pattern` (`frame_path`), refused where
+/// two name one file (`d{}/../same.png`: every frame's `..` leads back to
+/// one folder), which would leave one image where the report counts many.
+pub fn frame_paths(pattern: &Path, range: RangeInclusive<u32>) -> Result<Vec<PathBuf>> {
+    let mut seen: HashMap<PathBuf, u32> = HashMap::new();
+    let mut paths = Vec::new();
+    for frame in range {
+        let path = frame_path(pattern, frame)?;
+        if let Some(first) = seen.insert(lexically_absolute(&path)?, frame) {
+            return Err(Error::Usage(format!(
+                "{}: frames {first} and {frame} are both written to {}; the frame number must \
+                 make each frame's file its own",
+                pattern.display(),
+                path.display()
+            )));
+        }
+        paths.push(path);
+    }
+    Ok(paths)
+}
+
+/// `path` made absolute with `.` and `..` resolved by name: a frame's
+/// folder need not exist yet, so the file system cannot resolve them.
+fn lexically_absolute(path: &Path) -> Result<PathBuf> {
+    use std::path::Component;
+    let absolute = if path.is_absolute() {
+        path.to_path_buf()
+    } else {
+        let here = std::env::current_dir().map_err(|e| Error::io(Path::new("."), e))?;
+        here.join(path)
+    };
+    let mut normal = PathBuf::new();
+    for part in absolute.components() {
+        match part {
+            Component::CurDir => {}
+            Component::ParentDir => {
+                normal.pop();
+            }
+            other => normal.push(other),
+        }
+    }
+    Ok(normal)
 }
 
 /// `frames/frame_{:04}.png` with frame 7 → `frames/frame_0007.png`; every

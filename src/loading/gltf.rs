@@ -62,7 +62,9 @@ pub struct GltfScene {
 /// `NormalMode::Smooth`), materials, cameras and lights.
 pub fn load_scene(path: &Path, mode: NormalMode) -> Result<GltfScene> {
     let bytes = crate::files::read_capped(path, crate::files::MAX_MODEL_BYTES)?;
-    parse_scene(&bytes, path, mode)
+    let mut scene = parse_scene(&bytes, path, mode)?;
+    scene.mesh.files.insert(0, path.to_path_buf());
+    Ok(scene)
 }
 
 /// `load_scene` of a file's bytes (JSON or GLB); `path` names it in errors
@@ -126,7 +128,7 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
         e => fail(format!("invalid glTF: {e}")),
     })?;
     let base = path.parent().unwrap_or(Path::new("."));
-    check_buffer_files(&document, base).map_err(fail)?;
+    let buffer_files = check_buffer_files(&document, base).map_err(fail)?;
     let buffers = read_buffers(&document, base, blob).map_err(fail)?;
 
     let mut scene = GltfScene::default();
@@ -354,6 +356,7 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
     }
     super::require_triangles(&scene.mesh, path)?;
     scene.mesh.images = images.sources;
+    scene.mesh.files = buffer_files;
     if any_colors {
         scene.mesh.colors = Some(corner_values(&scene.mesh.triangles, &vertex_colors));
     }
@@ -461,7 +464,12 @@ fn read_buffers(
 /// Checks the files that buffers name before the crate reads them: it
 /// panics on a URI whose percent-encoding is not UTF-8, and would read a
 /// device or FIFO (`/dev/zero`, an absolute path being allowed) forever.
-fn check_buffer_files(document: &gltf::Document, base: &Path) -> std::result::Result<(), String> {
+/// Returns the files.
+fn check_buffer_files(
+    document: &gltf::Document,
+    base: &Path,
+) -> std::result::Result<Vec<std::path::PathBuf>, String> {
+    let mut files = Vec::new();
     for buffer in document.buffers() {
         let gltf::buffer::Source::Uri(uri) = buffer.source() else {
             continue;
@@ -486,8 +494,9 @@ fn check_buffer_files(document: &gltf::Document, base: &Path) -> std::result::Re
             crate::files::open_capped(&file, crate::files::MAX_MODEL_BYTES)
                 .map_err(|e| format!("buffer {index}: {e}"))?;
         }
+        files.push(file);
     }
-    Ok(())
+    Ok(files)
 }
 
 /// `%XX` escapes decoded, or None where the result is not UTF-8.

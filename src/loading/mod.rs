@@ -58,6 +58,9 @@ pub struct Mesh {
     pub colors: Option<Vec<[[f32; 4]; 3]>>,
     /// What was read but ignored or not found, each naming the file.
     pub warnings: Vec<String>,
+    /// The files read for it: the model file and those it names (MTL
+    /// files, glTF buffers); its images' are in `images`.
+    pub files: Vec<std::path::PathBuf>,
     /// Whether `normals` are the file's own at every corner (not computed).
     pub file_normals: bool,
     /// Vertices read but not in `positions` (a glTF file's point and line
@@ -137,7 +140,7 @@ impl Format {
 /// `gltf::load_scene`'s). A file without triangles is an error
 /// (`require_triangles`).
 pub fn load_mesh(path: &Path, mode: NormalMode) -> Result<Mesh> {
-    let mesh = match Format::of(path)? {
+    let mut mesh = match Format::of(path)? {
         Format::Obj => load_obj(path, mode)?,
         Format::Ply | Format::PlyGz => ply::load_ply(path, mode)?,
         Format::Stl => stl::load_stl(path, mode)?,
@@ -146,6 +149,7 @@ pub fn load_mesh(path: &Path, mode: NormalMode) -> Result<Mesh> {
         Format::Gltf | Format::Glb => return Ok(gltf::load_scene(path, mode)?.mesh),
     };
     require_triangles(&mesh, path)?;
+    mesh.files.insert(0, path.to_path_buf());
     Ok(mesh)
 }
 

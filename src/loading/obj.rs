@@ -456,6 +456,7 @@ pub fn parse_obj(text: &str, path: &Path, mode: NormalMode) -> Result<Mesh> {
             Some("mtllib") => {
                 for mtl in mtl_paths(path, tokens) {
                     load_mtl(&mtl, &mut materials)?;
+                    mesh.files.push(mtl);
                 }
             }
             Some("usemtl") => {

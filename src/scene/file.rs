@@ -132,6 +132,7 @@ impl Scene {
             ambient,
             shadows: file.render.shadows,
             intersect: file.render.intersect,
+            inputs: vec![path.to_path_buf()],
             ..Scene::bare()
         };
 

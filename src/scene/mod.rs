@@ -3,7 +3,7 @@
 //! scene file (`file`, docs/scene-format.md) or a model file alone
 //! (`model`).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use glam::{DMat3, DVec3};
 use serde::Deserialize;
@@ -56,6 +56,10 @@ pub struct Scene {
     /// What loading read but ignored or could not find (each names its
     /// file); the CLI prints them.
     pub warnings: Vec<String>,
+    /// Every file loading read or looked for: the scene file, its models,
+    /// their MTL files, glTF buffers and textures. No output may replace
+    /// one (`check_output`).
+    pub inputs: Vec<PathBuf>,
     /// World position (f64) of the origin of the f32 geometry, lights and
     /// camera the kernels see: the centre of a scene far from the origin,
     /// else zero (`placement::centring_offset`).
@@ -208,6 +212,7 @@ impl Scene {
             accel: Accel::default(),
             intersect: Intersect::default(),
             warnings: Vec::new(),
+            inputs: Vec::new(),
             offset: DVec3::ZERO,
         }
     }
@@ -249,6 +254,12 @@ impl Scene {
         albedo: Option<[f32; 3]>,
     ) -> Result<()> {
         self.warnings.append(&mut mesh.warnings);
+        self.inputs.append(&mut mesh.files);
+        self.inputs
+            .extend(mesh.images.iter().filter_map(|image| match image {
+                loading::ImageSource::File(file) => Some(file.clone()),
+                loading::ImageSource::Embedded { .. } => None,
+            }));
         let uniform = match albedo {
             Some(a) => Some(a),
             None if mesh.face_materials.is_empty() => Some(DEFAULT_ALBEDO),
@@ -531,13 +542,21 @@ impl Scene {
     }
 
     /// The default view's eye and look_at within MAX_LOCAL_COORDINATE of
-    /// the offset, as the geometry is.
+    /// the offset, as the geometry is, and a camera still in f32 there.
     pub(crate) fn check_camera_placement(&self) -> Result<(), String> {
         let camera = &self.view.camera;
         for (name, world) in [("eye", camera.eye), ("look_at", camera.look_at)] {
             checked_local(&format!("camera.{name}"), DVec3::from(world), self.offset)?;
         }
-        Ok(())
+        crate::camera::validate_camera_f32(camera, self.offset)
+    }
+
+    /// An error where writing `output` would replace a file the scene was
+    /// read from (its scene file, a model, an MTL file, a buffer, a
+    /// texture; links included), naming that file.
+    pub fn check_output(&self, output: &Path) -> Result<()> {
+        let inputs: Vec<&Path> = self.inputs.iter().map(PathBuf::as_path).collect();
+        crate::output::refuse_input(output, &inputs)
     }
 
     /// Its offset, and the radius of its geometry about it (from the

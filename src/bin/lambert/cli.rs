@@ -166,6 +166,7 @@ fn render_part(args: &RenderArgs, tile_text: &str, quiet: bool) -> Result<ExitCo
     }
     check_output_path(&args.output, &[&args.scene])?;
     let scene = args.options.load(&args.scene)?;
+    scene.check_output(&args.output)?;
     print_warnings(&scene, quiet);
     let job = TileJob {
         tile,
@@ -409,6 +410,7 @@ fn render(args: &RenderArgs, quiet: bool) -> Result<ExitCode> {
     let start = Instant::now();
     let scene = args.options.load(&args.scene)?;
     let load = start.elapsed();
+    scene.check_output(&args.output)?;
     print_warnings(&scene, quiet);
     let sampling = match (args.time_budget, args.target_error) {
         (Some(budget), _) => Sampling::Budget(budget),
@@ -513,6 +515,9 @@ fn diff(args: &DiffArgs, quiet: bool) -> Result<ExitCode> {
         check_output_path(path, &[&args.scene])?;
     }
     let scene = args.options.load(&args.scene)?;
+    if let Some(path) = &args.heatmap {
+        scene.check_output(path)?;
+    }
     print_warnings(&scene, quiet || args.json);
     let tolerance = Tolerance {
         abs: args.tol_abs,
@@ -590,6 +595,7 @@ fn trace(args: &TraceArgs, quiet: bool) -> Result<ExitCode> {
         Some(path) => Scene::load(path)?,
         None => Scene::from_objs(&args.obj)?,
     };
+    scene.check_output(&args.output)?;
     args.options.apply(&mut scene)?;
     // Where a ray's f32 numbers limit its hits (docs/accuracy.md).
     if !quiet {
@@ -668,6 +674,7 @@ fn trace(args: &TraceArgs, quiet: bool) -> Result<ExitCode> {
 fn camera_rays(args: &CameraRaysArgs, quiet: bool) -> Result<ExitCode> {
     lambert::output::prepare_output_for(&args.output, &[&args.scene])?;
     let scene = args.view.load(&args.scene)?;
+    scene.check_output(&args.output)?;
     let rays = rays::camera_rays(&scene);
     rays::write_rays(&args.output, &rays)?;
     if !quiet {

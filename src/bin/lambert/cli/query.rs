@@ -148,6 +148,7 @@ pub(super) fn query(args: &QueryArgs, quiet: bool) -> Result<ExitCode> {
         Some(path) => Scene::load(path)?,
         None => Scene::from_objs(&args.obj)?,
     };
+    scene.check_output(&args.output)?;
     print_warnings(&scene, quiet);
     let job = QueryJob {
         kind,

@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use super::{RenderArgs, check_output_path, print_warnings};
 use crate::progress_bar;
 use lambert::error::{Error, Result};
-use lambert::jobs::{TurntableJob, frame_path, render_turntable, seconds};
+use lambert::jobs::{TurntableJob, frame_paths, render_turntable, seconds};
 
 /// `--frames A-B` (or `A`) of `frames`: inclusive, within 0..frames.
 pub(super) fn frame_range(text: &str, frames: u32) -> Result<std::ops::RangeInclusive<u32>> {
@@ -35,11 +35,15 @@ pub(super) fn turntable(args: &RenderArgs, frames: u32, quiet: bool) -> Result<E
         None => 0..=frames - 1,
     };
     // Every frame's name is checked before the first is rendered.
-    for frame in range.clone() {
-        lambert::output::refuse_input(&frame_path(&args.output, frame)?, &[&args.scene])?;
+    let paths = frame_paths(&args.output, range.clone())?;
+    for path in &paths {
+        lambert::output::refuse_input(path, &[&args.scene])?;
     }
-    check_output_path(&frame_path(&args.output, *range.start())?, &[&args.scene])?;
+    check_output_path(&paths[0], &[&args.scene])?;
     let scene = args.options.load(&args.scene)?;
+    for path in &paths {
+        scene.check_output(path)?;
+    }
     print_warnings(&scene, quiet);
     let job = TurntableJob {
         pattern: &args.output,

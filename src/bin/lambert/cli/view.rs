@@ -47,6 +47,9 @@ pub(super) fn run(args: ViewArgs, quiet: bool) -> Result<ExitCode> {
         validate_spp(frames).map_err(|e| Error::Usage(format!("--frames: {e}")))?;
     }
     let scene = args.options.load(&args.scene)?;
+    if let Some(path) = &args.screenshot {
+        scene.check_output(path)?;
+    }
     print_warnings(&scene, quiet);
     let spp = args
         .frames
