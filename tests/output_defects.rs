@@ -387,3 +387,180 @@ fn a_range_of_frames_says_how_many_of_how_many() {
     assert!(output.status.success(), "{text}");
     assert!(text.contains("rendering 3 of 4 frames"), "{text}");
 }
+
+#[test]
+fn an_adapter_with_too_few_bindings_is_refused_in_words_and_auto_falls_back() {
+    let (dir, scene) = room();
+    let out = dir.path().join("out.png");
+    // GL (Mesa's llvmpipe through EGL) allows 16 storage buffers a stage.
+    let gpu = lambert(&[
+        "render",
+        s(&scene),
+        "-o",
+        s(&out),
+        "--backend",
+        "gl",
+        "--device",
+        "gpu",
+    ]);
+    let text = stderr(&gpu);
+    assert!(!gpu.status.success(), "{text}");
+    assert!(!text.contains("Too many bindings"), "{text}");
+    assert!(
+        text.contains("cannot run lambert") && text.contains("storage buffers"),
+        "GL's adapter not found or not refused in words (GL tests need Mesa's \
+         libegl-mesa0): {text}"
+    );
+    assert!(!out.exists());
+    // Named, a software adapter is auto's choice: it falls back instead.
+    let auto = lambert(&[
+        "render",
+        s(&scene),
+        "-o",
+        s(&out),
+        "--backend",
+        "gl",
+        "--adapter",
+        "llvmpipe",
+    ]);
+    let text = stderr(&auto);
+    assert!(auto.status.success(), "{text}");
+    assert!(text.contains("using the CPU path instead"), "{text}");
+    assert!(out.exists());
+}
+
+#[test]
+fn info_prints_a_far_model_s_bounds_in_world_coordinates() {
+    let dir = tempfile::tempdir().unwrap();
+    let model = write(
+        dir.path(),
+        "far.obj",
+        "v 3000000 0 0\nv 3000001 0 0\nv 3000000 1 0\nf 1 2 3\n",
+    );
+    let output = lambert(&["info", s(&model)]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let bounds = stdout
+        .lines()
+        .find(|l| l.trim_start().starts_with("bounds:"))
+        .unwrap_or_else(|| panic!("no bounds: {stdout}"));
+    assert!(
+        bounds.contains("[3000000, 0, 0] to [3000001, 1, 0]"),
+        "{bounds}"
+    );
+    assert!(bounds.contains("centre [3000000.5, 0.5, 0]"), "{bounds}");
+}
+
+/// Runs `lambert render` of a fresh room with `options`: its status and
+/// stderr.
+fn render_with(options: &[&str]) -> (bool, String) {
+    let (dir, scene) = room();
+    let out = dir.path().join("out.png");
+    let mut args = vec!["render", s(&scene), "-o", s(&out), "--device", "cpu"];
+    args.extend(options);
+    let output = lambert(&args);
+    (output.status.success(), stderr(&output))
+}
+
+#[test]
+fn spp_with_a_time_budget_and_max_spp_alone_are_refused_in_words() {
+    let (ok, text) = render_with(&["--time-budget", "0.2", "--spp", "4"]);
+    assert!(!ok, "{text}");
+    assert!(
+        text.contains("--time-budget")
+            && text.contains("--spp")
+            && text.contains("cannot be used with"),
+        "{text}"
+    );
+    let (ok, text) = render_with(&["--max-spp", "8"]);
+    assert!(!ok, "{text}");
+    assert!(text.contains("--target-error"), "{text}");
+    let (ok, text) = render_with(&["--max-spp", "8", "--target-error", "0.5"]);
+    assert!(ok, "{text}");
+}
+
+#[test]
+fn sigterm_exits_143_and_sigint_130() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = format!(
+        "[camera]\neye = [0.5, 0.5, 3.0]\nlook_at = [0.5, 0.5, 0.0]\nvfov = 40.0\n\
+         width = 1024\nheight = 1024\n[render]\nspp = 256\n\
+         [[sphere]]\ncenter = [0.5, 0.5, 0.0]\nradius = 1.0\n{LIGHT}"
+    );
+    let scene = write(dir.path(), "slow.toml", text);
+    let out = dir.path().join("out.pfm");
+    for (signal, code) in [("-TERM", 143), ("-INT", 130), ("-HUP", 129)] {
+        let mut child = common::lambert_command()
+            .args(["render", s(&scene), "-o", s(&out), "--device", "cpu", "-q"])
+            .spawn()
+            .unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(400));
+        let killed = std::process::Command::new("kill")
+            .args([signal, &child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(killed.success());
+        let status = child.wait().unwrap();
+        assert_eq!(status.code(), Some(code), "kill {signal}: {status:?}");
+    }
+}
+
+/// `lambert bench --time-vs-error` of `scenes` at its cheapest, with
+/// `--plot plot`.
+fn bench_plot(scenes: &[&Path], plot: &Path) -> Output {
+    let mut args = vec![
+        "bench",
+        "--time-vs-error",
+        "--device",
+        "cpu",
+        "--spp-list",
+        "1",
+        "--reference-spp",
+        "1",
+        "--runs",
+        "1",
+        "--plot",
+        s(plot),
+    ];
+    args.extend(scenes.iter().map(|p| s(p)));
+    lambert(&args)
+}
+
+#[test]
+fn time_vs_error_plots_of_two_scenes_of_one_name_are_both_kept() {
+    let dir = tempfile::tempdir().unwrap();
+    let scenes: Vec<PathBuf> = ["a", "b"]
+        .iter()
+        .map(|folder| {
+            let folder = dir.path().join(folder);
+            std::fs::create_dir_all(&folder).unwrap();
+            let text =
+                format!("{CAMERA}{LIGHT}[[sphere]]\ncenter = [0.5, 0.5, 0.0]\nradius = 0.5\n");
+            write(&folder, "scene.toml", text)
+        })
+        .collect();
+    let plot = dir.path().join("plots");
+    let output = bench_plot(&[&scenes[0], &scenes[1]], &plot);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    for name in ["a_scene", "b_scene"] {
+        assert!(
+            plot.join(format!("time_vs_error_{name}.png")).exists(),
+            "no plot of {name}: {:?}",
+            std::fs::read_dir(&plot).unwrap().collect::<Vec<_>>()
+        );
+    }
+    assert!(
+        stdout.contains("a/scene:") && stdout.contains("b/scene:"),
+        "{stdout}"
+    );
+    // --plot naming a file says what --plot wants.
+    let file = write(dir.path(), "plot.png", "not a folder");
+    let output = bench_plot(&[&scenes[0]], &file);
+    let text = stderr(&output);
+    assert!(!output.status.success());
+    assert!(
+        text.contains("not a folder") && text.contains("--plot"),
+        "{text}"
+    );
+}

@@ -3,6 +3,7 @@
 
 use crate::error::{Error, Result};
 
+use super::bindings::unmet_limits;
 use super::device::{GpuOptions, LLVMPIPE_THREADS_ENV, MAX_BUFFER_ENV, SHADOW_DISPATCH_ENV};
 
 /// Which adapter to use: `--adapter`, `--backend`, or wgpu's own
@@ -191,10 +192,21 @@ pub(super) fn choose_adapter(
                 .as_ref()
                 .is_none_or(|f| info.name.to_lowercase().contains(f))
                 && !(hardware_only && is_software(&info))
+                && unmet_limits(&a.limits()).is_none()
         })
         .min_by_key(|a| rank(&a.get_info()));
     let Some(adapter) = chosen else {
-        let available: Vec<String> = adapters.iter().map(|a| describe(&a.get_info())).collect();
+        let mut unfit = false;
+        let available: Vec<String> = adapters
+            .iter()
+            .map(|a| match unmet_limits(&a.limits()) {
+                Some(why) => {
+                    unfit = true;
+                    format!("{} (cannot run lambert: {why})", describe(&a.get_info()))
+                }
+                None => describe(&a.get_info()),
+            })
+            .collect();
         let wanted = match (&filter, hardware_only) {
             (Some(f), _) => format!("no adapter whose name contains '{f}'"),
             (None, true) => "no hardware GPU adapter".to_string(),
@@ -209,8 +221,13 @@ pub(super) fn choose_adapter(
         } else {
             available.join(", ")
         };
+        let advice = if unfit {
+            "; use another backend (vulkan, metal or dx12) or --device cpu"
+        } else {
+            ""
+        };
         return Err(Error::Gpu(format!(
-            "{wanted}; adapters available: {available}"
+            "{wanted}; adapters available: {available}{advice}"
         )));
     };
     Ok(adapter.clone())

@@ -150,6 +150,38 @@ pub const TABLES: [&BindingTable; 6] = [
     &PROXIMITY,
 ];
 
+/// Why an adapter with `limits` cannot run the kernel, if it cannot: a
+/// pipeline binds the scene's group and one second group, so it needs the
+/// scene's storage buffers (and storage textures) and the most of any
+/// second group's, within the adapter's per-stage limits. GL's 16 storage
+/// buffers are too few; without this check wgpu fails later with "Too many
+/// bindings" and `auto` never falls back.
+pub fn unmet_limits(limits: &wgpu::Limits) -> Option<String> {
+    let most = |kind: fn(BindingKind) -> bool| {
+        let count = |table: &BindingTable| table.entries.iter().filter(|e| kind(e.kind)).count();
+        (count(&SCENE) + TABLES[1..].iter().map(|t| count(t)).max().unwrap_or(0)) as u32
+    };
+    let buffers = most(|k| matches!(k, Storage | StorageWrite));
+    let textures = most(|k| k == Texels);
+    let short = |what: &str, has: u32, needs: u32| {
+        (has < needs).then(|| {
+            format!("it binds at most {has} {what} per shader stage and lambert's kernel binds {needs}")
+        })
+    };
+    short(
+        "storage buffers",
+        limits.max_storage_buffers_per_shader_stage,
+        buffers,
+    )
+    .or_else(|| {
+        short(
+            "storage textures",
+            limits.max_storage_textures_per_shader_stage,
+            textures,
+        )
+    })
+}
+
 impl BindingTable {
     pub(super) fn layout(&self, device: &wgpu::Device) -> wgpu::BindGroupLayout {
         let buffer = |ty| wgpu::BindingType::Buffer {

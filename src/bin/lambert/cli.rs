@@ -117,13 +117,19 @@ struct RenderArgs {
     /// --max-spp. Reports the error it expects.
     #[arg(long, value_name = "E")]
     target_error: Option<f64>,
-    /// Cap on samples per pixel for --target-error.
-    #[arg(long, default_value_t = 256)]
+    /// Cap on samples per pixel for --target-error (which it requires:
+    /// other renders take --spp).
+    #[arg(long, default_value_t = 256, requires = "target_error")]
     max_spp: u32,
     /// Spend about this many seconds: a 1-spp pilot render times a sample,
     /// then the image is rendered with as many samples per pixel as the
-    /// rest of the budget allows. Reports the error it expects.
-    #[arg(long, value_name = "SECONDS", conflicts_with = "target_error")]
+    /// rest of the budget allows (the scene's render.spp is not used; an
+    /// explicit --spp conflicts with it). Reports the error it expects.
+    #[arg(
+        long,
+        value_name = "SECONDS",
+        conflicts_with_all = ["target_error", "spp"]
+    )]
     time_budget: Option<f64>,
     /// Render only part I (from 0) of N of the image, as an EXR part file
     /// for `lambert merge` (bands of rows; see docs/distributed.md).

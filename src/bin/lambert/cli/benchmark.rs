@@ -39,9 +39,8 @@ pub(super) fn bench(args: &BenchArgs, quiet: bool) -> Result<ExitCode> {
         "{:<18} {:>9} {:>11} {:>11} {:>8} {:>7} {:>6} {:>9} {:>8}",
         "", "", "Mrays/s", "Mrays/s", "s", "", "", "MiB", ""
     );
-    for input in &inputs {
+    for (input, name) in inputs.iter().zip(input_names(&inputs)) {
         let scene = std::sync::Arc::new(bench::load_input(input, args.size)?);
-        let name = input_name(input);
         for row in bench::ladder_rows(&name, &scene, args.device.into(), &request, args.runs)? {
             println!(
                 "{:<18} {:>9} {:>11.2} {:>11.2} {:>8.3} {:>7.1} {:>6} {:>9.1} {:>8.1}  {}",
@@ -80,16 +79,61 @@ fn check_inputs_and_outputs(inputs: &[PathBuf], args: &BenchArgs) -> Result<()> 
         lambert::output::prepare_output_for(path, &inputs)?;
     }
     if let Some(dir) = &args.plot {
+        if dir.exists() && !dir.is_dir() {
+            return Err(Error::Usage(format!(
+                "--plot {}: is a file, not a folder; --plot names the folder the plots are \
+                 written into (time_per_ray.png, time_vs_error_NAME.png, …): name a new or \
+                 existing folder",
+                dir.display()
+            )));
+        }
         lambert::output::prepare_output_for(&dir.join("time_per_ray.png"), &inputs)?;
     }
     Ok(())
 }
 
-/// A bench input's name in tables and plots: its file name without extension.
-fn input_name(path: &Path) -> String {
-    path.file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default()
+/// The bench inputs' names in tables, JSON and plots: each file's name
+/// without extension, or, where two share one (`a/scene.toml` and
+/// `b/scene.toml`), each path from the inputs' common folder without
+/// extension (`a/scene`, `b/scene`), so that no plot replaces another and
+/// no two results read alike.
+fn input_names(paths: &[PathBuf]) -> Vec<String> {
+    let stems: Vec<String> = paths
+        .iter()
+        .map(|p| {
+            p.file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default()
+        })
+        .collect();
+    let distinct = |names: &[String]| {
+        names.iter().collect::<std::collections::HashSet<_>>().len() == names.len()
+    };
+    if distinct(&stems) {
+        return stems;
+    }
+    let absolute: Vec<PathBuf> = paths
+        .iter()
+        .map(|p| std::path::absolute(p).unwrap_or_else(|_| p.clone()))
+        .collect();
+    let mut common: PathBuf = absolute[0].parent().unwrap_or(Path::new("")).to_path_buf();
+    while !absolute.iter().all(|p| p.starts_with(&common)) && common.pop() {}
+    let relative: Vec<String> = absolute
+        .iter()
+        .map(|p| {
+            let from = p.strip_prefix(&common).unwrap_or(p);
+            from.with_extension("").to_string_lossy().into_owned()
+        })
+        .collect();
+    if distinct(&relative) {
+        return relative;
+    }
+    // One file named twice: numbered in order.
+    relative
+        .iter()
+        .enumerate()
+        .map(|(i, name)| format!("{name}#{}", i + 1))
+        .collect()
 }
 
 fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> Result<()> {
@@ -147,9 +191,8 @@ fn bench_time_vs_error(args: &BenchArgs, quiet: bool) -> Result<ExitCode> {
         gpu,
     };
     let mut all = Vec::new();
-    for input in &inputs {
+    for (input, name) in inputs.iter().zip(input_names(&inputs)) {
         let scene = std::sync::Arc::new(bench::load_input(input, args.size)?);
-        let name = input_name(input);
         let points = bench::time_vs_error(&name, &scene, &knobs, &request, &mut |line| {
             if !quiet {
                 eprintln!("{line}")
@@ -189,7 +232,8 @@ fn bench_time_vs_error(args: &BenchArgs, quiet: bool) -> Result<ExitCode> {
         }
         if let Some(dir) = &args.plot {
             std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-            crate::plot::time_vs_error(&points, &dir.join(format!("time_vs_error_{name}")))?;
+            let stem = format!("time_vs_error_{}", name.replace(['/', '\\'], "_"));
+            crate::plot::time_vs_error(&points, &dir.join(stem))?;
         }
         all.extend(points);
     }

@@ -18,11 +18,18 @@ pub(super) fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> 
         println!("  spheres: {}", scene.spheres.len());
     }
     if let Some(b) = scene.bvh.bounds() {
-        println!(
-            "  bounds: {} to {}",
-            lambert::limits::vector_text(b.min.as_dvec3()),
-            lambert::limits::vector_text(b.max.as_dvec3())
-        );
+        // The BVH's bounds are local (relative to the offset): world ones
+        // are printed, and the centre the geometry is kept relative to.
+        let world = |p: glam::Vec3| lambert::limits::vector_text(p.as_dvec3() + scene.offset);
+        let centre = if scene.offset == glam::DVec3::ZERO {
+            String::new()
+        } else {
+            format!(
+                " (kept in f32 relative to the centre {})",
+                lambert::limits::vector_text(scene.offset)
+            )
+        };
+        println!("  bounds: {} to {}{centre}", world(b.min), world(b.max));
     }
     // The trees checked as they are measured: a failure is a builder's bug,
     // reported rather than printed as statistics.
