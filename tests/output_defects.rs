@@ -115,6 +115,24 @@ fn no_output_replaces_a_mesh_an_mtl_or_a_texture_the_scene_reads() {
         (vec!["camera-rays", s(&scene), "-o", s(&mtl)], &mtl),
         (
             vec![
+                "bench",
+                "--time-vs-error",
+                "--device",
+                "cpu",
+                "--spp-list",
+                "1",
+                "--reference-spp",
+                "1",
+                "--runs",
+                "1",
+                "--json",
+                s(&mtl),
+                s(&scene),
+            ],
+            &mtl,
+        ),
+        (
+            vec![
                 "trace",
                 "--scene",
                 s(&scene),

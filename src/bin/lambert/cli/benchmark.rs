@@ -41,6 +41,7 @@ pub(super) fn bench(args: &BenchArgs, quiet: bool) -> Result<ExitCode> {
     );
     for (input, name) in inputs.iter().zip(input_names(&inputs)) {
         let scene = std::sync::Arc::new(bench::load_input(input, args.size)?);
+        check_scene_inputs(&scene, args)?;
         for row in bench::ladder_rows(&name, &scene, args.device.into(), &request, args.runs)? {
             println!(
                 "{:<18} {:>9} {:>11.2} {:>11.2} {:>8.3} {:>7.1} {:>6} {:>9.1} {:>8.1}  {}",
@@ -90,6 +91,15 @@ fn check_inputs_and_outputs(inputs: &[PathBuf], args: &BenchArgs) -> Result<()> 
         lambert::output::prepare_output_for(&dir.join("time_per_ray.png"), &inputs)?;
     }
     Ok(())
+}
+
+/// --json is none of the files `scene` was read from (a mesh, an MTL
+/// file, a texture): checked once it is loaded, before anything is written.
+fn check_scene_inputs(scene: &lambert::scene::Scene, args: &BenchArgs) -> Result<()> {
+    match &args.json {
+        Some(path) => scene.check_output(path),
+        None => Ok(()),
+    }
 }
 
 /// The bench inputs' names in tables, JSON and plots: each file's name
@@ -193,6 +203,7 @@ fn bench_time_vs_error(args: &BenchArgs, quiet: bool) -> Result<ExitCode> {
     let mut all = Vec::new();
     for (input, name) in inputs.iter().zip(input_names(&inputs)) {
         let scene = std::sync::Arc::new(bench::load_input(input, args.size)?);
+        check_scene_inputs(&scene, args)?;
         let points = bench::time_vs_error(&name, &scene, &knobs, &request, &mut |line| {
             if !quiet {
                 eprintln!("{line}")
