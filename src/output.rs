@@ -263,9 +263,9 @@ fn create_temporary(target: &Path, kind: &str) -> std::io::Result<(PathBuf, std:
     use std::hash::{BuildHasher, Hasher};
     use std::sync::atomic::{AtomicU64, Ordering};
     static COUNTER: AtomicU64 = AtomicU64::new(0);
-    let name = target.file_name().ok_or_else(|| {
-        std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a file name")
-    })?;
+    let name = target
+        .file_name()
+        .ok_or_else(|| std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a file name"))?;
     let mut last = None;
     for _ in 0..TEMPORARY_TRIES {
         // RandomState's keys come from the OS's random source once per

@@ -58,7 +58,10 @@ fn a_turntable_job_writes_its_frames_and_says_each() {
     assert_eq!(report.written[0].path, dir.path().join("f_01.png"));
     let lines = lines.0.into_inner().unwrap();
     assert_eq!(lines.len(), 3, "{lines:?}");
-    assert_eq!(lines[0], format!("rendering 2 of 4 frames on {}", report.device));
+    assert_eq!(
+        lines[0],
+        format!("rendering 2 of 4 frames on {}", report.device)
+    );
     assert!(lines[1].starts_with("frame 1: ") && lines[1].ends_with("f_01.png)"));
     assert!(lines[2].starts_with("frame 2: ") && lines[2].ends_with("f_02.png)"));
 }

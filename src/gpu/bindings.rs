@@ -165,7 +165,9 @@ pub fn unmet_limits(limits: &wgpu::Limits) -> Option<String> {
     let textures = most(|k| k == Texels);
     let short = |what: &str, has: u32, needs: u32| {
         (has < needs).then(|| {
-            format!("it binds at most {has} {what} per shader stage and lambert's kernel binds {needs}")
+            format!(
+                "it binds at most {has} {what} per shader stage and lambert's kernel binds {needs}"
+            )
         })
     };
     short(
