@@ -497,6 +497,32 @@ fn spp_with_a_time_budget_and_max_spp_alone_are_refused_in_words() {
     assert!(ok, "{text}");
 }
 
+/// Waits until process `pid` catches SIGHUP, SIGINT and SIGTERM (its
+/// handlers installed: a signal before would kill it outright), from
+/// Linux's /proc/PID/status.
+fn wait_for_signal_handlers(pid: u32) {
+    let wanted = (1u64 << 0) | (1 << 1) | (1 << 14); // signals 1, 2 and 15
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(20);
+    loop {
+        let status = std::fs::read_to_string(format!("/proc/{pid}/status")).unwrap_or_default();
+        let caught = status
+            .lines()
+            .find_map(|l| l.strip_prefix("SigCgt:"))
+            .and_then(|mask| u64::from_str_radix(mask.trim(), 16).ok())
+            .unwrap_or(0);
+        if caught & wanted == wanted {
+            // And a moment for the chained handler after ctrlc's.
+            std::thread::sleep(std::time::Duration::from_millis(100));
+            return;
+        }
+        assert!(
+            std::time::Instant::now() < deadline,
+            "process {pid} installed no signal handlers in 20 s"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+}
+
 #[test]
 fn sigterm_exits_143_and_sigint_130() {
     let dir = tempfile::tempdir().unwrap();
@@ -512,7 +538,7 @@ fn sigterm_exits_143_and_sigint_130() {
             .args(["render", s(&scene), "-o", s(&out), "--device", "cpu", "-q"])
             .spawn()
             .unwrap();
-        std::thread::sleep(std::time::Duration::from_millis(400));
+        wait_for_signal_handlers(child.id());
         let killed = std::process::Command::new("kill")
             .args([signal, &child.id().to_string()])
             .status()
