@@ -153,6 +153,26 @@ fn no_output_replaces_a_mesh_an_mtl_or_a_texture_the_scene_reads() {
 }
 
 #[test]
+fn no_output_replaces_a_gltf_file_s_buffer() {
+    let dir = tempfile::tempdir().unwrap();
+    let positions: Vec<u8> = [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    let buffer = write(dir.path(), "tri.bin", &positions);
+    let gltf = r#"{"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "buffers": [{"uri": "tri.bin", "byteLength": 36}],
+        "bufferViews": [{"buffer": 0, "byteLength": 36}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                       "min": [0, 0, 0], "max": [1, 1, 0]}]}"#;
+    let model = write(dir.path(), "tri.gltf", gltf);
+    let output = lambert(&["camera-rays", s(&model), "-o", s(&buffer)]);
+    refused_as_input(&output, &buffer, &positions);
+}
+
+#[test]
 fn turntable_and_part_outputs_are_refused_over_a_texture() {
     let (dir, scene) = room();
     let texture = dir.path().join("meshes/tex/grid.png");
