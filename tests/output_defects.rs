@@ -450,6 +450,10 @@ fn an_adapter_with_too_few_bindings_is_refused_in_words_and_auto_falls_back() {
          libegl-mesa0): {text}"
     );
     assert!(!out.exists());
+    // `info` says so of the adapter.
+    let info = lambert(&["info", "--backend", "gl"]);
+    let listed = String::from_utf8_lossy(&info.stdout);
+    assert!(listed.contains("cannot run lambert"), "{listed}");
     // Named, a software adapter is auto's choice: it falls back instead.
     let auto = lambert(&[
         "render",

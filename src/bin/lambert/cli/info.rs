@@ -203,6 +203,9 @@ pub(super) fn info(args: &AdapterArgs) -> Result<ExitCode> {
             "  timestamp queries: {}",
             adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY)
         );
+        if let Some(why) = gpu::bindings::unmet_limits(&limits) {
+            println!("  cannot run lambert: {why}");
+        }
     }
     Ok(ExitCode::SUCCESS)
 }
