@@ -206,8 +206,8 @@ impl<'a> Images<'a> {
                 let file = percent_decoded(uri)
                     .ok_or_else(|| format!("its uri {uri:?} is not percent-encoded UTF-8"))?;
                 let file = self.path.parent().unwrap_or(Path::new(".")).join(file);
-                if !file.is_file() {
-                    return Err(format!("{} is not found", file.display()));
+                if let Some(why) = crate::files::not_regular(&file) {
+                    return Err(format!("{} is {why}", file.display()));
                 }
                 Ok(ImageSource::File(file))
             }
