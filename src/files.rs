@@ -90,7 +90,7 @@ pub fn not_regular(path: &Path) -> Option<String> {
         Ok(meta) if meta.is_file() => None,
         Ok(meta) => Some(not_regular_text(&meta)),
         Err(e) if e.kind() == ErrorKind::NotFound => Some("not found".into()),
-        Err(e) => Some(e.to_string()),
+        Err(e) => Some(format!("not readable ({e})")),
     }
 }
 

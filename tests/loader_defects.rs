@@ -118,7 +118,7 @@ fn a_texture_naming_a_missing_uv_set_is_kept_with_a_warning() {
         let warnings = scene.warnings.join("\n");
         assert!(warnings.contains(expected), "{warnings}");
         assert!(
-            warnings.contains("which the primitive does not have"),
+            warnings.contains("which mesh 0 primitive 0 (the first such) does not have"),
             "{warnings}"
         );
         assert_eq!(scene.textures.images().len(), 1, "case {i}: {warnings}");

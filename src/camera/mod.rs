@@ -151,6 +151,7 @@ pub fn frame_camera(&(lo, hi): &(DVec3, DVec3), flat: Option<DVec3>) -> Camera {
     let half_h = (half_v.tan() * aspect).atan();
     let distance = 1.05 * radius / half_v.min(half_h).sin();
     let mut direction = DVec3::new(1.0, 0.75, 2.0).normalize();
+    let mut up = DVec3::from(default_up());
     if let Some(normal) = flat {
         let off_plane = direction.dot(normal);
         if off_plane.abs() < 0.5 {
@@ -160,13 +161,18 @@ pub fn frame_camera(&(lo, hi): &(DVec3, DVec3), flat: Option<DVec3>) -> Camera {
             let side = if off_plane < 0.0 { -1.0 } else { 1.0 };
             let (sin, cos) = 60f64.to_radians().sin_cos();
             direction = side * sin * normal + cos * along;
+            // A plane tilted so that this looks straight down +Y (or up
+            // it) keeps its heading as the image's up instead.
+            if direction.cross(up).length() < 0.1 {
+                up = along;
+            }
         }
     }
     let eye = centre + distance * direction;
     Camera {
         eye: eye.to_array(),
         look_at: centre.to_array(),
-        up: default_up(),
+        up: up.to_array(),
         vfov: FRAMED_VFOV_DEG,
         width: DEFAULT_WIDTH,
         height: DEFAULT_HEIGHT,
@@ -179,9 +185,9 @@ pub const FLAT_THICKNESS: f64 = 0.02;
 
 /// The unit normal of the plane `points` lie in (to within
 /// `FLAT_THICKNESS` of their extent), or None when they span a volume or
-/// a line. `points` gives them afresh for each of its four passes: the
-/// plane through the two points farthest apart (the first from the
-/// first point) and the point farthest from their line.
+/// a line. `points` gives them afresh for each of its passes: the plane
+/// is the one through a, the point farthest from the first point, b, the
+/// farthest from a, and the point farthest from the line ab.
 pub fn flat_normal<I: Iterator<Item = DVec3>>(points: impl Fn() -> I) -> Option<DVec3> {
     let farthest = |from: DVec3, measure: &dyn Fn(DVec3) -> f64| {
         points().fold((from, 0.0), |(best, d), p| {

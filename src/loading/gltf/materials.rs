@@ -75,24 +75,22 @@ pub(super) fn texture_coordinate_set(
     warnings: &mut Vec<String>,
 ) -> Option<u32> {
     let name = material_name(material);
-    let mut warn = |warning: String| {
-        if !warnings.contains(&warning) {
-            warnings.push(warning);
-        }
-    };
     let mut set = |info: gltf::texture::Info, slot: &str| {
         let (set, whose) = match info.texture_transform().and_then(|t| t.tex_coord()) {
             Some(set) => (set, "its KHR_texture_transform texCoord"),
             None => (info.tex_coord(), "texCoord"),
         };
-        if primitive
-            .get(&gltf::Semantic::TexCoords(set))
-            .is_none()
+        // One warning a material's texture, naming the first primitive.
+        let said = format!(
+            "{}: material {name}: its {slot} reads TEXCOORD_{set} ({whose})",
+            path.display()
+        );
+        if primitive.get(&gltf::Semantic::TexCoords(set)).is_none()
+            && !warnings.iter().any(|w| w.starts_with(&said))
         {
-            warn(format!(
-                "{}: {what}: material {name}: its {slot} reads TEXCOORD_{set} ({whose}), which \
-                 the primitive does not have; it reads the texture at (0, 0)",
-                path.display()
+            warnings.push(format!(
+                "{said}, which {what} (the first such) does not have; primitives without it \
+                 read the texture at (0, 0)"
             ));
         }
         set
@@ -107,11 +105,14 @@ pub(super) fn texture_coordinate_set(
     if let (Some(b), Some(e)) = (base, emissive)
         && b != e
     {
-        warn(format!(
+        let warning = format!(
             "{}: material {name}: its emissiveTexture reads TEXCOORD_{e}, its baseColorTexture \
              TEXCOORD_{b}; both read TEXCOORD_{b}",
             path.display(),
-        ));
+        );
+        if !warnings.contains(&warning) {
+            warnings.push(warning);
+        }
     }
     base.or(emissive)
 }
