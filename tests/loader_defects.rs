@@ -19,7 +19,10 @@ fn png() -> Vec<u8> {
     let image = image::RgbaImage::from_pixel(2, 2, image::Rgba([200, 50, 50, 255]));
     let mut bytes = Vec::new();
     image
-        .write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)
+        .write_to(
+            &mut std::io::Cursor::new(&mut bytes),
+            image::ImageFormat::Png,
+        )
         .unwrap();
     bytes
 }
@@ -126,7 +129,10 @@ fn a_texture_naming_a_missing_uv_set_is_kept_with_a_warning() {
         let stdout = String::from_utf8_lossy(&out.stdout);
         assert!(out.status.success(), "{}", stderr(&out));
         assert!(stdout.contains("textures: 1"), "{stdout}");
-        assert!(stdout.contains(&format!("warning: {}", path.display())), "{stdout}");
+        assert!(
+            stdout.contains(&format!("warning: {}", path.display())),
+            "{stdout}"
+        );
         assert!(stdout.contains(expected), "{stdout}");
     }
 }
@@ -159,7 +165,9 @@ fn image_paths_that_are_folders_or_devices_say_what_they_are() {
         let obj = write(
             d,
             &format!("m{i}.obj"),
-            format!("mtllib m{i}.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nusemtl a\nf 1/1 2/1 3/1\n"),
+            format!(
+                "mtllib m{i}.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nusemtl a\nf 1/1 2/1 3/1\n"
+            ),
         );
         let ply = write(
             d,
@@ -172,8 +180,15 @@ fn image_paths_that_are_folders_or_devices_say_what_they_are() {
             ),
         );
         for path in [glb, obj, ply] {
-            let warnings = load_mesh(&path, NormalMode::Face).unwrap().warnings.join("\n");
-            assert!(warnings.contains(expected), "{}: {warnings}", path.display());
+            let warnings = load_mesh(&path, NormalMode::Face)
+                .unwrap()
+                .warnings
+                .join("\n");
+            assert!(
+                warnings.contains(expected),
+                "{}: {warnings}",
+                path.display()
+            );
         }
     }
 }
@@ -219,14 +234,16 @@ fn cr_only_line_endings_are_line_breaks() {
 #[test]
 fn obj_faces_naming_vt_with_none_defined_drop_them_with_a_warning() {
     let dir = tempfile::tempdir().unwrap();
-    let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvn 0 0 1\nf 1/1/1 2/2/1 3/3/1\nf 2/2/1 4/4/1 3/3/1\n";
+    let obj =
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvn 0 0 1\nf 1/1/1 2/2/1 3/3/1\nf 2/2/1 4/4/1 3/3/1\n";
     let path = write(dir.path(), "cubevt.obj", obj);
     let mesh = load_mesh(&path, NormalMode::Face).unwrap();
     assert_eq!(mesh.triangles.len(), 2);
     assert_eq!(mesh.uvs, None);
     let warnings = mesh.warnings.join("\n");
     assert!(
-        warnings.contains("cubevt.obj:6: 2 faces naming texture coordinates where the file has no vt"),
+        warnings
+            .contains("cubevt.obj:6: 2 faces naming texture coordinates where the file has no vt"),
         "{warnings}"
     );
 }
@@ -265,11 +282,20 @@ fn mtl_image_paths_and_clamp_as_exporters_write_them() {
     assert_eq!(image_of(1).0, file(&d.join("my  two  spaces.png")));
     let (clamped, sampler) = image_of(2);
     assert_eq!(clamped, file(&d.join("plain.png")));
-    assert_eq!((sampler.wrap_u, sampler.wrap_v), (Wrap::ClampToEdge, Wrap::ClampToEdge));
+    assert_eq!(
+        (sampler.wrap_u, sampler.wrap_v),
+        (Wrap::ClampToEdge, Wrap::ClampToEdge)
+    );
     let sampler = image_of(3).1;
-    assert_eq!((sampler.wrap_u, sampler.wrap_v), (Wrap::Repeat, Wrap::Repeat));
+    assert_eq!(
+        (sampler.wrap_u, sampler.wrap_v),
+        (Wrap::Repeat, Wrap::Repeat)
+    );
     // -bm is skipped with its warning; -clamp is read.
-    assert!(warnings.contains("texture options -bm skipped"), "{warnings}");
+    assert!(
+        warnings.contains("texture options -bm skipped"),
+        "{warnings}"
+    );
     assert!(!warnings.contains("-clamp skipped"), "{warnings}");
     // The backslashed name, when neither reading is a file, names both.
     write(d, "b.mtl", "newmtl b\nmap_Kd maps\\none.png\n");
@@ -277,7 +303,8 @@ fn mtl_image_paths_and_clamp_as_exporters_write_them() {
     let mesh = load_mesh(&write(d, "b.obj", obj), NormalMode::Face).unwrap();
     let warnings = mesh.warnings.join("\n");
     assert!(
-        warnings.contains("image 'maps\\none.png' is not found") && warnings.contains("maps/none.png"),
+        warnings.contains("image 'maps\\none.png' is not found")
+            && warnings.contains("maps/none.png"),
         "{warnings}"
     );
 }
@@ -297,7 +324,12 @@ fn flat_models_are_framed_from_off_their_plane() {
         ("xy", glam::DVec3::X, glam::DVec3::Y, 0.2),
         ("yz", glam::DVec3::Y, glam::DVec3::Z, 0.2),
         ("xz", glam::DVec3::X, glam::DVec3::Z, 0.2),
-        ("edge-on", edge_on, edge_on.cross(glam::DVec3::Y).normalize(), 0.1),
+        (
+            "edge-on",
+            edge_on,
+            edge_on.cross(glam::DVec3::Y).normalize(),
+            0.1,
+        ),
     ];
     let mut covered = Vec::new();
     for (name, a, b, least) in planes {

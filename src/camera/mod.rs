@@ -203,7 +203,7 @@ pub fn flat_normal<I: Iterator<Item = DVec3>>(points: impl Fn() -> I) -> Option<
     let (c, _) = farthest(a, &|v| line.cross(v).length_squared());
     let normal = line.cross(c - a);
     // A line, or a point: no plane to see it from.
-    if !(normal.length() > 1e-9 * size * size) {
+    if normal.length() <= 1e-9 * size * size {
         return None;
     }
     let normal = normal.normalize();

@@ -564,9 +564,9 @@ pub fn parse_obj(text: &str, path: &Path, mode: NormalMode) -> Result<Mesh> {
                     corner_normals.push(fan.map(|c| c.2.flatten()));
                     if textured {
                         corner_uvs.resize(mesh.triangles.len() - 1, [[0.0; 2]; 3]);
-                        corner_uvs.push(fan.map(|c| {
-                            texture_coordinates[c.1.flatten().unwrap() as usize]
-                        }));
+                        corner_uvs.push(
+                            fan.map(|c| texture_coordinates[c.1.flatten().unwrap() as usize]),
+                        );
                     }
                     mesh.face_materials.push(current);
                 }
@@ -665,12 +665,15 @@ fn parse_corner(
     // quirk (trimesh reads such files), dropped as a missing normal is.
     let texture = match texture {
         Some(_) if texture_coordinates == 0 => Some(None),
-        Some(t) => Some(Some(resolve_index(t, texture_coordinates).ok_or_else(|| {
-            format!(
-                "texture coordinate index {t} is out of range: {texture_coordinates} vt \
-                 defined before this line"
-            )
-        })?)),
+        Some(t) => {
+            let index = resolve_index(t, texture_coordinates).ok_or_else(|| {
+                format!(
+                    "texture coordinate index {t} is out of range: {texture_coordinates} vt \
+                     defined before this line"
+                )
+            })?;
+            Some(Some(index))
+        }
         None => None,
     };
     Ok((position, texture, normal))

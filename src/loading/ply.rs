@@ -469,8 +469,7 @@ fn parse_header<'a>(bytes: &'a [u8], path: &Path) -> Result<Header<'a>> {
             line: line_number,
             message,
         };
-        let text =
-            std::str::from_utf8(raw).map_err(|_| fail("the header is not text".into()))?;
+        let text = std::str::from_utf8(raw).map_err(|_| fail("the header is not text".into()))?;
         if line_number == 1 {
             if text.trim() != "ply" {
                 return Err(fail("not a PLY file: the first line must be 'ply'".into()));
