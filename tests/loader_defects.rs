@@ -221,11 +221,14 @@ fn cr_only_line_endings_are_line_breaks() {
                          property float x\nproperty float y\nproperty float z\n\
                          element face 1\nproperty list uchar int vertex_indices\nend_header\n")
     .into_bytes();
-    binary.extend(floats(&[0., 0., 0., 1., 0., 0., 0., 1., 0.]));
+    // Its first vertex's x begins with a \n byte: the body, not a CR LF.
+    let x = f32::from_le_bytes([b'\n', 0, 0, 0]);
+    binary.extend(floats(&[x, 0., 0., 1., 0., 0., 0., 1., 0.]));
     binary.push(3);
     binary.extend([0i32, 1, 2].iter().flat_map(|i| i.to_le_bytes()));
     let mesh = load_mesh(&write(d, "macb.ply", binary), NormalMode::Face).unwrap();
     assert_eq!(mesh.triangles, vec![[0, 1, 2]]);
+    assert_eq!(mesh.positions[0].x, x as f64);
 }
 
 /// Item 11: an OBJ whose faces name texture coordinates when it has no

@@ -456,13 +456,16 @@ fn parse_header<'a>(bytes: &'a [u8], path: &Path) -> Result<Header<'a>> {
     let mut encoding = None;
     let mut elements: Vec<Element> = Vec::new();
     let mut texture_file = None;
+    // Whether the lines end in a lone CR (classic Mac OS).
+    let mut lone_cr = false;
     loop {
         if at >= bytes.len() {
             return Err(Error::scene(path, "the header has no end_header line"));
         }
-        let (end, next) = super::line_end(&bytes[at..]);
-        let raw = &bytes[at..at + end];
-        at += next;
+        let start = at;
+        let (end, next) = super::line_end(&bytes[start..]);
+        let raw = &bytes[start..start + end];
+        at = start + next;
         line_number += 1;
         let fail = |message: String| Error::Line {
             path: path.to_path_buf(),
@@ -474,6 +477,7 @@ fn parse_header<'a>(bytes: &'a [u8], path: &Path) -> Result<Header<'a>> {
             if text.trim() != "ply" {
                 return Err(fail("not a PLY file: the first line must be 'ply'".into()));
             }
+            lone_cr = &bytes[start + end..at] == b"\r";
             continue;
         }
         let mut tokens = text.split_whitespace();
@@ -535,7 +539,14 @@ fn parse_header<'a>(bytes: &'a [u8], path: &Path) -> Result<Header<'a>> {
                 }
                 element.properties.push(property);
             }
-            Some("end_header") => break,
+            Some("end_header") => {
+                // A binary body may begin with a \n byte: no part of a
+                // lone CR ending.
+                if lone_cr {
+                    at = start + end + 1;
+                }
+                break;
+            }
             // MeshLab's convention; the name may hold spaces.
             Some("comment") if tokens.next() == Some("TextureFile") => {
                 let name = text.trim().splitn(3, char::is_whitespace).nth(2);
