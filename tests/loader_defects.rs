@@ -355,3 +355,44 @@ fn flat_models_are_framed_from_off_their_plane() {
         "the fraction of the image each square covers, and its least: {covered:?}"
     );
 }
+
+/// Item 11: `-clamp on` reaches the pixel. A quad whose u runs 0 to 4
+/// over a red-then-blue image: repeated, as many pixels are red as blue;
+/// clamped, past u = 1 they read the blue edge.
+#[test]
+fn mtl_clamp_on_clamps_in_the_render() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let image = image::RgbaImage::from_fn(2, 1, |x, _| {
+        image::Rgba(if x == 0 {
+            [255, 0, 0, 255]
+        } else {
+            [0, 0, 255, 255]
+        })
+    });
+    image.save(d.join("rb.png")).unwrap();
+    let obj = "mtllib q.mtl\nv 0 0 0\nv 4 0 0\nv 4 1 0\nv 0 1 0\n\
+               vt 0 0\nvt 4 0\nvt 4 1\nvt 0 1\nusemtl m\nf 1/1 2/2 3/3 4/4\n";
+    let mut blue_share = Vec::new();
+    for clamp in ["off", "on"] {
+        write(
+            d,
+            "q.mtl",
+            format!("newmtl m\nKd 1 1 1\nmap_Kd -clamp {clamp} rb.png\n"),
+        );
+        let mut scene = Scene::load(&write(d, "q.obj", obj)).unwrap();
+        scene.view.camera.width = 64;
+        scene.view.camera.height = 48;
+        let image = render_cpu(&scene);
+        let hit: Vec<[f32; 3]> = (0..image.prims.len())
+            .filter(|&i| image.prims[i] != NO_HIT)
+            .map(|i| image.image.rgb[i])
+            .collect();
+        let blue = hit.iter().filter(|c| c[2] > c[0]).count();
+        blue_share.push(blue as f64 / hit.len() as f64);
+    }
+    assert!(
+        (0.35..0.65).contains(&blue_share[0]) && blue_share[1] > 0.8,
+        "blue pixels' share, repeated and clamped: {blue_share:?}"
+    );
+}
