@@ -84,8 +84,9 @@ fn icosphere_scene() -> Scene {
         .collect();
     drop((vertices, faces));
     let mut scene = Scene::from_triangles(triangles);
+    // A sphere: never flat.
     scene.view.camera =
-        lambert::camera::frame_camera(&(glam::DVec3::splat(-1.0), glam::DVec3::ONE));
+        lambert::camera::frame_camera(&(glam::DVec3::splat(-1.0), glam::DVec3::ONE), None);
     scene
         .lights
         .push(lambert::camera::default_light(&scene.view.camera));

@@ -81,6 +81,23 @@ fn read_bounded(
     Ok(bytes)
 }
 
+/// Why `path` (after symlinks) is not a regular file, in the words a file
+/// lambert reads is refused with ("not found", "not a regular file (a
+/// directory)"); None when it is one. For the files a model names (its
+/// images), which are checked when it loads and read later.
+pub fn not_regular(path: &Path) -> Option<String> {
+    match std::fs::metadata(path) {
+        Ok(meta) if meta.is_file() => None,
+        Ok(meta) => Some(not_regular_text(&meta)),
+        Err(e) if e.kind() == ErrorKind::NotFound => Some("not found".into()),
+        Err(e) => Some(format!("not readable ({e})")),
+    }
+}
+
+fn not_regular_text(meta: &std::fs::Metadata) -> String {
+    format!("not a regular file ({})", kind_of(meta))
+}
+
 /// Refuses anything but a regular file within the cap; returns its size.
 fn check(path: &Path, meta: &std::fs::Metadata, cap: u64) -> Result<u64> {
     if !meta.is_file() {
@@ -89,7 +106,7 @@ fn check(path: &Path, meta: &std::fs::Metadata, cap: u64) -> Result<u64> {
         } else {
             ErrorKind::InvalidInput
         };
-        let message = format!("not a regular file ({})", kind_of(meta));
+        let message = not_regular_text(meta);
         return Err(Error::io(path, std::io::Error::new(kind, message)));
     }
     if meta.len() > cap {

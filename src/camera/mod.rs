@@ -175,23 +175,76 @@ pub const FRAMED_VFOV_DEG: f64 = 40.0;
 /// The camera framed on a model with none: looking at the centre of its
 /// bounding box from the front-right and above (along (1, 0.75, 2) from
 /// it, +Y up), at the distance where the box's bounding sphere just fits
-/// the narrower field of view, with a 5% margin.
-pub fn frame_camera(&(lo, hi): &(DVec3, DVec3)) -> Camera {
+/// the narrower field of view, with a 5% margin. A flat model (`flat`: its
+/// plane's unit normal, `flat_normal`) that this direction would see
+/// within 30° of its plane, or edge-on, is seen from 60° off it instead, on
+/// the same side, so that the image shows its face rather than a sliver.
+pub fn frame_camera(&(lo, hi): &(DVec3, DVec3), flat: Option<DVec3>) -> Camera {
     let centre = 0.5 * (lo + hi);
     let radius = (0.5 * (hi - lo).length()).max(1e-6);
     let aspect = DEFAULT_WIDTH as f64 / DEFAULT_HEIGHT as f64;
     let half_v = (FRAMED_VFOV_DEG / 2.0).to_radians();
     let half_h = (half_v.tan() * aspect).atan();
     let distance = 1.05 * radius / half_v.min(half_h).sin();
-    let eye = centre + distance * DVec3::new(1.0, 0.75, 2.0).normalize();
+    let mut direction = DVec3::new(1.0, 0.75, 2.0).normalize();
+    let mut up = DVec3::from(default_up());
+    if let Some(normal) = flat {
+        let off_plane = direction.dot(normal);
+        if off_plane.abs() < 0.5 {
+            // The default direction's part in the plane keeps the view's
+            // heading; where it has none off the plane, its front side.
+            let along = (direction - off_plane * normal).normalize();
+            let side = if off_plane < 0.0 { -1.0 } else { 1.0 };
+            let (sin, cos) = 60f64.to_radians().sin_cos();
+            direction = side * sin * normal + cos * along;
+            // A plane tilted so that this looks straight down +Y (or up
+            // it) keeps its heading as the image's up instead.
+            if direction.cross(up).length() < 0.1 {
+                up = along;
+            }
+        }
+    }
+    let eye = centre + distance * direction;
     Camera {
         eye: eye.to_array(),
         look_at: centre.to_array(),
-        up: default_up(),
+        up: up.to_array(),
         vfov: FRAMED_VFOV_DEG,
         width: DEFAULT_WIDTH,
         height: DEFAULT_HEIGHT,
     }
+}
+
+/// Most a flat model's points stray from its plane, as a fraction of its
+/// size: a sheet this thin still shows as a sliver edge-on.
+pub const FLAT_THICKNESS: f64 = 0.02;
+
+/// The unit normal of the plane `points` lie in (to within
+/// `FLAT_THICKNESS` of their extent), or None when they span a volume or
+/// a line. `points` gives them afresh for each of its passes: the plane
+/// is the one through a, the point farthest from the first point, b, the
+/// farthest from a, and the point farthest from the line ab.
+pub fn flat_normal<I: Iterator<Item = DVec3>>(points: impl Fn() -> I) -> Option<DVec3> {
+    let farthest = |from: DVec3, measure: &dyn Fn(DVec3) -> f64| {
+        points().fold((from, 0.0), |(best, d), p| {
+            let m = measure(p - from);
+            if m > d { (p, m) } else { (best, d) }
+        })
+    };
+    let start = points().next()?;
+    let (a, _) = farthest(start, &|v| v.length_squared());
+    let (b, size) = farthest(a, &|v| v.length_squared());
+    let size = size.sqrt();
+    let line = b - a;
+    let (c, _) = farthest(a, &|v| line.cross(v).length_squared());
+    let normal = line.cross(c - a);
+    // A line, or a point: no plane to see it from.
+    if normal.length() <= 1e-9 * size * size {
+        return None;
+    }
+    let normal = normal.normalize();
+    let thickness = points().fold(0.0f64, |t, p| t.max((p - a).dot(normal).abs()));
+    (thickness <= FLAT_THICKNESS * size).then_some(normal)
 }
 
 /// The camera of frame `frame` of `frames`, orbiting look_at about up.

@@ -217,7 +217,13 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
                     .map_err(|m| fail(format!("{what}: indices {m}")))?;
             }
             let material = primitive.material();
-            let uv_set = texture_coordinate_set(&material, path, &mut scene.mesh.warnings);
+            let uv_set = texture_coordinate_set(
+                &material,
+                &primitive,
+                &what,
+                path,
+                &mut scene.mesh.warnings,
+            );
             let color_accessor = primitive.get(&gltf::Semantic::Colors(0));
             if let Some(c) = &color_accessor {
                 let dimensions = match c.dimensions() {
@@ -286,10 +292,12 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
                 }
                 _ => vertex_colors.extend(std::iter::repeat_n([1.0; 4], positions.len())),
             }
+            // A textured primitive keeps its textures even without the set
+            // they read (reading (0, 0), with the warning above).
+            any_uvs |= uv_set.is_some();
             match (uv_set.and_then(|n| reader.read_tex_coords(n)), &uv_accessor) {
                 (Some(uvs), Some(accessor)) => {
                     same_count(accessor, "TEXCOORD")?;
-                    any_uvs = true;
                     vertex_uvs.extend(uvs.into_f32());
                 }
                 _ => vertex_uvs.extend(std::iter::repeat_n([0.0; 2], positions.len())),

@@ -37,7 +37,7 @@ pub enum Filter {
 }
 
 /// How a texture is sampled: a glTF sampler; OBJ and PLY get the default
-/// (repeat, bilinear, mipmapped).
+/// (repeat, bilinear, mipmapped), but for MTL `-clamp on` (clamp to edge).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Sampler {
     pub wrap_u: Wrap,

@@ -71,6 +71,37 @@ pub struct Mesh {
     pub skipped_lines: usize,
 }
 
+/// Where the line that `bytes` begins ends, and where the next one
+/// begins: every text format's lines end at `\n`, `\r\n` or a lone `\r`
+/// (classic Mac OS files, which some CAD exporters still write).
+pub(crate) fn line_end(bytes: &[u8]) -> (usize, usize) {
+    match bytes.iter().position(|&b| b == b'\n' || b == b'\r') {
+        None => (bytes.len(), bytes.len()),
+        Some(end) if bytes[end..].starts_with(b"\r\n") => (end, end + 2),
+        Some(end) => (end, end + 1),
+    }
+}
+
+/// The lines of `bytes` as `line_end` ends them (as `str::lines`: no
+/// empty last line after a final ending).
+pub(crate) fn byte_lines(mut bytes: &[u8]) -> impl Iterator<Item = &[u8]> {
+    std::iter::from_fn(move || {
+        if bytes.is_empty() {
+            return None;
+        }
+        let (end, next) = line_end(bytes);
+        let line = &bytes[..end];
+        bytes = &bytes[next..];
+        Some(line)
+    })
+}
+
+/// `byte_lines` of text.
+pub(crate) fn text_lines(text: &str) -> impl Iterator<Item = &str> {
+    // Line endings are ASCII, so every line is whole UTF-8.
+    byte_lines(text.as_bytes()).map(|line| std::str::from_utf8(line).unwrap_or_default())
+}
+
 /// The one answer for a model without triangles, whatever its format:
 /// an error, rather than a picture of nothing or a camera framed on no
 /// bounds.

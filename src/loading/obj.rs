@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 
-use super::material::{AlphaMode, ImageSource, MaterialDesc, TextureUse};
+use super::material::{AlphaMode, ImageSource, MaterialDesc, Sampler, TextureUse, Wrap};
 use super::{Mesh, NormalMode, area_weighted_normals, check_coordinate, corner_values};
 use crate::error::{Error, Result};
 
@@ -40,7 +40,7 @@ pub struct Materials {
 /// write one) is not part of the first statement.
 fn statements(text: &str) -> impl Iterator<Item = (usize, Cow<'_, str>)> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    let mut lines = text.lines().enumerate();
+    let mut lines = super::text_lines(text).enumerate();
     std::iter::from_fn(move || {
         let (index, first) = lines.next()?;
         let mut statement = Cow::Borrowed(first);
@@ -123,7 +123,7 @@ pub fn parse_mtl(text: &str, mtl: &Path, materials: &mut Materials) -> Result<()
                 let at = format!("{}:{line_number}", mtl.display());
                 let rest: Vec<&str> = tokens.collect();
                 let texture = if keyword.starts_with("map_") {
-                    texture_use(&rest, mtl, &at, materials)
+                    texture_use(&rest, after_words(line, 1), mtl, &at, materials)
                 } else {
                     None
                 };
@@ -216,11 +216,15 @@ fn mtl_colour(
     Ok(Some(rgb))
 }
 
-/// A `map_` statement's image and its `-o`/`-s` options (other options
-/// skipped with a warning): None, with a warning, where the image is not
-/// found; the material then keeps its factor.
+/// A `map_` statement's image and its `-o`/`-s`/`-clamp` options (other
+/// options skipped with a warning): None, with a warning, where the image
+/// is not a file; the material then keeps its factor. `tokens` are the
+/// statement's words after its keyword, `text` the same as written: the
+/// image is the rest of it after the options, spaces and all, as Blender
+/// reads it.
 fn texture_use(
     tokens: &[&str],
+    text: &str,
     mtl: &Path,
     at: &str,
     materials: &mut Materials,
@@ -232,12 +236,26 @@ fn texture_use(
         _ => 1,
     };
     let (mut offset, mut scale) = ([0.0f32; 2], [1.0f32; 2]);
+    let mut wrap = Wrap::Repeat;
     let mut skipped = Vec::new();
     let mut i = 0;
     while i < tokens.len() && tokens[i].starts_with('-') {
         let option = tokens[i];
-        let mut values = Vec::new();
         i += 1;
+        if option == "-clamp" {
+            // `-clamp on`: coordinates outside [0, 1] read the edge.
+            match tokens.get(i) {
+                Some(&"on") => wrap = Wrap::ClampToEdge,
+                Some(&"off") => wrap = Wrap::Repeat,
+                _ => {
+                    skipped.push(option);
+                    continue;
+                }
+            }
+            i += 1;
+            continue;
+        }
+        let mut values = Vec::new();
         while values.len() < arguments(option) && i < tokens.len() {
             match tokens[i].parse::<f32>() {
                 Ok(x) if x.is_finite() => values.push(x),
@@ -255,19 +273,18 @@ fn texture_use(
     }
     if !skipped.is_empty() {
         materials.warnings.push(format!(
-            "{at}: texture options {} skipped (lambert reads -o and -s)",
+            "{at}: texture options {} skipped (lambert reads -o, -s and -clamp on|off)",
             skipped.join(" ")
         ));
     }
-    let name = tokens[i.min(tokens.len())..].join(" ");
-    let file = mtl.parent().unwrap_or(Path::new(".")).join(&name);
-    if name.is_empty() || !file.is_file() {
-        materials.warnings.push(format!(
-            "{at}: image '{name}' not found ({}); the material keeps its colour",
-            file.display()
-        ));
-        return None;
-    }
+    let name = after_words(text, i);
+    let file = image_file(mtl, name)
+        .map_err(|why| {
+            materials.warnings.push(format!(
+                "{at}: image '{name}' {why}; the material keeps its colour"
+            ))
+        })
+        .ok()?;
     let source = ImageSource::File(file);
     let image = match materials.images.iter().position(|s| *s == source) {
         Some(i) => i,
@@ -280,12 +297,54 @@ fn texture_use(
     // v' = s·v + o becomes 1 − v' = s·(1 − v) + (1 − s − o).
     Some(TextureUse {
         image,
-        sampler: Default::default(),
+        sampler: Sampler {
+            wrap_u: wrap,
+            wrap_v: wrap,
+            ..Sampler::default()
+        },
         transform: [
             [scale[0], 0.0, offset[0]],
             [0.0, scale[1], 1.0 - scale[1] - offset[1]],
         ],
     })
+}
+
+/// The file an MTL's image `name` is, relative to the MTL's folder: as
+/// written, else with its backslashes as folder separators (MeshLab and
+/// Blender on Windows write `textures\\grid.png`); or what it is instead
+/// ("is not found (PATH)").
+fn image_file(mtl: &Path, name: &str) -> Result<PathBuf, String> {
+    let folder = mtl.parent().unwrap_or(Path::new("."));
+    if name.is_empty() {
+        return Err("is missing (no file name)".into());
+    }
+    let written = folder.join(name);
+    let Some(why) = crate::files::not_regular(&written) else {
+        return Ok(written);
+    };
+    if name.contains('\\') {
+        let slashed = folder.join(name.replace('\\', "/"));
+        return match crate::files::not_regular(&slashed) {
+            None => Ok(slashed),
+            Some(why) => Err(format!(
+                "is {why} ({}, read with / for \\: {})",
+                written.display(),
+                slashed.display()
+            )),
+        };
+    }
+    Err(format!("is {why} ({})", written.display()))
+}
+
+/// `text` after its first `n` words, as written (inner runs of spaces
+/// kept), without the blanks around it.
+fn after_words(text: &str, n: usize) -> &str {
+    let mut rest = text.trim_start();
+    for _ in 0..n {
+        let end = rest.find(char::is_whitespace).unwrap_or(rest.len());
+        rest = rest[end..].trim_start();
+    }
+    rest.trim_end()
 }
 
 /// `r [g b]`: one number repeated, or three; each finite and non-negative.
@@ -338,9 +397,9 @@ fn mtl_paths<'a>(obj: &Path, tokens: impl Iterator<Item = &'a str>) -> Vec<PathB
 }
 
 /// A face corner: position index, texture coordinate index if given, and
-/// normal index if given (None inside where it names a normal that is not
-/// defined).
-type Corner = (u32, Option<u32>, Option<Option<u32>>);
+/// normal index if given (None inside where it names a `vt` while there is
+/// none, or a normal that is not defined).
+type Corner = (u32, Option<Option<u32>>, Option<Option<u32>>);
 
 /// Faces of one kind skipped or changed: how many, and the first's line.
 #[derive(Default)]
@@ -402,6 +461,7 @@ pub fn parse_obj(text: &str, path: &Path, mode: NormalMode) -> Result<Mesh> {
     let mut bad_colors = Skipped::default();
     let mut short_faces = Skipped::default();
     let mut unknown_normals = Skipped::default();
+    let mut unknown_uvs = Skipped::default();
     for (line_number, line) in statements(text) {
         let fail = |message: String| Error::Line {
             path: path.to_path_buf(),
@@ -492,6 +552,10 @@ pub fn parse_obj(text: &str, path: &Path, mode: NormalMode) -> Result<Mesh> {
                     unknown_normals.add(line_number);
                     corners.iter_mut().for_each(|c| c.2 = None);
                 }
+                if corners.iter().any(|c| c.1 == Some(None)) {
+                    unknown_uvs.add(line_number);
+                    corners.iter_mut().for_each(|c| c.1 = None);
+                }
                 // A face's texture coordinates count where every corner
                 // has one; else its corners read (0, 0).
                 let textured = corners.iter().all(|c| c.1.is_some());
@@ -501,7 +565,9 @@ pub fn parse_obj(text: &str, path: &Path, mode: NormalMode) -> Result<Mesh> {
                     corner_normals.push(fan.map(|c| c.2.flatten()));
                     if textured {
                         corner_uvs.resize(mesh.triangles.len() - 1, [[0.0; 2]; 3]);
-                        corner_uvs.push(fan.map(|c| texture_coordinates[c.1.unwrap() as usize]));
+                        corner_uvs.push(
+                            fan.map(|c| texture_coordinates[c.1.flatten().unwrap() as usize]),
+                        );
                     }
                     mesh.face_materials.push(current);
                 }
@@ -523,6 +589,12 @@ pub fn parse_obj(text: &str, path: &Path, mode: NormalMode) -> Result<Mesh> {
         path,
         "naming normals that are not defined (no such vn): those normals are dropped and \
          computed ones used",
+        &mut mesh.warnings,
+    );
+    unknown_uvs.warn(
+        path,
+        "naming texture coordinates where the file has no vt before them: those are dropped and \
+         the faces read (0, 0)",
         &mut mesh.warnings,
     );
     if mode == NormalMode::Smooth {
@@ -590,14 +662,19 @@ fn parse_corner(
         _ => None,
     };
     // Checked after the normal parses, so a malformed corner names its
-    // first malformed part.
+    // first malformed part. With no `vt` at all the index is an exporter's
+    // quirk (trimesh reads such files), dropped as a missing normal is.
     let texture = match texture {
-        Some(t) => Some(resolve_index(t, texture_coordinates).ok_or_else(|| {
-            format!(
-                "texture coordinate index {t} is out of range: {texture_coordinates} vt \
-                 defined before this line"
-            )
-        })?),
+        Some(_) if texture_coordinates == 0 => Some(None),
+        Some(t) => {
+            let index = resolve_index(t, texture_coordinates).ok_or_else(|| {
+                format!(
+                    "texture coordinate index {t} is out of range: {texture_coordinates} vt \
+                     defined before this line"
+                )
+            })?;
+            Some(Some(index))
+        }
         None => None,
     };
     Ok((position, texture, normal))

@@ -163,8 +163,7 @@ pub fn parse_ply(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<Mesh> {
     // before anything is allocated for it.
     match encoding {
         Encoding::Ascii => {
-            let lines = body
-                .split(|&b| b == b'\n')
+            let lines = super::byte_lines(body)
                 .filter(|l| !l.iter().all(u8::is_ascii_whitespace))
                 .count();
             let claimed: usize = elements
@@ -356,21 +355,20 @@ pub fn parse_ply(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<Mesh> {
     }
     let texture = texture_file.and_then(|name| {
         let file = path.parent().unwrap_or(Path::new(".")).join(&name);
-        if file.is_file() {
-            mesh.images.push(ImageSource::File(file));
-            Some(TextureUse {
-                image: 0,
-                sampler: Default::default(),
-                transform: super::material::IDENTITY_UV_TRANSFORM,
-            })
-        } else {
+        if let Some(why) = crate::files::not_regular(&file) {
             mesh.warnings.push(format!(
-                "{}: its TextureFile '{name}' is not found ({}); the faces keep their colours",
+                "{}: its TextureFile '{name}' is {why} ({}); the faces keep their colours",
                 path.display(),
                 file.display()
             ));
-            None
+            return None;
         }
+        mesh.images.push(ImageSource::File(file));
+        Some(TextureUse {
+            image: 0,
+            sampler: Default::default(),
+            transform: super::material::IDENTITY_UV_TRANSFORM,
+        })
     });
     // Colours or a texture as given: one white material, not the default
     // grey.
@@ -458,26 +456,28 @@ fn parse_header<'a>(bytes: &'a [u8], path: &Path) -> Result<Header<'a>> {
     let mut encoding = None;
     let mut elements: Vec<Element> = Vec::new();
     let mut texture_file = None;
+    // Whether the lines end in a lone CR (classic Mac OS).
+    let mut lone_cr = false;
     loop {
-        let end = bytes[at..]
-            .iter()
-            .position(|&b| b == b'\n')
-            .ok_or_else(|| Error::scene(path, "the header has no end_header line"))?;
-        let raw = &bytes[at..at + end];
-        at += end + 1;
+        if at >= bytes.len() {
+            return Err(Error::scene(path, "the header has no end_header line"));
+        }
+        let start = at;
+        let (end, next) = super::line_end(&bytes[start..]);
+        let raw = &bytes[start..start + end];
+        at = start + next;
         line_number += 1;
         let fail = |message: String| Error::Line {
             path: path.to_path_buf(),
             line: line_number,
             message,
         };
-        let text = std::str::from_utf8(raw)
-            .map_err(|_| fail("the header is not text".into()))?
-            .trim_end_matches('\r');
+        let text = std::str::from_utf8(raw).map_err(|_| fail("the header is not text".into()))?;
         if line_number == 1 {
             if text.trim() != "ply" {
                 return Err(fail("not a PLY file: the first line must be 'ply'".into()));
             }
+            lone_cr = &bytes[start + end..at] == b"\r";
             continue;
         }
         let mut tokens = text.split_whitespace();
@@ -539,7 +539,14 @@ fn parse_header<'a>(bytes: &'a [u8], path: &Path) -> Result<Header<'a>> {
                 }
                 element.properties.push(property);
             }
-            Some("end_header") => break,
+            Some("end_header") => {
+                // A binary body may begin with a \n byte: no part of a
+                // lone CR ending.
+                if lone_cr {
+                    at = start + end + 1;
+                }
+                break;
+            }
             // MeshLab's convention; the name may hold spaces.
             Some("comment") if tokens.next() == Some("TextureFile") => {
                 let name = text.trim().splitn(3, char::is_whitespace).nth(2);
@@ -627,12 +634,9 @@ impl<'a> Reader<'a> {
                     self.error("the file ends before every element the header declares".into())
                 );
             }
-            let end = self.body[self.at..]
-                .iter()
-                .position(|&b| b == b'\n')
-                .map_or(self.body.len(), |e| self.at + e);
-            let raw = &self.body[self.at..end];
-            self.at = (end + 1).min(self.body.len().max(end));
+            let (end, next) = super::line_end(&self.body[self.at..]);
+            let raw = &self.body[self.at..self.at + end];
+            self.at += next;
             self.line += 1;
             let text = std::str::from_utf8(raw).map_err(|_| self.error("not text".into()))?;
             self.tokens = text.split_whitespace().collect();

@@ -230,13 +230,9 @@ impl<'a> Words<'a> {
             if self.rest.is_empty() {
                 return None;
             }
-            let end = self
-                .rest
-                .iter()
-                .position(|&b| b == b'\n')
-                .unwrap_or(self.rest.len());
+            let (end, next) = super::line_end(self.rest);
             self.line_rest = &self.rest[..end];
-            self.rest = &self.rest[(end + 1).min(self.rest.len())..];
+            self.rest = &self.rest[next..];
             self.line += 1;
         }
     }

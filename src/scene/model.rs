@@ -8,7 +8,8 @@ use glam::DVec3;
 use super::{DEFAULT_AMBIENT, Rgb, Scene, Transform, colour, directional_light, point_light};
 use crate::bvh::MAX_PRIMITIVES;
 use crate::camera::{
-    Camera, DEFAULT_HEIGHT, DEFAULT_WIDTH, default_light, frame_camera, validate_camera,
+    Camera, DEFAULT_HEIGHT, DEFAULT_WIDTH, default_light, flat_normal, frame_camera,
+    validate_camera,
 };
 use crate::error::{Error, Result};
 use crate::limits::{MAX_SIDE, checked_point};
@@ -37,6 +38,7 @@ impl Scene {
             mesh.normals = None;
         }
         let bounds = mesh_bounds(&mesh);
+        let flat = flat_normal(|| mesh.positions.iter().copied());
         scene.offset = centring_offset(bounds.0, bounds.1);
         scene.add_mesh(path, "the model", mesh, &Transform::IDENTITY, None)?;
         let chosen = match camera {
@@ -80,7 +82,7 @@ impl Scene {
                     height,
                 }
             }
-            None => frame_camera(&bounds),
+            None => frame_camera(&bounds, flat),
         };
         validate_camera(&scene.view.camera)
             .and_then(|()| scene.check_camera_placement())
@@ -161,7 +163,7 @@ impl Scene {
         };
         let mut scene = Scene::model_bare();
         let bounds = mesh_bounds(&mesh);
-        scene.view.camera = frame_camera(&bounds);
+        scene.view.camera = frame_camera(&bounds, flat_normal(|| mesh.positions.iter().copied()));
         scene.offset = centring_offset(bounds.0, bounds.1);
         for (row, &p) in mesh.positions.iter().enumerate() {
             checked_local(&format!("vertices row {row}"), p, scene.offset).map_err(Error::Usage)?;

@@ -63,30 +63,52 @@ pub(super) fn material_desc(
 /// Which TEXCOORD_n a primitive's material reads: its base colour
 /// texture's set (KHR_texture_transform may name another), else its
 /// emissive texture's; a material whose textures read two sets gets the
-/// base colour's, with a warning. None without textures.
+/// base colour's, with a warning. None without textures. A texture whose
+/// set the primitive lacks is a warning naming the material, the texture
+/// and the set: the primitive reads it at (0, 0), as an OBJ face without
+/// `vt` does.
 pub(super) fn texture_coordinate_set(
     material: &gltf::Material,
+    primitive: &gltf::Primitive,
+    what: &str,
     path: &Path,
     warnings: &mut Vec<String>,
 ) -> Option<u32> {
-    let set = |info: gltf::texture::Info| {
-        info.texture_transform()
-            .and_then(|t| t.tex_coord())
-            .unwrap_or(info.tex_coord())
+    let name = material_name(material);
+    let mut set = |info: gltf::texture::Info, slot: &str| {
+        let (set, whose) = match info.texture_transform().and_then(|t| t.tex_coord()) {
+            Some(set) => (set, "its KHR_texture_transform texCoord"),
+            None => (info.tex_coord(), "texCoord"),
+        };
+        // One warning a material's texture, naming the first primitive.
+        let said = format!(
+            "{}: material {name}: its {slot} reads TEXCOORD_{set} ({whose})",
+            path.display()
+        );
+        if primitive.get(&gltf::Semantic::TexCoords(set)).is_none()
+            && !warnings.iter().any(|w| w.starts_with(&said))
+        {
+            warnings.push(format!(
+                "{said}, which {what} (the first such) does not have; primitives without it \
+                 read the texture at (0, 0)"
+            ));
+        }
+        set
     };
     let base = material
         .pbr_metallic_roughness()
         .base_color_texture()
-        .map(set);
-    let emissive = material.emissive_texture().map(set);
+        .map(|info| set(info, "baseColorTexture"));
+    let emissive = material
+        .emissive_texture()
+        .map(|info| set(info, "emissiveTexture"));
     if let (Some(b), Some(e)) = (base, emissive)
         && b != e
     {
         let warning = format!(
-            "{}: material {}: its emissiveTexture reads TEXCOORD_{e}, its baseColorTexture \
+            "{}: material {name}: its emissiveTexture reads TEXCOORD_{e}, its baseColorTexture \
              TEXCOORD_{b}; both read TEXCOORD_{b}",
             path.display(),
-            material_name(material)
         );
         if !warnings.contains(&warning) {
             warnings.push(warning);
@@ -206,8 +228,8 @@ impl<'a> Images<'a> {
                 let file = percent_decoded(uri)
                     .ok_or_else(|| format!("its uri {uri:?} is not percent-encoded UTF-8"))?;
                 let file = self.path.parent().unwrap_or(Path::new(".")).join(file);
-                if !file.is_file() {
-                    return Err(format!("{} is not found", file.display()));
+                if let Some(why) = crate::files::not_regular(&file) {
+                    return Err(format!("{} is {why}", file.display()));
                 }
                 Ok(ImageSource::File(file))
             }

@@ -84,12 +84,12 @@ pub fn fly(camera: &Camera, key: char) -> Option<Camera> {
 }
 
 /// The camera framed on the box `bounds` (as a model with no camera of
-/// its own is framed), at the window's size.
-pub fn frame(bounds: (DVec3, DVec3), width: u32, height: u32) -> Camera {
+/// its own is framed; `flat`, a flat model's normal), at the window's size.
+pub fn frame(bounds: (DVec3, DVec3), flat: Option<DVec3>, width: u32, height: u32) -> Camera {
     Camera {
         width,
         height,
-        ..frame_camera(&bounds)
+        ..frame_camera(&bounds, flat)
     }
 }
 

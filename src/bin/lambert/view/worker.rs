@@ -146,7 +146,16 @@ impl Worker {
                 Some(b) => {
                     let offset = self.scene.offset;
                     let bounds = (b.min.as_dvec3() + offset, b.max.as_dvec3() + offset);
-                    self.restart(frame(bounds, width, height));
+                    // Spheres are never flat; triangles alone may be.
+                    let scene = &self.scene;
+                    let flat = scene.spheres.is_empty().then(|| {
+                        lambert::camera::flat_normal(|| {
+                            scene.triangles.iter().flat_map(|t| {
+                                [t.v0, t.v1, t.v2].map(|v| glam::Vec3::from(v).as_dvec3())
+                            })
+                        })
+                    });
+                    self.restart(frame(bounds, flat.flatten(), width, height));
                 }
                 None => {
                     report(Report::Say("the scene has no geometry to frame".into()));
