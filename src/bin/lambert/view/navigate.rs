@@ -43,7 +43,11 @@ impl Reach {
         let local = MAX_LOCAL_COORDINATE * (1.0 - 1e-9);
         let world = DVec3::splat(MAX_COORDINATE * (1.0 - 1e-9));
         // A scene of one point has no size: a unit then.
-        let size = if size > 0.0 && size.is_finite() { size } else { 1.0 };
+        let size = if size > 0.0 && size.is_finite() {
+            size
+        } else {
+            1.0
+        };
         let min_distance = MIN_DISTANCE_OF_SIZE * size;
         Reach {
             lo: (offset - local).max(-world),
@@ -89,7 +93,11 @@ impl Reach {
         let room = (0..3)
             .filter(|&i| direction[i] != 0.0)
             .map(|i| {
-                let wall = if direction[i] > 0.0 { self.hi[i] } else { self.lo[i] };
+                let wall = if direction[i] > 0.0 {
+                    self.hi[i]
+                } else {
+                    self.lo[i]
+                };
                 (wall - look_at[i]) / direction[i]
             })
             .fold(f64::INFINITY, f64::min);

@@ -182,7 +182,10 @@ impl Worker {
                 let scene = Arc::make_mut(&mut self.scene);
                 scene.shadows = !scene.shadows;
                 let on = scene.shadows;
-                report(Report::Say(format!("shadows {}", if on { "on" } else { "off" })));
+                report(Report::Say(format!(
+                    "shadows {}",
+                    if on { "on" } else { "off" }
+                )));
                 self.upload(camera)?;
             }
             Command::Load(path) => match Scene::load(&path) {
