@@ -36,7 +36,7 @@ lambert view: keys and mouse
   w a d e            fly forward, left, right, up
   s q                (with a mouse button held) fly back, down
   f                  frame the model
-  r                  the file's camera
+  r                  the camera the file was loaded with
   1 .. 9             the file's cameras (glTF)
   l                  shadows on/off
   s, Shift+S         save a screenshot (PNG of the image so far, full resolution)
