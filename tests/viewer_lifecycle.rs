@@ -423,3 +423,49 @@ fn the_viewer_refines_to_the_scenes_render_spp_as_its_help_says() {
     wait_for_title(&viewer, "3 spp, done", |t| t.contains("— 3/3 spp, done"));
     assert!(viewer.quit().success());
 }
+
+#[test]
+fn a_cancelled_batch_adds_nothing_and_the_next_starts_from_the_first_sample() {
+    use lambert::render::{Progressive, Renderer};
+    use std::sync::Arc;
+    use std::sync::atomic::AtomicBool;
+    let mut scene = common::load("cornell");
+    scene.view.camera.width = 300;
+    scene.view.camera.height = 200;
+    scene.view.spp = 4;
+    let view = scene.view.clone();
+    let scene = Arc::new(scene);
+    let gpu = lambert::gpu::GpuRenderer::new(common::open_gpu(), &scene).unwrap();
+    for mut renderer in [
+        Renderer::Cpu(Arc::clone(&scene)),
+        Renderer::Gpu(Box::new(gpu)),
+    ] {
+        let mut progressive = Progressive::new(view.clone());
+        renderer.add_samples(&mut progressive, 1).unwrap();
+        let cancelled = AtomicBool::new(true);
+        let added = renderer
+            .add_samples_or_cancel(&mut progressive, 2, &cancelled)
+            .unwrap();
+        assert!(
+            !added,
+            "{}: a cancelled batch says it added",
+            renderer.describe()
+        );
+        assert_eq!(progressive.samples(), 0, "{}", renderer.describe());
+        // Started again, its batches make the render's image.
+        for count in [1, 3] {
+            assert!(
+                renderer
+                    .add_samples_or_cancel(&mut progressive, count, &AtomicBool::new(false))
+                    .unwrap()
+            );
+        }
+        let (rendered, _) = renderer.render(&view, None).unwrap();
+        assert_eq!(
+            progressive.image().rgb,
+            rendered.image.rgb,
+            "{}",
+            renderer.describe()
+        );
+    }
+}
