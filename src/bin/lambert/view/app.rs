@@ -110,6 +110,9 @@ impl App {
     /// Opens the window, the device and the render thread.
     fn start(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
         let settings = self.settings.take().expect("started once");
+        // Raw wheel buttons tell a click's release apart (`device_event`),
+        // focused or not.
+        event_loop.listen_device_events(winit::event_loop::DeviceEvents::Always);
         let camera = &settings.scene.view.camera;
         let attributes = Window::default_attributes()
             .with_title("lambert view")
