@@ -178,7 +178,7 @@ impl Worker {
                 // The renderer (on a GPU, its copy of the scene) goes
                 // first, so that the scene is ours alone and changes in
                 // place: never two copies at once.
-                self.renderer = None;
+                self.drop_renderer();
                 let scene = Arc::make_mut(&mut self.scene);
                 scene.shadows = !scene.shadows;
                 let on = scene.shadows;
@@ -194,7 +194,7 @@ impl Worker {
                         report(Report::Say(format!("warning: {warning}")));
                     }
                     let camera = sized(scene.view.camera.clone());
-                    self.renderer = None;
+                    self.drop_renderer();
                     self.scene = Arc::new(scene);
                     self.upload(camera)
                         .map_err(|e| Error::Usage(format!("{}: {e}", path.display())))?;
@@ -263,6 +263,17 @@ impl Worker {
         Ok(Scene::load_with_camera(&self.path, name.as_deref())?
             .view
             .camera)
+    }
+
+    /// Lets the renderer go, and on a GPU its buffers at once: wgpu frees
+    /// a dropped buffer only when the device is next polled.
+    fn drop_renderer(&mut self) {
+        self.renderer = None;
+        if let Some(gpu) = &self.gpu {
+            // Nothing is in flight between frames: a failure here would
+            // be the next upload's to report.
+            let _ = gpu.device.poll(wgpu::PollType::wait_indefinitely());
+        }
     }
 
     /// The scene on the device the renderer was on (or the CPU path,
