@@ -186,7 +186,8 @@ impl Worker {
                     "shadows {}",
                     if on { "on" } else { "off" }
                 )));
-                self.upload(camera)?;
+                let renderer = self.renderer_for(&self.scene)?;
+                self.show(Arc::clone(&self.scene), renderer, camera);
             }
             Command::Load(path) => match Scene::load(&path) {
                 Ok(scene) => {
@@ -194,12 +195,19 @@ impl Worker {
                         report(Report::Say(format!("warning: {warning}")));
                     }
                     let camera = sized(scene.view.camera.clone());
-                    self.drop_renderer();
-                    self.scene = Arc::new(scene);
-                    self.upload(camera)
-                        .map_err(|e| Error::Usage(format!("{}: {e}", path.display())))?;
-                    report(Report::Say(format!("loaded {}", path.display())));
-                    self.path = path;
+                    // Another scene: the one shown stays until this one
+                    // is on the device, and where it does not go there.
+                    let scene = Arc::new(scene);
+                    match self.renderer_for(&scene) {
+                        Ok(renderer) => {
+                            self.show(scene, renderer, camera);
+                            report(Report::Say(format!("loaded {}", path.display())));
+                            self.path = path;
+                        }
+                        Err(e) => {
+                            report(Report::Say(format!("error: {}: {e}", path.display())));
+                        }
+                    }
                 }
                 Err(e) => {
                     report(Report::Say(format!("error: {e}")));
@@ -276,16 +284,21 @@ impl Worker {
         }
     }
 
-    /// The scene on the device the renderer was on (or the CPU path,
-    /// sharing the host's copy), seen from `camera`.
-    fn upload(&mut self, camera: Camera) -> Result<()> {
-        self.renderer = Some(match &self.gpu {
-            Some(gpu) => Renderer::Gpu(Box::new(GpuRenderer::new(gpu.clone(), &self.scene)?)),
-            None => Renderer::Cpu(Arc::clone(&self.scene)),
-        });
-        self.reach = Reach::of(&self.scene);
+    /// A renderer of `scene` on the device the renderer was on (or the
+    /// CPU path, sharing the host's copy).
+    fn renderer_for(&self, scene: &Arc<Scene>) -> Result<Renderer> {
+        Ok(match &self.gpu {
+            Some(gpu) => Renderer::Gpu(Box::new(GpuRenderer::new(gpu.clone(), scene)?)),
+            None => Renderer::Cpu(Arc::clone(scene)),
+        })
+    }
+
+    /// `scene`, rendered by `renderer`, seen from `camera`.
+    fn show(&mut self, scene: Arc<Scene>, renderer: Renderer, camera: Camera) {
+        self.renderer = Some(renderer);
+        self.reach = Reach::of(&scene);
+        self.scene = scene;
         self.restart(camera);
-        Ok(())
     }
 
     /// Starts the view again from its first sample, from `camera`.
