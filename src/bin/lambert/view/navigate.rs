@@ -21,9 +21,10 @@ pub struct Reach {
 
 /// The closest the eye comes to look_at, as a fraction of the scene's size.
 const MIN_DISTANCE_OF_SIZE: f64 = 1e-6;
-/// ... and of look_at's own magnitude, so that eye − look_at keeps seven
-/// digits and the view direction stays true.
-const MIN_DISTANCE_OF_POSITION: f64 = 1e-9;
+/// ... and of look_at's own magnitude (4,500 of f64's steps there), so
+/// that the view direction, eye − look_at, is right to 2e-4 rad: a
+/// fraction of a pixel.
+const MIN_DISTANCE_OF_POSITION: f64 = 1e-12;
 
 impl Reach {
     /// `scene`'s: its offset, and the size of its geometry (of the view's
