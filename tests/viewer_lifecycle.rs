@@ -91,9 +91,10 @@ fn hundreds_of_notches_each_way_keep_the_camera_in_the_scene_formats_range() {
         // the eye again.
         let nearest = distance(&camera);
         assert!(nearest >= 1e-6, "{nearest}");
-        // Near the origin, a millionth of the scene's size (2) it is.
+        // Near the origin, a millionth of the scene's size (its box's
+        // diagonal, 2√3) it is.
         if centre == DVec3::ZERO {
-            assert!((nearest - 2e-6).abs() < 1e-9, "{nearest}");
+            assert!((nearest - 2e-6 * 3f64.sqrt()).abs() < 1e-12, "{nearest}");
         }
         let back = navigate::dolly(&camera, -1.0, &reach);
         assert!(
