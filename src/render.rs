@@ -2,6 +2,7 @@
 //! and rendering it there.
 
 use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use crate::camera::View;
@@ -293,22 +294,45 @@ impl Renderer {
     /// Adds the next `count` samples of `progressive`'s view (fewer when
     /// fewer are left) on this renderer's device.
     pub fn add_samples(&mut self, progressive: &mut Progressive, count: u32) -> Result<()> {
+        self.add_samples_or_cancel(progressive, count, &AtomicBool::new(false))
+            .map(|_| ())
+    }
+
+    /// `add_samples`, stopped between tiles (rows on the CPU path) once
+    /// another thread sets `cancel`: then `progressive` starts again from
+    /// its first sample and this returns false. (A batch of all the view's
+    /// samples at once is a plain GPU render, which stops only at its end.)
+    pub fn add_samples_or_cancel(
+        &mut self,
+        progressive: &mut Progressive,
+        count: u32,
+        cancel: &AtomicBool,
+    ) -> Result<bool> {
         let view = &progressive.view;
         let start = progressive.samples;
         let samples = start..start.saturating_add(count).min(view.spp);
         let finished = match self {
             Renderer::Gpu(renderer) => {
                 renderer.set_view(view);
-                renderer.add_samples(samples.clone(), &mut progressive.sums)?
+                renderer.add_samples_or_cancel(samples.clone(), &mut progressive.sums, cancel)?
             }
-            Renderer::Cpu(scene) => {
-                cpu::add_samples(scene, view, samples.clone(), &mut progressive.sums)
-                    .map_err(Error::Usage)?
-            }
+            Renderer::Cpu(scene) => cpu::add_samples_or_cancel(
+                scene,
+                view,
+                samples.clone(),
+                &mut progressive.sums,
+                cancel,
+            )
+            .map_err(Error::Usage)?,
         };
+        if cancel.load(Ordering::Relaxed) {
+            // The sums hold part of the batch.
+            *progressive = Progressive::new(progressive.view.clone());
+            return Ok(false);
+        }
         progressive.samples = samples.end;
         progressive.finished = finished;
-        Ok(())
+        Ok(true)
     }
 
     /// Readies the device for `trace` (builds its pipeline).

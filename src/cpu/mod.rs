@@ -27,7 +27,8 @@ pub use query::{
     trace_rays_each, trace_rays_f64, trace_rays_gpu_twin, trace_rays_with,
 };
 pub use render::{
-    add_samples, render, render_gpu_twin, render_pixel_list, render_rows, render_with,
+    add_samples, add_samples_or_cancel, render, render_gpu_twin, render_pixel_list, render_rows,
+    render_with,
 };
 pub use simd::{CPU_KERNEL_ENV, CpuKernel};
 

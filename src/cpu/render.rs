@@ -125,6 +125,20 @@ pub fn add_samples(
     samples: std::ops::Range<u32>,
     sums: &mut [[::core::primitive::f32; 4]],
 ) -> Result<Option<Image>, String> {
+    let never = std::sync::atomic::AtomicBool::new(false);
+    add_samples_or_cancel(scene, view, samples, sums, &never)
+}
+
+/// `add_samples`, whose rows not yet begun are skipped once `cancel` is
+/// set: then `sums` hold part of the batch, and None comes back.
+pub fn add_samples_or_cancel(
+    scene: &Scene,
+    view: &View,
+    samples: std::ops::Range<u32>,
+    sums: &mut [[::core::primitive::f32; 4]],
+    cancel: &std::sync::atomic::AtomicBool,
+) -> Result<Option<Image>, String> {
+    use std::sync::atomic::Ordering;
     let c = &view.camera;
     crate::camera::check_batch((c.width, c.height, view.spp), &samples, sums.len())?;
     let cpu_kernel = CpuKernel::active();
@@ -132,6 +146,9 @@ pub fn add_samples(
     let width = view.camera.width as usize;
     let kernel = kernel32(scene, view, cpu_kernel, None);
     sums.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
+        if cancel.load(Ordering::Relaxed) {
+            return;
+        }
         // SAFETY: checked above.
         unsafe {
             with_simd(
@@ -153,6 +170,9 @@ pub fn add_samples(
         let (mean, _) = kernel.pixel_mean((glam::Vec3::new(s[0], s[1], s[2]), s[3]));
         mean.to_array()
     };
+    if cancel.load(Ordering::Relaxed) {
+        return Ok(None);
+    }
     Ok((samples.end == view.spp).then(|| Image {
         width: view.camera.width,
         height: view.camera.height,

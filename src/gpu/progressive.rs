@@ -5,6 +5,7 @@
 //! bit.
 
 use std::ops::Range;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::error::{Error, Result};
 use crate::output::Image;
@@ -24,6 +25,17 @@ impl GpuRenderer {
         samples: Range<u32>,
         sums: &mut [[f32; 4]],
     ) -> Result<Option<Image>> {
+        self.add_samples_or_cancel(samples, sums, &AtomicBool::new(false))
+    }
+
+    /// `add_samples`, stopped before its next tile once `cancel` is set
+    /// (then `sums` are as they were, and None comes back).
+    pub fn add_samples_or_cancel(
+        &mut self,
+        samples: Range<u32>,
+        sums: &mut [[f32; 4]],
+        cancel: &AtomicBool,
+    ) -> Result<Option<Image>> {
         let (width, height, spp) = (self.params.width, self.params.height, self.params.spp);
         let view = (width, height, spp);
         crate::camera::check_batch(view, &samples, sums.len()).map_err(Error::Usage)?;
@@ -35,7 +47,10 @@ impl GpuRenderer {
         loop {
             // The sums change only once the batch's loops ran whole.
             let mut next = sums.to_vec();
-            let image = self.add_samples_once(&samples, &mut next)?;
+            let image = self.add_samples_once(&samples, &mut next, cancel)?;
+            if cancel.load(Ordering::Relaxed) {
+                return Ok(None);
+            }
             if !self.loops_were_cut()? {
                 sums.copy_from_slice(&next);
                 return Ok(image);
@@ -48,6 +63,7 @@ impl GpuRenderer {
         &mut self,
         samples: &Range<u32>,
         sums: &mut [[f32; 4]],
+        cancel: &AtomicBool,
     ) -> Result<Option<Image>> {
         let (width, height) = (self.params.width, self.params.height);
         let finishing = samples.end == self.params.spp;
@@ -61,6 +77,9 @@ impl GpuRenderer {
         let side = self.tile_side();
         for tile_y in (0..height).step_by(side as usize) {
             for tile_x in (0..width).step_by(side as usize) {
+                if cancel.load(Ordering::Relaxed) {
+                    return Ok(None);
+                }
                 let tile_width = side.min(width - tile_x) as usize;
                 let tile_height = side.min(height - tile_y);
                 // The tile's rows in `tile_sums`, TILE pixels apart.

@@ -37,7 +37,8 @@ pub struct RenderSettings {
     pub background: Rgb,
     pub ambient: Rgb,
     pub shadows: bool,
-    pub spp: u32,
+    /// None where the file does not say (1).
+    pub spp: Option<u32>,
     pub seed: u32,
     pub intersect: Intersect,
 }
@@ -48,7 +49,7 @@ impl Default for RenderSettings {
             background: Rgb::Uniform(0.0),
             ambient: Rgb::Uniform(0.0),
             shadows: true,
-            spp: 1,
+            spp: None,
             seed: 0,
             intersect: Intersect::default(),
         }
@@ -120,17 +121,19 @@ impl Scene {
         validate_camera(&file.camera).map_err(fail)?;
         let background = colour("render.background", file.render.background).map_err(fail)?;
         let ambient = colour("render.ambient", file.render.ambient).map_err(fail)?;
-        validate_spp(file.render.spp).map_err(|e| fail(format!("render.{e}")))?;
+        let spp = file.render.spp.unwrap_or(1);
+        validate_spp(spp).map_err(|e| fail(format!("render.{e}")))?;
 
         let mut scene = Scene {
             view: View {
                 camera: file.camera,
-                spp: file.render.spp,
+                spp,
                 seed: file.render.seed,
             },
             background,
             ambient,
             shadows: file.render.shadows,
+            spp_given: file.render.spp.is_some(),
             intersect: file.render.intersect,
             inputs: vec![path.to_path_buf()],
             ..Scene::bare()

@@ -31,6 +31,9 @@ pub struct Scene {
     /// The view the scene's file asks for (its camera, spp and seed): the
     /// default of the front ends, which render any other view as well.
     pub view: View,
+    /// Whether the file set `view.spp` (`render.spp`) rather than leaving
+    /// it 1: the viewer refines to it only then.
+    pub spp_given: bool,
     pub background: [f32; 3],
     pub ambient: [f32; 3],
     pub shadows: bool,
@@ -197,6 +200,7 @@ impl Scene {
                 spp: 1,
                 seed: 0,
             },
+            spp_given: false,
             background: [0.0; 3],
             ambient: [0.0; 3],
             shadows: false,

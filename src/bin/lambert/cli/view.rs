@@ -13,6 +13,9 @@ use super::{check_output_path, print_warnings};
 use crate::view::{INTERACTIVE_SPP, Settings, view};
 
 #[derive(Args)]
+#[command(mut_arg("spp", |a| a.help(
+    "Samples per pixel the image is refined to, one a frame [default: the scene's render.spp, else 1024]"
+)))]
 pub(super) struct ViewArgs {
     /// A scene (.toml) or model file, as `render` takes.
     scene: PathBuf,
@@ -24,8 +27,8 @@ pub(super) struct ViewArgs {
     adapter: AdapterArgs,
     /// Render N frames of one sample per pixel each (the image `render
     /// --spp N` makes, bit for bit), write --screenshot and exit. Without
-    /// it the image is refined up to --spp (default 1024) and the window
-    /// stays.
+    /// it the image is refined up to --spp (default: the scene's
+    /// render.spp, else 1024) and the window stays.
     #[arg(
         long,
         value_name = "N",
@@ -54,6 +57,7 @@ pub(super) fn run(args: ViewArgs, quiet: bool) -> Result<ExitCode> {
     let spp = args
         .frames
         .or(args.options.spp())
+        .or(scene.spp_given.then_some(scene.view.spp))
         .unwrap_or(INTERACTIVE_SPP);
     view(Settings {
         path: args.scene,

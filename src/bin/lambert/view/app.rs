@@ -5,6 +5,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, Sender};
 use std::thread::JoinHandle;
 
@@ -14,12 +15,15 @@ use lambert::gpu::{Gpu, Presenting};
 use lambert::render::{Progressive, Renderer};
 use winit::application::ApplicationHandler;
 use winit::dpi::{PhysicalPosition, PhysicalSize};
-use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event::{
+    DeviceEvent, DeviceId, ElementState, MouseButton, MouseScrollDelta, WindowEvent,
+};
 use winit::event_loop::{ActiveEventLoop, EventLoopProxy};
 use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
 
 use super::Settings;
+use super::navigate::Reach;
 use super::present::{CpuPresenter, GpuPresenter, Presenter};
 use super::worker::{Command, Frame, Report, Worker};
 
@@ -32,7 +36,7 @@ lambert view: keys and mouse
   w a d e            fly forward, left, right, up
   s q                (with a mouse button held) fly back, down
   f                  frame the model
-  r                  the file's camera
+  r                  the camera the file was loaded with
   1 .. 9             the file's cameras (glTF)
   l                  shadows on/off
   s, Shift+S         save a screenshot (PNG of the image so far, full resolution)
@@ -55,9 +59,17 @@ pub struct App {
     presenter: Option<Presenter>,
     commands: Option<Sender<Command>>,
     worker: Option<JoinHandle<()>>,
+    /// Set on quitting: the render thread drops the frame in flight.
+    cancel: Arc<AtomicBool>,
     latest: Option<Arc<Frame>>,
     cursor: Option<PhysicalPosition<f64>>,
     drag: Option<Drag>,
+    /// A wheel button's release (X11 buttons 4 to 7) came: winit reports
+    /// it as a wheel event too, which is not a second notch.
+    wheel_released: bool,
+    /// What failed without ending the session, shown in the title until
+    /// the next try.
+    problem: Option<String>,
     /// The heads-up line's device.
     about: String,
     screenshot: Option<PathBuf>,
@@ -76,9 +88,12 @@ impl App {
             presenter: None,
             commands: None,
             worker: None,
+            cancel: Arc::new(AtomicBool::new(false)),
             latest: None,
             cursor: None,
             drag: None,
+            wheel_released: false,
+            problem: None,
             about: String::new(),
             failure: None,
         }
@@ -95,6 +110,9 @@ impl App {
     /// Opens the window, the device and the render thread.
     fn start(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
         let settings = self.settings.take().expect("started once");
+        // Raw wheel buttons tell a click's release apart (`device_event`),
+        // focused or not.
+        event_loop.listen_device_events(winit::event_loop::DeviceEvents::Always);
         let camera = &settings.scene.view.camera;
         let attributes = Window::default_attributes()
             .with_title("lambert view")
@@ -170,8 +188,10 @@ impl App {
         };
         let worker = Worker {
             path: settings.path.clone(),
+            reach: Reach::of(&scene),
             scene,
-            renderer,
+            renderer: Some(renderer),
+            cancel: Arc::clone(&self.cancel),
             gpu,
             progressive: Progressive::new(view),
             frames_screenshot: settings
@@ -199,8 +219,10 @@ impl App {
         }
     }
 
-    /// Ends the run: the render thread finishes its batch and stops.
+    /// Ends the run: the render thread drops the frame in flight (at its
+    /// next tile) and stops.
     fn quit(&mut self, event_loop: &ActiveEventLoop) {
+        self.cancel.store(true, Ordering::Relaxed);
         self.commands = None;
         if let Some(worker) = self.worker.take() {
             let _ = worker.join();
@@ -250,8 +272,8 @@ impl App {
         match c {
             'Q' => self.quit(event_loop),
             'q' if !flying => self.quit(event_loop),
-            'S' => self.send(Command::Screenshot(self.screenshot_path())),
-            's' if !flying => self.send(Command::Screenshot(self.screenshot_path())),
+            'S' => self.screenshot(),
+            's' if !flying => self.screenshot(),
             'w' | 'a' | 's' | 'd' | 'e' | 'q' => self.send(Command::Fly(c)),
             'f' | 'F' => self.send(Command::Frame),
             'r' | 'R' => self.send(Command::FileCamera(None)),
@@ -263,25 +285,43 @@ impl App {
         }
     }
 
+    fn screenshot(&mut self) {
+        self.problem = None;
+        self.show_title();
+        self.send(Command::Screenshot(self.screenshot_path()));
+    }
+
+    /// The heads-up line: the latest frame's figures, and a problem.
+    fn show_title(&self) {
+        let (Some(window), Some(frame)) = (&self.window, &self.latest) else {
+            return;
+        };
+        let done = if frame.samples == frame.spp {
+            ", done"
+        } else {
+            ""
+        };
+        let problem = self
+            .problem
+            .as_ref()
+            .map_or(String::new(), |p| format!(" — error: {p}"));
+        window.set_title(&format!(
+            "lambert view — {}/{} spp{done} — {:.2} Mrays/s — {:.1} ms/frame — {} triangles — {} — H: keys{problem}",
+            frame.samples,
+            frame.spp,
+            frame.mrays_per_s,
+            frame.frame_time.as_secs_f64() * 1e3,
+            frame.triangles,
+            self.about
+        ));
+    }
+
     fn frame_arrived(&mut self, frame: Arc<Frame>) {
+        self.latest = Some(frame);
+        self.show_title();
         if let Some(window) = &self.window {
-            let done = if frame.samples == frame.spp {
-                ", done"
-            } else {
-                ""
-            };
-            window.set_title(&format!(
-                "lambert view — {}/{} spp{done} — {:.2} Mrays/s — {:.1} ms/frame — {} triangles — {} — H: keys",
-                frame.samples,
-                frame.spp,
-                frame.mrays_per_s,
-                frame.frame_time.as_secs_f64() * 1e3,
-                frame.triangles,
-                self.about
-            ));
             window.request_redraw();
         }
-        self.latest = Some(frame);
     }
 }
 
@@ -303,6 +343,12 @@ impl ApplicationHandler<Report> for App {
                 }
             }
             Report::Print(text) => print!("{text}"),
+            // An error: shown even with --quiet.
+            Report::Problem(text) => {
+                eprintln!("error: {text}");
+                self.problem = Some(text);
+                self.show_title();
+            }
             Report::Finished => {
                 self.present(event_loop);
                 self.quit(event_loop);
@@ -313,7 +359,8 @@ impl ApplicationHandler<Report> for App {
 
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
         match event {
-            WindowEvent::CloseRequested => self.quit(event_loop),
+            // Destroyed: by the window manager, with no close request.
+            WindowEvent::CloseRequested | WindowEvent::Destroyed => self.quit(event_loop),
             WindowEvent::RedrawRequested => self.present(event_loop),
             WindowEvent::Resized(size) => {
                 if let Some(presenter) = &mut self.presenter {
@@ -349,6 +396,11 @@ impl ApplicationHandler<Report> for App {
                 self.cursor = Some(position);
             }
             WindowEvent::MouseWheel { delta, .. } => {
+                if std::mem::take(&mut self.wheel_released)
+                    && matches!(delta, MouseScrollDelta::LineDelta(..))
+                {
+                    return;
+                }
                 let notches = match delta {
                     MouseScrollDelta::LineDelta(_, y) => y as f64,
                     MouseScrollDelta::PixelDelta(p) => p.y / 50.0,
@@ -357,6 +409,20 @@ impl ApplicationHandler<Report> for App {
             }
             WindowEvent::DroppedFile(path) => self.send(Command::Load(path)),
             _ => {}
+        }
+    }
+
+    /// X11's wheel is buttons 4 to 7, and winit 0.30 makes a wheel event
+    /// of both a button's press and its release: its raw release (which
+    /// comes just before) marks the next wheel event as that echo. Wheels
+    /// that scroll by valuators instead send no raw button at all.
+    fn device_event(&mut self, _: &ActiveEventLoop, _: DeviceId, event: DeviceEvent) {
+        if let DeviceEvent::Button {
+            button: 4..=7,
+            state,
+        } = event
+        {
+            self.wheel_released = state == ElementState::Released;
         }
     }
 }

@@ -16,8 +16,9 @@ use lambert::gpu::AdapterRequest;
 use lambert::render::DeviceChoice;
 use lambert::scene::Scene;
 
-/// Samples per pixel of the interactive sequence when neither `--spp` nor
-/// `--frames` is given: the converged image is `render --spp 1024`'s.
+/// Samples per pixel of the interactive sequence when neither `--spp`,
+/// `--frames` nor the scene's `render.spp` gives them: the converged image
+/// is `render --spp 1024`'s.
 pub const INTERACTIVE_SPP: u32 = 1024;
 
 /// What the command line asks of the viewer.

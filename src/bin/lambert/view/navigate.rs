@@ -1,14 +1,122 @@
 //! The viewer's camera moves (orbit, pan, dolly, fly, frame) and the
-//! camera as a `[camera]` table: pure functions of the camera, in f64.
+//! camera as a `[camera]` table: pure functions of the camera, in f64,
+//! kept by a `Reach` within what a scene file accepts of a camera.
 
 use glam::{DQuat, DVec3};
 
 use lambert::camera::{Camera, MIN_UP_SINE, frame_camera};
+use lambert::limits::{MAX_COORDINATE, MAX_LOCAL_COORDINATE};
+use lambert::scene::Scene;
+
+/// Where the camera may go: eye and look_at within MAX_LOCAL_COORDINATE of
+/// the scene's offset on each axis and within MAX_COORDINATE (what a scene
+/// file accepts, so that `c`'s table renders), and the eye at least
+/// `min_distance` from look_at (so that a notch back always moves it).
+#[derive(Clone, Copy, Debug)]
+pub struct Reach {
+    lo: DVec3,
+    hi: DVec3,
+    min_distance: f64,
+}
+
+/// The closest the eye comes to look_at, as a fraction of the scene's size.
+const MIN_DISTANCE_OF_SIZE: f64 = 1e-6;
+/// ... and of look_at's own magnitude (4,500 of f64's steps there), so
+/// that the view direction, eye − look_at, is right to 2e-4 rad: a
+/// fraction of a pixel.
+const MIN_DISTANCE_OF_POSITION: f64 = 1e-12;
+
+impl Reach {
+    /// `scene`'s: its offset, and the size of its geometry (of the view's
+    /// distance where it has none).
+    pub fn of(scene: &Scene) -> Reach {
+        let camera = &scene.view.camera;
+        let size = scene.bvh.bounds().map_or_else(
+            || (DVec3::from(camera.eye) - DVec3::from(camera.look_at)).length(),
+            |b| (b.max - b.min).as_dvec3().length(),
+        );
+        Reach::new(scene.offset, size)
+    }
+
+    /// About `offset`, for a scene `size` across.
+    pub fn new(offset: DVec3, size: f64) -> Reach {
+        // A hair inside the limits: world − offset, rounded, stays within.
+        let local = MAX_LOCAL_COORDINATE * (1.0 - 1e-9);
+        let world = DVec3::splat(MAX_COORDINATE * (1.0 - 1e-9));
+        // A scene of one point has no size: a unit then.
+        let size = if size > 0.0 && size.is_finite() {
+            size
+        } else {
+            1.0
+        };
+        let min_distance = MIN_DISTANCE_OF_SIZE * size;
+        Reach {
+            lo: (offset - local).max(-world),
+            hi: (offset + local).min(world),
+            min_distance,
+        }
+    }
+
+    /// The closest the eye may come to `look_at`.
+    fn min_distance(&self, look_at: DVec3) -> f64 {
+        self.min_distance
+            .max(MIN_DISTANCE_OF_POSITION * look_at.abs().max_element())
+    }
+
+    /// `camera` moved back within reach (`before` where the move left
+    /// the eye no direction from look_at, or no finite place).
+    pub fn keep(&self, camera: Camera, before: &Camera) -> Camera {
+        let (eye, look_at) = (DVec3::from(camera.eye), DVec3::from(camera.look_at));
+        let offset = eye - look_at;
+        if !offset.is_finite() || offset.length_squared() == 0.0 {
+            return before.clone();
+        }
+        self.place(camera, look_at, offset.normalize(), offset.length(), before)
+    }
+
+    /// The camera with look_at in the box (less a margin for the eye's
+    /// least distance) and the eye `distance` from it along `direction`,
+    /// that distance kept between the least and the box's wall.
+    fn place(
+        &self,
+        camera: Camera,
+        look_at: DVec3,
+        direction: DVec3,
+        distance: f64,
+        before: &Camera,
+    ) -> Camera {
+        if !look_at.is_finite() || !direction.is_finite() || distance.is_nan() {
+            return before.clone();
+        }
+        let margin = self.min_distance(look_at.clamp(self.lo, self.hi));
+        let look_at = look_at.clamp(self.lo + margin, self.hi - margin);
+        // The farthest the eye may go along `direction` inside the box.
+        let room = (0..3)
+            .filter(|&i| direction[i] != 0.0)
+            .map(|i| {
+                let wall = if direction[i] > 0.0 {
+                    self.hi[i]
+                } else {
+                    self.lo[i]
+                };
+                (wall - look_at[i]) / direction[i]
+            })
+            .fold(f64::INFINITY, f64::min);
+        let distance = distance.clamp(margin, room.max(margin));
+        Camera {
+            eye: (look_at + direction * distance)
+                .clamp(self.lo, self.hi)
+                .to_array(),
+            look_at: look_at.to_array(),
+            ..camera
+        }
+    }
+}
 
 /// Orbit: a drag the window's height long turns the camera half a turn
 /// (π / height radians a pixel), about `up` for a sideways drag and about
 /// the camera's right for an upward one.
-pub fn orbit(camera: &Camera, dx: f64, dy: f64, window_height: u32) -> Camera {
+pub fn orbit(camera: &Camera, dx: f64, dy: f64, window_height: u32, reach: &Reach) -> Camera {
     let per_pixel = std::f64::consts::PI / window_height.max(1) as f64;
     let centre = DVec3::from(camera.look_at);
     let up = DVec3::from(camera.up).normalize();
@@ -25,10 +133,11 @@ pub fn orbit(camera: &Camera, dx: f64, dy: f64, window_height: u32) -> Camera {
         } else {
             turned
         };
-    Camera {
+    let orbited = Camera {
         eye: (centre + offset).to_array(),
         ..camera.clone()
-    }
+    };
+    reach.keep(orbited, camera)
 }
 
 /// The camera's right and true up (unit vectors), and its distance to
@@ -40,36 +149,35 @@ fn frame_of(camera: &Camera) -> (DVec3, DVec3, DVec3, f64) {
     (forward, right, right.cross(forward), offset.length())
 }
 
-/// Both eye and look_at moved by `by`.
-fn moved(camera: &Camera, by: DVec3) -> Camera {
-    Camera {
-        eye: (DVec3::from(camera.eye) + by).to_array(),
-        look_at: (DVec3::from(camera.look_at) + by).to_array(),
-        ..camera.clone()
-    }
+/// Both eye and look_at moved by `by` (look_at stopped at the reach's
+/// walls, the eye kept at its distance).
+fn moved(camera: &Camera, by: DVec3, reach: &Reach) -> Camera {
+    let (forward, _, _, distance) = frame_of(camera);
+    let look_at = DVec3::from(camera.look_at) + by;
+    reach.place(camera.clone(), look_at, -forward, distance, camera)
 }
 
 /// Pan: the point at look_at's depth under the cursor follows it.
-pub fn pan(camera: &Camera, dx: f64, dy: f64, window_height: u32) -> Camera {
+pub fn pan(camera: &Camera, dx: f64, dy: f64, window_height: u32, reach: &Reach) -> Camera {
     let (_, right, up, distance) = frame_of(camera);
     let pixel = 2.0 * distance * (camera.vfov.to_radians() / 2.0).tan() / window_height as f64;
-    moved(camera, (-dx * right + dy * up) * pixel)
+    moved(camera, (-dx * right + dy * up) * pixel, reach)
 }
 
 /// Dolly: each notch of the wheel towards the scene brings the eye 10%
-/// closer to look_at (away for notches back).
-pub fn dolly(camera: &Camera, notches: f64) -> Camera {
-    let centre = DVec3::from(camera.look_at);
-    let offset = DVec3::from(camera.eye) - centre;
-    Camera {
-        eye: (centre + offset * 0.9f64.powf(notches)).to_array(),
-        ..camera.clone()
-    }
+/// closer to look_at (away for notches back), as far as `reach` allows.
+pub fn dolly(camera: &Camera, notches: f64, reach: &Reach) -> Camera {
+    let (forward, _, _, distance) = frame_of(camera);
+    let look_at = DVec3::from(camera.look_at);
+    // 0 or ∞ for a wild count: the reach's least or farthest distance.
+    let distance = distance * 0.9f64.powf(notches);
+    reach.place(camera.clone(), look_at, -forward, distance, camera)
 }
 
 /// Fly: a step of 5% of the distance to look_at along the camera's
-/// forward (W, S), right (D, A) or up (E, Q), look_at moving alike.
-pub fn fly(camera: &Camera, key: char) -> Option<Camera> {
+/// forward (W, S), right (D, A) or up (E, Q), look_at moving alike, up to
+/// the reach's walls.
+pub fn fly(camera: &Camera, key: char, reach: &Reach) -> Option<Camera> {
     let (forward, right, up, distance) = frame_of(camera);
     let direction = match key {
         'w' => forward,
@@ -80,17 +188,25 @@ pub fn fly(camera: &Camera, key: char) -> Option<Camera> {
         'q' => -up,
         _ => return None,
     };
-    Some(moved(camera, direction * 0.05 * distance))
+    Some(moved(camera, direction * 0.05 * distance, reach))
 }
 
 /// The camera framed on the box `bounds` (as a model with no camera of
-/// its own is framed; `flat`, a flat model's normal), at the window's size.
-pub fn frame(bounds: (DVec3, DVec3), flat: Option<DVec3>, width: u32, height: u32) -> Camera {
-    Camera {
+/// its own is framed; `flat`, a flat model's normal), at the window's size,
+/// within reach.
+pub fn frame(
+    bounds: (DVec3, DVec3),
+    flat: Option<DVec3>,
+    width: u32,
+    height: u32,
+    reach: &Reach,
+) -> Camera {
+    let framed = Camera {
         width,
         height,
         ..frame_camera(&bounds, flat)
-    }
+    };
+    reach.keep(framed.clone(), &framed)
 }
 
 /// The camera as a scene file's `[camera]` table (docs/scene-format.md):

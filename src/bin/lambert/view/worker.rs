@@ -6,6 +6,7 @@
 
 use std::path::PathBuf;
 use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, TryRecvError};
 use std::time::{Duration, Instant};
 
@@ -15,6 +16,8 @@ use lambert::gpu::{Gpu, GpuRenderer};
 use lambert::output::Image;
 use lambert::render::{Progressive, Renderer};
 use lambert::scene::Scene;
+
+use super::navigate::Reach;
 
 /// What the window asks of the render thread.
 pub enum Command {
@@ -57,6 +60,9 @@ pub enum Report {
     Say(String),
     /// A result for the terminal (stdout: the `[camera]` table).
     Print(String),
+    /// Something that failed without ending the session (a screenshot
+    /// not written): on stderr and in the window's title.
+    Problem(String),
     /// `--frames N`: the last frame is in and the screenshot written.
     Finished,
     Failed(String),
@@ -78,11 +84,17 @@ pub struct Frame {
 
 /// The render thread's state.
 pub struct Worker {
-    /// The host's copy, for a rebuild (shadows) and for framing.
+    /// The host's copy, for a rebuild (shadows), for framing and for its
+    /// camera as loaded (`R`).
     pub scene: Arc<Scene>,
-    /// The file the scene came from (its cameras, `R`, `1`–`9`).
+    /// The file the scene came from (its glTF cameras, `1`–`9`).
     pub path: PathBuf,
-    pub renderer: Renderer,
+    /// None only while a rebuild replaces it (the old one goes first).
+    pub renderer: Option<Renderer>,
+    /// Where the camera may go in this scene.
+    pub reach: Reach,
+    /// Set by the window to stop the frame in flight (it is quitting).
+    pub cancel: Arc<AtomicBool>,
     /// The device the renderer renders on, when a GPU's: rebuilds stay on
     /// the device the window presents with.
     pub gpu: Option<Gpu>,
@@ -96,6 +108,9 @@ impl Worker {
     /// false once the window is gone.
     pub fn run(mut self, commands: Receiver<Command>, report: impl Fn(Report) -> bool) {
         loop {
+            if self.cancel.load(Ordering::Relaxed) {
+                return;
+            }
             let command = if self.progressive.is_finished() {
                 match commands.recv() {
                     Ok(command) => Some(command),
@@ -124,12 +139,13 @@ impl Worker {
         let camera = self.progressive.view().camera.clone();
         let (width, height) = (camera.width, camera.height);
         let sized = |c: Camera| Camera { width, height, ..c };
+        let reach = self.reach;
         match command {
-            Command::Orbit { dx, dy } => self.restart(orbit(&camera, dx, dy, height)),
-            Command::Pan { dx, dy } => self.restart(pan(&camera, dx, dy, height)),
-            Command::Dolly(notches) => self.restart(dolly(&camera, notches)),
+            Command::Orbit { dx, dy } => self.restart(orbit(&camera, dx, dy, height, &reach)),
+            Command::Pan { dx, dy } => self.restart(pan(&camera, dx, dy, height, &reach)),
+            Command::Dolly(notches) => self.restart(dolly(&camera, notches, &reach)),
             Command::Fly(key) => {
-                if let Some(moved) = fly(&camera, key) {
+                if let Some(moved) = fly(&camera, key, &reach) {
                     self.restart(moved);
                 }
             }
@@ -155,7 +171,7 @@ impl Worker {
                             })
                         })
                     });
-                    self.restart(frame(bounds, flat.flatten(), width, height));
+                    self.restart(frame(bounds, flat.flatten(), width, height, &reach));
                 }
                 None => {
                     report(Report::Say("the scene has no geometry to frame".into()));
@@ -168,13 +184,19 @@ impl Worker {
                 }
             },
             Command::ToggleShadows => {
-                let mut scene = (*self.scene).clone();
+                // The renderer (on a GPU, its copy of the scene) goes
+                // first, so that the scene is ours alone and changes in
+                // place: never two copies at once.
+                self.drop_renderer();
+                let scene = Arc::make_mut(&mut self.scene);
                 scene.shadows = !scene.shadows;
+                let on = scene.shadows;
                 report(Report::Say(format!(
                     "shadows {}",
-                    if scene.shadows { "on" } else { "off" }
+                    if on { "on" } else { "off" }
                 )));
-                self.upload(scene, camera)?;
+                let renderer = self.renderer_for(&self.scene)?;
+                self.show(Arc::clone(&self.scene), renderer, camera);
             }
             Command::Load(path) => match Scene::load(&path) {
                 Ok(scene) => {
@@ -182,8 +204,12 @@ impl Worker {
                         report(Report::Say(format!("warning: {warning}")));
                     }
                     let camera = sized(scene.view.camera.clone());
-                    match self.upload(scene, camera) {
-                        Ok(()) => {
+                    // Another scene: the one shown stays until this one
+                    // is on the device, and where it does not go there.
+                    let scene = Arc::new(scene);
+                    match self.renderer_for(&scene) {
+                        Ok(renderer) => {
+                            self.show(scene, renderer, camera);
                             report(Report::Say(format!("loaded {}", path.display())));
                             self.path = path;
                         }
@@ -196,14 +222,19 @@ impl Worker {
                     report(Report::Say(format!("error: {e}")));
                 }
             },
-            Command::Screenshot(path) => {
-                self.progressive.image().save(&path)?;
-                report(Report::Say(format!(
-                    "wrote {} ({} spp)",
-                    path.display(),
-                    self.progressive.samples()
-                )));
-            }
+            Command::Screenshot(path) => match self.progressive.image().save(&path) {
+                Ok(()) => {
+                    report(Report::Say(format!(
+                        "wrote {} ({} spp)",
+                        path.display(),
+                        self.progressive.samples()
+                    )));
+                }
+                // The session goes on: the next `s` may find room.
+                Err(e) => {
+                    report(Report::Problem(format!("screenshot not written: {e}")));
+                }
+            },
             Command::PrintCamera => {
                 report(Report::Print(camera_toml(&camera)));
             }
@@ -211,10 +242,11 @@ impl Worker {
         Ok(())
     }
 
-    /// The file's camera (`index` None), or its glTF camera `index`.
+    /// The camera the file was loaded with (`index` None: no reparse), or
+    /// its glTF camera `index`.
     fn file_camera(&self, index: Option<usize>) -> Result<Camera> {
         let Some(index) = index else {
-            return Ok(Scene::load(&self.path)?.view.camera);
+            return Ok(self.scene.view.camera.clone());
         };
         let is_gltf = lambert::loading::Format::of(&self.path).is_ok_and(|f| f.is_gltf());
         if !is_gltf {
@@ -250,16 +282,32 @@ impl Worker {
             .camera)
     }
 
-    /// `scene` on the device the renderer is on (or the CPU path), seen
-    /// from `camera`.
-    fn upload(&mut self, scene: Scene, camera: Camera) -> Result<()> {
-        self.renderer = match &self.gpu {
-            Some(gpu) => Renderer::Gpu(Box::new(GpuRenderer::new(gpu.clone(), &scene)?)),
-            None => Renderer::Cpu(Arc::new(scene.clone())),
-        };
-        self.scene = Arc::new(scene);
+    /// Lets the renderer go, and on a GPU its buffers at once: wgpu frees
+    /// a dropped buffer only when the device is next polled.
+    fn drop_renderer(&mut self) {
+        self.renderer = None;
+        if let Some(gpu) = &self.gpu {
+            // Nothing is in flight between frames: a failure here would
+            // be the next upload's to report.
+            let _ = gpu.device.poll(wgpu::PollType::wait_indefinitely());
+        }
+    }
+
+    /// A renderer of `scene` on the device the renderer was on (or the
+    /// CPU path, sharing the host's copy).
+    fn renderer_for(&self, scene: &Arc<Scene>) -> Result<Renderer> {
+        Ok(match &self.gpu {
+            Some(gpu) => Renderer::Gpu(Box::new(GpuRenderer::new(gpu.clone(), scene)?)),
+            None => Renderer::Cpu(Arc::clone(scene)),
+        })
+    }
+
+    /// `scene`, rendered by `renderer`, seen from `camera`.
+    fn show(&mut self, scene: Arc<Scene>, renderer: Renderer, camera: Camera) {
+        self.renderer = Some(renderer);
+        self.reach = Reach::of(&scene);
+        self.scene = scene;
         self.restart(camera);
-        Ok(())
     }
 
     /// Starts the view again from its first sample, from `camera`.
@@ -272,10 +320,14 @@ impl Worker {
     }
 
     /// Adds one sample per pixel and reports the frame; with `--frames`,
-    /// writes the screenshot after the last.
+    /// writes the screenshot after the last. A frame cancelled (the window
+    /// is quitting) reports nothing.
     fn add_frame(&mut self, report: &impl Fn(Report) -> bool) -> Result<()> {
         let start = Instant::now();
-        self.renderer.add_samples(&mut self.progressive, 1)?;
+        let renderer = self.renderer.as_mut().expect("a renderer between rebuilds");
+        if !renderer.add_samples_or_cancel(&mut self.progressive, 1, &self.cancel)? {
+            return Ok(());
+        }
         let frame_time = start.elapsed();
         let image = self.progressive.image();
         let view = self.progressive.view();
