@@ -79,12 +79,11 @@ fn points_query<'py, T: Send>(
     let (view, n) = (rows.view(), rows.len());
     let (out, notes) = detached(py, || {
         let points = read_points(view, n)?;
-        let warnings = match view.is_f64() {
-            true => Vec::new(),
-            false => native
-                .scene
-                .placement()
-                .point_warnings(n, |i| points[i].into()),
+        let warnings = if view.is_f64() {
+            Vec::new()
+        } else {
+            let placement = native.scene.placement();
+            placement.point_warnings(n, |i| points[i].into())
         };
         let (out, note) = on_device(native, device, |renderer| work(renderer, &points))?;
         Ok((out, note.into_iter().chain(warnings)))

@@ -144,3 +144,24 @@ def test_far_float32_points_and_rays_warn(device):
         warnings.simplefilter("error")
         near.distance((points - PLACES["1e6"]).astype(np.float32), device=device)
         near.count_intersections(o - np.float32(PLACES["1e6"]), d, device=device)
+
+
+def test_gpu_lists_more_crossings_than_one_binding_holds():
+    """Item 6: 300,000 rays × 30 crossings (180 MB of listed crossings,
+    beyond lavapipe's 128 MiB storage binding) are listed on the GPU in
+    batches that fit, as the CPU path lists them."""
+    vertices, faces = [], []
+    for z in range(30):
+        b = len(vertices)
+        vertices += [[-1, -1, z], [1, -1, z], [1, 1, z], [-1, 1, z]]
+        faces += [[b, b + 1, b + 2], [b, b + 2, b + 3]]
+    scene = lambert.Scene.from_arrays(np.array(vertices, dtype=np.float64), np.array(faces))
+    n = 300_000
+    rng = np.random.default_rng(6)
+    o = np.column_stack([rng.uniform(-0.9, 0.9, (n, 2)), np.full(n, -1.0)]).astype(np.float32)
+    d = np.tile(np.float32([0, 0, 1]), (n, 1))
+    gpu = scene.list_intersections(o, d, device="gpu")
+    cpu = scene.list_intersections(o, d, device="cpu")
+    assert len(cpu["t"]) == 30 * n
+    for key in cpu:
+        assert (gpu[key] == cpu[key]).all(), key
