@@ -190,19 +190,10 @@ impl Placement {
     /// f32's largest t (reported as misses).
     pub fn ray_problem(&self, origin: DVec3, dir: DVec3, in_f32: bool) -> Option<RayProblem> {
         let local = origin - self.offset;
-        if in_f32 {
-            let magnitude = origin.abs().max_element() as f32;
-            let spacing = (magnitude.next_up() - magnitude) as f64;
-            let scale = (2.0 * self.radius).max(local.length());
-            if spacing > ORIGIN_PRECISION * scale {
-                return Some(RayProblem::CoarseOrigin(format!(
-                    "its origin {} is given in f32, which spaces values {spacing} apart \
-                     there, more than {ORIGIN_PRECISION:e} of the scene's size or distance \
-                     ({scale:.3}): its hits are no more precise than its origin (give \
-                     origins in f64, as the Python package takes them)",
-                    vector_text(origin)
-                )));
-            }
+        if in_f32 && let Some(coarse) = self.coarse_in_f32(origin, "origin", "hits") {
+            return Some(RayProblem::CoarseOrigin(format!(
+                "{coarse} (give origins in f64, as the Python package takes them)"
+            )));
         }
         let last = (local.length() + 2.0 * self.radius) / dir.length();
         if last > f32::MAX as f64 && self.radius > 0.0 {
@@ -213,6 +204,24 @@ impl Placement {
             )));
         }
         None
+    }
+
+    /// Where a world position given in f32 is held more coarsely than
+    /// ORIGIN_PRECISION of the larger of the scene's size and the
+    /// position's distance from it: what it says of the `what` (a ray's
+    /// origin, a query point) and of its `answers`.
+    fn coarse_in_f32(&self, position: DVec3, what: &str, answers: &str) -> Option<String> {
+        let magnitude = position.abs().max_element() as f32;
+        let spacing = (magnitude.next_up() - magnitude) as f64;
+        let scale = (2.0 * self.radius).max((position - self.offset).length());
+        (spacing > ORIGIN_PRECISION * scale).then(|| {
+            format!(
+                "its {what} {} is given in f32, which spaces values {spacing} apart \
+                 there, more than {ORIGIN_PRECISION:e} of the scene's size or distance \
+                 ({scale:.3}): its {answers} are no more precise than its {what}",
+                vector_text(position)
+            )
+        })
     }
 
     /// `ray_problem` over a query given in world f32: one warning per kind
@@ -231,36 +240,62 @@ impl Placement {
         in_f32: bool,
         ray: impl Fn(usize) -> (DVec3, DVec3) + Sync,
     ) -> Vec<String> {
-        let problems: Vec<(usize, RayProblem)> = (0..n)
-            .into_par_iter()
-            .filter_map(|i| {
-                let (origin, dir) = ray(i);
-                self.ray_problem(origin, dir, in_f32).map(|p| (i, p))
-            })
-            .collect();
-        let mut first: Vec<(usize, RayProblem, usize)> = Vec::new();
-        for (i, problem) in problems {
-            let kind = std::mem::discriminant(&problem);
-            match first
-                .iter_mut()
-                .find(|f| std::mem::discriminant(&f.1) == kind)
-            {
-                Some(f) => f.2 += 1,
-                None => first.push((i, problem, 1)),
-            }
-        }
-        first
-            .into_iter()
-            .map(|(i, problem, count)| match count {
-                1 => format!("ray {i}: {}", problem.text()),
-                _ => format!(
-                    "ray {i} (and {} more like it): {}",
-                    count - 1,
-                    problem.text()
-                ),
-            })
-            .collect()
+        grouped_warnings("ray", n, |i| {
+            let (origin, dir) = ray(i);
+            self.ray_problem(origin, dir, in_f32)
+        })
     }
+
+    /// The warning of a point query given in world f32 (a point file,
+    /// float32 arrays), if any: where f32 holds points more coarsely than
+    /// the scene's precision (a point near a mesh placed at 1e8, where f32
+    /// spaces values 8 apart), naming the first such point and how many
+    /// are; point i being `point(i)` (widened exactly to f64).
+    pub fn point_warnings(&self, n: usize, point: impl Fn(usize) -> DVec3 + Sync) -> Vec<String> {
+        grouped_warnings("point", n, |i| {
+            self.coarse_in_f32(point(i), "position", "answers")
+                .map(|coarse| {
+                    RayProblem::CoarseOrigin(format!(
+                        "{coarse} (give points in f64, as the Python package takes them)"
+                    ))
+                })
+        })
+    }
+}
+
+/// `problem` over items 0..n (`what`s: rays or points): one warning per
+/// kind of problem, naming the first item with it and how many have it.
+fn grouped_warnings(
+    what: &str,
+    n: usize,
+    problem: impl Fn(usize) -> Option<RayProblem> + Sync,
+) -> Vec<String> {
+    let problems: Vec<(usize, RayProblem)> = (0..n)
+        .into_par_iter()
+        .filter_map(|i| problem(i).map(|p| (i, p)))
+        .collect();
+    let mut first: Vec<(usize, RayProblem, usize)> = Vec::new();
+    for (i, problem) in problems {
+        let kind = std::mem::discriminant(&problem);
+        match first
+            .iter_mut()
+            .find(|f| std::mem::discriminant(&f.1) == kind)
+        {
+            Some(f) => f.2 += 1,
+            None => first.push((i, problem, 1)),
+        }
+    }
+    first
+        .into_iter()
+        .map(|(i, problem, count)| match count {
+            1 => format!("{what} {i}: {}", problem.text()),
+            _ => format!(
+                "{what} {i} (and {} more like it): {}",
+                count - 1,
+                problem.text()
+            ),
+        })
+        .collect()
 }
 
 /// What `Placement::ray_problem` found, and its message.
@@ -277,6 +312,26 @@ impl RayProblem {
         match self {
             RayProblem::CoarseOrigin(text) | RayProblem::BeyondT(text) => text,
         }
+    }
+}
+
+/// A world point as a query gives it: f32 (a point file, float32 arrays)
+/// or f64 (float64 arrays), taken exactly into f64 to be moved into the
+/// scene's frame, so that f64 points keep their precision far from the
+/// origin.
+pub trait WorldPoint: Copy + Send + Sync + std::fmt::Debug {
+    fn world(self) -> DVec3;
+}
+
+impl WorldPoint for [f32; 3] {
+    fn world(self) -> DVec3 {
+        world(self)
+    }
+}
+
+impl WorldPoint for [f64; 3] {
+    fn world(self) -> DVec3 {
+        DVec3::from(self)
     }
 }
 

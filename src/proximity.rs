@@ -2,7 +2,11 @@
 //! winding numbers and the inside tests built on them, and every hit
 //! along rays, on either device. Here, what both paths share: the checks
 //! of the points and rays, and their move into the scene's local frame
-//! (world points and rays in, world answers out, as `trace`).
+//! (world points and rays in, world answers out, as `trace`): points, f32
+//! or f64, are moved in f64; rays given in f64 are moved by the caller
+//! (`Placement::local_ray`, as `trace`'s) and passed as `LocalRays`.
+
+use std::borrow::Cow;
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -11,7 +15,7 @@ use crate::cpu;
 use crate::error::{Error, Result};
 use crate::layout::{ClosestPoint, NO_HIT, Ray};
 use crate::limits::{MAX_LOCAL_COORDINATE, vector_text};
-use crate::placement::{Placement, world_hit};
+use crate::placement::{LocalRays, Placement, WorldPoint, world_hit};
 use crate::render::{IntersectionList, Renderer};
 
 /// The direction of `parity_inside`'s rays: Open3D's (RaycastingScene's
@@ -44,9 +48,9 @@ impl Renderer {
     /// `ClosestPoint::NONE` where no triangle is that near. Where several
     /// triangles are equally near (an edge or a vertex they share), the
     /// lowest id.
-    pub fn closest_points(
+    pub fn closest_points<P: WorldPoint>(
         &mut self,
-        points: &[[f32; 3]],
+        points: &[P],
         max_distance: f32,
     ) -> Result<Vec<ClosestPoint>> {
         let placement = self.triangles_only("closest points")?;
@@ -86,7 +90,7 @@ impl Renderer {
     /// world point (Jacobson et al. 2013, through Barill et al.'s tree):
     /// 1 inside a closed, outward-facing mesh, 0 outside, fractions near
     /// holes. Inside is ≥ 0.5.
-    pub fn winding_numbers(&mut self, points: &[[f32; 3]]) -> Result<Vec<f32>> {
+    pub fn winding_numbers<P: WorldPoint>(&mut self, points: &[P]) -> Result<Vec<f32>> {
         let placement = self.triangles_only("winding numbers")?;
         let local = local_points(&placement, points)?;
         match self {
@@ -98,19 +102,21 @@ impl Renderer {
     /// Whether each world point is inside by parity: an odd number of
     /// crossings along a ray from it in direction `PARITY_DIRECTION`, as
     /// Open3D counts (for watertight meshes; `winding_numbers` for others).
-    pub fn parity_inside(&mut self, points: &[[f32; 3]]) -> Result<Vec<bool>> {
+    pub fn parity_inside<P: WorldPoint>(&mut self, points: &[P]) -> Result<Vec<bool>> {
         check_points(points)?;
-        let rays: Vec<Ray> = points
-            .iter()
-            .map(|&origin| Ray {
-                origin,
-                tmin: 0.0,
-                dir: PARITY_DIRECTION,
-                tmax: f32::INFINITY,
-            })
+        let placement = self.triangles_only("intersection counts")?;
+        let dir = DVec3::from(PARITY_DIRECTION.map(f64::from));
+        // Each ray starts from its point in f64 (`local_ray`, as a ray
+        // given in f64): a counted crossing needs no shift back.
+        let rays = points
+            .par_iter()
+            .map(|p| placement.local_ray(p.world(), dir, 0.0, f64::INFINITY).0)
             .collect();
         Ok(self
-            .count_intersections(&rays)?
+            .count_local_intersections(&LocalRays {
+                rays: Cow::Owned(rays),
+                shifts: Vec::new(),
+            })?
             .into_iter()
             .map(|n| n % 2 == 1)
             .collect())
@@ -121,7 +127,13 @@ impl Renderer {
     pub fn count_intersections(&mut self, rays: &[Ray]) -> Result<Vec<u32>> {
         let placement = self.triangles_only("intersection counts")?;
         check_rays(rays)?;
-        let local = placement.localize(rays);
+        self.count_local_intersections(&placement.localize(rays))
+    }
+
+    /// `count_intersections` of rays already in the scene's local frame
+    /// (`Placement::local_ray` of rays given in f64, checked as given).
+    pub fn count_local_intersections(&mut self, local: &LocalRays) -> Result<Vec<u32>> {
+        let placement = self.triangles_only("intersection counts")?;
         match self {
             Renderer::Gpu(r) => r.count_intersections(&local.rays, cpu::box_pad(placement.radius)),
             Renderer::Cpu(scene) => Ok(cpu::count_intersections(scene, &local.rays)),
@@ -134,7 +146,14 @@ impl Renderer {
     pub fn list_intersections(&mut self, rays: &[Ray]) -> Result<IntersectionList> {
         let placement = self.triangles_only("intersection lists")?;
         check_rays(rays)?;
-        let local = placement.localize(rays);
+        self.list_local_intersections(&placement.localize(rays))
+    }
+
+    /// `list_intersections` of rays already in the scene's local frame
+    /// (`Placement::local_ray`, checked as given), each t on the ray as
+    /// given (plus its shift, in f64).
+    pub fn list_local_intersections(&mut self, local: &LocalRays) -> Result<IntersectionList> {
+        let placement = self.triangles_only("intersection lists")?;
         let (ray_splits, mut hits) = match self {
             Renderer::Gpu(r) => {
                 let (splits, mut hits) =
@@ -186,11 +205,8 @@ fn in_spatial_order<T: Copy + Send + Sync>(
 }
 
 /// Every point finite, or an error naming the first that is not.
-fn check_points(points: &[[f32; 3]]) -> Result<()> {
-    match points
-        .par_iter()
-        .position_first(|p| !p.iter().all(|c| c.is_finite()))
-    {
+fn check_points<P: WorldPoint>(points: &[P]) -> Result<()> {
+    match points.par_iter().position_first(|p| !p.world().is_finite()) {
         None => Ok(()),
         Some(i) => Err(Error::Usage(format!(
             "point {i}: {:?} is not finite (NaN or infinite)",
@@ -207,9 +223,9 @@ fn check_rays(rays: &[Ray]) -> Result<()> {
 /// The world points in the scene's local frame (in f64, then rounded
 /// once), or an error naming the first that is not finite or lies so far
 /// from the scene that f32 squares of its distance would overflow.
-fn local_points(placement: &Placement, points: &[[f32; 3]]) -> Result<Vec<[f32; 3]>> {
+fn local_points<P: WorldPoint>(placement: &Placement, points: &[P]) -> Result<Vec<[f32; 3]>> {
     check_points(points)?;
-    let local = |p: &[f32; 3]| DVec3::from(p.map(f64::from)) - placement.offset;
+    let local = |p: &P| p.world() - placement.offset;
     if let Some(i) = points
         .par_iter()
         .position_first(|p| local(p).abs().max_element() > MAX_LOCAL_COORDINATE)
@@ -217,12 +233,9 @@ fn local_points(placement: &Placement, points: &[[f32; 3]]) -> Result<Vec<[f32; 
         return Err(Error::Usage(format!(
             "point {i}: {} is more than {MAX_LOCAL_COORDINATE:e} from the scene's centre {} \
              along an axis: its distance cannot be given in f32",
-            vector_text(DVec3::from(points[i].map(f64::from))),
+            vector_text(points[i].world()),
             vector_text(placement.offset)
         )));
-    }
-    if placement.offset == DVec3::ZERO {
-        return Ok(points.to_vec());
     }
     Ok(points
         .par_iter()

@@ -43,6 +43,31 @@ fn fallback_note(error: &crate::Error) -> String {
     )
 }
 
+/// Why `--device auto` took the CPU path for what a GPU's limits could not
+/// hold.
+fn limit_note(error: &str) -> String {
+    format!("GPU: {error}\nnote: using the CPU path instead")
+}
+
+/// Runs `work` on `renderer`, opened for `choice`; where that is auto and
+/// the work hits a limit of its GPU (`Error::GpuLimit`: the scene fit, a
+/// query's answers do not), runs it again on the CPU path sharing `scene`,
+/// and returns auto's note of why with the answers.
+pub fn with_fallback<T>(
+    renderer: &mut Renderer,
+    choice: DeviceChoice,
+    scene: &Arc<Scene>,
+    work: impl Fn(&mut Renderer) -> Result<T>,
+) -> Result<(T, Option<String>)> {
+    match work(renderer) {
+        Err(Error::GpuLimit(e)) if choice == DeviceChoice::Auto && !renderer.is_cpu() => {
+            let answers = work(&mut Renderer::Cpu(Arc::clone(scene)))?;
+            Ok((answers, Some(limit_note(&e))))
+        }
+        done => done.map(|answers| (answers, None)),
+    }
+}
+
 /// What `open_device` opened.
 enum Opened {
     Gpu(Box<GpuRenderer>),
@@ -86,9 +111,7 @@ fn open_device(
             };
             match GpuRenderer::new(gpu, scene) {
                 Ok(renderer) => Ok(Opened::Gpu(Box::new(renderer))),
-                Err(Error::GpuLimit(e)) => Ok(Opened::Cpu(Some(format!(
-                    "GPU: {e}\nnote: using the CPU path instead"
-                )))),
+                Err(Error::GpuLimit(e)) => Ok(Opened::Cpu(Some(limit_note(&e)))),
                 Err(e) => Err(e),
             }
         }

@@ -206,7 +206,11 @@ class Scene:
         within max_distance), ``u``, ``v`` float32 (the point is
         (1-u-v)·v0 + u·v1 + v·v2, as ``intersect``'s), ``distance`` float32
         (inf beyond max_distance). Of triangles at the same distance (a
-        point nearest an edge or vertex they share), one is reported."""
+        point nearest an edge or vertex they share), one is reported.
+        float64 points keep their precision far from the origin (``point``
+        is float32: take a far location from prim_id, u and v on the
+        float64 vertices); where float32 points are too coarse for the
+        scene, a RuntimeWarning names the first. So for every point query."""
         p = _floats("points", points)
         return _lambert.closest_points(self._native, p, _max_distance(max_distance), device)
 
@@ -236,8 +240,9 @@ class Scene:
 
     def count_intersections(self, origins, directions=None, tmin=0.0, tmax=np.inf, *, device="auto"):
         """(N,) int32: how many times each ray crosses the triangles within
-        tmin < t < tmax (rays as for :meth:`intersect`); a crossing through
-        an edge or vertex that triangles share counts once."""
+        tmin < t < tmax (rays as for :meth:`intersect`, float64 origins
+        traced from f64); a crossing through an edge or vertex that
+        triangles share counts once."""
         o, d, lo, hi = _query(origins, directions, tmin, tmax)
         return _lambert.crossings(self._native, o, d, lo, hi, device, False)
 

@@ -144,7 +144,8 @@ class ProximityQuery(_Cached):
     - ``on_surface``: the closest point is found in float32 and returned
       as (1-u-v)·v0 + u·v1 + v·v2 of the triangle found, evaluated in
       float64 (trimesh's is float64 throughout): on a mesh of size 1 it is
-      within about 1e-7 of trimesh's. Of triangles equally near (a point
+      within about 1e-7 of trimesh's, far from the origin too (the points
+      go in as float64, moved into the mesh's frame before float32). Of triangles equally near (a point
       nearest an edge or vertex they share) one is reported; trimesh
       prefers the one whose normal faces the point most.
     - ``signed_distance`` signs by the generalized winding number (inside

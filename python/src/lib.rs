@@ -309,11 +309,10 @@ impl NativeScene {
 
 /// Parses a query's arguments: either `records` (an (N, 8) float32 view of
 /// RAY_DTYPE records) or origins, directions, tmin and tmax, and runs
-/// `$body` with `$query` the `Query` (on `$scene`). With `$placed`,
-/// float64 origins are traced in the scene's frame; without, every ray is
-/// a world f32 ray (the crossing queries, which take world rays).
+/// `$body` with `$query` the `Query` (on `$scene`): float64 origins are
+/// traced in the scene's frame.
 macro_rules! with_query {
-    ($scene:expr, $origins:expr, $directions:expr, $tmin:expr, $tmax:expr, $placed:expr, |$query:ident| $body:expr) => {{
+    ($scene:expr, $origins:expr, $directions:expr, $tmin:expr, $tmax:expr, |$query:ident| $body:expr) => {{
         match $directions {
             None => {
                 let records: PyReadonlyArray2<f32> = $origins.extract()?;
@@ -353,7 +352,7 @@ macro_rules! with_query {
                     n,
                     // float64 origins stay f64 until they are in the
                     // scene's frame (docs/python.md, "Far from the origin").
-                    local: ($placed && origins.is_f64()).then(|| $scene.placement()),
+                    local: origins.is_f64().then(|| $scene.placement()),
                 };
                 $body
             }
@@ -419,7 +418,7 @@ impl NativeScene {
         t64: bool,
     ) -> PyResult<Bound<'py, PyDict>> {
         let (device, intersect) = (device_choice(device)?, intersect_choice(intersect)?);
-        with_query!(self.scene, origins, directions, tmin, tmax, true, |query| {
+        with_query!(self.scene, origins, directions, tmin, tmax, |query| {
             let (columns, notes) = detached(py, || {
                 let n = query.len();
                 let t = TColumn::new(n, t64);
@@ -502,7 +501,7 @@ impl NativeScene {
         intersect: &str,
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
         let (device, intersect) = (device_choice(device)?, intersect_choice(intersect)?);
-        with_query!(self.scene, origins, directions, tmin, tmax, true, |query| {
+        with_query!(self.scene, origins, directions, tmin, tmax, |query| {
             let (hit, notes) = detached(py, || {
                 let n = query.len();
                 let hit = Column::new(n);

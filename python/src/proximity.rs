@@ -4,13 +4,15 @@
 //! rays, on numpy arrays of any layout, with the GIL released, on the
 //! device asked (`Renderer`'s queries, both paths).
 
+use std::borrow::Cow;
 use std::sync::Arc;
 
 use lambert::Error;
 use lambert::jobs::{self, Sign};
 use lambert::layout::{ListedHit, NO_HIT, Ray};
 use lambert::limits::checked_point;
-use lambert::render::{DeviceChoice, IntersectionList, Renderer};
+use lambert::placement::LocalRays;
+use lambert::render::{DeviceChoice, IntersectionList, Renderer, with_fallback};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
@@ -22,9 +24,10 @@ use crate::arrays::{Bound1, Rows, RowsView};
 use crate::query::Query;
 use crate::{NativeScene, detached, device_choice};
 
-/// Query points as the renderer takes them: f32, each checked finite and
-/// within the coordinate limit, the first bad row named.
-fn read_points(rows: RowsView<'_>, n: usize) -> Result<Vec<[f32; 3]>, Error> {
+/// Query points as given (float32 widened exactly: float64 points stay f64
+/// until the renderer moves them into the scene's frame), each checked
+/// finite and within the coordinate limit, the first bad row named.
+fn read_points(rows: RowsView<'_>, n: usize) -> Result<Vec<[f64; 3]>, Error> {
     let bad = (0..n)
         .into_par_iter()
         .position_first(|i| checked_point("", rows.row_f64(i)).is_err());
@@ -32,16 +35,17 @@ fn read_points(rows: RowsView<'_>, n: usize) -> Result<Vec<[f32; 3]>, Error> {
         let problem = checked_point("", rows.row_f64(i)).expect_err("a bad row");
         return Err(Error::Usage(format!("points row {i}{problem}")));
     }
-    Ok((0..n).into_par_iter().map(|i| rows.row(i)).collect())
+    Ok((0..n).into_par_iter().map(|i| rows.row_f64(i)).collect())
 }
 
 /// Runs `work` on the renderer for `device`, without the GIL: on the CPU
 /// path on a renderer of its own sharing the scene, so that threads query
-/// at once; a GPU's queue is taken in turn. Returns the fallback note too.
+/// at once; a GPU's queue is taken in turn (auto takes the CPU path where
+/// the work hits the GPU's limits). Returns the fallback note too.
 fn on_device<T: Send>(
     native: &NativeScene,
     device: DeviceChoice,
-    work: impl FnOnce(&mut Renderer) -> Result<T, Error> + Send,
+    work: impl Fn(&mut Renderer) -> Result<T, Error>,
 ) -> Result<(T, Option<String>), Error> {
     if native.scene.triangles.is_empty() {
         return Err(Error::Usage(
@@ -55,26 +59,36 @@ fn on_device<T: Send>(
         let mut cpu = Renderer::Cpu(Arc::clone(&native.scene));
         Ok((work(&mut cpu)?, note))
     } else {
-        Ok((work(renderer)?, note))
+        let (out, fell_back) = with_fallback(renderer, device, &native.scene, work)?;
+        Ok((out, note.or(fell_back)))
     }
 }
 
-/// A points query: the points read (any layout), `work` run on them.
+/// A points query: the points read (any layout), `work` run on them; a
+/// RuntimeWarning where float32 points are too coarse for the scene's
+/// precision (as `intersect` warns of float32 origins).
 fn points_query<'py, T: Send>(
     py: Python<'py>,
     native: &NativeScene,
     points: &Bound<'py, PyAny>,
     device: &str,
-    work: impl FnOnce(&mut Renderer, &[[f32; 3]]) -> Result<T, Error> + Send,
+    work: impl Fn(&mut Renderer, &[[f64; 3]]) -> Result<T, Error> + Send + Sync,
 ) -> PyResult<T> {
     let device = device_choice(device)?;
     let rows = Rows::extract("points", points)?;
     let (view, n) = (rows.view(), rows.len());
-    let (out, note) = detached(py, || {
+    let (out, notes) = detached(py, || {
         let points = read_points(view, n)?;
-        on_device(native, device, |renderer| work(renderer, &points))
+        let warnings = if view.is_f64() {
+            Vec::new()
+        } else {
+            let placement = native.scene.placement();
+            placement.point_warnings(n, |i| points[i].into())
+        };
+        let (out, note) = on_device(native, device, |renderer| work(renderer, &points))?;
+        Ok((out, note.into_iter().chain(warnings)))
     })?;
-    NativeScene::warn(py, note)?;
+    NativeScene::warn(py, notes)?;
     Ok(out)
 }
 
@@ -166,8 +180,9 @@ pub fn contains<'py>(
     Ok(inside.into_pyarray(py))
 }
 
-/// A crossing query's rays, gathered (world f32, checked), and `work` run
-/// on them.
+/// A crossing query's rays, gathered (checked as given): world f32 rays,
+/// or for float64 origins rays already in the scene's frame with their
+/// shifts (`LocalRays`, as `intersect` traces them); `work` run on them.
 #[allow(clippy::too_many_arguments)]
 fn rays_query<'py, T: Send>(
     py: Python<'py>,
@@ -177,26 +192,51 @@ fn rays_query<'py, T: Send>(
     tmin: &Bound<'py, PyAny>,
     tmax: &Bound<'py, PyAny>,
     device: &str,
-    work: impl FnOnce(&mut Renderer, &[Ray]) -> Result<T, Error> + Send,
+    work: impl Fn(&mut Renderer, Crossings) -> Result<T, Error> + Send + Sync,
 ) -> PyResult<T> {
     let device = device_choice(device)?;
-    with_query!(
-        native.scene,
-        origins,
-        directions,
-        tmin,
-        tmax,
-        false,
-        |query| {
-            let (out, notes) = detached(py, || {
-                let rays = query.gathered(Vec::new())?;
-                let (out, note) = on_device(native, device, |renderer| work(renderer, &rays))?;
-                Ok((out, (note, query.warnings(&native.scene.placement()))))
-            })?;
-            NativeScene::warn(py, notes.0.into_iter().chain(notes.1))?;
-            Ok(out)
+    with_query!(native.scene, origins, directions, tmin, tmax, |query| {
+        let (out, notes) = detached(py, || {
+            let rays = query.gathered(Vec::new())?;
+            let local = query.local().map(|placement| LocalRays {
+                rays: Cow::Borrowed(&rays[..]),
+                shifts: query.shifts(placement),
+            });
+            let crossings = match &local {
+                Some(local) => Crossings::Local(local),
+                None => Crossings::World(&rays),
+            };
+            let (out, note) = on_device(native, device, |renderer| work(renderer, crossings))?;
+            Ok((out, (note, query.warnings(&native.scene.placement()))))
+        })?;
+        NativeScene::warn(py, notes.0.into_iter().chain(notes.1))?;
+        Ok(out)
+    })
+}
+
+/// The rays of a crossing query as the renderer takes them.
+#[derive(Clone, Copy)]
+enum Crossings<'a> {
+    /// World f32 rays (float32 origins, ray records).
+    World(&'a [Ray]),
+    /// Rays moved into the scene's frame in f64 (float64 origins).
+    Local(&'a LocalRays<'a>),
+}
+
+impl Crossings<'_> {
+    fn count(self, renderer: &mut Renderer) -> Result<Vec<u32>, Error> {
+        match self {
+            Crossings::World(rays) => renderer.count_intersections(rays),
+            Crossings::Local(local) => renderer.count_local_intersections(local),
         }
-    )
+    }
+
+    fn list(self, renderer: &mut Renderer) -> Result<IntersectionList, Error> {
+        match self {
+            Crossings::World(rays) => renderer.list_intersections(rays),
+            Crossings::Local(local) => renderer.list_local_intersections(local),
+        }
+    }
 }
 
 /// The crossings of each ray in (tmin, tmax): with `list`, every one
@@ -227,7 +267,7 @@ pub fn crossings<'py>(
             |renderer, rays| {
                 // Open3D's dtype; no ray crosses 2³¹ triangles of a scene
                 // that fits in memory.
-                let counts = renderer.count_intersections(rays)?;
+                let counts = rays.count(renderer)?;
                 Ok(counts.into_iter().map(|c| c as i32).collect::<Vec<i32>>())
             },
         )?;
@@ -241,7 +281,7 @@ pub fn crossings<'py>(
         tmin,
         tmax,
         device,
-        |renderer, rays| renderer.list_intersections(rays),
+        |renderer, rays| rays.list(renderer),
     )?;
     let floats = |f: fn(&ListedHit) -> f32| hits.iter().map(f).collect::<Vec<f32>>();
     let ids = |f: fn(&ListedHit) -> u32| hits.iter().map(|h| f(h) as i64).collect::<Vec<i64>>();

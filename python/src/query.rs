@@ -117,6 +117,16 @@ impl Query<'_> {
         }
     }
 
+    /// How far along its ray each origin moved into the scene's frame
+    /// (`local_ray`'s shift), ray by ray.
+    pub fn shifts(&self, placement: &Placement) -> Vec<f64> {
+        use rayon::prelude::*;
+        (0..self.len())
+            .into_par_iter()
+            .map(|i| self.local_ray(placement, i).1)
+            .collect()
+    }
+
     /// Where f32 limits the query's hits (`Placement::ray_problem`): one
     /// warning per kind, naming the first ray and counting the rest.
     pub fn warnings(&self, placement: &Placement) -> Vec<String> {

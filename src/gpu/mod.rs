@@ -33,6 +33,7 @@ mod wave_list;
 
 pub use adapter::{AdapterRequest, Presenting, enumerate_adapters};
 pub use device::{Gpu, GpuOptions, MAX_BUFFER_ENV, SHADOW_DISPATCH_ENV};
+pub use proximity::binding_runs;
 pub use render::ShadowDispatch;
 pub use renderer::GpuRenderer;
 pub use shader::{SHADER_SOURCE, specialisation};

@@ -16,7 +16,8 @@ use super::GpuRenderer;
 use super::bindings::{PROXIMITY, SCENE, leading_bytes};
 
 /// Items per dispatch at most: no dispatch runs long enough for a watchdog,
-/// and the workgroup count stays within every device's limit.
+/// and the workgroup count stays within every device's limit
+/// (`GpuRenderer::batch`: fewer where a binding holds fewer).
 const BATCH: usize = 1 << 18;
 
 /// What the queries keep between calls.
@@ -47,6 +48,14 @@ impl GpuRenderer {
     /// sets it when it opens the renderer from an `Arc<Scene>`).
     pub fn set_winding_source(&mut self, scene: Weak<Scene>) {
         self.proximity.winding_source = Some(scene);
+    }
+
+    /// Items a dispatch takes, each binding `bytes` of one buffer (its
+    /// largest): BATCH, or as many as the adapter's storage binding limit
+    /// holds.
+    fn batch(&self, bytes: usize) -> usize {
+        let fit = self.gpu.binding_limit() / bytes as u64;
+        BATCH.min(fit as usize).max(1)
     }
 
     /// A kept buffer of at least `size` bytes (4 at least).
@@ -175,7 +184,8 @@ impl GpuRenderer {
     ) -> Result<Vec<ClosestPoint>> {
         let scalars = [max_distance * max_distance, 0.0, 0.0, 0.0];
         let mut out = Vec::with_capacity(points.len());
-        for (chunk, margins) in points.chunks(BATCH).zip(margins.chunks(BATCH)) {
+        let batch = self.batch(size_of::<ClosestPoint>());
+        for (chunk, margins) in points.chunks(batch).zip(margins.chunks(batch)) {
             let input: Vec<[f32; 4]> = chunk
                 .iter()
                 .zip(margins)
@@ -244,7 +254,8 @@ impl GpuRenderer {
         }
         let (nodes, prims) = self.proximity.winding.clone().expect("uploaded");
         let mut out = Vec::with_capacity(points.len());
-        for chunk in points.chunks(BATCH) {
+        // 16 bytes a point in, 4 out.
+        for chunk in points.chunks(self.batch(16)) {
             let input: Vec<[f32; 4]> = chunk.iter().map(|p| [p[0], p[1], p[2], 0.0]).collect();
             let points = self.storage("query_points", bytemuck::cast_slice(&input));
             let len = (chunk.len() * 4) as u64;
@@ -300,7 +311,7 @@ impl GpuRenderer {
     /// `cpu::count_intersections` on the device.
     pub fn count_intersections(&mut self, rays: &[Ray], pad: f32) -> Result<Vec<u32>> {
         let mut out = Vec::with_capacity(rays.len());
-        for chunk in rays.chunks(BATCH) {
+        for chunk in rays.chunks(self.batch(size_of::<Ray>())) {
             out.extend(self.count_chunk(chunk, pad)?.2);
         }
         Ok(out)
@@ -309,66 +320,122 @@ impl GpuRenderer {
     /// `cpu::list_intersections` on the device, each ray's hits in the
     /// order the traversal found them (the engine sorts them): counts,
     /// their prefix sums, then a second pass that writes each ray's hits
-    /// from its first slot.
+    /// from its first slot, over runs of rays whose hits fit one binding.
+    /// A ray whose crossings alone exceed one is `Error::GpuLimit` (auto
+    /// takes the CPU path then).
     pub fn list_intersections(
         &mut self,
         rays: &[Ray],
         pad: f32,
     ) -> Result<(Vec<u64>, Vec<ListedHit>)> {
+        let hit_bytes = size_of::<ListedHit>() as u64;
+        // Hits one binding holds (each ray's first slot is a u32).
+        let per_binding = (self.gpu.binding_limit() / hit_bytes).min(u32::MAX as u64);
         let mut splits = vec![0u64];
         let mut hits = Vec::new();
-        for (c, chunk) in rays.chunks(BATCH).enumerate() {
+        let batch = self.batch(size_of::<Ray>());
+        for (c, chunk) in rays.chunks(batch).enumerate() {
             let (rays_buffer, counts, n) = self.count_chunk(chunk, pad)?;
-            let mut firsts = Vec::with_capacity(n.len());
-            let mut total = 0u64;
             for &k in &n {
-                firsts.push(total as u32);
-                total += k as u64;
                 splits.push(splits.last().expect("one") + k as u64);
             }
-            if total == 0 {
-                continue;
+            let runs = binding_runs(&n, per_binding).map_err(|k| {
+                Error::GpuLimit(format!(
+                    "ray {}: its {} crossings take {} bytes, more than the {} bytes {} \
+                     can bind (max_storage_buffer_binding_size {}); the CPU path lists them",
+                    c * batch + k,
+                    n[k],
+                    n[k] as u64 * hit_bytes,
+                    per_binding * hit_bytes,
+                    self.gpu.describe(),
+                    self.gpu.limits.max_storage_buffer_binding_size
+                ))
+            })?;
+            for (range, total) in runs.into_iter().filter(|(_, total)| *total > 0) {
+                // The whole chunk's rays are bound already; a run of them
+                // is bound from its own first ray.
+                let run = &chunk[range.clone()];
+                let run_rays = if run.len() == chunk.len() {
+                    rays_buffer.clone()
+                } else {
+                    self.storage("rays", bytemuck::cast_slice(run))
+                };
+                let listed =
+                    self.list_run(run, &run_rays, &counts, &n[range.clone()], total, pad)?;
+                let base = (c * batch + range.start) as u32;
+                hits.extend(listed.into_iter().map(|h| ListedHit {
+                    ray: h.ray + base,
+                    ..h
+                }));
             }
-            if total > u32::MAX as u64 / size_of::<ListedHit>() as u64 {
-                return Err(Error::GpuLimit(format!(
-                    "{total} hits in one batch of rays are more than one buffer holds"
-                )));
-            }
-            self.gpu
-                .queue
-                .write_buffer(&counts, 0, bytemuck::cast_slice(&firsts));
-            let scalars =
-                self.storage("query_scalars", bytemuck::cast_slice(&[0.0, pad, 0.0, 0.0]));
-            let len = total * size_of::<ListedHit>() as u64;
-            let listed = self.kept_buffer(
-                "listed_hits",
-                len,
-                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            );
-            self.dispatch_query(
-                "list_hits",
-                chunk.len(),
-                &[
-                    (
-                        "rays",
-                        &rays_buffer,
-                        (chunk.len() * size_of::<Ray>()) as u64,
-                    ),
-                    ("query_scalars", &scalars, 16),
-                    ("hit_counts", &counts, (n.len() * 4) as u64),
-                    ("listed_hits", &listed, len),
-                ],
-            )?;
-            let base = (c * BATCH) as u32;
-            hits.extend(
-                self.read_back::<ListedHit>(&listed, len)?
-                    .into_iter()
-                    .map(|h| ListedHit {
-                        ray: h.ray + base,
-                        ..h
-                    }),
-            );
         }
         Ok((splits, hits))
     }
+
+    /// The `total` hits of `run` (bound in `run_rays`), whose counts are
+    /// `n`, ray indices from 0 (`counts`: the chunk's count buffer, its
+    /// start rewritten with each ray's first slot).
+    fn list_run(
+        &mut self,
+        run: &[Ray],
+        run_rays: &wgpu::Buffer,
+        counts: &wgpu::Buffer,
+        n: &[u32],
+        total: u64,
+        pad: f32,
+    ) -> Result<Vec<ListedHit>> {
+        let firsts: Vec<u32> = n
+            .iter()
+            .scan(0u32, |first, &k| {
+                let this = *first;
+                *first += k;
+                Some(this)
+            })
+            .collect();
+        self.gpu
+            .queue
+            .write_buffer(counts, 0, bytemuck::cast_slice(&firsts));
+        let scalars = self.storage("query_scalars", bytemuck::cast_slice(&[0.0, pad, 0.0, 0.0]));
+        let len = total * size_of::<ListedHit>() as u64;
+        let listed = self.kept_buffer(
+            "listed_hits",
+            len,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        );
+        self.dispatch_query(
+            "list_hits",
+            run.len(),
+            &[
+                ("rays", run_rays, std::mem::size_of_val(run) as u64),
+                ("query_scalars", &scalars, 16),
+                ("hit_counts", counts, (n.len() * 4) as u64),
+                ("listed_hits", &listed, len),
+            ],
+        )?;
+        self.read_back::<ListedHit>(&listed, len)
+    }
+}
+
+/// Consecutive runs of the rays whose crossing `counts` sum to at most
+/// `per_binding` each (as many rays a run as fit), with their sums; or the
+/// first ray whose count alone is more (which no run can list).
+pub fn binding_runs(
+    counts: &[u32],
+    per_binding: u64,
+) -> std::result::Result<Vec<(std::ops::Range<usize>, u64)>, usize> {
+    let mut runs = Vec::new();
+    let mut start = 0;
+    while start < counts.len() {
+        let (mut end, mut total) = (start, 0u64);
+        while end < counts.len() && total + counts[end] as u64 <= per_binding {
+            total += counts[end] as u64;
+            end += 1;
+        }
+        if end == start {
+            return Err(start);
+        }
+        runs.push((start..end, total));
+        start = end;
+    }
+    Ok(runs)
 }

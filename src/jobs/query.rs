@@ -8,14 +8,15 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
-use super::open;
+use super::{open, say};
 use crate::error::{Error, Result};
 use crate::gpu::AdapterRequest;
 use crate::layout::{ClosestPoint, ListedHit, NO_HIT, Ray};
 use crate::output::write_atomically;
+use crate::placement::WorldPoint;
 use crate::progress::ProgressSink;
 use crate::rays;
-use crate::render::{DeviceChoice, Renderer};
+use crate::render::{DeviceChoice, Renderer, with_fallback};
 use crate::scene::Scene;
 
 /// A point is inside where the triangles' generalized winding number about
@@ -47,7 +48,11 @@ impl Sign {
 }
 
 /// Whether each point is inside the triangles, by `sign`.
-pub fn inside(renderer: &mut Renderer, points: &[[f32; 3]], sign: Sign) -> Result<Vec<bool>> {
+pub fn inside<P: WorldPoint>(
+    renderer: &mut Renderer,
+    points: &[P],
+    sign: Sign,
+) -> Result<Vec<bool>> {
     match sign {
         Sign::Winding => Ok(renderer
             .winding_numbers(points)?
@@ -59,7 +64,7 @@ pub fn inside(renderer: &mut Renderer, points: &[[f32; 3]], sign: Sign) -> Resul
 }
 
 /// The distance from each point to the nearest triangle.
-pub fn distances(renderer: &mut Renderer, points: &[[f32; 3]]) -> Result<Vec<f32>> {
+pub fn distances<P: WorldPoint>(renderer: &mut Renderer, points: &[P]) -> Result<Vec<f32>> {
     Ok(renderer
         .closest_points(points, f32::INFINITY)?
         .iter()
@@ -69,9 +74,9 @@ pub fn distances(renderer: &mut Renderer, points: &[[f32; 3]]) -> Result<Vec<f32
 
 /// The distance to the nearest triangle, negative inside (by `sign`); a
 /// point on the surface inside is -0.0.
-pub fn signed_distances(
+pub fn signed_distances<P: WorldPoint>(
     renderer: &mut Renderer,
-    points: &[[f32; 3]],
+    points: &[P],
     sign: Sign,
 ) -> Result<Vec<f32>> {
     let distance = distances(renderer, points)?;
@@ -150,7 +155,7 @@ struct Records {
     found: usize,
 }
 
-type Work = Box<dyn FnOnce(&mut Renderer) -> Result<Records>>;
+type Work = Box<dyn Fn(&mut Renderer) -> Result<Records>>;
 
 /// Runs `job` on `scene` and writes its records.
 pub fn run_query(
@@ -164,33 +169,53 @@ pub fn run_query(
         ));
     }
     let start = Instant::now();
-    let (queries, work): (usize, Work) = match job.kind {
+    let placement = scene.placement();
+    // Where the file's f32 numbers limit the answers, said before the work
+    // (docs/ray-query.md).
+    let (queries, work, warnings): (usize, Work, _) = match job.kind {
         QueryKind::Points(query) => {
             let points = rays::read_points(job.input)?;
+            let warnings = placement.point_warnings(points.len(), |i| points[i].world());
             (
                 points.len(),
                 Box::new(move |r| point_records(r, query, &points)),
+                warnings,
             )
         }
         QueryKind::Rays(query) => {
             let rays = rays::read_rays(job.input)?;
-            (rays.len(), Box::new(move |r| ray_records(r, query, &rays)))
+            let warnings = placement.ray_warnings(&rays);
+            (
+                rays.len(),
+                Box::new(move |r| ray_records(r, query, &rays)),
+                warnings,
+            )
         }
     };
     let read_seconds = start.elapsed().as_secs_f64();
+    for warning in warnings {
+        say(sink, &format!("warning: {warning}"));
+    }
     // Held until the queries are done: a GPU renderer builds the winding
     // tree (inside tests, signed distances) from the host's scene.
     let scene = Arc::new(scene);
     let (mut renderer, _) = open(Arc::clone(&scene), job.device, job.adapter, sink)?;
     let start = Instant::now();
-    let records = work(&mut renderer)?;
+    let (records, fell_back) = with_fallback(&mut renderer, job.device, &scene, work)?;
+    if let Some(note) = &fell_back {
+        say(sink, note);
+    }
+    let device = match fell_back {
+        Some(_) => Renderer::Cpu(Arc::clone(&scene)).describe(),
+        None => renderer.describe(),
+    };
     drop(scene);
     let query_seconds = start.elapsed().as_secs_f64();
     let start = Instant::now();
     write_atomically(job.output, &records.bytes)?;
     Ok(QueryReport {
         output: job.output.to_path_buf(),
-        device: renderer.describe(),
+        device,
         queries,
         records: records.count,
         found: records.found,
