@@ -21,9 +21,12 @@ Embree's, which are lambert's: the point is (1-u-v)·v0 + u·v1 + v·v2.
 Where it differs from Open3D:
 
 - Inside (``compute_signed_distance``, ``compute_occupancy``) is where the
-  generalized winding number is at least 0.5 (``method="winding"``, the
-  default), which agrees with Open3D's ray parity on watertight meshes and
-  stays sensible on meshes with holes or self-intersections; give
+  generalized winding number is at least 0.5 in magnitude
+  (``method="winding"``, the default), which agrees with Open3D's ray
+  parity on closed meshes whose bodies do not overlap, facing out or in
+  (where two bodies facing the same way overlap it is inside, parity
+  outside), and stays sensible on meshes with holes or
+  self-intersections; give
   ``method="parity"`` for a parity count as Open3D does. ``nsamples`` is
   checked as Open3D checks it (odd, at least 1) but needs no votes: the
   winding number has no edge cases, and lambert's watertight crossings
