@@ -232,7 +232,10 @@ fn two_bodies_one_facing_in_are_both_inside_as_by_parity() {
         .zip(&by_winding)
         .filter(|(p, inside)| **inside && p[0] > 0.0)
         .count();
-    assert!(right_inside > 50, "{right_inside} inside the body facing in");
+    assert!(
+        right_inside > 50,
+        "{right_inside} inside the body facing in"
+    );
 }
 
 #[test]
@@ -257,6 +260,8 @@ fn the_gpu_carries_the_rounding_errors_as_the_cpu_does() {
     let points = random_points(500);
     assert_eq!(
         gpu.winding_numbers(&points).unwrap(),
-        cpu(scene.triangles.clone()).winding_numbers(&points).unwrap()
+        cpu(scene.triangles.clone())
+            .winding_numbers(&points)
+            .unwrap()
     );
 }
