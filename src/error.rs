@@ -27,6 +27,13 @@ pub enum Error {
     /// the CPU path).
     #[error("GPU: {0}")]
     GpuLimit(String),
+    /// The driver cut the shader's loops short (Mesa's llvmpipe ends loops
+    /// after 65535 iterations an invocation group), so the answers would
+    /// be wrong; the message says where. The CPU path has no such limit,
+    /// and each front end says how to ask for it in its own terms (the
+    /// CLI's `--device cpu`, Python's `device="cpu"`).
+    #[error("GPU: {0}")]
+    LoopsCut(String),
     #[error("{0}")]
     Usage(String),
 }

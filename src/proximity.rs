@@ -88,8 +88,8 @@ impl Renderer {
 
     /// The generalized winding number of the scene's triangles at each
     /// world point (Jacobson et al. 2013, through Barill et al.'s tree):
-    /// 1 inside a closed, outward-facing mesh, 0 outside, fractions near
-    /// holes. Inside is ≥ 0.5.
+    /// 1 inside a closed, outward-facing mesh (−1 facing in), 0 outside,
+    /// fractions near holes. Inside is |w| ≥ 0.5 (`jobs::inside`).
     pub fn winding_numbers<P: WorldPoint>(&mut self, points: &[P]) -> Result<Vec<f32>> {
         let placement = self.triangles_only("winding numbers")?;
         let local = local_points(&placement, points)?;

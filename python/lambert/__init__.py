@@ -221,7 +221,8 @@ class Scene:
     def signed_distance(self, points, method="winding", *, device="auto"):
         """(N,) float32: the distance to the nearest triangle, negative
         inside. ``method="winding"``: inside where the generalized winding
-        number is at least 0.5 (meshes with holes or self-intersections get
+        number is at least 0.5 in magnitude (closed meshes facing either
+        way, and meshes with holes or self-intersections get
         a sensible inside); ``"parity"``: inside where a ray from the point
         crosses the surface an odd number of times (watertight meshes)."""
         if method not in ("winding", "parity"):
@@ -230,12 +231,14 @@ class Scene:
 
     def winding_number(self, points, *, device="auto"):
         """(N,) float32: the generalized winding number of the triangles
-        about each point (1 inside a closed, outward-facing mesh, 0 outside,
+        about each point (1 inside a closed, outward-facing mesh, -1 facing
+        in, 0 outside; within 1e-2 at 1% of the diagonal from the surface,
         fractional near holes)."""
         return _lambert.point_values(self._native, _floats("points", points), "winding_number", "winding", device)
 
     def contains(self, points, *, device="auto"):
-        """(N,) bool: whether each point is inside (winding number ≥ 0.5)."""
+        """(N,) bool: whether each point is inside (|winding number| ≥ 0.5:
+        the inside of a closed mesh facing either way)."""
         return _lambert.contains(self._native, _floats("points", points), device)
 
     def count_intersections(self, origins, directions=None, tmin=0.0, tmax=np.inf, *, device="auto"):

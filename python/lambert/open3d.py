@@ -14,16 +14,21 @@ dtypes are Open3D's (0.20): ``add_triangles``, ``cast_rays``,
 ``compute_signed_distance``, ``compute_occupancy``, ``INVALID_ID``, and
 ``create_rays_pinhole`` (Open3D's own, when Open3D is installed). Arrays in
 are numpy arrays or, when Open3D is installed, its tensors; results come
-back as numpy arrays, or as Open3D tensors where the input was one (so
-``ans["t_hit"].numpy()`` works as before). Barycentrics are Open3D's and
+back as Open3D tensors where the input was one, else as numpy arrays
+that also have Open3D's ``.numpy()`` (a plain view of themselves), so
+that Open3D's idiom ``scene.cast_rays(np_rays)["t_hit"].numpy()`` runs
+unchanged and numpy code keeps its arrays. Barycentrics are Open3D's and
 Embree's, which are lambert's: the point is (1-u-v)·v0 + u·v1 + v·v2.
 
 Where it differs from Open3D:
 
 - Inside (``compute_signed_distance``, ``compute_occupancy``) is where the
-  generalized winding number is at least 0.5 (``method="winding"``, the
-  default), which agrees with Open3D's ray parity on watertight meshes and
-  stays sensible on meshes with holes or self-intersections; give
+  generalized winding number is at least 0.5 in magnitude
+  (``method="winding"``, the default), which agrees with Open3D's ray
+  parity on closed meshes whose bodies do not overlap, facing out or in
+  (where two bodies facing the same way overlap it is inside, parity
+  outside), and stays sensible on meshes with holes or
+  self-intersections; give
   ``method="parity"`` for a parity count as Open3D does. ``nsamples`` is
   checked as Open3D checks it (odd, at least 1) but needs no votes: the
   winding number has no edge cases, and lambert's watertight crossings
@@ -32,8 +37,12 @@ Where it differs from Open3D:
   come in traversal order), and a crossing through an edge or vertex that
   triangles share counts once, in ``count_intersections`` too.
 - Hits count where t > 0 (Open3D's tnear = 0 includes t = 0).
-- A ray with a non-finite value or a zero direction misses; a query point
-  with a non-finite coordinate is a ``ValueError`` naming its row.
+- Any finite non-zero direction is traced, however long or short (1e-30
+  or 1e20): one of a length outside 1e-6 to 1e6 is normalised in float64
+  and t given back in units of its length, as Open3D's. A ray with a non-finite value or a zero direction
+  misses; a ray the native checks refuse (an origin too far from the
+  scene) is a ``ValueError`` naming its row in ``rays.reshape(-1, 6)``;
+  so is a query point with a non-finite coordinate.
 - On an empty scene, closest points have ``INVALID_ID`` ids and distances
   are inf (Open3D gives the distance to the origin).
 - ``nthreads`` is accepted and ignored: lambert uses all cores (rayon's
@@ -54,6 +63,11 @@ __all__ = ["INVALID_ID", "RaycastingScene"]
 INVALID_ID = 0xFFFFFFFF
 
 
+#: Direction lengths traced as given; shorter or longer ones are normalised
+#: in float64 first (f32 squares of them would under- or overflow).
+_USUAL_LENGTH = (1e-6, 1e6)
+
+
 def _is_tensor(x):
     """Whether `x` is an Open3D tensor (without importing Open3D)."""
     return type(x).__module__.startswith("open3d") and hasattr(x, "numpy")
@@ -71,10 +85,22 @@ def _numpy(x, name, last):
     return a, tensor
 
 
+class Result(np.ndarray):
+    """A result array for numpy input: numpy's, with Open3D's
+    ``Tensor.numpy()``, so that code written for Open3D runs unchanged."""
+
+    def numpy(self):
+        """This array as a plain numpy array (a view), as Open3D's."""
+        return self.view(np.ndarray)
+
+
 def _out(values, tensor):
-    """A result as numpy, or as an Open3D tensor where the input was one."""
+    """A result as numpy (with ``.numpy()``), or as an Open3D tensor where
+    the input was one."""
     if not tensor:
-        return values
+        if isinstance(values, dict):
+            return {k: v.view(Result) for k, v in values.items()}
+        return values.view(Result)
     import open3d
 
     if isinstance(values, dict):
@@ -174,16 +200,40 @@ class RaycastingScene:
                 np.where(hit, local, INVALID_ID).astype(np.uint32))
 
     def _rays(self, rays):
-        """Flat origins and directions, the traceable ones, the result shape
-        and whether they came as a tensor."""
+        """Flat origins, directions to trace (normalised in float64 where
+        their length is out of the usual, so that any finite non-zero
+        length traces), the caller's direction lengths in units of the
+        traced ones' (the caller's t is the traced t over it), the
+        result shape and whether they came as a tensor; None for the
+        directions when nothing can be hit (an empty scene). A ray that
+        cannot be traced (a non-finite value, a zero direction) becomes
+        one with an empty t interval, which the native queries answer as
+        a miss: every ray keeps its row, so that an error names the
+        caller's."""
         a, tensor = _numpy(rays, "rays", 6)
         shape = a.shape[:-1]
-        flat = a.reshape(-1, 6).astype(np.float32, copy=False)
-        o, d = flat[:, :3], flat[:, 3:]
-        ok = np.isfinite(flat).all(axis=1) & (np.abs(d) > 0).any(axis=1)
+        flat = a.reshape(-1, 6)
+        o = flat[:, :3].astype(np.float32)
+        d = flat[:, 3:].astype(np.float64)
+        with np.errstate(invalid="ignore", over="ignore"):
+            # Scaled by the largest component first: no square over- or underflows.
+            scale = np.abs(d).max(axis=1)
+            unit = d / scale[:, None]
+            norm = np.sqrt((unit * unit).sum(axis=1))
+            length = scale * norm
+            unit /= norm[:, None]
+        ok = np.isfinite(flat).all(axis=1) & np.isfinite(o).all(axis=1) & (scale > 0)
+        # Directions of an ordinary length are traced as given (the native
+        # queries' bits); only the others need the normalising.
+        usual = ok & (length >= _USUAL_LENGTH[0]) & (length <= _USUAL_LENGTH[1])
+        traced = np.where(usual[:, None], d, unit)
+        length[usual] = 1
+        o[~ok] = 0
+        traced[~ok] = (1, 0, 0)
+        length[~ok] = 1
         if self._scene is None:
-            ok[:] = False
-        return o, d, ok, shape, tensor
+            traced = None
+        return o, traced, length, ok, shape, tensor
 
     def _points(self, query_points):
         a, tensor = _numpy(query_points, "query_points", 3)
@@ -194,20 +244,21 @@ class RaycastingScene:
         ``geometry_ids``, ``primitive_ids`` (uint32, INVALID_ID on a miss),
         ``primitive_uvs`` (..., 2) and ``primitive_normals`` (..., 3, unit,
         zero on a miss)."""
-        o, d, ok, shape, tensor = self._rays(rays)
+        o, d, length, ok, shape, tensor = self._rays(rays)
         n = len(o)
         t = np.full(n, np.inf, dtype=np.float32)
         prim = np.full(n, -1, dtype=np.int64)
         uv = np.zeros((n, 2), dtype=np.float32)
         normal = np.zeros((n, 3), dtype=np.float32)
-        if ok.any():
-            hits = self._scene.intersect(o[ok], d[ok], device=self._device)
-            t[ok], prim[ok] = hits["t"], hits["prim_id"]
-            uv[ok] = np.stack([hits["u"], hits["v"]], axis=-1)
+        if d is not None:
+            hits = self._scene.intersect(o, d, 0.0, np.where(ok, np.inf, 0.0), device=self._device)
+            t = (hits["t"] / length).astype(np.float32)
+            prim = hits["prim_id"]
+            uv = np.stack([hits["u"], hits["v"]], axis=-1)
             ng = hits["normal"]
             with np.errstate(invalid="ignore", divide="ignore"):
                 unit = ng / np.sqrt((ng * ng).sum(axis=1, dtype=np.float32))[:, None]
-            normal[ok] = np.where(hits["prim_id"][:, None] >= 0, unit, 0)
+            normal = np.where(prim[:, None] >= 0, unit, 0).astype(np.float32)
         geometry, primitive = self._ids(prim)
         return _out({"t_hit": t.reshape(shape), "geometry_ids": geometry.reshape(shape),
                      "primitive_ids": primitive.reshape(shape),
@@ -216,39 +267,42 @@ class RaycastingScene:
 
     def test_occlusions(self, rays, tnear=0.0, tfar=np.inf, nthreads=0):
         """(...) bool: whether anything lies on each ray with tnear < t < tfar."""
-        o, d, ok, shape, tensor = self._rays(rays)
+        o, d, length, ok, shape, tensor = self._rays(rays)
         hit = np.zeros(len(o), dtype=bool)
-        if ok.any():
-            hit[ok] = self._scene.occluded(o[ok], d[ok], float(tnear), float(tfar), device=self._device)
+        if d is not None:
+            # tnear and tfar in the caller's units, as the traced rays' t.
+            with np.errstate(invalid="ignore", over="ignore"):
+                lo, hi = float(tnear) * length, float(tfar) * length
+            hit = self._scene.occluded(o, d, np.where(ok, lo, 0.0), np.where(ok, hi, 0.0),
+                                       device=self._device)
         return _out(hit.reshape(shape), tensor)
 
     def count_intersections(self, rays, nthreads=0):
         """(...) int32: how many times each ray crosses the triangles."""
-        o, d, ok, shape, tensor = self._rays(rays)
+        o, d, _, ok, shape, tensor = self._rays(rays)
         count = np.zeros(len(o), dtype=np.int32)
-        if ok.any():
-            count[ok] = self._scene.count_intersections(o[ok], d[ok], device=self._device)
+        if d is not None:
+            count = self._scene.count_intersections(o, d, 0.0, np.where(ok, np.inf, 0.0),
+                                                    device=self._device)
         return _out(count.reshape(shape), tensor)
 
     def list_intersections(self, rays, nthreads=0):
         """Every crossing: ``ray_splits`` (rays + 1,), ``ray_ids``,
         ``t_hit``, ``geometry_ids``, ``primitive_ids`` (uint32) and
         ``primitive_uvs`` (hits, 2), each ray's crossings sorted by t."""
-        o, d, ok, _, tensor = self._rays(rays)
-        counts = np.zeros(len(o), dtype=np.int64)
-        listed = {"ray_ids": np.zeros(0, dtype=np.int64), "t": np.zeros(0, dtype=np.float32),
+        o, d, length, ok, _, tensor = self._rays(rays)
+        listed = {"ray_splits": np.zeros(len(o) + 1, dtype=np.int64),
+                  "ray_ids": np.zeros(0, dtype=np.int64), "t": np.zeros(0, dtype=np.float32),
                   "prim_id": np.zeros(0, dtype=np.int64), "u": np.zeros(0, dtype=np.float32),
                   "v": np.zeros(0, dtype=np.float32)}
-        if ok.any():
-            traced = np.flatnonzero(ok)
-            listed = self._scene.list_intersections(o[ok], d[ok], device=self._device)
-            counts[traced] = np.diff(listed["ray_splits"])
-            listed["ray_ids"] = traced[listed["ray_ids"]]
-        splits = np.zeros(len(o) + 1, dtype=np.uint32)
-        splits[1:] = np.cumsum(counts)
+        if d is not None:
+            listed = self._scene.list_intersections(o, d, 0.0, np.where(ok, np.inf, 0.0),
+                                                    device=self._device)
         geometry, primitive = self._ids(listed["prim_id"])
-        return _out({"ray_splits": splits, "ray_ids": listed["ray_ids"].astype(np.uint32),
-                     "t_hit": listed["t"], "geometry_ids": geometry, "primitive_ids": primitive,
+        t = (listed["t"] / length[listed["ray_ids"]]).astype(np.float32)
+        return _out({"ray_splits": listed["ray_splits"].astype(np.uint32),
+                     "ray_ids": listed["ray_ids"].astype(np.uint32),
+                     "t_hit": t, "geometry_ids": geometry, "primitive_ids": primitive,
                      "primitive_uvs": np.stack([listed["u"], listed["v"]], axis=-1)}, tensor)
 
     def compute_closest_points(self, query_points, nthreads=0):

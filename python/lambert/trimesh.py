@@ -149,9 +149,12 @@ class ProximityQuery(_Cached):
       nearest an edge or vertex they share) one is reported; trimesh
       prefers the one whose normal faces the point most.
     - ``signed_distance`` signs by the generalized winding number (inside
-      where it is at least 0.5) rather than by the closest triangle's
-      normal and ray parity: meshes with holes or self-intersections get a
-      sensible inside. The sign is trimesh's: positive inside, negative
+      where it is at least 0.5 in magnitude) rather than by the closest
+      triangle's normal and ray parity: meshes with holes or
+      self-intersections get a sensible inside, and on a closed mesh it
+      is positive where ``mesh.contains`` (trimesh's ray test) says
+      inside, whichever way the faces point (trimesh's own, signing by
+      normals that point in, disagrees with its ``contains`` there). The sign is trimesh's: positive inside, negative
       outside; the distance is ``on_surface``'s, in float64.
     - ``vertex`` is trimesh's own (a k-d tree over the vertices, which
       needs scipy): lambert has no nearest-vertex query.

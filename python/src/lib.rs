@@ -39,7 +39,8 @@ use arrays::{Bound1, Rows};
 use query::{FirstBad, Gathered, Query};
 
 /// The library's errors as the exceptions a Python user expects, with the
-/// CLI's messages.
+/// CLI's messages (advice, where the library leaves it to the front end,
+/// in Python's terms).
 fn to_py(e: Error) -> PyErr {
     let message = e.to_string();
     match &e {
@@ -49,6 +50,8 @@ fn to_py(e: Error) -> PyErr {
             _ => PyOSError::new_err(message),
         },
         Error::Gpu(_) | Error::GpuLimit(_) => PyRuntimeError::new_err(message),
+        // The library leaves the advice to the front end: Python's words.
+        Error::LoopsCut(_) => PyRuntimeError::new_err(format!("{message}: use device=\"cpu\"")),
         Error::Scene { .. } | Error::Line { .. } | Error::Usage(_) => {
             PyValueError::new_err(message)
         }

@@ -89,16 +89,18 @@ def trace_cli(cli, tmp_path_factory):
     return trace
 
 
-def reference_module(name):
-    """A test-only reference (open3d, igl) that scripts/test-python
+def reference_module(name, needed_by=None):
+    """A test-only reference (open3d, igl; scipy and rtree for trimesh's
+    proximity, `needed_by` saying what uses it) that scripts/test-python
     installs: skips without it, except under CI (CI=true), where its absence
     fails, so that the comparison never silently stops running."""
+    why = f", which {needed_by} needs," if needed_by else ""
     try:
         return importlib.import_module(name)
     except ImportError as e:
         if os.environ.get("CI", "").lower() in ("true", "1"):
-            pytest.fail(f"{name} is not importable under CI ({e}): scripts/test-python installs it")
-        pytest.skip(f"{name} is not installed (scripts/test-python installs it)")
+            pytest.fail(f"{name}{why} is not importable under CI ({e}): scripts/test-python installs it")
+        pytest.skip(f"{name}{why} is not installed (scripts/test-python installs it)")
 
 
 QUERY_DEVICES = ["cpu", "gpu"]

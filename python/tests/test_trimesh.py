@@ -6,6 +6,7 @@ import pytest
 import trimesh  # noqa: E402  (scripts/test installs it)
 
 import lambert.trimesh  # noqa: E402
+from conftest import reference_module  # noqa: E402
 
 
 def meshes():
@@ -155,6 +156,14 @@ def open_mesh():
     return trimesh.Trimesh(torus.vertices, torus.faces[keep], process=False)
 
 
+def needs_trimesh_proximity():
+    """trimesh's proximity queries, the reference of lambert.trimesh's, need
+    scipy (a k-d tree) and rtree: without them the test skips, or fails
+    under CI, as the other references do."""
+    for name in ("scipy", "rtree"):
+        reference_module(name, needed_by="trimesh's proximity")
+
+
 def proximity_points(mesh, n, seed):
     rng = np.random.default_rng(seed)
     lo, hi = mesh.bounds
@@ -163,6 +172,7 @@ def proximity_points(mesh, n, seed):
 
 @pytest.mark.parametrize("index", range(4))
 def test_closest_points_on_the_surface_match_trimesh(index):
+    needs_trimesh_proximity()
     mesh = (list(meshes()) + [open_mesh()])[index]
     points = proximity_points(mesh, 500, seed=index)
     query = lambert.trimesh.ProximityQuery(mesh, device="cpu")
@@ -185,6 +195,7 @@ def test_signed_distance_has_trimeshs_sign(index):
     sd = lambert.trimesh.ProximityQuery(mesh, device="cpu").signed_distance(points)
     assert sd.dtype == np.float64
     if mesh.is_watertight:
+        needs_trimesh_proximity()
         expected = trimesh.proximity.signed_distance(mesh, points)
         clear = np.abs(expected) > 1e-6
         np.testing.assert_array_equal(np.sign(sd[clear]), np.sign(expected[clear]))
@@ -198,6 +209,7 @@ def test_signed_distance_has_trimeshs_sign(index):
 
 
 def test_nearest_vertex_is_trimeshs():
+    needs_trimesh_proximity()
     mesh = trimesh.creation.icosphere(subdivisions=2)
     points = proximity_points(mesh, 200, seed=3)
     distance, vertex_id = lambert.trimesh.ProximityQuery(mesh).vertex(points)

@@ -499,7 +499,7 @@ fn sphere_gap(origin: Vec3, center: Vec3, radius: Real) -> Real {
 /// a + b as the rounded sum and its rounding error (Knuth's TwoSum: exact
 /// without branches, whichever is larger). The shader's takes the sum
 /// through `opaque_one` (1), lest a GPU compiler fold the error to 0.
-fn two_sum(a: Real, b: Real) -> (Real, Real) {
+pub fn two_sum(a: Real, b: Real) -> (Real, Real) {
     let s = a + b;
     let bb = s - a;
     (s, (a - (s - bb)) + (b - bb))

@@ -152,9 +152,9 @@ impl GpuRenderer {
         self.gpu.queue.submit([encoder.finish()]);
         self.gpu.wait()?;
         if self.loops_were_cut()? {
-            return Err(Error::Gpu(format!(
+            return Err(Error::LoopsCut(format!(
                 "{} cut the shader's loops short in {entry} (Mesa's llvmpipe ends loops \
-                 after 65535 iterations an invocation group): use the CPU path",
+                 after 65535 iterations an invocation group)",
                 self.gpu.describe()
             )));
         }

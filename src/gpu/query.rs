@@ -58,9 +58,9 @@ impl GpuRenderer {
             self.run_list(pipeline, list, rays, 1 << 20, None, true)?;
         self.lists.trace_device_time = device;
         if self.loops_were_cut()? {
-            return Err(Error::Gpu(format!(
+            return Err(Error::LoopsCut(format!(
                 "{} cut the shader's loops short on a ray of this query (Mesa's llvmpipe \
-                 ends loops after 65535 iterations an invocation group): use --device cpu",
+                 ends loops after 65535 iterations an invocation group)",
                 self.gpu.describe()
             )));
         }

@@ -344,10 +344,10 @@ impl GpuRenderer {
     pub(super) fn fewer_samples_per_dispatch(&mut self) -> Result<()> {
         let step = self.samples_per_dispatch().min(self.params.spp);
         if step <= 1 {
-            return Err(Error::Gpu(format!(
+            return Err(Error::LoopsCut(format!(
                 "{} cut the shader's loops short even at one sample per pixel per dispatch \
                  (Mesa's llvmpipe ends loops after 65535 iterations an invocation group): \
-                 this scene is too complex for this adapter; use --device cpu",
+                 this scene is too complex for this adapter",
                 self.gpu.describe()
             )));
         }

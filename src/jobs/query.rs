@@ -20,15 +20,18 @@ use crate::render::{DeviceChoice, Renderer, with_fallback};
 use crate::scene::Scene;
 
 /// A point is inside where the triangles' generalized winding number about
-/// it is at least this: 1 inside a closed mesh, 0 outside, and across a
-/// hole the boundary between the two.
+/// it is at least this in magnitude: 1 inside a closed mesh facing out, −1
+/// inside one facing in, 0 outside, and across a hole the boundary between
+/// the two. The magnitude makes inside the same whichever way a closed
+/// body faces, as ray parity (Open3D's, trimesh's) has it.
 pub const INSIDE_WINDING: f32 = 0.5;
 
 /// How a signed distance tells inside from outside.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Sign {
-    /// The generalized winding number, at least `INSIDE_WINDING` inside:
-    /// sensible on meshes with holes or self-intersections.
+    /// The generalized winding number, at least `INSIDE_WINDING` in
+    /// magnitude inside: sensible on meshes with holes or
+    /// self-intersections, and on closed meshes facing either way.
     #[default]
     Winding,
     /// An odd number of crossings along a ray from the point (as Open3D
@@ -57,7 +60,7 @@ pub fn inside<P: WorldPoint>(
         Sign::Winding => Ok(renderer
             .winding_numbers(points)?
             .into_iter()
-            .map(|w| w >= INSIDE_WINDING)
+            .map(|w| w.abs() >= INSIDE_WINDING)
             .collect()),
         Sign::Parity => renderer.parity_inside(points),
     }

@@ -91,6 +91,11 @@ fn main() -> ExitCode {
     }
     match cli::run() {
         Ok(code) => code,
+        // The library gives no advice in flags; the CLI's is --device.
+        Err(e @ lambert::error::Error::LoopsCut(_)) => {
+            eprintln!("error: {e}: use --device cpu");
+            ExitCode::FAILURE
+        }
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::FAILURE

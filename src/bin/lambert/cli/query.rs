@@ -34,7 +34,7 @@ pub(super) enum What {
 /// `--method`: `Sign`.
 #[derive(Clone, Copy, ValueEnum)]
 pub(super) enum Method {
-    /// The generalized winding number, inside at 0.5 or more (meshes with holes too).
+    /// The generalized winding number, inside where |w| ≥ 0.5 (meshes with holes, either orientation).
     Winding,
     /// The parity of crossings along a ray (watertight meshes).
     Parity,
