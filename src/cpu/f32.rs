@@ -2,7 +2,7 @@
 //! with `Real = f32`, the NaN-ignoring selects in SSE, and the vector variants of the
 //! slab test and of the ordering of entered children.
 
-super::kernel::kernel!(f32, glam::Vec3, glam::Vec4);
+super::kernel::kernel!(f32, glam::Vec2, glam::Vec3, glam::Vec4);
 
 /// `a` where a > b, else `b` (a NaN in either yields `b`): the shader's
 /// `select(b, a, a > b)`, in one instruction where SSE's maxps and

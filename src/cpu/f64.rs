@@ -1,7 +1,7 @@
 //! Double precision, the oracle: the kernel (`kernel!`, kernel.rs) with
 //! `Real = f64`, portable throughout.
 
-super::kernel::kernel!(f64, glam::DVec3, glam::DVec4);
+super::kernel::kernel!(f64, glam::DVec2, glam::DVec3, glam::DVec4);
 
 /// `a` where a > b, else `b` (a NaN in either yields `b`).
 #[inline(always)]

@@ -64,7 +64,8 @@ macro_rules! intersect {
             /// The texture in `slot` at (u, v) of triangle `prim` (with
             /// FLAG_ATTRIBUTES), at the level of detail of a ray cone `cone_width`
             /// wide there along `dir`; width 0 reads the base level (the any-hit
-            /// test's alpha). In f32 in both precisions, as the shader samples.
+            /// test's alpha). In this precision throughout: the oracle's texture
+            /// coordinates are f64's.
             #[allow(clippy::too_many_arguments)]
             #[inline(always)]
             pub fn texture_at(
@@ -75,31 +76,27 @@ macro_rules! intersect {
                 u: Real,
                 v: Real,
                 dir: Vec3,
-                cone_width: f32,
+                cone_width: Real,
             ) -> Vec4 {
                 let a = &self.scene.attributes[prim as usize];
-                let uvs = a.uvs.map(glam::Vec2::from_array);
-                let uv =
-                    crate::cpu::texture::interpolate_uv(uvs[0], uvs[1], uvs[2], u as f32, v as f32);
+                let uvs = a.uvs.map(|c| Vec2::new(c[0] as Real, c[1] as Real));
+                let uv = interpolate_uv(uvs[0], uvs[1], uvs[2], u, v);
                 let lod = if cone_width > 0.0 {
-                    let p = |c: [f32; 3]| glam::Vec3::from_array(c);
-                    let d = glam::Vec3::new(dir.x as f32, dir.y as f32, dir.z as f32);
                     self.textures.texture_lod(
                         slot,
-                        p(tri.v0),
-                        p(tri.v1),
-                        p(tri.v2),
+                        vec3(tri.v0),
+                        vec3(tri.v1),
+                        vec3(tri.v2),
                         uvs[0],
                         uvs[1],
                         uvs[2],
-                        d,
+                        dir,
                         cone_width,
                     )
                 } else {
                     0
                 };
-                let c = self.textures.sample_texture(slot, uv, lod);
-                Vec4::new(c.x as Real, c.y as Real, c.z as Real, c.w as Real)
+                self.textures.sample_texture(slot, uv, lod)
             }
 
             /// The base colour at (u, v) of triangle `prim`: its material's, times
@@ -114,7 +111,7 @@ macro_rules! intersect {
                 u: Real,
                 v: Real,
                 dir: Vec3,
-                cone_width: f32,
+                cone_width: Real,
             ) -> Vec4 {
                 let scene = self.scene;
                 let material = &scene.materials[tri.material as usize];

@@ -118,7 +118,7 @@ macro_rules! layout {
             /// Whether some triangle is alpha-masked (the shader's HAS_ALPHA_MASK).
             alpha_mask: bool,
             /// The scene's texture store (the shader's `textures`).
-            textures: crate::cpu::texture::Textures<'a>,
+            textures: Textures<'a>,
             /// The camera rays' cone spread (the shader's `params.cone_spread`).
             cone_spread: f32,
             /// The GPU's short stack: entries `trace_compressed` keeps before the
@@ -154,7 +154,7 @@ macro_rules! layout {
                     intersect: scene.intersect,
                     ymm_boxes,
                     alpha_mask: scene.has_alpha_mask(),
-                    textures: crate::cpu::texture::Textures {
+                    textures: Textures {
                         words: scene.textures.words(),
                     },
                     cone_spread: crate::texture::cone_spread(

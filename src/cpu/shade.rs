@@ -88,7 +88,7 @@ macro_rules! shade {
                     let error = self_hit_bound(v0.abs().max(v1.abs()).max(v2.abs()));
                     let geometric = face_forward((v1 - v0).cross(v2 - v0).normalize(), ray.dir);
                     // The camera ray's cone where it hits (docs/textures.md).
-                    let cone_width = hit.t as f32 * self.cone_spread;
+                    let cone_width = hit.t * self.cone_spread as Real;
                     let material = &scene.materials[tri.material as usize];
                     let mut emission = vec3(material.emission);
                     if material.emissive_texture != NO_TEXTURE && tri.flags & FLAG_ATTRIBUTES != 0 {
