@@ -11,6 +11,9 @@ use lambert::output::Rendered;
 use lambert::progress::Progress;
 
 mod bin;
+pub mod cli;
+pub mod formats;
+pub mod stress;
 // Each test file uses some of these; unused ones are no warning.
 #[allow(unused_imports)]
 pub use bin::*;
