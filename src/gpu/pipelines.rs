@@ -7,12 +7,11 @@ use crate::scene::{Intersect, Scene};
 
 use super::bindings::{BindingTable, IMAGE_TILE, PIXEL_LIST, RAYS, SCENE};
 use super::device::Gpu;
-use super::render::SplitShadows;
 use super::upload::{BvhStorage, SceneBuffers};
 use super::{GpuRenderer, RENDER_WORKGROUP};
 
 /// The bind group layouts every renderer builds, one per binding table
-/// (the shadows-apart passes build theirs with them).
+/// (the wavefront builds its own with its passes).
 pub(super) struct Layouts {
     pub scene: wgpu::BindGroupLayout,
     pub image: wgpu::BindGroupLayout,
@@ -51,9 +50,6 @@ pub(super) struct Pipelines {
     pub constants: Vec<(&'static str, f64)>,
     pub layouts: Layouts,
     pub render: Option<wgpu::ComputePipeline>,
-    /// The passes of a render with its shadow rays apart, built on first
-    /// use where `shadow_dispatch` asks for them.
-    pub split: Option<SplitShadows>,
     /// `trace_rays` pipelines: by any hit or closest hit, then by
     /// ray/triangle test.
     pub trace: [[Option<wgpu::ComputePipeline>; 3]; 2],
@@ -71,7 +67,6 @@ impl Pipelines {
             constants,
             layouts,
             render: None,
-            split: None,
             trace: Default::default(),
             pixel_list: None,
         }
@@ -165,21 +160,6 @@ pub(super) fn compute_pipeline(
 }
 
 impl GpuRenderer {
-    /// Builds the render pipeline if not built yet (so that timing a render
-    /// can leave the compile out).
-    pub fn prepare_render(&mut self) -> Result<()> {
-        if self.shadows_apart() {
-            if self.pipelines.split.is_none() {
-                self.pipelines.split = Some(self.build_split()?);
-            }
-        } else if self.pipelines.render.is_none() {
-            let p = &self.pipelines;
-            let pipeline = p.build(&self.gpu, "render", &p.layouts.image, &p.constants)?;
-            self.pipelines.render = Some(pipeline);
-        }
-        Ok(())
-    }
-
     /// Builds the `trace_rays` pipeline for closest or any hit with the
     /// given ray/triangle test, if not built yet.
     pub fn prepare_trace(&mut self, any_hit: bool, intersect: Intersect) -> Result<()> {

@@ -7,7 +7,9 @@
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
 
+use crate::camera::View;
 use crate::error::{Error, Result};
+use crate::layout::Params;
 use crate::output::Image;
 use crate::progress::Progress;
 
@@ -15,39 +17,42 @@ use super::readback::SUMS_BYTES;
 use super::{GpuRenderer, TILE};
 
 impl GpuRenderer {
-    /// Adds samples `samples` of the current view (of its `spp`) to `sums`
+    /// Adds samples `samples` of `view` (of its `spp`) to `sums`
     /// (one per pixel, row by row: colour sums and squared luminance, as
     /// the shader keeps them), which hold samples `0..samples.start`.
     /// When `samples.end` is the view's spp, returns the finished image:
     /// the shader's means, bit for bit the image `render` returns.
     pub fn add_samples(
         &mut self,
+        view: &View,
         samples: Range<u32>,
         sums: &mut [[f32; 4]],
     ) -> Result<Option<Image>> {
-        self.add_samples_or_cancel(samples, sums, &AtomicBool::new(false))
+        self.add_samples_or_cancel(view, samples, sums, &AtomicBool::new(false))
     }
 
     /// `add_samples`, stopped before its next tile once `cancel` is set
     /// (then `sums` are as they were, and None comes back).
     pub fn add_samples_or_cancel(
         &mut self,
+        view: &View,
         samples: Range<u32>,
         sums: &mut [[f32; 4]],
         cancel: &AtomicBool,
     ) -> Result<Option<Image>> {
-        let (width, height, spp) = (self.params.width, self.params.height, self.params.spp);
-        let view = (width, height, spp);
-        crate::camera::check_batch(view, &samples, sums.len()).map_err(Error::Usage)?;
+        let params = self.uniform(view);
+        let (width, height, spp) = (params.width, params.height, params.spp);
+        crate::camera::check_batch((width, height, spp), &samples, sums.len())
+            .map_err(Error::Usage)?;
         if samples == (0..spp) {
-            let (rendered, _) = self.render(&Progress::hidden())?;
+            let (rendered, _) = self.render(view, &Progress::hidden())?;
             return Ok(Some(rendered.image));
         }
         self.prepare_render()?;
         loop {
             // The sums change only once the batch's loops ran whole.
             let mut next = sums.to_vec();
-            let image = self.add_samples_once(&samples, &mut next, cancel)?;
+            let image = self.add_samples_once(&params, &samples, &mut next, cancel)?;
             if cancel.load(Ordering::Relaxed) {
                 return Ok(None);
             }
@@ -55,18 +60,19 @@ impl GpuRenderer {
                 sums.copy_from_slice(&next);
                 return Ok(image);
             }
-            self.fewer_samples_per_dispatch()?;
+            self.fewer_samples_per_dispatch(spp)?;
         }
     }
 
     fn add_samples_once(
         &mut self,
+        params: &Params,
         samples: &Range<u32>,
         sums: &mut [[f32; 4]],
         cancel: &AtomicBool,
     ) -> Result<Option<Image>> {
-        let (width, height) = (self.params.width, self.params.height);
-        let finishing = samples.end == self.params.spp;
+        let (width, height) = (params.width, params.height);
+        let finishing = samples.end == params.spp;
         let mut rgb = vec![[0.0f32; 3]; if finishing { sums.len() } else { 0 }];
         let staging = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("tile sums readback"),
@@ -74,7 +80,7 @@ impl GpuRenderer {
             usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
             mapped_at_creation: false,
         });
-        let side = self.tile_side();
+        let side = self.tile_side_for(params.spp);
         for tile_y in (0..height).step_by(side as usize) {
             for tile_x in (0..width).step_by(side as usize) {
                 if cancel.load(Ordering::Relaxed) {
@@ -94,11 +100,11 @@ impl GpuRenderer {
                     let bytes = bytemuck::cast_slice(&block);
                     self.gpu.queue.write_buffer(&self.tile.sums, 0, bytes);
                 }
-                let extent = [tile_width as u32, tile_height];
-                self.render_tile(tile_x, tile_y, extent[0], extent[1], samples.clone())?;
+                let extent = [tile_x, tile_y, tile_width as u32, tile_height];
+                self.render_tile(params, extent, samples.clone())?;
                 if finishing {
                     self.tile
-                        .read(&self.gpu, extent[0], tile_height, |row, colors, _| {
+                        .read(&self.gpu, extent[2], tile_height, |row, colors, _| {
                             for (i, src) in colors.chunks(4).enumerate() {
                                 rgb[at(row) + i] = [src[0], src[1], src[2]];
                             }

@@ -41,7 +41,7 @@ type Bound<'a> = (&'static str, &'a wgpu::Buffer, u64);
 impl GpuRenderer {
     /// Spheres in the resident scene (the queries are over triangles).
     pub fn sphere_count(&self) -> u32 {
-        self.params.num_spheres
+        self.resident.scene_params().num_spheres
     }
 
     /// Where a winding query finds the scene's winding tree (the engine

@@ -4,6 +4,7 @@ use std::cell::RefCell;
 use std::collections::HashMap;
 use std::time::Duration;
 
+use crate::camera::View;
 use crate::error::{Error, Result};
 use crate::layout::{Hit, NO_HIT, Params, Ray, WORKGROUP_INVOCATIONS};
 use crate::scene::Intersect;
@@ -70,27 +71,29 @@ impl GpuRenderer {
             .collect())
     }
 
-    /// Renders the listed pixels with the current sampling (adaptive
+    /// Renders the listed pixels with `view`'s spp and seed (adaptive
     /// sampling's later passes): mean colour and variance of the mean. In
-    /// the wavefront where the render is (`shadows_apart`), else in one
+    /// the wavefront where the render is (`is_wavefront`), else in one
     /// pass; the same bits either way.
-    pub fn render_pixel_list(&mut self, pixels: &[[u32; 2]]) -> Result<Vec<[f32; 4]>> {
-        if self.shadows_apart() {
-            return self.render_list_apart(pixels);
+    pub fn render_pixel_list(&mut self, view: &View, pixels: &[[u32; 2]]) -> Result<Vec<[f32; 4]>> {
+        let params = self.uniform(view);
+        if self.is_wavefront() {
+            return self.render_list_wavefront(&params, pixels);
         }
         self.prepare_pixel_list()?;
         loop {
             let pipeline = self.pipelines.pixel_list.as_ref().expect("built");
             let list = &self.pipelines.layouts.pixels;
-            let step = self.samples_per_dispatch.min(self.params.spp);
+            let step = self.samples_per_dispatch.min(params.spp);
             // As many samples per dispatch as a full tile at 1 spp.
             let batch =
                 ((TILE * TILE) / step).max(RENDER_WORKGROUP[0] * RENDER_WORKGROUP[1]) as usize;
-            let (results, _) = self.run_list(pipeline, list, pixels, batch, Some(step), false)?;
+            let sampling = Some((&params, step));
+            let (results, _) = self.run_list(pipeline, list, pixels, batch, sampling, false)?;
             if !self.loops_were_cut()? {
                 return Ok(results);
             }
-            self.fewer_samples_per_dispatch()?;
+            self.fewer_samples_per_dispatch(params.spp)?;
         }
     }
 
@@ -122,17 +125,15 @@ impl GpuRenderer {
         })
     }
 
-    /// Uploads the uniform with `samples` (of the view's spp) as the next
-    /// dispatch's: a pixel list's samples, a dispatch at a time.
-    pub(super) fn upload_samples(&self, samples: std::ops::Range<u32>) {
+    /// Uploads the uniform `params` with `samples` (of its spp) as the
+    /// next dispatch's: a pixel list's samples, a dispatch at a time.
+    pub(super) fn upload_samples(&self, params: &Params, samples: std::ops::Range<u32>) {
         let params = Params {
             sample_begin: samples.start,
             sample_end: samples.end,
-            ..self.params
+            ..*params
         };
-        self.gpu
-            .queue
-            .write_buffer(&self.resident.params_buffer, 0, bytemuck::bytes_of(&params));
+        self.resident.write_uniform(&self.gpu, &params);
     }
 
     /// Device time of the last `trace_rays`, from timestamp queries (None
@@ -143,8 +144,9 @@ impl GpuRenderer {
 
     /// Runs a one-invocation-per-item entry point over `inputs` (bound at
     /// `list`'s first binding, outputs at its second), `batch` items per
-    /// dispatch so that no dispatch runs long; with `step`, the scene's
-    /// samples that many at a time, a dispatch each. With `timed`, also
+    /// dispatch so that no dispatch runs long; with `sampling` (a view's
+    /// uniform and a step), its samples that many at a time, a dispatch
+    /// each, else one dispatch with the scene's uniform. With `timed`, also
     /// returns the dispatches' device time, summed, where timestamps work
     /// (reading it back waits on each dispatch's queries).
     fn run_list<I: bytemuck::Pod, O: bytemuck::Pod>(
@@ -153,7 +155,7 @@ impl GpuRenderer {
         list: &ListLayout,
         inputs: &[I],
         batch: usize,
-        step: Option<u32>,
+        sampling: Option<(&Params, u32)>,
         timed: bool,
     ) -> Result<(Vec<O>, Option<Duration>)> {
         const LIST_WORKGROUP: usize = WORKGROUP_INVOCATIONS as usize;
@@ -184,10 +186,12 @@ impl GpuRenderer {
                     (output.name, leading_bytes(&out_buffer, out_len)),
                 ],
             );
-            let spp = self.params.spp;
-            let step = step.unwrap_or(spp);
+            let (params, spp, step) = match sampling {
+                Some((params, step)) => (params, params.spp, step),
+                None => (self.resident.scene_params(), 1, 1),
+            };
             for begin in (0..spp).step_by(step as usize) {
-                self.upload_samples(begin..(begin + step).min(spp));
+                self.upload_samples(params, begin..(begin + step).min(spp));
                 let mut encoder = gpu.device.create_command_encoder(&Default::default());
                 {
                     let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {

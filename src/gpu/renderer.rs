@@ -1,5 +1,5 @@
-//! `GpuRenderer`: a scene resident on the device, and the steps that put
-//! it there.
+//! `GpuRenderer`: a scene resident on the device, the steps that put it
+//! there, and the uniform each call writes from its view.
 
 use std::time::{Duration, Instant};
 
@@ -18,27 +18,41 @@ use super::device::Gpu;
 use super::pipelines::{Layouts, Pipelines, resident_constants};
 use super::query::ListState;
 use super::readback::{LoopStatus, TileTargets};
-use super::render::{LLVMPIPE_SAMPLES_PER_DISPATCH, ShadowDispatch};
+use super::render::LLVMPIPE_SAMPLES_PER_DISPATCH;
 use super::shader::{SHADER_SOURCE, specialisation};
 use super::timer::Timer;
 use super::upload::{BvhStorage, SceneBuffers};
+use super::wavefront::{ShadowDispatch, Wavefront};
 
-/// A scene resident on the device: buffers and pipeline are built once;
-/// a new view only rewrites the uniform. It keeps all it renders with (the
-/// scene's uniform, its placement), so the host's scene may go once it is
-/// built; it starts at the scene's default view (`Scene::view`).
+/// A scene resident on the device, rendered from any view: each render
+/// call takes its `View` and writes the uniform from it and the scene's
+/// part (`Resident`), so no call leaves state another reads. It keeps all
+/// it renders with (the scene's part of the uniform, its placement), so
+/// the host's scene may go once it is built.
+///
+/// Its parts, and when each is built (the rule): what every call needs is
+/// built when the renderer is opened (`new`): the device context (`Gpu`),
+/// the scene's upload and bind groups (`Resident`: buffers, the BVH,
+/// textures, the uniform), the shader module and its layouts
+/// (`Pipelines`), the tile's buffers (`TileTargets`) and the timer. Each
+/// pass or kernel family is built on its first use, by its `prepare_*`
+/// (which a caller may call first to leave the compile out of a timing):
+/// the megakernel's `render` pipeline or the `Wavefront`
+/// (`prepare_render`), the wavefront's pixel-list pass, `trace_rays`'s
+/// pipelines (`prepare_trace`), `render_pixel_list`'s, and the geometric
+/// queries' (`proximity.rs`; the winding tree on the first winding query).
 pub struct GpuRenderer {
     pub(super) gpu: Gpu,
     pub(super) pipelines: Pipelines,
     pub(super) resident: Resident,
     pub(super) tile: TileTargets,
-    /// The uniform as the next dispatch writes it.
-    pub(super) params: Params,
     /// Samples one dispatch adds to a pixel: few enough that no invocation
     /// trips llvmpipe's loop limit (`loops_completed` in the shader);
     /// halved whenever one still does.
     pub(super) samples_per_dispatch: u32,
     pub(super) timer: Option<Timer>,
+    /// The wavefront's passes, built on the first wavefront render.
+    pub(super) wavefront: Option<Wavefront>,
     pub(super) lists: ListState,
     pub(super) proximity: super::proximity::ProximityState,
     /// How a render traces its shadow rays (the tests set either).
@@ -55,17 +69,33 @@ pub struct GpuRenderer {
 }
 
 /// The bind groups every pass binds (the scene's buffers live on in
-/// them), the uniform and the shader's loop flag.
+/// them), the uniform, the scene's part of it and the shader's loop flag.
 pub(super) struct Resident {
     pub scene_group: wgpu::BindGroup,
     pub image_group: wgpu::BindGroup,
-    pub params_buffer: wgpu::Buffer,
+    params_buffer: wgpu::Buffer,
+    /// The uniform's scene part (its counts, background, ambient); the
+    /// view's part zero, each render call's to fill.
+    scene_params: Params,
     pub loop_status: LoopStatus,
 }
 
-/// The uniform for `scene` seen from `view`.
-fn params_for(scene: &Scene, view: &View) -> Params {
-    let scene_params = Params {
+impl Resident {
+    /// Uploads `params` as the uniform of the next dispatch.
+    pub fn write_uniform(&self, gpu: &Gpu, params: &Params) {
+        gpu.queue
+            .write_buffer(&self.params_buffer, 0, bytemuck::bytes_of(params));
+    }
+
+    /// The uniform's scene part alone: all the queries read.
+    pub fn scene_params(&self) -> &Params {
+        &self.scene_params
+    }
+}
+
+/// The uniform's part that `scene` sets.
+fn scene_params(scene: &Scene) -> Params {
+    Params {
         background: scene.background,
         num_triangles: scene.triangles.len() as u32,
         ambient: scene.ambient,
@@ -74,8 +104,7 @@ fn params_for(scene: &Scene, view: &View) -> Params {
         shadows: scene.shadows as u32,
         canary_loops: 2,
         ..bytemuck::Zeroable::zeroed()
-    };
-    with_view(scene_params, scene.offset, view)
+    }
 }
 
 /// `params` seen from `view` (the geometry relative to `offset`): the f32
@@ -135,7 +164,7 @@ impl GpuRenderer {
     ) -> Result<GpuRenderer> {
         let start = Instant::now();
         let device = &gpu.device;
-        let params = params_for(scene, &scene.view);
+        let params = scene_params(scene);
         let params_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("params"),
             contents: bytemuck::bytes_of(&params),
@@ -189,12 +218,13 @@ impl GpuRenderer {
                 scene_group,
                 image_group,
                 params_buffer,
+                scene_params: params,
                 loop_status,
             },
             tile,
-            params,
             samples_per_dispatch,
             timer,
+            wavefront: None,
             lists: ListState::default(),
             proximity: Default::default(),
             shadow_dispatch,
@@ -210,11 +240,15 @@ impl GpuRenderer {
         &self.gpu
     }
 
-    /// Sets the view (camera, size, spp, seed) the resident scene is
-    /// rendered from; uploads nothing else (the scene's own part of the
-    /// uniform stays the one uploaded).
-    pub fn set_view(&mut self, view: &View) {
-        self.params = with_view(self.params, self.placement.offset, view);
+    /// The uniform of a render of `view` (camera, size, spp, seed): the
+    /// scene's part as uploaded, the view's from `view`.
+    pub(super) fn uniform(&self, view: &View) -> Params {
+        with_view(self.resident.scene_params, self.placement.offset, view)
+    }
+
+    /// Lights in the resident scene.
+    pub(super) fn scene_lights(&self) -> u32 {
+        self.resident.scene_params.num_lights
     }
 }
 
