@@ -283,7 +283,10 @@ fn wavefront_as_megakernel(scene: &lambert::Scene, label: &str) -> lambert::outp
         let var: Vec<u32> = r.variance.iter().map(|v| v.to_bits()).collect();
         (rgb, var, r.prims.clone())
     };
-    assert!(bits(&wavefront) == bits(&mega), "{label}: the wavefront differs");
+    assert!(
+        bits(&wavefront) == bits(&mega),
+        "{label}: the wavefront differs"
+    );
     println!("{label}: wavefront = megakernel, bit for bit");
     wavefront
 }

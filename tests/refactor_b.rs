@@ -150,7 +150,10 @@ fn the_circle_check_finds_a_circle_and_reads_groups() {
     let edges = |pairs: &[(&str, &str)]| {
         let mut graph: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
         for (from, to) in pairs {
-            graph.entry(from.to_string()).or_default().insert(to.to_string());
+            graph
+                .entry(from.to_string())
+                .or_default()
+                .insert(to.to_string());
         }
         graph
     };
@@ -288,21 +291,56 @@ fn each_render_call_renders_the_view_it_is_given() {
 
         let mut shared = fresh();
         let label = format!("{dispatch:?}");
-        assert_eq!(bits(&shared.render(&first, &hidden).unwrap().0), bits(&alone_first), "{label}");
+        assert_eq!(
+            bits(&shared.render(&first, &hidden).unwrap().0),
+            bits(&alone_first),
+            "{label}"
+        );
         let mut sums = vec![[0.0f32; 4]; 23 * 17];
-        assert!(shared.add_samples(&second, 0..2, &mut sums).unwrap().is_none());
+        assert!(
+            shared
+                .add_samples(&second, 0..2, &mut sums)
+                .unwrap()
+                .is_none()
+        );
         let list = shared.render_pixel_list(&second, &pixels).unwrap();
-        assert_eq!(list_bits(&list), list_bits(&alone_list), "{label}: the pixel list");
+        assert_eq!(
+            list_bits(&list),
+            list_bits(&alone_list),
+            "{label}: the pixel list"
+        );
         let again = shared.render(&first, &hidden).unwrap().0;
-        assert_eq!(bits(&again), bits(&alone_first), "{label}: the first view again");
+        assert_eq!(
+            bits(&again),
+            bits(&alone_first),
+            "{label}: the first view again"
+        );
         let finished = shared.add_samples(&second, 2..5, &mut sums).unwrap();
-        let rgb: Vec<u32> = finished.expect("the last batch").rgb.iter().flatten().map(|c| c.to_bits()).collect();
-        assert_eq!(rgb, bits(&alone_second).0, "{label}: the batches end as one render");
+        let rgb: Vec<u32> = finished
+            .expect("the last batch")
+            .rgb
+            .iter()
+            .flatten()
+            .map(|c| c.to_bits())
+            .collect();
+        assert_eq!(
+            rgb,
+            bits(&alone_second).0,
+            "{label}: the batches end as one render"
+        );
         let hits = shared.trace_rays(&rays, false, scene.intersect).unwrap();
         let hit_bits = |hits: &[lambert::layout::Hit]| -> Vec<[u32; 2]> {
             hits.iter().map(|h| [h.t.to_bits(), h.prim]).collect()
         };
-        assert_eq!(hit_bits(&hits), hit_bits(&alone_hits), "{label}: the rays' hits");
-        assert_eq!(shared.tile_count(&second), fresh().tile_count(&second), "{label}");
+        assert_eq!(
+            hit_bits(&hits),
+            hit_bits(&alone_hits),
+            "{label}: the rays' hits"
+        );
+        assert_eq!(
+            shared.tile_count(&second),
+            fresh().tile_count(&second),
+            "{label}"
+        );
     }
 }

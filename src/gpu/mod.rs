@@ -8,7 +8,10 @@
 //! - `bindings`: the bind group tables, checked against the shader;
 //! - `shader`: the shader's source and its specialisation;
 //! - `pipelines`: the module's layouts and pipelines, built on first use;
-//! - `renderer`: `GpuRenderer`, a scene resident on the device;
+//! - `renderer`: `GpuRenderer`, a scene resident on the device: its
+//!   parts, and when each is built;
+//! - `resident`: the scene's upload as the passes see it (bind groups,
+//!   the uniform of a view), and `Host`, what a pass reads of the others;
 //! - `render`: the render passes (the megakernel, or the wavefront), tile
 //!   by tile, of the view each call is given;
 //! - `wavefront`: the wavefront (shadow rays traced apart from the camera
@@ -30,6 +33,7 @@ mod query;
 mod readback;
 mod render;
 mod renderer;
+mod resident;
 mod shader;
 mod timer;
 mod upload;

@@ -199,7 +199,7 @@ impl GpuRenderer {
                         timestamp_writes: timer.map(Timer::writes),
                     });
                     pass.set_pipeline(pipeline);
-                    pass.set_bind_group(SCENE.group, &self.resident.scene_group, &[]);
+                    pass.set_bind_group(SCENE.group, self.resident.scene_group(), &[]);
                     pass.set_bind_group(table.group, &group, &[]);
                     pass.dispatch_workgroups(chunk.len().div_ceil(LIST_WORKGROUP) as u32, 1, 1);
                 }

@@ -210,7 +210,7 @@ impl GpuRenderer {
     /// Whether any invocation since the last call found its loops cut short
     /// (the shader's `report_cut_loops`); clears the flag.
     pub(super) fn loops_were_cut(&self) -> Result<bool> {
-        self.resident.loop_status.were_cut(&self.gpu)
+        self.resident.loops_were_cut(&self.gpu)
     }
 
     /// Renders one tile with the uniform `params` (its tile and samples
@@ -227,7 +227,7 @@ impl GpuRenderer {
                 label: Some("render tile, wavefront"),
                 timestamp_writes: self.timer.as_ref().map(Timer::writes),
             });
-            pass.set_bind_group(SCENE.group, &resident.scene_group, &[]);
+            pass.set_bind_group(SCENE.group, resident.scene_group(), &[]);
             let samples = params.sample_end - params.sample_begin;
             wavefront.dispatch_tile(gpu, &mut pass, samples, workgroups);
         } else {
@@ -237,8 +237,8 @@ impl GpuRenderer {
             });
             let [groups_x, groups_y, layers] = workgroups;
             pass.set_pipeline(self.pipelines.render.as_ref().expect("prepared"));
-            pass.set_bind_group(SCENE.group, &resident.scene_group, &[]);
-            pass.set_bind_group(IMAGE_TILE.group, &resident.image_group, &[]);
+            pass.set_bind_group(SCENE.group, resident.scene_group(), &[]);
+            pass.set_bind_group(IMAGE_TILE.group, resident.image_group(), &[]);
             pass.dispatch_workgroups(groups_x, groups_y, layers);
         }
         if let Some(timer) = &self.timer {

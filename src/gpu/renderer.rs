@@ -1,24 +1,22 @@
 //! `GpuRenderer`: a scene resident on the device, the steps that put it
 //! there, and the uniform each call writes from its view.
 
+use std::sync::Weak;
 use std::time::{Duration, Instant};
 
-use glam::DVec3;
-use wgpu::util::DeviceExt;
-
-use crate::camera::f32::CameraBasis;
-use crate::camera::{View, strata_columns};
+use crate::camera::View;
 use crate::error::{Error, Result};
-use crate::layout::Params;
+use crate::layout::{ClosestPoint, ListedHit, Params, Ray};
 use crate::scene::Scene;
 
 use super::adapter::is_llvmpipe;
-use super::bindings::{IMAGE_TILE, SCENE};
 use super::device::Gpu;
 use super::pipelines::{Layouts, Pipelines, resident_constants};
+use super::proximity::Proximity;
 use super::query::ListState;
-use super::readback::{LoopStatus, TileTargets};
+use super::readback::TileTargets;
 use super::render::LLVMPIPE_SAMPLES_PER_DISPATCH;
+use super::resident::{Host, Resident};
 use super::shader::{SHADER_SOURCE, specialisation};
 use super::timer::Timer;
 use super::upload::{BvhStorage, SceneBuffers};
@@ -54,7 +52,7 @@ pub struct GpuRenderer {
     /// The wavefront's passes, built on the first wavefront render.
     pub(super) wavefront: Option<Wavefront>,
     pub(super) lists: ListState,
-    pub(super) proximity: super::proximity::ProximityState,
+    proximity: Proximity,
     /// How a render traces its shadow rays (the tests set either).
     pub shadow_dispatch: ShadowDispatch,
     /// Bytes of the scene's buffers on the device.
@@ -66,69 +64,6 @@ pub struct GpuRenderer {
     pub upload_time: Duration,
     /// The resident scene's placement: `trace_rays` takes world rays.
     pub placement: crate::placement::Placement,
-}
-
-/// The bind groups every pass binds (the scene's buffers live on in
-/// them), the uniform, the scene's part of it and the shader's loop flag.
-pub(super) struct Resident {
-    pub scene_group: wgpu::BindGroup,
-    pub image_group: wgpu::BindGroup,
-    params_buffer: wgpu::Buffer,
-    /// The uniform's scene part (its counts, background, ambient); the
-    /// view's part zero, each render call's to fill.
-    scene_params: Params,
-    pub loop_status: LoopStatus,
-}
-
-impl Resident {
-    /// Uploads `params` as the uniform of the next dispatch.
-    pub fn write_uniform(&self, gpu: &Gpu, params: &Params) {
-        gpu.queue
-            .write_buffer(&self.params_buffer, 0, bytemuck::bytes_of(params));
-    }
-
-    /// The uniform's scene part alone: all the queries read.
-    pub fn scene_params(&self) -> &Params {
-        &self.scene_params
-    }
-}
-
-/// The uniform's part that `scene` sets.
-fn scene_params(scene: &Scene) -> Params {
-    Params {
-        background: scene.background,
-        num_triangles: scene.triangles.len() as u32,
-        ambient: scene.ambient,
-        num_spheres: scene.spheres.len() as u32,
-        num_lights: scene.lights.len() as u32,
-        shadows: scene.shadows as u32,
-        canary_loops: 2,
-        ..bytemuck::Zeroable::zeroed()
-    }
-}
-
-/// `params` seen from `view` (the geometry relative to `offset`): the f32
-/// reference's basis, so both paths shoot the very same rays.
-fn with_view(params: Params, offset: DVec3, view: &View) -> Params {
-    let basis = CameraBasis::new(&view.camera.relative_to(offset));
-    Params {
-        eye: basis.eye.to_array(),
-        width: basis.width,
-        right: basis.right.to_array(),
-        height: basis.height,
-        up: basis.up.to_array(),
-        tan_half_x: basis.tan_half_x,
-        forward: basis.forward.to_array(),
-        tan_half_y: basis.tan_half_y,
-        tile_origin: [0, 0],
-        spp: view.spp,
-        seed: view.seed,
-        strata_x: strata_columns(view.spp),
-        sample_begin: 0,
-        sample_end: view.spp,
-        cone_spread: crate::texture::cone_spread(basis.tan_half_y, basis.height, view.spp),
-        ..params
-    }
 }
 
 impl GpuRenderer {
@@ -164,34 +99,13 @@ impl GpuRenderer {
     ) -> Result<GpuRenderer> {
         let start = Instant::now();
         let device = &gpu.device;
-        let params = scene_params(scene);
-        let params_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("params"),
-            contents: bytemuck::bytes_of(&params),
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-        });
         let buffers = SceneBuffers::upload(&gpu, scene, storage)?;
         let constants = resident_constants(constants, &buffers, storage, scene, &gpu);
         let tile = TileTargets::new(device);
-        let loop_status = LoopStatus::new(device);
         let layouts = Layouts::new(device);
 
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let scene_group = scene_bind_group(
-            device,
-            &layouts,
-            &buffers,
-            [&params_buffer, &loop_status.buffer],
-        );
-        let image_group = IMAGE_TILE.bind_group(
-            device,
-            IMAGE_TILE.label,
-            &layouts.image,
-            vec![
-                ("out_prim", tile.prim.as_entire_binding()),
-                ("tile_sums", tile.sums.as_entire_binding()),
-            ],
-        );
+        let resident = Resident::new(device, scene, &layouts, &buffers, &tile);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("lambert shader"),
             source: wgpu::ShaderSource::Wgsl(SHADER_SOURCE.into()),
@@ -214,13 +128,7 @@ impl GpuRenderer {
         Ok(GpuRenderer {
             gpu,
             pipelines: Pipelines::new(module, constants, layouts),
-            resident: Resident {
-                scene_group,
-                image_group,
-                params_buffer,
-                scene_params: params,
-                loop_status,
-            },
+            resident,
             tile,
             samples_per_dispatch,
             timer,
@@ -243,59 +151,67 @@ impl GpuRenderer {
     /// The uniform of a render of `view` (camera, size, spp, seed): the
     /// scene's part as uploaded, the view's from `view`.
     pub(super) fn uniform(&self, view: &View) -> Params {
-        with_view(self.resident.scene_params, self.placement.offset, view)
+        self.resident.uniform(self.placement.offset, view)
     }
 
     /// Lights in the resident scene.
     pub(super) fn scene_lights(&self) -> u32 {
-        self.resident.scene_params.num_lights
+        self.resident.scene_params().num_lights
     }
-}
 
-/// Group 0: the uniform, the scene's arrays (low and high ranges), the
-/// loop flag and the BVH's texels.
-fn scene_bind_group(
-    device: &wgpu::Device,
-    layouts: &Layouts,
-    buffers: &SceneBuffers,
-    [params_buffer, loop_status]: [&wgpu::Buffer; 2],
-) -> wgpu::BindGroup {
-    let node_view = buffers.node_texture.create_view(&Default::default());
-    let block_view = buffers.block_texture.create_view(&Default::default());
-    let triangle_view = buffers.triangle_texture.create_view(&Default::default());
-    SCENE.bind_group(
-        device,
-        SCENE.label,
-        &layouts.scene,
-        vec![
-            ("params", params_buffer.as_entire_binding()),
-            ("triangles", buffers.triangles.low_binding()),
-            ("triangle_normals", buffers.normals.low_binding()),
-            ("spheres", buffers.spheres.as_entire_binding()),
-            ("materials", buffers.materials.as_entire_binding()),
-            ("lights", buffers.lights.as_entire_binding()),
-            ("bvh_nodes", buffers.nodes.low_binding()),
-            ("bvh_blocks", buffers.blocks.low_binding()),
-            ("triangles_hi", buffers.triangles.high_binding()),
-            ("triangle_normals_hi", buffers.normals.high_binding()),
-            ("bvh_nodes_hi", buffers.nodes.high_binding()),
-            ("bvh_blocks_hi", buffers.blocks.high_binding()),
-            ("loop_status", loop_status.as_entire_binding()),
-            ("triangle_attributes", buffers.attributes.low_binding()),
-            ("triangle_attributes_hi", buffers.attributes.high_binding()),
-            ("textures", buffers.textures.as_entire_binding()),
-            (
-                "bvh_node_texels",
-                wgpu::BindingResource::TextureView(&node_view),
-            ),
-            (
-                "bvh_block_texels",
-                wgpu::BindingResource::TextureView(&block_view),
-            ),
-            (
-                "triangle_texels",
-                wgpu::BindingResource::TextureView(&triangle_view),
-            ),
-        ],
-    )
+    /// Spheres in the resident scene (the geometric queries are over
+    /// triangles).
+    pub fn sphere_count(&self) -> u32 {
+        self.resident.scene_params().num_spheres
+    }
+
+    /// Where a winding query finds the scene's winding tree (the engine
+    /// sets it when it opens the renderer from an `Arc<Scene>`).
+    pub fn set_winding_source(&mut self, scene: Weak<Scene>) {
+        self.proximity.set_winding_source(scene);
+    }
+
+    /// The geometric queries' part, and what it reads of the others.
+    fn proximity(&mut self) -> (Host<'_>, &mut Proximity) {
+        let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
+        (host, &mut self.proximity)
+    }
+
+    /// `cpu::closest_points` on the device (`margins`: each point's cull
+    /// margin, the CPU's `query_margin`).
+    pub fn closest_points(
+        &mut self,
+        points: &[[f32; 3]],
+        margins: &[f32],
+        max_distance: f32,
+    ) -> Result<Vec<ClosestPoint>> {
+        let (host, proximity) = self.proximity();
+        proximity.closest_points(host, points, margins, max_distance)
+    }
+
+    /// `cpu::winding_numbers` on the device: the same tree (uploaded on the
+    /// first call) walked in the same order.
+    pub fn winding_numbers(&mut self, points: &[[f32; 3]]) -> Result<Vec<f32>> {
+        let (host, proximity) = self.proximity();
+        proximity.winding_numbers(host, points)
+    }
+
+    /// `cpu::count_intersections` on the device (`pad`: the CPU's
+    /// `box_pad`).
+    pub fn count_intersections(&mut self, rays: &[Ray], pad: f32) -> Result<Vec<u32>> {
+        let (host, proximity) = self.proximity();
+        proximity.count_intersections(host, rays, pad)
+    }
+
+    /// `cpu::list_intersections` on the device, each ray's hits in the
+    /// order the traversal found them (the engine sorts them); a ray whose
+    /// crossings alone exceed one binding is `Error::GpuLimit`.
+    pub fn list_intersections(
+        &mut self,
+        rays: &[Ray],
+        pad: f32,
+    ) -> Result<(Vec<u64>, Vec<ListedHit>)> {
+        let (host, proximity) = self.proximity();
+        proximity.list_intersections(host, rays, pad)
+    }
 }

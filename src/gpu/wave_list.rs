@@ -71,7 +71,7 @@ impl GpuRenderer {
                         label: Some("pixel list, wavefront"),
                         timestamp_writes: None,
                     });
-                    pass.set_bind_group(SCENE.group, &self.resident.scene_group, &[]);
+                    pass.set_bind_group(SCENE.group, self.resident.scene_group(), &[]);
                     wavefront.dispatch_list(gpu, &mut pass, &groups, workgroups);
                 }
                 gpu.queue.submit([encoder.finish()]);
