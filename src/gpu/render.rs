@@ -236,7 +236,7 @@ impl GpuRenderer {
                 timestamp_writes: self.timer.as_ref().map(Timer::writes),
             });
             let [groups_x, groups_y, layers] = workgroups;
-            pass.set_pipeline(self.pipelines.render.as_ref().expect("prepared"));
+            pass.set_pipeline(self.megakernel.as_ref().expect("prepared"));
             pass.set_bind_group(SCENE.group, resident.scene_group(), &[]);
             pass.set_bind_group(IMAGE_TILE.group, resident.image_group(), &[]);
             pass.dispatch_workgroups(groups_x, groups_y, layers);
@@ -259,10 +259,10 @@ impl GpuRenderer {
                 let wavefront = Wavefront::new(&self.gpu, &self.pipelines, &self.tile, lights)?;
                 self.wavefront = Some(wavefront);
             }
-        } else if self.pipelines.render.is_none() {
-            let p = &self.pipelines;
-            let pipeline = p.build(&self.gpu, "render", &p.layouts.image, &p.constants)?;
-            self.pipelines.render = Some(pipeline);
+        } else if self.megakernel.is_none() {
+            let host = self.host();
+            let pipeline = host.build("render", &host.layouts().image)?;
+            self.megakernel = Some(pipeline);
         }
         Ok(())
     }

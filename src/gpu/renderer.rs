@@ -6,14 +6,14 @@ use std::time::{Duration, Instant};
 
 use crate::camera::View;
 use crate::error::{Error, Result};
-use crate::layout::{ClosestPoint, ListedHit, Params, Ray};
-use crate::scene::Scene;
+use crate::layout::{ClosestPoint, Hit, ListedHit, Params, Ray};
+use crate::scene::{Intersect, Scene};
 
 use super::adapter::is_llvmpipe;
 use super::device::Gpu;
 use super::pipelines::{Layouts, Pipelines, resident_constants};
 use super::proximity::Proximity;
-use super::query::ListState;
+use super::query::Lists;
 use super::readback::TileTargets;
 use super::render::LLVMPIPE_SAMPLES_PER_DISPATCH;
 use super::resident::{Host, Resident};
@@ -49,9 +49,11 @@ pub struct GpuRenderer {
     /// halved whenever one still does.
     pub(super) samples_per_dispatch: u32,
     pub(super) timer: Option<Timer>,
+    /// The megakernel's pipeline, built on its first render.
+    pub(super) megakernel: Option<wgpu::ComputePipeline>,
     /// The wavefront's passes, built on the first wavefront render.
     pub(super) wavefront: Option<Wavefront>,
-    pub(super) lists: ListState,
+    pub(super) lists: Lists,
     proximity: Proximity,
     /// How a render traces its shadow rays (the tests set either).
     pub shadow_dispatch: ShadowDispatch,
@@ -133,7 +135,8 @@ impl GpuRenderer {
             samples_per_dispatch,
             timer,
             wavefront: None,
-            lists: ListState::default(),
+            lists: Lists::default(),
+            megakernel: None,
             proximity: Default::default(),
             shadow_dispatch,
             device_bytes: buffers.device_bytes,
@@ -169,6 +172,77 @@ impl GpuRenderer {
     /// sets it when it opens the renderer from an `Arc<Scene>`).
     pub fn set_winding_source(&mut self, scene: Weak<Scene>) {
         self.proximity.set_winding_source(scene);
+    }
+
+    /// What a pass reads of the renderer's other parts.
+    pub(super) fn host(&self) -> Host<'_> {
+        Host::new(&self.gpu, &self.pipelines, &self.resident)
+    }
+
+    /// Traces `rays` (world coordinates, as in a ray file) against the
+    /// resident scene with the ray/triangle test `intersect`: closest hits,
+    /// or with `any_hit` the first hit each ray finds. Misses come back as
+    /// t = +inf, prim = NO_HIT.
+    pub fn trace_rays(
+        &mut self,
+        rays: &[Ray],
+        any_hit: bool,
+        intersect: Intersect,
+    ) -> Result<Vec<Hit>> {
+        let local = self.placement.localize(rays);
+        let mut hits = self.trace_local_rays(&local.rays, any_hit, intersect)?;
+        local.to_world(&mut hits);
+        Ok(hits)
+    }
+
+    /// `trace_rays` for rays already in the scene's local frame
+    /// (`Placement::local_ray`), hits in that frame.
+    pub fn trace_local_rays(
+        &mut self,
+        rays: &[Ray],
+        any_hit: bool,
+        intersect: Intersect,
+    ) -> Result<Vec<Hit>> {
+        self.prepare_trace(any_hit, intersect)?;
+        let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
+        let timer = self.timer.as_ref();
+        self.lists.trace(host, timer, rays, any_hit, intersect)
+    }
+
+    /// Builds the `trace_rays` pipeline for closest or any hit with the
+    /// given ray/triangle test, if not built yet.
+    pub fn prepare_trace(&mut self, any_hit: bool, intersect: Intersect) -> Result<()> {
+        let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
+        self.lists.prepare_trace(host, any_hit, intersect)
+    }
+
+    /// Device time of the last `trace_rays`, from timestamp queries (None
+    /// where the adapter has none).
+    pub fn trace_device_time(&self) -> Option<Duration> {
+        self.lists.trace_device_time()
+    }
+
+    /// Renders the listed pixels with `view`'s spp and seed (adaptive
+    /// sampling's later passes): mean colour and variance of the mean. In
+    /// the wavefront where the render is (`is_wavefront`), else in one
+    /// pass; the same bits either way.
+    pub fn render_pixel_list(&mut self, view: &View, pixels: &[[u32; 2]]) -> Result<Vec<[f32; 4]>> {
+        let params = self.uniform(view);
+        if self.is_wavefront() {
+            return self.render_list_wavefront(&params, pixels);
+        }
+        let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
+        self.lists.prepare_pixel_list(host)?;
+        loop {
+            let step = self.samples_per_dispatch.min(params.spp);
+            let results = self
+                .lists
+                .render_pixel_list(self.host(), &params, pixels, step)?;
+            if !self.loops_were_cut()? {
+                return Ok(results);
+            }
+            self.fewer_samples_per_dispatch(params.spp)?;
+        }
     }
 
     /// The geometric queries' part, and what it reads of the others.

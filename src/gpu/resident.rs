@@ -95,6 +95,17 @@ impl Resident {
         with_view(self.scene_params, offset, view)
     }
 
+    /// Uploads the uniform `params` with `samples` (of its spp) as the
+    /// next dispatch's: a pixel list's samples, a dispatch at a time.
+    pub fn write_samples(&self, gpu: &Gpu, params: &Params, samples: std::ops::Range<u32>) {
+        let params = Params {
+            sample_begin: samples.start,
+            sample_end: samples.end,
+            ..*params
+        };
+        self.write_uniform(gpu, &params);
+    }
+
     /// Uploads `params` as the uniform of the next dispatch.
     pub fn write_uniform(&self, gpu: &Gpu, params: &Params) {
         gpu.queue
@@ -172,6 +183,27 @@ impl<'a> Host<'a> {
         self.resident.scene_group()
     }
 
+    /// The uniform's scene part alone: all the queries read.
+    pub fn scene_params(&self) -> &Params {
+        self.resident.scene_params()
+    }
+
+    /// Uploads the uniform `params` with `samples` (of its spp) as the
+    /// next dispatch's.
+    pub fn write_samples(&self, params: &Params, samples: std::ops::Range<u32>) {
+        self.resident.write_samples(self.gpu, params, samples)
+    }
+
+    /// The shader's bind group layouts.
+    pub fn layouts(&self) -> &Layouts {
+        &self.pipelines.layouts
+    }
+
+    /// The overrides specialising the shader to the resident scene.
+    pub fn constants(&self) -> &[(&'static str, f64)] {
+        &self.pipelines.constants
+    }
+
     /// Builds `entry` with the scene's group and `layout`, specialised to
     /// the resident scene.
     pub fn build(
@@ -179,8 +211,17 @@ impl<'a> Host<'a> {
         entry: &str,
         layout: &wgpu::BindGroupLayout,
     ) -> Result<wgpu::ComputePipeline> {
-        let p = self.pipelines;
-        p.build(self.gpu, entry, layout, &p.constants)
+        self.build_with(entry, layout, self.constants())
+    }
+
+    /// `build` with other overrides.
+    pub fn build_with(
+        &self,
+        entry: &str,
+        layout: &wgpu::BindGroupLayout,
+        constants: &[(&str, f64)],
+    ) -> Result<wgpu::ComputePipeline> {
+        self.pipelines.build(self.gpu, entry, layout, constants)
     }
 
     /// Whether any invocation since the last call found its loops cut

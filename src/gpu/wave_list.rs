@@ -47,8 +47,11 @@ impl GpuRenderer {
         // As many camera rays a dispatch as the wavefront's lists hold.
         let batch = (wave_budget(self.scene_lights()) / step) as usize;
         let batch = batch.min(pixels.len()).max(1);
-        let [list, sums, staging] =
-            self.list_buffers(batch as u64 * PIXEL_BYTES, batch as u64 * SUMS_BYTES);
+        let [list, sums, staging] = self.lists.buffers(
+            self.host(),
+            batch as u64 * PIXEL_BYTES,
+            batch as u64 * SUMS_BYTES,
+        );
         let mut results = Vec::with_capacity(pixels.len());
         for chunk in pixels.chunks(batch) {
             let n = chunk.len() as u64;
@@ -64,7 +67,8 @@ impl GpuRenderer {
             );
             let workgroups = n.div_ceil(WORKGROUP_INVOCATIONS as u64) as u32;
             for begin in (0..spp).step_by(step as usize) {
-                self.upload_samples(params, begin..(begin + step).min(spp));
+                self.resident
+                    .write_samples(gpu, params, begin..(begin + step).min(spp));
                 let mut encoder = gpu.device.create_command_encoder(&Default::default());
                 {
                     let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
