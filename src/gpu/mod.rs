@@ -7,19 +7,20 @@
 //! - `upload`: the scene's buffers and the BVH's storage;
 //! - `bindings`: the bind group tables, checked against the shader;
 //! - `shader`: the shader's source and its specialisation;
-//! - `pipelines`: the module's layouts and pipelines, built on first use;
+//! - `pipelines`: the shader module, its overrides and layouts;
 //! - `renderer`: `GpuRenderer`, a scene resident on the device: its
 //!   parts, and when each is built;
 //! - `resident`: the scene's upload as the passes see it (bind groups,
 //!   the uniform of a view), and `Host`, what a pass reads of the others;
-//! - `render`: the render passes (the megakernel, or the wavefront), tile
-//!   by tile, of the view each call is given;
+//! - `render`: the tile renders' part (`Tiles`: the megakernel, or the
+//!   wavefront), tile by tile, of the view each call is given;
 //! - `wavefront`: the wavefront (shadow rays traced apart from the camera
 //!   rays): its passes, lists and bind groups, and `ShadowDispatch`;
 //! - `wave_list`: adaptive sampling's pixel lists in the wavefront;
 //! - `progressive`: a render's samples added a few at a time (the viewer);
-//! - `query`: ray queries and pixel lists;
-//! - `proximity`: closest points, winding numbers, every hit along rays;
+//! - `query`: ray queries and pixel lists (`Lists`);
+//! - `proximity`: closest points, winding numbers, every hit along rays
+//!   (`Proximity`);
 //! - `timer` and `readback`: timestamps, and getting results back.
 
 mod adapter;

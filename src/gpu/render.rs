@@ -1,24 +1,28 @@
-//! The render passes: tile by tile, in the `render` megakernel or in the
-//! wavefront (`wavefront.rs`), each tile read back before the next; the
-//! view rendered is each call's argument.
+//! The tile renders' part of a renderer (`Tiles`): the tile's buffers,
+//! the megakernel's pipeline or the wavefront (each built on its first
+//! render), the timer and the samples a dispatch takes; rendered tile by
+//! tile, each tile read back before the next, from the uniform of the view
+//! each call is given.
 
 use std::time::{Duration, Instant};
 
-use crate::camera::View;
 use crate::error::{Error, Result};
 use crate::layout::{Params, WORKGROUP_INVOCATIONS};
 use crate::output::{Image, Rendered};
 use crate::progress::Progress;
 
 use super::bindings::{IMAGE_TILE, SCENE};
+use super::device::Gpu;
+use super::readback::TileTargets;
+use super::resident::Host;
 use super::timer::{GpuTimings, Timer};
 use super::wavefront::{ShadowDispatch, Wavefront, wave_budget};
-use super::{GpuRenderer, RENDER_WORKGROUP, TILE};
+use super::{RENDER_WORKGROUP, TILE};
 
 /// Samples a dispatch adds to each pixel on llvmpipe: the bundled scenes'
 /// pixels ran out of loop iterations from about 192 (a 3,674-triangle
 /// bunny, two lights); a heavier scene halves it as often as it needs.
-pub(super) const LLVMPIPE_SAMPLES_PER_DISPATCH: u32 = 32;
+const LLVMPIPE_SAMPLES_PER_DISPATCH: u32 = 32;
 
 /// The workgroups of a render dispatch over a `width` × `height` tile, on
 /// an adapter that runs a dispatch on `threads` CPU threads (the shader's
@@ -33,37 +37,111 @@ fn tile_workgroups(width: u32, height: u32, threads: u32) -> [u32; 3] {
     ]
 }
 
-impl GpuRenderer {
-    /// Renders the scene as `view` sees it, tile by tile, reading each
-    /// back before the next.
-    pub fn render(&mut self, view: &View, progress: &Progress) -> Result<(Rendered, GpuTimings)> {
-        self.render_rows(view, 0..view.camera.height, progress)
+/// The tile renders' part of a renderer.
+pub(super) struct Tiles {
+    /// The buffers a tile is rendered into and read back from.
+    targets: TileTargets,
+    /// The megakernel's pipeline, built on its first render.
+    megakernel: Option<wgpu::ComputePipeline>,
+    /// The wavefront's passes, built on the first wavefront render.
+    wavefront: Option<Wavefront>,
+    timer: Option<Timer>,
+    /// Samples one dispatch adds to a pixel: few enough that no invocation
+    /// trips llvmpipe's loop limit (`loops_completed` in the shader);
+    /// halved whenever one still does.
+    samples_per_dispatch: u32,
+    /// Lights in the resident scene (the wavefront's lists are sized by
+    /// them).
+    lights: u32,
+}
+
+impl Tiles {
+    /// The tile's buffers and the timer, for a scene of `lights` lights.
+    pub fn new(gpu: &Gpu, lights: u32) -> Tiles {
+        let samples_per_dispatch = if gpu.is_llvmpipe() {
+            LLVMPIPE_SAMPLES_PER_DISPATCH
+        } else {
+            u32::MAX
+        };
+        Tiles {
+            targets: TileTargets::new(&gpu.device),
+            megakernel: None,
+            wavefront: None,
+            timer: Timer::new(gpu),
+            samples_per_dispatch,
+            lights,
+        }
     }
 
-    /// Renders rows `rows` of `view`'s image alone (a part of it), tile by
-    /// tile. If the driver cut the shader's loops short anywhere (checked
-    /// once, after the last tile), renders again with half as many samples
-    /// per dispatch, down to one, then fails rather than return a wrong
-    /// picture.
+    /// The tile's buffers (the megakernel's group 1 binds them).
+    pub fn targets(&self) -> &TileTargets {
+        &self.targets
+    }
+
+    pub fn timer(&self) -> Option<&Timer> {
+        self.timer.as_ref()
+    }
+
+    /// Lights in the resident scene.
+    pub fn lights(&self) -> u32 {
+        self.lights
+    }
+
+    /// The wavefront, once `prepare` built it.
+    pub fn wavefront(&self) -> Option<&Wavefront> {
+        self.wavefront.as_ref()
+    }
+
+    /// Builds the wavefront and its pixel list's first pass if not built
+    /// yet.
+    pub fn prepare_wavefront_list(&mut self, host: Host<'_>) -> Result<()> {
+        self.prepare(host, ShadowDispatch::Wavefront)?;
+        let wavefront = self.wavefront.as_mut().expect("prepared");
+        wavefront.prepare_list(host)
+    }
+
+    /// Builds the passes a render in `dispatch` runs if not built yet: the
+    /// megakernel's pipeline, or the wavefront (so that timing a render
+    /// can leave the compile out).
+    pub fn prepare(&mut self, host: Host<'_>, dispatch: ShadowDispatch) -> Result<()> {
+        match dispatch {
+            ShadowDispatch::Wavefront if self.wavefront.is_none() => {
+                self.wavefront = Some(Wavefront::new(host, &self.targets, self.lights)?);
+            }
+            ShadowDispatch::Megakernel if self.megakernel.is_none() => {
+                self.megakernel = Some(host.build("render", &host.layouts().image)?);
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+
+    /// Renders rows `rows` of the image of the view's uniform `params`
+    /// (all or a part of it), tile by tile (`prepare` first). If the driver
+    /// cut the shader's loops short anywhere (checked once, after the last
+    /// tile), renders again with half as many samples per dispatch, down
+    /// to one, then fails rather than return a wrong picture.
     pub fn render_rows(
         &mut self,
-        view: &View,
+        host: Host<'_>,
+        dispatch: ShadowDispatch,
+        params: &Params,
         rows: std::ops::Range<u32>,
         progress: &Progress,
     ) -> Result<(Rendered, GpuTimings)> {
-        let params = self.uniform(view);
-        self.prepare_render()?;
         loop {
-            let result = self.render_rows_once(&params, &rows, progress)?;
-            if !self.loops_were_cut()? {
+            let result = self.render_rows_once(host, dispatch, params, &rows, progress)?;
+            if !host.loops_were_cut()? {
                 return Ok(result);
             }
-            self.fewer_samples_per_dispatch(params.spp)?;
+            self.fewer_samples_per_dispatch(host.gpu(), dispatch, params.spp)?;
         }
     }
 
     fn render_rows_once(
-        &mut self,
+        &self,
+        host: Host<'_>,
+        dispatch: ShadowDispatch,
         params: &Params,
         rows: &std::ops::Range<u32>,
         progress: &Progress,
@@ -74,7 +152,7 @@ impl GpuRenderer {
         let mut prims = vec![0u32; width as usize * height as usize];
         let mut variance = vec![0.0f32; width as usize * height as usize];
         let mut timings = GpuTimings::default();
-        let side = self.tile_side_for(params.spp);
+        let side = self.tile_side(dispatch, params.spp);
         for tile_y in rows.clone().step_by(side as usize) {
             for tile_x in (0..width).step_by(side as usize) {
                 let tile_width = side.min(width - tile_x);
@@ -82,15 +160,15 @@ impl GpuRenderer {
                 let start = Instant::now();
                 let samples = 0..params.spp;
                 let extent = [tile_x, tile_y, tile_width, tile_height];
-                let device_time = self.render_tile(params, extent, samples)?;
+                let device_time = self.render_tile(host, dispatch, params, extent, samples)?;
                 timings.render += start.elapsed();
                 if let Some(t) = device_time {
                     *timings.device.get_or_insert(Duration::ZERO) += t;
                 }
 
                 let start = Instant::now();
-                self.tile
-                    .read(&self.gpu, tile_width, tile_height, |row, colors, ids| {
+                self.targets
+                    .read(host.gpu(), tile_width, tile_height, |row, colors, ids| {
                         let offset = ((tile_y - rows.start + row) * width + tile_x) as usize;
                         let n = tile_width as usize;
                         for (i, src) in colors.chunks(4).enumerate() {
@@ -113,33 +191,22 @@ impl GpuRenderer {
         ))
     }
 
-    /// Side of the tiles `render` dispatches for `view`: TILE at 1 sample
-    /// per pixel per dispatch, smaller as they grow, so that a dispatch
-    /// traces about as many camera rays (TILE²) at any spp; in the
-    /// wavefront no larger than its buffers take (`wave_budget`: smaller
-    /// with many lights).
-    pub fn tile_side(&self, view: &View) -> u32 {
-        self.tile_side_for(view.spp)
-    }
-
-    pub(super) fn tile_side_for(&self, spp: u32) -> u32 {
-        let samples = spp.min(self.samples_per_dispatch());
+    /// Side of the tiles a render of `spp` samples a pixel dispatches:
+    /// TILE at 1 sample per pixel per dispatch, smaller as they grow, so
+    /// that a dispatch traces about as many camera rays (TILE²) at any spp;
+    /// in the wavefront no larger than its buffers take (`wave_budget`:
+    /// smaller with many lights).
+    pub fn tile_side(&self, dispatch: ShadowDispatch, spp: u32) -> u32 {
+        let samples = spp.min(self.samples_per_dispatch(dispatch));
         let step = RENDER_WORKGROUP[0].max(RENDER_WORKGROUP[1]);
         let side = (TILE / samples.isqrt().max(1))
             .next_multiple_of(step)
             .clamp(step, TILE);
-        if self.is_wavefront() {
-            let fits = (wave_budget(self.scene_lights()) / samples).isqrt() / step * step;
+        if dispatch == ShadowDispatch::Wavefront {
+            let fits = (wave_budget(self.lights) / samples).isqrt() / step * step;
             return side.min(fits.max(step));
         }
         side
-    }
-
-    /// Number of tiles `render` dispatches for `view`.
-    pub fn tile_count(&self, view: &View) -> u64 {
-        let side = self.tile_side(view);
-        let camera = &view.camera;
-        camera.width.div_ceil(side) as u64 * camera.height.div_ceil(side) as u64
     }
 
     /// Renders samples `samples` of one tile (`[x, y, width, height]`; all
@@ -147,23 +214,25 @@ impl GpuRenderer {
     /// sums) of the view `params` holds, over as many dispatches as
     /// `samples_per_dispatch` asks. Returns the device time where
     /// timestamps work.
-    pub(super) fn render_tile(
-        &mut self,
+    pub fn render_tile(
+        &self,
+        host: Host<'_>,
+        dispatch: ShadowDispatch,
         params: &Params,
         extent: [u32; 4],
         samples: std::ops::Range<u32>,
     ) -> Result<Option<Duration>> {
-        let step = self.samples_per_dispatch().min(params.spp);
+        let step = self.samples_per_dispatch(dispatch).min(params.spp);
         let mut device_time = None;
         for begin in samples.clone().step_by(step as usize) {
-            let dispatch = Params {
+            let tile = Params {
                 sample_begin: begin,
                 sample_end: (begin + step).min(samples.end),
                 tile_origin: [extent[0], extent[1]],
                 tile_size: [extent[2], extent[3]],
                 ..*params
             };
-            if let Some(t) = self.dispatch_tile(&dispatch)? {
+            if let Some(t) = self.dispatch_tile(host, dispatch, &tile)? {
                 *device_time.get_or_insert(Duration::ZERO) += t;
             }
         }
@@ -172,62 +241,57 @@ impl GpuRenderer {
 
     /// Samples a render dispatch adds to a pixel; in the wavefront, no
     /// more than leave a workgroup's pixels within its buffers.
-    pub(super) fn samples_per_dispatch(&self) -> u32 {
-        if self.is_wavefront() {
-            let budget = wave_budget(self.scene_lights());
-            self.samples_per_dispatch
-                .min(budget / WORKGROUP_INVOCATIONS)
-        } else {
-            self.samples_per_dispatch
+    pub fn samples_per_dispatch(&self, dispatch: ShadowDispatch) -> u32 {
+        match dispatch {
+            ShadowDispatch::Wavefront => {
+                let budget = wave_budget(self.lights);
+                self.samples_per_dispatch
+                    .min(budget / WORKGROUP_INVOCATIONS)
+            }
+            ShadowDispatch::Megakernel => self.samples_per_dispatch,
         }
-    }
-
-    /// Whether this render is the wavefront, as `shadow_dispatch` asks.
-    /// Each of its dispatches takes every sample of the tile's pixels a
-    /// megakernel dispatch would, in one submission: an earlier version
-    /// that dispatched each sample's passes and waited took 152 s rather
-    /// than 19 over the sampling tests.
-    pub fn is_wavefront(&self) -> bool {
-        self.shadow_dispatch == ShadowDispatch::Wavefront
     }
 
     /// Halves `samples_per_dispatch` after the driver cut loops short in a
     /// render of `spp` samples per pixel.
-    pub(super) fn fewer_samples_per_dispatch(&mut self, spp: u32) -> Result<()> {
-        let step = self.samples_per_dispatch().min(spp);
+    pub fn fewer_samples_per_dispatch(
+        &mut self,
+        gpu: &Gpu,
+        dispatch: ShadowDispatch,
+        spp: u32,
+    ) -> Result<()> {
+        let step = self.samples_per_dispatch(dispatch).min(spp);
         if step <= 1 {
             return Err(Error::LoopsCut(format!(
                 "{} cut the shader's loops short even at one sample per pixel per dispatch \
                  (Mesa's llvmpipe ends loops after 65535 iterations an invocation group): \
                  this scene is too complex for this adapter",
-                self.gpu.describe()
+                gpu.describe()
             )));
         }
         self.samples_per_dispatch = step / 2;
         Ok(())
     }
 
-    /// Whether any invocation since the last call found its loops cut short
-    /// (the shader's `report_cut_loops`); clears the flag.
-    pub(super) fn loops_were_cut(&self) -> Result<bool> {
-        self.resident.loops_were_cut(&self.gpu)
-    }
-
     /// Renders one tile with the uniform `params` (its tile and samples
     /// set); returns its device time where timestamps work.
-    fn dispatch_tile(&mut self, params: &Params) -> Result<Option<Duration>> {
+    fn dispatch_tile(
+        &self,
+        host: Host<'_>,
+        dispatch: ShadowDispatch,
+        params: &Params,
+    ) -> Result<Option<Duration>> {
         let [width, height] = params.tile_size;
-        let gpu = &self.gpu;
-        let resident = &self.resident;
-        resident.write_uniform(gpu, params);
+        let gpu = host.gpu();
+        host.write_uniform(params);
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         let workgroups = tile_workgroups(width, height, gpu.cpu_threads());
-        if let (true, Some(wavefront)) = (self.is_wavefront(), &self.wavefront) {
+        if let (ShadowDispatch::Wavefront, Some(wavefront)) = (dispatch, &self.wavefront) {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("render tile, wavefront"),
                 timestamp_writes: self.timer.as_ref().map(Timer::writes),
             });
-            pass.set_bind_group(SCENE.group, resident.scene_group(), &[]);
+            pass.set_bind_group(SCENE.group, host.scene_group(), &[]);
             let samples = params.sample_end - params.sample_begin;
             wavefront.dispatch_tile(gpu, &mut pass, samples, workgroups);
         } else {
@@ -237,8 +301,8 @@ impl GpuRenderer {
             });
             let [groups_x, groups_y, layers] = workgroups;
             pass.set_pipeline(self.megakernel.as_ref().expect("prepared"));
-            pass.set_bind_group(SCENE.group, resident.scene_group(), &[]);
-            pass.set_bind_group(IMAGE_TILE.group, resident.image_group(), &[]);
+            pass.set_bind_group(SCENE.group, host.scene_group(), &[]);
+            pass.set_bind_group(IMAGE_TILE.group, host.image_group(), &[]);
             pass.dispatch_workgroups(groups_x, groups_y, layers);
         }
         if let Some(timer) = &self.timer {
@@ -247,23 +311,5 @@ impl GpuRenderer {
         gpu.queue.submit([encoder.finish()]);
         gpu.wait()?;
         self.timer.as_ref().map(|t| t.read(gpu)).transpose()
-    }
-
-    /// Builds the passes a render runs if not built yet: the megakernel's
-    /// pipeline, or the wavefront (so that timing a render can leave the
-    /// compile out).
-    pub fn prepare_render(&mut self) -> Result<()> {
-        if self.is_wavefront() {
-            if self.wavefront.is_none() {
-                let lights = self.scene_lights();
-                let wavefront = Wavefront::new(&self.gpu, &self.pipelines, &self.tile, lights)?;
-                self.wavefront = Some(wavefront);
-            }
-        } else if self.megakernel.is_none() {
-            let host = self.host();
-            let pipeline = host.build("render", &host.layouts().image)?;
-            self.megakernel = Some(pipeline);
-        }
-        Ok(())
     }
 }

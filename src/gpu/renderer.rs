@@ -1,26 +1,28 @@
 //! `GpuRenderer`: a scene resident on the device, the steps that put it
 //! there, and the uniform each call writes from its view.
 
+use std::ops::Range;
 use std::sync::Weak;
+use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
 use crate::camera::View;
 use crate::error::{Error, Result};
 use crate::layout::{ClosestPoint, Hit, ListedHit, Params, Ray};
+use crate::output::{Image, Rendered};
+use crate::progress::Progress;
 use crate::scene::{Intersect, Scene};
 
-use super::adapter::is_llvmpipe;
 use super::device::Gpu;
 use super::pipelines::{Layouts, Pipelines, resident_constants};
 use super::proximity::Proximity;
 use super::query::Lists;
-use super::readback::TileTargets;
-use super::render::LLVMPIPE_SAMPLES_PER_DISPATCH;
+use super::render::Tiles;
 use super::resident::{Host, Resident};
 use super::shader::{SHADER_SOURCE, specialisation};
-use super::timer::Timer;
+use super::timer::GpuTimings;
 use super::upload::{BvhStorage, SceneBuffers};
-use super::wavefront::{ShadowDispatch, Wavefront};
+use super::wavefront::ShadowDispatch;
 
 /// A scene resident on the device, rendered from any view: each render
 /// call takes its `View` and writes the uniform from it and the scene's
@@ -28,32 +30,31 @@ use super::wavefront::{ShadowDispatch, Wavefront};
 /// it renders with (the scene's part of the uniform, its placement), so
 /// the host's scene may go once it is built.
 ///
-/// Its parts, and when each is built (the rule): what every call needs is
-/// built when the renderer is opened (`new`): the device context (`Gpu`),
-/// the scene's upload and bind groups (`Resident`: buffers, the BVH,
-/// textures, the uniform), the shader module and its layouts
-/// (`Pipelines`), the tile's buffers (`TileTargets`) and the timer. Each
-/// pass or kernel family is built on its first use, by its `prepare_*`
-/// (which a caller may call first to leave the compile out of a timing):
-/// the megakernel's `render` pipeline or the `Wavefront`
-/// (`prepare_render`), the wavefront's pixel-list pass, `trace_rays`'s
-/// pipelines (`prepare_trace`), `render_pixel_list`'s, and the geometric
-/// queries' (`proximity.rs`; the winding tree on the first winding query).
+/// Its parts, each in its own file with its own `impl`, reached only
+/// through their methods: the device context (`Gpu`), the shader module
+/// and its layouts (`Pipelines`), the scene's upload (`Resident`: its
+/// buffers, the BVH, textures, the uniform), and one part per pass or
+/// kernel family: the tile renders (`Tiles`, render.rs: the megakernel or
+/// the `Wavefront`; progressive batches and the wavefront's pixel lists),
+/// the ray queries and pixel lists (`Lists`, query.rs) and the geometric
+/// queries (`Proximity`, proximity.rs). A pass reads the others through
+/// `Host`.
+///
+/// When each is built (the rule): what every call needs when the renderer
+/// is opened (`new`): the device context, the scene's upload, the shader
+/// module, the tile's buffers and the timer. Every pipeline on the first
+/// use of its pass, by its `prepare_*` (which a caller may call first to
+/// leave the compile out of a timing): the megakernel's `render` pipeline
+/// or the wavefront's passes and lists (`prepare_render`), the wavefront's
+/// pixel-list pass, `trace_rays`'s pipelines (`prepare_trace`),
+/// `render_pixel_list`'s, and the geometric queries' (each on its first
+/// query; the winding tree on the first winding query).
 pub struct GpuRenderer {
-    pub(super) gpu: Gpu,
-    pub(super) pipelines: Pipelines,
-    pub(super) resident: Resident,
-    pub(super) tile: TileTargets,
-    /// Samples one dispatch adds to a pixel: few enough that no invocation
-    /// trips llvmpipe's loop limit (`loops_completed` in the shader);
-    /// halved whenever one still does.
-    pub(super) samples_per_dispatch: u32,
-    pub(super) timer: Option<Timer>,
-    /// The megakernel's pipeline, built on its first render.
-    pub(super) megakernel: Option<wgpu::ComputePipeline>,
-    /// The wavefront's passes, built on the first wavefront render.
-    pub(super) wavefront: Option<Wavefront>,
-    pub(super) lists: Lists,
+    gpu: Gpu,
+    pipelines: Pipelines,
+    resident: Resident,
+    tiles: Tiles,
+    lists: Lists,
     proximity: Proximity,
     /// How a render traces its shadow rays (the tests set either).
     pub shadow_dispatch: ShadowDispatch,
@@ -103,11 +104,12 @@ impl GpuRenderer {
         let device = &gpu.device;
         let buffers = SceneBuffers::upload(&gpu, scene, storage)?;
         let constants = resident_constants(constants, &buffers, storage, scene, &gpu);
-        let tile = TileTargets::new(device);
+        let lights = scene.lights.len().min(u32::MAX as usize) as u32;
+        let tiles = Tiles::new(&gpu, lights);
         let layouts = Layouts::new(device);
 
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let resident = Resident::new(device, scene, &layouts, &buffers, &tile);
+        let resident = Resident::new(device, scene, &layouts, &buffers, tiles.targets());
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("lambert shader"),
             source: wgpu::ShaderSource::Wgsl(SHADER_SOURCE.into()),
@@ -116,27 +118,17 @@ impl GpuRenderer {
             return Err(Error::Gpu(format!("uploading the scene: {e}")));
         }
         gpu.wait()?;
-        let timer = Timer::new(&gpu);
         let shadow_dispatch = ShadowDispatch::for_scene(
             scene,
             gpu.options.shadow_dispatch.as_deref(),
             gpu.limits.max_storage_buffer_binding_size as u64,
         )?;
-        let samples_per_dispatch = if is_llvmpipe(&gpu.info) {
-            LLVMPIPE_SAMPLES_PER_DISPATCH
-        } else {
-            u32::MAX
-        };
         Ok(GpuRenderer {
             gpu,
             pipelines: Pipelines::new(module, constants, layouts),
             resident,
-            tile,
-            samples_per_dispatch,
-            timer,
-            wavefront: None,
+            tiles,
             lists: Lists::default(),
-            megakernel: None,
             proximity: Default::default(),
             shadow_dispatch,
             device_bytes: buffers.device_bytes,
@@ -157,11 +149,6 @@ impl GpuRenderer {
         self.resident.uniform(self.placement.offset, view)
     }
 
-    /// Lights in the resident scene.
-    pub(super) fn scene_lights(&self) -> u32 {
-        self.resident.scene_params().num_lights
-    }
-
     /// Spheres in the resident scene (the geometric queries are over
     /// triangles).
     pub fn sphere_count(&self) -> u32 {
@@ -175,8 +162,98 @@ impl GpuRenderer {
     }
 
     /// What a pass reads of the renderer's other parts.
-    pub(super) fn host(&self) -> Host<'_> {
+    fn host(&self) -> Host<'_> {
         Host::new(&self.gpu, &self.pipelines, &self.resident)
+    }
+
+    /// Renders the scene as `view` sees it, tile by tile, reading each
+    /// back before the next.
+    pub fn render(&mut self, view: &View, progress: &Progress) -> Result<(Rendered, GpuTimings)> {
+        self.render_rows(view, 0..view.camera.height, progress)
+    }
+
+    /// Renders rows `rows` of `view`'s image alone (a part of it), tile by
+    /// tile; fails rather than return a picture whose loops the driver
+    /// cut short (`Tiles::render_rows`).
+    pub fn render_rows(
+        &mut self,
+        view: &View,
+        rows: std::ops::Range<u32>,
+        progress: &Progress,
+    ) -> Result<(Rendered, GpuTimings)> {
+        let params = self.uniform(view);
+        self.prepare_render()?;
+        let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
+        let dispatch = self.shadow_dispatch;
+        self.tiles
+            .render_rows(host, dispatch, &params, rows, progress)
+    }
+
+    /// Builds the passes a render runs if not built yet: the megakernel's
+    /// pipeline, or the wavefront (so that timing a render can leave the
+    /// compile out).
+    pub fn prepare_render(&mut self) -> Result<()> {
+        let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
+        self.tiles.prepare(host, self.shadow_dispatch)
+    }
+
+    /// Whether this renderer renders in the wavefront, as `shadow_dispatch`
+    /// asks. Each of its dispatches takes every sample of the tile's pixels
+    /// a megakernel dispatch would, in one submission: an earlier version
+    /// that dispatched each sample's passes and waited took 152 s rather
+    /// than 19 over the sampling tests.
+    pub fn is_wavefront(&self) -> bool {
+        self.shadow_dispatch == ShadowDispatch::Wavefront
+    }
+
+    /// Side of the tiles `render` dispatches for `view`.
+    pub fn tile_side(&self, view: &View) -> u32 {
+        self.tiles.tile_side(self.shadow_dispatch, view.spp)
+    }
+
+    /// Number of tiles `render` dispatches for `view`.
+    pub fn tile_count(&self, view: &View) -> u64 {
+        let side = self.tile_side(view);
+        let camera = &view.camera;
+        camera.width.div_ceil(side) as u64 * camera.height.div_ceil(side) as u64
+    }
+
+    /// Adds samples `samples` of `view` (of its `spp`) to `sums` (one per
+    /// pixel, row by row: colour sums and squared luminance, as the shader
+    /// keeps them), which hold samples `0..samples.start`. When
+    /// `samples.end` is the view's spp, returns the finished image: the
+    /// shader's means, bit for bit the image `render` returns.
+    pub fn add_samples(
+        &mut self,
+        view: &View,
+        samples: Range<u32>,
+        sums: &mut [[f32; 4]],
+    ) -> Result<Option<Image>> {
+        self.add_samples_or_cancel(view, samples, sums, &AtomicBool::new(false))
+    }
+
+    /// `add_samples`, stopped before its next tile once `cancel` is set
+    /// (then `sums` are as they were, and None comes back).
+    pub fn add_samples_or_cancel(
+        &mut self,
+        view: &View,
+        samples: Range<u32>,
+        sums: &mut [[f32; 4]],
+        cancel: &AtomicBool,
+    ) -> Result<Option<Image>> {
+        let params = self.uniform(view);
+        let (width, height, spp) = (params.width, params.height, params.spp);
+        crate::camera::check_batch((width, height, spp), &samples, sums.len())
+            .map_err(Error::Usage)?;
+        if samples == (0..spp) {
+            let (rendered, _) = self.render(view, &Progress::hidden())?;
+            return Ok(Some(rendered.image));
+        }
+        self.prepare_render()?;
+        let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
+        let dispatch = self.shadow_dispatch;
+        self.tiles
+            .add_samples(host, dispatch, &params, samples, sums, cancel)
     }
 
     /// Traces `rays` (world coordinates, as in a ray file) against the
@@ -205,7 +282,7 @@ impl GpuRenderer {
     ) -> Result<Vec<Hit>> {
         self.prepare_trace(any_hit, intersect)?;
         let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
-        let timer = self.timer.as_ref();
+        let timer = self.tiles.timer();
         self.lists.trace(host, timer, rays, any_hit, intersect)
     }
 
@@ -229,19 +306,25 @@ impl GpuRenderer {
     pub fn render_pixel_list(&mut self, view: &View, pixels: &[[u32; 2]]) -> Result<Vec<[f32; 4]>> {
         let params = self.uniform(view);
         if self.is_wavefront() {
-            return self.render_list_wavefront(&params, pixels);
+            let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
+            return self
+                .tiles
+                .render_list_wavefront(host, &self.lists, &params, pixels);
         }
         let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
         self.lists.prepare_pixel_list(host)?;
         loop {
-            let step = self.samples_per_dispatch.min(params.spp);
+            let step = self.tiles.samples_per_dispatch(ShadowDispatch::Megakernel);
+            let step = step.min(params.spp);
             let results = self
                 .lists
                 .render_pixel_list(self.host(), &params, pixels, step)?;
-            if !self.loops_were_cut()? {
+            if !self.resident.loops_were_cut(&self.gpu)? {
                 return Ok(results);
             }
-            self.fewer_samples_per_dispatch(params.spp)?;
+            let dispatch = ShadowDispatch::Megakernel;
+            self.tiles
+                .fewer_samples_per_dispatch(&self.gpu, dispatch, params.spp)?;
         }
     }
 

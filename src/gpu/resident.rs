@@ -188,6 +188,16 @@ impl<'a> Host<'a> {
         self.resident.scene_params()
     }
 
+    /// The megakernel's group 1: the tile's buffers.
+    pub fn image_group(&self) -> &wgpu::BindGroup {
+        self.resident.image_group()
+    }
+
+    /// Uploads `params` as the uniform of the next dispatch.
+    pub fn write_uniform(&self, params: &Params) {
+        self.resident.write_uniform(self.gpu, params)
+    }
+
     /// Uploads the uniform `params` with `samples` (of its spp) as the
     /// next dispatch's.
     pub fn write_samples(&self, params: &Params, samples: std::ops::Range<u32>) {

@@ -12,8 +12,8 @@ use crate::scene::Scene;
 use super::bindings::WAVEFRONT;
 use super::device::Gpu;
 use super::options::SHADOW_DISPATCH_ENV;
-use super::pipelines::Pipelines;
 use super::readback::TileTargets;
+use super::resident::Host;
 use super::{SHADOW_QUERY_BYTES, WAVE_RAYS, WAVE_SHADING_BYTES, WAVE_SHADOW_RAYS};
 
 /// How a render traces its shadow rays: in the `render` megakernel, each
@@ -111,13 +111,8 @@ struct WaveBuffers {
 impl Wavefront {
     /// The passes and lists of a wavefront over `lights` lights, writing
     /// `tile`'s buffers.
-    pub fn new(
-        gpu: &Gpu,
-        pipelines: &Pipelines,
-        tile: &TileTargets,
-        lights: u32,
-    ) -> Result<Wavefront> {
-        let device = &gpu.device;
+    pub fn new(host: Host<'_>, tile: &TileTargets, lights: u32) -> Result<Wavefront> {
+        let device = &host.gpu().device;
         let layout = WAVEFRONT.layout(device);
         let rays = wave_budget(lights) as u64;
         let buffer = |label, size, usage| {
@@ -163,7 +158,7 @@ impl Wavefront {
                 no_list.as_entire_binding(),
             ],
         );
-        let build = |entry| pipelines.build(gpu, entry, &buffers.layout, &pipelines.constants);
+        let build = |entry| host.build(entry, &buffers.layout);
         Ok(Wavefront {
             primary: build("render_primary")?,
             primary_samples: build("render_primary_samples")?,
@@ -176,11 +171,9 @@ impl Wavefront {
     }
 
     /// Builds the pixel list's first pass if not built yet.
-    pub fn prepare_list(&mut self, gpu: &Gpu, pipelines: &Pipelines) -> Result<()> {
+    pub fn prepare_list(&mut self, host: Host<'_>) -> Result<()> {
         if self.list_primary.is_none() {
-            let layout = &self.buffers.layout;
-            let pipeline =
-                pipelines.build(gpu, "render_list_primary", layout, &pipelines.constants)?;
+            let pipeline = host.build("render_list_primary", &self.buffers.layout)?;
             self.list_primary = Some(pipeline);
         }
         Ok(())
