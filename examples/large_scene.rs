@@ -76,7 +76,7 @@ fn main() -> lambert::Result<()> {
     );
     renderer.prepare_render()?;
     let start = Instant::now();
-    let (gpu_image, _) = renderer.render(&Progress::hidden())?;
+    let (gpu_image, _) = renderer.render(&scene.view, &Progress::hidden())?;
     let gpu_time = start.elapsed();
     let start = Instant::now();
     let cpu_image = cpu::render(

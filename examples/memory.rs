@@ -121,7 +121,7 @@ fn run(model: &str) -> lambert::Result<()> {
     let mut renderer = measure("GPU upload", &mut phases, || GpuRenderer::new(gpu, &scene))?;
     let device_bytes = renderer.device_bytes;
     measure("GPU render", &mut phases, || {
-        renderer.render(&Progress::hidden()).map(drop)
+        renderer.render(&scene.view, &Progress::hidden()).map(drop)
     })?;
 
     let name = Path::new(model)

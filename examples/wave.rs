@@ -55,8 +55,9 @@ fn main() -> lambert::Result<()> {
             let which = (turn + round) % 3;
             let cpu_before = process_cpu_time();
             let t = if which < 2 {
-                gpu.shadow_dispatch = [ShadowDispatch::Apart, ShadowDispatch::Megakernel][which];
-                gpu.render(&hidden)?.1.device
+                gpu.shadow_dispatch =
+                    [ShadowDispatch::Wavefront, ShadowDispatch::Megakernel][which];
+                gpu.render(&scene.view, &hidden)?.1.device
             } else {
                 tracer.trace_rays(&primary, false, scene.intersect)?;
                 let p = tracer.trace_device_time();

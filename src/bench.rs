@@ -534,9 +534,8 @@ fn time_render(
             } else {
                 open_gpu(scene, request)?
             };
-            r.set_view(view);
             r.prepare_render()?;
-            let (t, (image, timings)) = median_time(runs, || r.render(&Progress::hidden()))?;
+            let (t, (image, timings)) = median_time(runs, || r.render(view, &Progress::hidden()))?;
             Ok((t, timings.device, image))
         }
         Path32::CpuF32 => cpu(Precision::F32),

@@ -272,9 +272,8 @@ impl Renderer {
     ) -> Result<(Rendered, RenderTimings)> {
         match self {
             Renderer::Gpu(renderer) => {
-                renderer.set_view(view);
-                let progress = Progress::start(progress, renderer.tile_count(), "tiles");
-                let (rendered, t) = renderer.render_rows(rows, &progress)?;
+                let progress = Progress::start(progress, renderer.tile_count(view), "tiles");
+                let (rendered, t) = renderer.render_rows(view, rows, &progress)?;
                 progress.finish();
                 Ok((
                     rendered,
@@ -306,10 +305,7 @@ impl Renderer {
     /// and variance of the mean (adaptive sampling's later passes).
     pub fn render_pixel_list(&mut self, view: &View, pixels: &[[u32; 2]]) -> Result<Vec<[f32; 4]>> {
         match self {
-            Renderer::Gpu(renderer) => {
-                renderer.set_view(view);
-                renderer.render_pixel_list(pixels)
-            }
+            Renderer::Gpu(renderer) => renderer.render_pixel_list(view, pixels),
             Renderer::Cpu(scene) => Ok(cpu::render_pixel_list(scene, view, pixels)),
         }
     }
@@ -335,10 +331,12 @@ impl Renderer {
         let start = progressive.samples;
         let samples = start..start.saturating_add(count).min(view.spp);
         let finished = match self {
-            Renderer::Gpu(renderer) => {
-                renderer.set_view(view);
-                renderer.add_samples_or_cancel(samples.clone(), &mut progressive.sums, cancel)?
-            }
+            Renderer::Gpu(renderer) => renderer.add_samples_or_cancel(
+                view,
+                samples.clone(),
+                &mut progressive.sums,
+                cancel,
+            )?,
             Renderer::Cpu(scene) => cpu::add_samples_or_cancel(
                 scene,
                 view,

@@ -150,7 +150,7 @@ fn scenes_split_across_bindings_render_the_same() {
             "{name}: the arrays the limit split"
         );
         let split = renderer
-            .render(&lambert::progress::Progress::hidden())
+            .render(&scene.view, &lambert::progress::Progress::hidden())
             .unwrap()
             .0;
         let stats = lambert::diff::compare(
@@ -167,31 +167,31 @@ fn scenes_split_across_bindings_render_the_same() {
     }
 }
 
-/// The wavefront render (shadow rays apart; the default at any spp where
+/// The wavefront render (shadow rays traced apart from the camera rays; the default at any spp where
 /// shadows are traced) and the megakernel give the same image, bit for bit (colour, variance and
 /// primitive): at 1 and 3 spp on five scenes, at 40 spp (more than a
 /// dispatch takes on llvmpipe: the sums carried between dispatches), and
 /// with 40 lights (a camera ray's shadow rays queued together, their terms
 /// added in light order), which also agree with the CPU path.
 #[test]
-fn shadow_rays_apart_render_as_the_megakernel_does() {
+fn the_wavefront_renders_as_the_megakernel_does() {
     for name in ["cornell", "spheres", "bunny", "dragon", "edge_cases"] {
         let mut scene = load(name);
         for spp in [1, 3] {
             scene.view.spp = spp;
-            apart_as_megakernel(&scene, &format!("{name} at {spp} spp"));
+            wavefront_as_megakernel(&scene, &format!("{name} at {spp} spp"));
         }
     }
     for name in ["spheres", "edge_cases"] {
         let mut scene = load(name);
         scene.view.spp = 40;
-        apart_as_megakernel(&scene, &format!("{name} at 40 spp"));
+        wavefront_as_megakernel(&scene, &format!("{name} at 40 spp"));
     }
     let mut many = ring_of_lights();
     for spp in [1, 4] {
         many.view.spp = spp;
-        let apart = apart_as_megakernel(&many, &format!("40 lights at {spp} spp"));
-        let stats = compare(&apart, &render_cpu(&many), &Tolerance::default()).unwrap();
+        let wavefront = wavefront_as_megakernel(&many, &format!("40 lights at {spp} spp"));
+        let stats = compare(&wavefront, &render_cpu(&many), &Tolerance::default()).unwrap();
         assert!(stats.passed, "40 lights at {spp} spp: GPU vs CPU\n{stats}");
     }
 }
@@ -220,7 +220,7 @@ fn ring_of_lights() -> lambert::Scene {
 /// dispatch takes on llvmpipe), on scattered and repeated pixels, with one
 /// light and with 40; and within tolerance of the CPU path.
 #[test]
-fn pixel_lists_render_apart_as_the_megakernel_does() {
+fn pixel_lists_render_in_the_wavefront_as_the_megakernel_does() {
     use lambert::gpu::{GpuRenderer, ShadowDispatch};
     let many = ring_of_lights();
     for (name, scene) in [
@@ -239,19 +239,18 @@ fn pixel_lists_render_apart_as_the_megakernel_does() {
                 seed: 0x5eed + spp,
                 ..scene.view.clone()
             };
-            renderer.set_view(&view);
-            renderer.shadow_dispatch = ShadowDispatch::Apart;
-            let apart = renderer.render_pixel_list(&pixels).unwrap();
+            renderer.shadow_dispatch = ShadowDispatch::Wavefront;
+            let wavefront = renderer.render_pixel_list(&view, &pixels).unwrap();
             renderer.shadow_dispatch = ShadowDispatch::Megakernel;
-            let mega = renderer.render_pixel_list(&pixels).unwrap();
+            let mega = renderer.render_pixel_list(&view, &pixels).unwrap();
             let bits =
                 |r: &[[f32; 4]]| -> Vec<u32> { r.iter().flatten().map(|c| c.to_bits()).collect() };
             assert!(
-                bits(&apart) == bits(&mega),
-                "{name} at {spp} spp: the pixel list apart differs from the megakernel's"
+                bits(&wavefront) == bits(&mega),
+                "{name} at {spp} spp: the pixel list in the wavefront differs from the megakernel's"
             );
             let cpu = lambert::cpu::render_pixel_list(&scene, &view, &pixels);
-            for (i, (g, c)) in apart.iter().zip(&cpu).enumerate() {
+            for (i, (g, c)) in wavefront.iter().zip(&cpu).enumerate() {
                 for k in 0..3 {
                     assert!(
                         (g[k] - c[k]).abs() <= 1e-3 * c[k].abs().max(1.0),
@@ -266,27 +265,30 @@ fn pixel_lists_render_apart_as_the_megakernel_does() {
 
 /// Renders `scene` in the wavefront (its default) and in the megakernel;
 /// fails unless they are the same bits. Returns the image.
-fn apart_as_megakernel(scene: &lambert::Scene, label: &str) -> lambert::output::Rendered {
+fn wavefront_as_megakernel(scene: &lambert::Scene, label: &str) -> lambert::output::Rendered {
     use lambert::gpu::{GpuRenderer, ShadowDispatch};
     let hidden = lambert::progress::Progress::hidden();
     let mut renderer = GpuRenderer::new(open_gpu(), scene).expect("scene uploads");
     assert_eq!(
         renderer.shadow_dispatch,
-        ShadowDispatch::Apart,
+        ShadowDispatch::Wavefront,
         "{label}: the wavefront by default, at any spp"
     );
-    assert!(renderer.shadows_apart(), "{label}");
-    let apart = renderer.render(&hidden).unwrap().0;
+    assert!(renderer.is_wavefront(), "{label}");
+    let wavefront = renderer.render(&scene.view, &hidden).unwrap().0;
     renderer.shadow_dispatch = ShadowDispatch::Megakernel;
-    let mega = renderer.render(&hidden).unwrap().0;
+    let mega = renderer.render(&scene.view, &hidden).unwrap().0;
     let bits = |r: &lambert::output::Rendered| {
         let rgb: Vec<u32> = r.image.rgb.iter().flatten().map(|c| c.to_bits()).collect();
         let var: Vec<u32> = r.variance.iter().map(|v| v.to_bits()).collect();
         (rgb, var, r.prims.clone())
     };
-    assert!(bits(&apart) == bits(&mega), "{label}: apart differs");
-    println!("{label}: shadow rays apart = megakernel, bit for bit");
-    apart
+    assert!(
+        bits(&wavefront) == bits(&mega),
+        "{label}: the wavefront differs"
+    );
+    println!("{label}: wavefront = megakernel, bit for bit");
+    wavefront
 }
 
 /// The workgroups dealt to llvmpipe's threads in turn (the shader's
@@ -322,9 +324,9 @@ fn workgroups_spread_over_any_thread_count_change_no_pixel_or_hit() {
         }
         let mut renderer = GpuRenderer::new(gpu, &scene).expect("scene uploads");
         let mut images = Vec::new();
-        for dispatch in [ShadowDispatch::Apart, ShadowDispatch::Megakernel] {
+        for dispatch in [ShadowDispatch::Wavefront, ShadowDispatch::Megakernel] {
             renderer.shadow_dispatch = dispatch;
-            let r = renderer.render(&hidden).unwrap().0;
+            let r = renderer.render(&scene.view, &hidden).unwrap().0;
             images.push((bits(&r), r.prims.clone()));
         }
         let hits = renderer.trace_rays(&rays, false, scene.intersect).unwrap();

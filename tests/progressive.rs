@@ -128,7 +128,9 @@ fn a_batch_past_the_views_samples_or_of_another_size_is_refused() {
     let error = lambert::cpu::add_samples(&scene, &view, 0..1, &mut short).unwrap_err();
     assert!(error.contains("sums for a 517×263 view"), "{error}");
     let mut gpu = GpuRenderer::new(open_gpu(), &scene).unwrap();
-    gpu.set_view(&view);
-    let error = gpu.add_samples(0..5, &mut sums).unwrap_err().to_string();
+    let error = gpu
+        .add_samples(&view, 0..5, &mut sums)
+        .unwrap_err()
+        .to_string();
     assert!(error.contains("samples 0..5 of a view of 4"), "{error}");
 }

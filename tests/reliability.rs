@@ -448,10 +448,11 @@ fn a_lost_device_is_an_error_not_a_hang() {
     use lambert::gpu::GpuRenderer;
     let scene = common::load("spheres");
     let mut renderer = GpuRenderer::new(common::open_gpu(), &scene).expect("scene uploads");
+    let view = scene.view.clone();
     renderer.gpu().device.destroy();
     let (sender, receiver) = std::sync::mpsc::channel();
     std::thread::spawn(move || {
-        let result = renderer.render(&lambert::progress::Progress::hidden());
+        let result = renderer.render(&view, &lambert::progress::Progress::hidden());
         let _ = sender.send(result.map(|_| ()).map_err(|e| e.to_string()));
     });
     let result = receiver

@@ -122,7 +122,7 @@ fn specialised_and_full_shaders_render_the_same_image() {
     for name in ["spheres", "bunny", "triangle_oblique"] {
         let scene = load(name);
         let mut full = GpuRenderer::with_full_shader(open_gpu(), &scene).unwrap();
-        let full = full.render(&Progress::hidden()).unwrap().0;
+        let full = full.render(&scene.view, &Progress::hidden()).unwrap().0;
         let stats = compare(&render_gpu(&scene), &full, &Tolerance::default()).unwrap();
         assert_eq!(
             stats.max_abs, 0.0,
@@ -197,8 +197,7 @@ fn high_spp_renders_agree_on_both_paths_at_every_size() {
             let mut scene = at_spp(&bunny, spp);
             scene.view.camera.width = width;
             scene.view.camera.height = height;
-            renderer.set_view(&scene.view);
-            let gpu_image = renderer.render(&Progress::hidden()).unwrap().0;
+            let gpu_image = renderer.render(&scene.view, &Progress::hidden()).unwrap().0;
             let cpu_image = render_cpu(&scene);
             let stats = compare(&gpu_image, &cpu_image, &Tolerance::default()).unwrap();
             assert!(

@@ -4,7 +4,7 @@
 use crate::error::{Error, Result};
 
 use super::bindings::unmet_limits;
-use super::device::{GpuOptions, LLVMPIPE_THREADS_ENV, MAX_BUFFER_ENV, SHADOW_DISPATCH_ENV};
+use super::options::{GpuOptions, LLVMPIPE_THREADS_ENV, MAX_BUFFER_ENV, SHADOW_DISPATCH_ENV};
 
 /// Which adapter to use: `--adapter`, `--backend`, or wgpu's own
 /// `WGPU_ADAPTER_NAME` and `WGPU_BACKEND` when those are unset, and the

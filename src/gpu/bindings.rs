@@ -91,9 +91,10 @@ pub const IMAGE_TILE: BindingTable = BindingTable {
     entries: &[OUT_PRIM, TILE_SUMS],
 };
 
-/// Group 1 of `render_primary`, `render_shadows` and `render_resolve`.
-pub const SHADOWS_APART: BindingTable = BindingTable {
-    label: "image tile, shadows apart",
+/// Group 1 of the wavefront (`render_primary`, `render_list_primary`,
+/// `render_shadows` and `render_resolve`).
+pub const WAVEFRONT: BindingTable = BindingTable {
+    label: "image tile, wavefront",
     group: 1,
     entries: &[
         OUT_PRIM,
@@ -144,7 +145,7 @@ pub const PROXIMITY: BindingTable = BindingTable {
 pub const TABLES: [&BindingTable; 6] = [
     &SCENE,
     &IMAGE_TILE,
-    &SHADOWS_APART,
+    &WAVEFRONT,
     &RAYS,
     &PIXEL_LIST,
     &PROXIMITY,

@@ -1,24 +1,32 @@
 //! The GPU path: adapter choice, scene upload, and tiled dispatch of
 //! the shader (`shaders/*.wgsl`, composed in `shader_source`) through wgpu, split by concern:
 //!
+//! - `options`: the front ends' options and their variables' names;
 //! - `adapter`: which adapter a request asks for, and the choice;
-//! - `device`: the open device, its limits and errors, the front ends'
-//!   options;
+//! - `device`: the open device, its limits and errors;
 //! - `upload`: the scene's buffers and the BVH's storage;
 //! - `bindings`: the bind group tables, checked against the shader;
 //! - `shader`: the shader's source and its specialisation;
-//! - `pipelines`: the module's layouts and pipelines, built on first use;
-//! - `renderer`: `GpuRenderer`, a scene resident on the device;
-//! - `render`: the render passes (megakernel, or shadows apart);
-//! - `wave_list`: adaptive sampling's pixel lists with shadows apart;
+//! - `pipelines`: the shader module, its overrides and layouts;
+//! - `renderer`: `GpuRenderer`, a scene resident on the device: its
+//!   parts, and when each is built;
+//! - `resident`: the scene's upload as the passes see it (bind groups,
+//!   the uniform of a view), and `Host`, what a pass reads of the others;
+//! - `render`: the tile renders' part (`Tiles`: the megakernel, or the
+//!   wavefront), tile by tile, of the view each call is given;
+//! - `wavefront`: the wavefront (shadow rays traced apart from the camera
+//!   rays): its passes, lists and bind groups, and `ShadowDispatch`;
+//! - `wave_list`: adaptive sampling's pixel lists in the wavefront;
 //! - `progressive`: a render's samples added a few at a time (the viewer);
-//! - `query`: ray queries and pixel lists;
-//! - `proximity`: closest points, winding numbers, every hit along rays;
+//! - `query`: ray queries and pixel lists (`Lists`);
+//! - `proximity`: closest points, winding numbers, every hit along rays
+//!   (`Proximity`);
 //! - `timer` and `readback`: timestamps, and getting results back.
 
 mod adapter;
 pub mod bindings;
 mod device;
+mod options;
 mod pipelines;
 mod progressive;
 mod proximity;
@@ -26,19 +34,22 @@ mod query;
 mod readback;
 mod render;
 mod renderer;
+mod resident;
 mod shader;
 mod timer;
 mod upload;
 mod wave_list;
+mod wavefront;
 
 pub use adapter::{AdapterRequest, Presenting, enumerate_adapters};
-pub use device::{Gpu, GpuOptions, MAX_BUFFER_ENV, SHADOW_DISPATCH_ENV};
+pub use device::Gpu;
+pub use options::{GpuOptions, MAX_BUFFER_ENV, SHADOW_DISPATCH_ENV};
 pub use proximity::binding_runs;
-pub use render::ShadowDispatch;
 pub use renderer::GpuRenderer;
 pub use shader::{SHADER_SOURCE, specialisation};
 pub use timer::GpuTimings;
 pub use upload::{BvhStorage, TEXELS_PER_ROW};
+pub use wavefront::ShadowDispatch;
 
 /// Side of the square tile one dispatch renders: small enough that no
 /// dispatch runs long enough for a GPU watchdog to kill it.
@@ -51,7 +62,7 @@ const RENDER_WORKGROUP: [u32; 2] = [8, 8];
 const _: () =
     assert!(RENDER_WORKGROUP[0] * RENDER_WORKGROUP[1] == crate::layout::WORKGROUP_INVOCATIONS);
 
-/// Camera rays a dispatch of the wavefront render (shadows apart) takes
+/// Camera rays a dispatch of the wavefront render takes
 /// at most: as many as the megakernel's largest tile dispatch (a 256²
 /// tile at 3 samples per pixel: `GpuRenderer::tile_side` rounds up), whose
 /// tiles it shares.

@@ -1,18 +1,18 @@
-//! The shader module, its bind group layouts and its compute pipelines,
-//! each built on first use: a ray query never compiles the render entry
-//! point, nor a render the query's.
+//! The shader module, its bind group layouts, and how a pass builds its
+//! compute pipelines from them (each pass keeps its own, built on its first
+//! use: a ray query never compiles the render entry point, nor a render the
+//! query's).
 
 use crate::error::{Error, Result};
-use crate::scene::{Intersect, Scene};
+use crate::scene::Scene;
 
+use super::RENDER_WORKGROUP;
 use super::bindings::{BindingTable, IMAGE_TILE, PIXEL_LIST, RAYS, SCENE};
 use super::device::Gpu;
-use super::render::SplitShadows;
 use super::upload::{BvhStorage, SceneBuffers};
-use super::{GpuRenderer, RENDER_WORKGROUP};
 
 /// The bind group layouts every renderer builds, one per binding table
-/// (the shadows-apart passes build theirs with them).
+/// (the wavefront builds its own with its passes).
 pub(super) struct Layouts {
     pub scene: wgpu::BindGroupLayout,
     pub image: wgpu::BindGroupLayout,
@@ -44,20 +44,13 @@ impl Layouts {
     }
 }
 
-/// The module, the overrides specialising it to the resident scene, and
-/// the pipelines built so far.
+/// The shader module, the overrides specialising it to the resident scene,
+/// and its layouts: what every pass builds its pipelines from (each pass
+/// keeps its own).
 pub(super) struct Pipelines {
     pub module: wgpu::ShaderModule,
     pub constants: Vec<(&'static str, f64)>,
     pub layouts: Layouts,
-    pub render: Option<wgpu::ComputePipeline>,
-    /// The passes of a render with its shadow rays apart, built on first
-    /// use where `shadow_dispatch` asks for them.
-    pub split: Option<SplitShadows>,
-    /// `trace_rays` pipelines: by any hit or closest hit, then by
-    /// ray/triangle test.
-    pub trace: [[Option<wgpu::ComputePipeline>; 3]; 2],
-    pub pixel_list: Option<wgpu::ComputePipeline>,
 }
 
 impl Pipelines {
@@ -70,10 +63,6 @@ impl Pipelines {
             module,
             constants,
             layouts,
-            render: None,
-            split: None,
-            trace: Default::default(),
-            pixel_list: None,
         }
     }
 
@@ -162,57 +151,4 @@ pub(super) fn compute_pipeline(
         },
         cache: None,
     })
-}
-
-impl GpuRenderer {
-    /// Builds the render pipeline if not built yet (so that timing a render
-    /// can leave the compile out).
-    pub fn prepare_render(&mut self) -> Result<()> {
-        if self.shadows_apart() {
-            if self.pipelines.split.is_none() {
-                self.pipelines.split = Some(self.build_split()?);
-            }
-        } else if self.pipelines.render.is_none() {
-            let p = &self.pipelines;
-            let pipeline = p.build(&self.gpu, "render", &p.layouts.image, &p.constants)?;
-            self.pipelines.render = Some(pipeline);
-        }
-        Ok(())
-    }
-
-    /// Builds the `trace_rays` pipeline for closest or any hit with the
-    /// given ray/triangle test, if not built yet.
-    pub fn prepare_trace(&mut self, any_hit: bool, intersect: Intersect) -> Result<()> {
-        let (a, i) = (any_hit as usize, intersect.shader_value() as usize);
-        if self.pipelines.trace[a][i].is_none() {
-            let mut constants: Vec<(&str, f64)> = self
-                .pipelines
-                .constants
-                .iter()
-                .filter(|(name, _)| *name != "INTERSECT")
-                .copied()
-                .collect();
-            constants.push(("INTERSECT", intersect.shader_value() as f64));
-            constants.push(("ANY_HIT", if any_hit { 1.0 } else { 0.0 }));
-            let p = &self.pipelines;
-            let pipeline = p.build(&self.gpu, "trace_rays", &p.layouts.rays.layout, &constants)?;
-            self.pipelines.trace[a][i] = Some(pipeline);
-        }
-        Ok(())
-    }
-
-    /// Builds the `render_pixel_list` pipeline if not built yet.
-    pub(super) fn prepare_pixel_list(&mut self) -> Result<()> {
-        if self.pipelines.pixel_list.is_none() {
-            let p = &self.pipelines;
-            let pipeline = p.build(
-                &self.gpu,
-                "render_pixel_list",
-                &p.layouts.pixels.layout,
-                &p.constants,
-            )?;
-            self.pipelines.pixel_list = Some(pipeline);
-        }
-        Ok(())
-    }
 }

@@ -7,74 +7,69 @@
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use crate::error::{Error, Result};
+use crate::error::Result;
+use crate::layout::Params;
 use crate::output::Image;
-use crate::progress::Progress;
 
+use super::TILE;
 use super::readback::SUMS_BYTES;
-use super::{GpuRenderer, TILE};
+use super::render::Tiles;
+use super::resident::Host;
+use super::wavefront::ShadowDispatch;
 
-impl GpuRenderer {
-    /// Adds samples `samples` of the current view (of its `spp`) to `sums`
-    /// (one per pixel, row by row: colour sums and squared luminance, as
-    /// the shader keeps them), which hold samples `0..samples.start`.
-    /// When `samples.end` is the view's spp, returns the finished image:
-    /// the shader's means, bit for bit the image `render` returns.
+impl Tiles {
+    /// Adds samples `samples` (a batch checked against the view, not all
+    /// of them) of the view's uniform `params` to `sums` (one per pixel,
+    /// row by row: colour sums and squared luminance, as the shader keeps
+    /// them), which hold samples `0..samples.start` (`prepare` first);
+    /// stopped before its next tile once `cancel` is set (then `sums` are
+    /// as they were, and None comes back). When `samples.end` is the
+    /// view's spp, returns the finished image.
     pub fn add_samples(
         &mut self,
-        samples: Range<u32>,
-        sums: &mut [[f32; 4]],
-    ) -> Result<Option<Image>> {
-        self.add_samples_or_cancel(samples, sums, &AtomicBool::new(false))
-    }
-
-    /// `add_samples`, stopped before its next tile once `cancel` is set
-    /// (then `sums` are as they were, and None comes back).
-    pub fn add_samples_or_cancel(
-        &mut self,
+        host: Host<'_>,
+        dispatch: ShadowDispatch,
+        params: &Params,
         samples: Range<u32>,
         sums: &mut [[f32; 4]],
         cancel: &AtomicBool,
     ) -> Result<Option<Image>> {
-        let (width, height, spp) = (self.params.width, self.params.height, self.params.spp);
-        let view = (width, height, spp);
-        crate::camera::check_batch(view, &samples, sums.len()).map_err(Error::Usage)?;
-        if samples == (0..spp) {
-            let (rendered, _) = self.render(&Progress::hidden())?;
-            return Ok(Some(rendered.image));
-        }
-        self.prepare_render()?;
         loop {
             // The sums change only once the batch's loops ran whole.
             let mut next = sums.to_vec();
-            let image = self.add_samples_once(&samples, &mut next, cancel)?;
+            let image =
+                self.add_samples_once(host, dispatch, params, &samples, &mut next, cancel)?;
             if cancel.load(Ordering::Relaxed) {
                 return Ok(None);
             }
-            if !self.loops_were_cut()? {
+            if !host.loops_were_cut()? {
                 sums.copy_from_slice(&next);
                 return Ok(image);
             }
-            self.fewer_samples_per_dispatch()?;
+            self.fewer_samples_per_dispatch(host.gpu(), dispatch, params.spp)?;
         }
     }
 
     fn add_samples_once(
-        &mut self,
+        &self,
+        host: Host<'_>,
+        dispatch: ShadowDispatch,
+        params: &Params,
         samples: &Range<u32>,
         sums: &mut [[f32; 4]],
         cancel: &AtomicBool,
     ) -> Result<Option<Image>> {
-        let (width, height) = (self.params.width, self.params.height);
-        let finishing = samples.end == self.params.spp;
+        let (width, height) = (params.width, params.height);
+        let finishing = samples.end == params.spp;
         let mut rgb = vec![[0.0f32; 3]; if finishing { sums.len() } else { 0 }];
-        let staging = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        let gpu = host.gpu();
+        let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("tile sums readback"),
             size: TILE as u64 * TILE as u64 * SUMS_BYTES,
             usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
             mapped_at_creation: false,
         });
-        let side = self.tile_side();
+        let side = self.tile_side(dispatch, params.spp);
         for tile_y in (0..height).step_by(side as usize) {
             for tile_x in (0..width).step_by(side as usize) {
                 if cancel.load(Ordering::Relaxed) {
@@ -92,13 +87,13 @@ impl GpuRenderer {
                             .copy_from_slice(&sums[at(row)..][..tile_width]);
                     }
                     let bytes = bytemuck::cast_slice(&block);
-                    self.gpu.queue.write_buffer(&self.tile.sums, 0, bytes);
+                    gpu.queue.write_buffer(&self.targets().sums, 0, bytes);
                 }
-                let extent = [tile_width as u32, tile_height];
-                self.render_tile(tile_x, tile_y, extent[0], extent[1], samples.clone())?;
+                let extent = [tile_x, tile_y, tile_width as u32, tile_height];
+                self.render_tile(host, dispatch, params, extent, samples.clone())?;
                 if finishing {
-                    self.tile
-                        .read(&self.gpu, extent[0], tile_height, |row, colors, _| {
+                    self.targets()
+                        .read(gpu, extent[2], tile_height, |row, colors, _| {
                             for (i, src) in colors.chunks(4).enumerate() {
                                 rgb[at(row) + i] = [src[0], src[1], src[2]];
                             }
@@ -106,10 +101,10 @@ impl GpuRenderer {
                     continue;
                 }
                 let len = slot(tile_height) as u64 * SUMS_BYTES;
-                let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-                encoder.copy_buffer_to_buffer(&self.tile.sums, 0, &staging, 0, len);
-                self.gpu.queue.submit([encoder.finish()]);
-                self.gpu.read_mapped(&staging, len, "tile sums", |bytes| {
+                let mut encoder = gpu.device.create_command_encoder(&Default::default());
+                encoder.copy_buffer_to_buffer(&self.targets().sums, 0, &staging, 0, len);
+                gpu.queue.submit([encoder.finish()]);
+                gpu.read_mapped(&staging, len, "tile sums", |bytes| {
                     let block: &[[f32; 4]] = bytemuck::cast_slice(bytes);
                     for row in 0..tile_height {
                         sums[at(row)..][..tile_width]

@@ -12,17 +12,19 @@ use crate::error::{Error, Result};
 use crate::layout::{ClosestPoint, ListedHit, NO_HIT, Ray, WORKGROUP_INVOCATIONS};
 use crate::scene::Scene;
 
-use super::GpuRenderer;
 use super::bindings::{PROXIMITY, SCENE, leading_bytes};
+use super::resident::Host;
 
 /// Items per dispatch at most: no dispatch runs long enough for a watchdog,
 /// and the workgroup count stays within every device's limit
 /// (`GpuRenderer::batch`: fewer where a binding holds fewer).
 const BATCH: usize = 1 << 18;
 
-/// What the queries keep between calls.
+/// The geometric queries' part of a renderer: their layout and pipelines
+/// (each built on its first use), the buffers they keep between calls, and
+/// the winding tree (uploaded on the first winding query).
 #[derive(Default)]
-pub(super) struct ProximityState {
+pub(super) struct Proximity {
     layout: Option<wgpu::BindGroupLayout>,
     pipelines: HashMap<&'static str, wgpu::ComputePipeline>,
     /// By binding name (and "readback"), grown as needed.
@@ -32,80 +34,76 @@ pub(super) struct ProximityState {
     /// The host's scene, for its winding tree (set by the engine when it
     /// opens the renderer; the jobs let it go, and then no winding query
     /// runs on this renderer).
-    pub winding_source: Option<Weak<Scene>>,
+    winding_source: Option<Weak<Scene>>,
 }
 
 /// One binding's buffer and the bytes of it a dispatch binds.
 type Bound<'a> = (&'static str, &'a wgpu::Buffer, u64);
 
-impl GpuRenderer {
-    /// Spheres in the resident scene (the queries are over triangles).
-    pub fn sphere_count(&self) -> u32 {
-        self.params.num_spheres
-    }
-
-    /// Where a winding query finds the scene's winding tree (the engine
-    /// sets it when it opens the renderer from an `Arc<Scene>`).
+impl Proximity {
+    /// Where a winding query finds the scene's winding tree.
     pub fn set_winding_source(&mut self, scene: Weak<Scene>) {
-        self.proximity.winding_source = Some(scene);
+        self.winding_source = Some(scene);
     }
 
     /// Items a dispatch takes, each binding `bytes` of one buffer (its
     /// largest): BATCH, or as many as the adapter's storage binding limit
     /// holds.
-    fn batch(&self, bytes: usize) -> usize {
-        let fit = self.gpu.binding_limit() / bytes as u64;
+    fn batch(&self, host: Host<'_>, bytes: usize) -> usize {
+        let fit = host.gpu().binding_limit() / bytes as u64;
         BATCH.min(fit as usize).max(1)
     }
 
     /// A kept buffer of at least `size` bytes (4 at least).
     fn kept_buffer(
         &mut self,
+        host: Host<'_>,
         label: &'static str,
         size: u64,
         usage: wgpu::BufferUsages,
     ) -> wgpu::Buffer {
         let size = size.max(16).next_multiple_of(16);
-        if let Some(b) = self
-            .proximity
-            .buffers
-            .get(label)
-            .filter(|b| b.size() >= size)
-        {
+        if let Some(b) = self.buffers.get(label).filter(|b| b.size() >= size) {
             return b.clone();
         }
-        let buffer = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        let buffer = host.gpu().device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(label),
             size,
             usage,
             mapped_at_creation: false,
         });
-        self.proximity.buffers.insert(label, buffer.clone());
+        self.buffers.insert(label, buffer.clone());
         buffer
     }
 
-    fn storage(&mut self, label: &'static str, bytes: &[u8]) -> wgpu::Buffer {
+    fn storage(&mut self, host: Host<'_>, label: &'static str, bytes: &[u8]) -> wgpu::Buffer {
         use wgpu::BufferUsages as U;
         let buffer = self.kept_buffer(
+            host,
             label,
             bytes.len() as u64,
             U::STORAGE | U::COPY_DST | U::COPY_SRC,
         );
-        self.gpu.queue.write_buffer(&buffer, 0, bytes);
+        host.gpu().queue.write_buffer(&buffer, 0, bytes);
         buffer
     }
 
     /// Runs `entry` over `items` invocations with the named buffers bound
     /// (the rest of the table bound to a small placeholder).
-    fn dispatch_query(&mut self, entry: &'static str, items: usize, bound: &[Bound]) -> Result<()> {
-        if self.proximity.layout.is_none() {
-            self.proximity.layout = Some(PROXIMITY.layout(&self.gpu.device));
+    fn dispatch_query(
+        &mut self,
+        host: Host<'_>,
+        entry: &'static str,
+        items: usize,
+        bound: &[Bound],
+    ) -> Result<()> {
+        if self.layout.is_none() {
+            self.layout = Some(PROXIMITY.layout(&host.gpu().device));
         }
-        if !self.proximity.pipelines.contains_key(entry) {
-            let p = &self.pipelines;
-            let layout = self.proximity.layout.as_ref().expect("built");
-            let pipeline = p.build(&self.gpu, entry, layout, &p.constants)?;
-            self.proximity.pipelines.insert(entry, pipeline);
+        if !self.pipelines.contains_key(entry) {
+            let layout = self.layout.as_ref().expect("built");
+            let pipeline = host.build(entry, layout)?;
+            self.pipelines.insert(entry, pipeline);
         }
         // The bindings this entry point does not use: each its own kept
         // buffer (one buffer under two bindings, one of them written,
@@ -118,7 +116,7 @@ impl GpuRenderer {
             .map(|e| {
                 (
                     e.name,
-                    self.kept_buffer(e.name, 64, U::STORAGE | U::COPY_DST | U::COPY_SRC),
+                    self.kept_buffer(host, e.name, 64, U::STORAGE | U::COPY_DST | U::COPY_SRC),
                 )
             })
             .collect();
@@ -136,39 +134,50 @@ impl GpuRenderer {
                 (e.name, leading_bytes(buffer, size))
             })
             .collect();
-        let layout = self.proximity.layout.as_ref().expect("built");
-        let group = PROXIMITY.bind_group(&self.gpu.device, entry, layout, resources);
-        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        let layout = self.layout.as_ref().expect("built");
+        let group = PROXIMITY.bind_group(&host.gpu().device, entry, layout, resources);
+        let mut encoder = host
+            .gpu()
+            .device
+            .create_command_encoder(&Default::default());
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some(entry),
                 timestamp_writes: None,
             });
-            pass.set_pipeline(&self.proximity.pipelines[entry]);
-            pass.set_bind_group(SCENE.group, &self.resident.scene_group, &[]);
+            pass.set_pipeline(&self.pipelines[entry]);
+            pass.set_bind_group(SCENE.group, host.scene_group(), &[]);
             pass.set_bind_group(PROXIMITY.group, &group, &[]);
             pass.dispatch_workgroups(items.div_ceil(WORKGROUP_INVOCATIONS as usize) as u32, 1, 1);
         }
-        self.gpu.queue.submit([encoder.finish()]);
-        self.gpu.wait()?;
-        if self.loops_were_cut()? {
+        host.gpu().queue.submit([encoder.finish()]);
+        host.gpu().wait()?;
+        if host.loops_were_cut()? {
             return Err(Error::LoopsCut(format!(
                 "{} cut the shader's loops short in {entry} (Mesa's llvmpipe ends loops \
                  after 65535 iterations an invocation group)",
-                self.gpu.describe()
+                host.gpu().describe()
             )));
         }
         Ok(())
     }
 
     /// The first `len` bytes of `buffer`, as `T`s.
-    fn read_back<T: bytemuck::Pod>(&mut self, buffer: &wgpu::Buffer, len: u64) -> Result<Vec<T>> {
+    fn read_back<T: bytemuck::Pod>(
+        &mut self,
+        host: Host<'_>,
+        buffer: &wgpu::Buffer,
+        len: u64,
+    ) -> Result<Vec<T>> {
         use wgpu::BufferUsages as U;
-        let staging = self.kept_buffer("readback", len, U::COPY_DST | U::MAP_READ);
-        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        let staging = self.kept_buffer(host, "readback", len, U::COPY_DST | U::MAP_READ);
+        let mut encoder = host
+            .gpu()
+            .device
+            .create_command_encoder(&Default::default());
         encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, len);
-        self.gpu.queue.submit([encoder.finish()]);
-        self.gpu
+        host.gpu().queue.submit([encoder.finish()]);
+        host.gpu()
             .read_mapped(&staging, len, "query results", |bytes| {
                 bytemuck::pod_collect_to_vec(bytes)
             })
@@ -178,28 +187,31 @@ impl GpuRenderer {
     /// margin, the CPU's `query_margin`).
     pub fn closest_points(
         &mut self,
+        host: Host<'_>,
         points: &[[f32; 3]],
         margins: &[f32],
         max_distance: f32,
     ) -> Result<Vec<ClosestPoint>> {
         let scalars = [max_distance * max_distance, 0.0, 0.0, 0.0];
         let mut out = Vec::with_capacity(points.len());
-        let batch = self.batch(size_of::<ClosestPoint>());
+        let batch = self.batch(host, size_of::<ClosestPoint>());
         for (chunk, margins) in points.chunks(batch).zip(margins.chunks(batch)) {
             let input: Vec<[f32; 4]> = chunk
                 .iter()
                 .zip(margins)
                 .map(|(p, &m)| [p[0], p[1], p[2], m])
                 .collect();
-            let points = self.storage("query_points", bytemuck::cast_slice(&input));
-            let scalars = self.storage("query_scalars", bytemuck::cast_slice(&scalars));
+            let points = self.storage(host, "query_points", bytemuck::cast_slice(&input));
+            let scalars = self.storage(host, "query_scalars", bytemuck::cast_slice(&scalars));
             let len = (chunk.len() * size_of::<ClosestPoint>()) as u64;
             let answers = self.kept_buffer(
+                host,
                 "closest_out",
                 len,
                 wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             );
             self.dispatch_query(
+                host,
                 "closest_points",
                 chunk.len(),
                 &[
@@ -208,7 +220,7 @@ impl GpuRenderer {
                     ("closest_out", &answers, len),
                 ],
             )?;
-            let answers: Vec<ClosestPoint> = self.read_back(&answers, len)?;
+            let answers: Vec<ClosestPoint> = self.read_back(host, &answers, len)?;
             out.extend(answers.into_iter().map(|a| {
                 if a.prim == NO_HIT {
                     ClosestPoint::NONE
@@ -222,10 +234,9 @@ impl GpuRenderer {
 
     /// `cpu::winding_numbers` on the device: the same tree (uploaded on the
     /// first call) walked in the same order.
-    pub fn winding_numbers(&mut self, points: &[[f32; 3]]) -> Result<Vec<f32>> {
-        if self.proximity.winding.is_none() {
+    pub fn winding_numbers(&mut self, host: Host<'_>, points: &[[f32; 3]]) -> Result<Vec<f32>> {
+        if self.winding.is_none() {
             let scene = self
-                .proximity
                 .winding_source
                 .as_ref()
                 .and_then(Weak::upgrade)
@@ -240,7 +251,7 @@ impl GpuRenderer {
             let tree = scene.bvh.winding_tree(scene.triangles.len());
             use wgpu::util::DeviceExt;
             let upload = |label, bytes: &[u8]| {
-                self.gpu
+                host.gpu()
                     .device
                     .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                         label: Some(label),
@@ -250,21 +261,23 @@ impl GpuRenderer {
             };
             let nodes = upload("winding nodes", bytemuck::cast_slice(&tree.nodes));
             let prims = upload("winding prims", bytemuck::cast_slice(&tree.prims));
-            self.proximity.winding = Some((nodes, prims));
+            self.winding = Some((nodes, prims));
         }
-        let (nodes, prims) = self.proximity.winding.clone().expect("uploaded");
+        let (nodes, prims) = self.winding.clone().expect("uploaded");
         let mut out = Vec::with_capacity(points.len());
         // 16 bytes a point in, 4 out.
-        for chunk in points.chunks(self.batch(16)) {
+        for chunk in points.chunks(self.batch(host, 16)) {
             let input: Vec<[f32; 4]> = chunk.iter().map(|p| [p[0], p[1], p[2], 0.0]).collect();
-            let points = self.storage("query_points", bytemuck::cast_slice(&input));
+            let points = self.storage(host, "query_points", bytemuck::cast_slice(&input));
             let len = (chunk.len() * 4) as u64;
             let answers = self.kept_buffer(
+                host,
                 "winding_out",
                 len,
                 wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             );
             self.dispatch_query(
+                host,
                 "winding_numbers",
                 chunk.len(),
                 &[
@@ -274,7 +287,7 @@ impl GpuRenderer {
                     ("winding_out", &answers, len),
                 ],
             )?;
-            out.extend(self.read_back::<f32>(&answers, len)?);
+            out.extend(self.read_back::<f32>(host, &answers, len)?);
         }
         Ok(out)
     }
@@ -282,13 +295,19 @@ impl GpuRenderer {
     /// Each ray's count of crossings (`pad`: the CPU's `box_pad`).
     fn count_chunk(
         &mut self,
+        host: Host<'_>,
         rays: &[Ray],
         pad: f32,
     ) -> Result<(wgpu::Buffer, wgpu::Buffer, Vec<u32>)> {
-        let rays_buffer = self.storage("rays", bytemuck::cast_slice(rays));
-        let scalars = self.storage("query_scalars", bytemuck::cast_slice(&[0.0, pad, 0.0, 0.0]));
+        let rays_buffer = self.storage(host, "rays", bytemuck::cast_slice(rays));
+        let scalars = self.storage(
+            host,
+            "query_scalars",
+            bytemuck::cast_slice(&[0.0, pad, 0.0, 0.0]),
+        );
         let len = (rays.len() * 4) as u64;
         let counts = self.kept_buffer(
+            host,
             "hit_counts",
             len,
             wgpu::BufferUsages::STORAGE
@@ -296,6 +315,7 @@ impl GpuRenderer {
                 | wgpu::BufferUsages::COPY_DST,
         );
         self.dispatch_query(
+            host,
             "count_hits",
             rays.len(),
             &[
@@ -304,15 +324,20 @@ impl GpuRenderer {
                 ("hit_counts", &counts, len),
             ],
         )?;
-        let n = self.read_back::<u32>(&counts, len)?;
+        let n = self.read_back::<u32>(host, &counts, len)?;
         Ok((rays_buffer, counts, n))
     }
 
     /// `cpu::count_intersections` on the device.
-    pub fn count_intersections(&mut self, rays: &[Ray], pad: f32) -> Result<Vec<u32>> {
+    pub fn count_intersections(
+        &mut self,
+        host: Host<'_>,
+        rays: &[Ray],
+        pad: f32,
+    ) -> Result<Vec<u32>> {
         let mut out = Vec::with_capacity(rays.len());
-        for chunk in rays.chunks(self.batch(size_of::<Ray>())) {
-            out.extend(self.count_chunk(chunk, pad)?.2);
+        for chunk in rays.chunks(self.batch(host, size_of::<Ray>())) {
+            out.extend(self.count_chunk(host, chunk, pad)?.2);
         }
         Ok(out)
     }
@@ -325,17 +350,18 @@ impl GpuRenderer {
     /// takes the CPU path then).
     pub fn list_intersections(
         &mut self,
+        host: Host<'_>,
         rays: &[Ray],
         pad: f32,
     ) -> Result<(Vec<u64>, Vec<ListedHit>)> {
         let hit_bytes = size_of::<ListedHit>() as u64;
         // Hits one binding holds (each ray's first slot is a u32).
-        let per_binding = (self.gpu.binding_limit() / hit_bytes).min(u32::MAX as u64);
+        let per_binding = (host.gpu().binding_limit() / hit_bytes).min(u32::MAX as u64);
         let mut splits = vec![0u64];
         let mut hits = Vec::new();
-        let batch = self.batch(size_of::<Ray>());
+        let batch = self.batch(host, size_of::<Ray>());
         for (c, chunk) in rays.chunks(batch).enumerate() {
-            let (rays_buffer, counts, n) = self.count_chunk(chunk, pad)?;
+            let (rays_buffer, counts, n) = self.count_chunk(host, chunk, pad)?;
             for &k in &n {
                 splits.push(splits.last().expect("one") + k as u64);
             }
@@ -347,8 +373,8 @@ impl GpuRenderer {
                     n[k],
                     n[k] as u64 * hit_bytes,
                     per_binding * hit_bytes,
-                    self.gpu.describe(),
-                    self.gpu.limits.max_storage_buffer_binding_size
+                    host.gpu().describe(),
+                    host.gpu().limits.max_storage_buffer_binding_size
                 ))
             })?;
             for (range, total) in runs.into_iter().filter(|(_, total)| *total > 0) {
@@ -358,10 +384,10 @@ impl GpuRenderer {
                 let run_rays = if run.len() == chunk.len() {
                     rays_buffer.clone()
                 } else {
-                    self.storage("rays", bytemuck::cast_slice(run))
+                    self.storage(host, "rays", bytemuck::cast_slice(run))
                 };
                 let listed =
-                    self.list_run(run, &run_rays, &counts, &n[range.clone()], total, pad)?;
+                    self.list_run(host, run, &run_rays, &counts, &n[range.clone()], total, pad)?;
                 let base = (c * batch + range.start) as u32;
                 hits.extend(listed.into_iter().map(|h| ListedHit {
                     ray: h.ray + base,
@@ -377,6 +403,7 @@ impl GpuRenderer {
     /// start rewritten with each ray's first slot).
     fn list_run(
         &mut self,
+        host: Host<'_>,
         run: &[Ray],
         run_rays: &wgpu::Buffer,
         counts: &wgpu::Buffer,
@@ -392,17 +419,23 @@ impl GpuRenderer {
                 Some(this)
             })
             .collect();
-        self.gpu
+        host.gpu()
             .queue
             .write_buffer(counts, 0, bytemuck::cast_slice(&firsts));
-        let scalars = self.storage("query_scalars", bytemuck::cast_slice(&[0.0, pad, 0.0, 0.0]));
+        let scalars = self.storage(
+            host,
+            "query_scalars",
+            bytemuck::cast_slice(&[0.0, pad, 0.0, 0.0]),
+        );
         let len = total * size_of::<ListedHit>() as u64;
         let listed = self.kept_buffer(
+            host,
             "listed_hits",
             len,
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         );
         self.dispatch_query(
+            host,
             "list_hits",
             run.len(),
             &[
@@ -412,7 +445,7 @@ impl GpuRenderer {
                 ("listed_hits", &listed, len),
             ],
         )?;
-        self.read_back::<ListedHit>(&listed, len)
+        self.read_back::<ListedHit>(host, &listed, len)
     }
 }
 

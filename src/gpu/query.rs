@@ -1,4 +1,7 @@
-//! Ray queries and pixel lists: one invocation per item, in batches.
+//! Ray queries and pixel lists: one invocation per item, in batches. Their
+//! part of a renderer (`Lists`): the `trace_rays` and `render_pixel_list`
+//! pipelines, each built on its first use, and the buffers kept between
+//! calls.
 
 use std::cell::RefCell;
 use std::collections::HashMap;
@@ -10,58 +13,74 @@ use crate::scene::Intersect;
 
 use super::bindings::{SCENE, leading_bytes};
 use super::pipelines::ListLayout;
+use super::resident::Host;
 use super::timer::Timer;
-use super::{GpuRenderer, RENDER_WORKGROUP, TILE};
+use super::{RENDER_WORKGROUP, TILE};
 
-/// What the list passes keep between calls.
+/// The list passes' part of a renderer.
 #[derive(Default)]
-pub(super) struct ListState {
+pub(super) struct Lists {
+    /// `trace_rays` pipelines: by any hit or closest hit, then by
+    /// ray/triangle test.
+    trace: [[Option<wgpu::ComputePipeline>; 3]; 2],
+    pixel_list: Option<wgpu::ComputePipeline>,
     /// The list passes' input, output and readback buffers, by label
-    /// (`list_buffers`).
+    /// (`buffers`).
     buffers: RefCell<HashMap<&'static str, wgpu::Buffer>>,
     /// Device time of the last `trace_rays` (its dispatches, summed), where
     /// timestamps work.
     trace_device_time: Option<Duration>,
 }
 
-impl GpuRenderer {
-    /// Traces `rays` (world coordinates, as in a ray file) against the
-    /// resident scene with the ray/triangle test `intersect`: closest hits,
-    /// or with `any_hit` the first hit each ray finds. Misses come back as
-    /// t = +inf, prim = NO_HIT.
-    pub fn trace_rays(
+impl Lists {
+    /// Builds the `trace_rays` pipeline for closest or any hit with the
+    /// given ray/triangle test, if not built yet.
+    pub fn prepare_trace(
         &mut self,
-        rays: &[Ray],
+        host: Host<'_>,
         any_hit: bool,
         intersect: Intersect,
-    ) -> Result<Vec<Hit>> {
-        let local = self.placement.localize(rays);
-        let mut hits = self.trace_local_rays(&local.rays, any_hit, intersect)?;
-        local.to_world(&mut hits);
-        Ok(hits)
+    ) -> Result<()> {
+        let (a, i) = (any_hit as usize, intersect.shader_value() as usize);
+        if self.trace[a][i].is_none() {
+            let mut constants: Vec<(&str, f64)> = host
+                .constants()
+                .iter()
+                .filter(|(name, _)| *name != "INTERSECT")
+                .copied()
+                .collect();
+            constants.push(("INTERSECT", intersect.shader_value() as f64));
+            constants.push(("ANY_HIT", if any_hit { 1.0 } else { 0.0 }));
+            let layout = &host.layouts().rays.layout;
+            let pipeline = host.build_with("trace_rays", layout, &constants)?;
+            self.trace[a][i] = Some(pipeline);
+        }
+        Ok(())
     }
 
-    /// `trace_rays` for rays already in the scene's local frame
-    /// (`Placement::local_ray`), hits in that frame.
-    pub fn trace_local_rays(
+    /// Traces `rays` in the scene's local frame (`prepare_trace` first),
+    /// timed with `timer` where there is one: hits in that frame, misses
+    /// as `Hit::MISS`.
+    pub fn trace(
         &mut self,
+        host: Host<'_>,
+        timer: Option<&Timer>,
         rays: &[Ray],
         any_hit: bool,
         intersect: Intersect,
     ) -> Result<Vec<Hit>> {
-        self.prepare_trace(any_hit, intersect)?;
-        let pipeline = self.pipelines.trace[any_hit as usize][intersect.shader_value() as usize]
+        let pipeline = self.trace[any_hit as usize][intersect.shader_value() as usize]
             .as_ref()
             .expect("prepared");
-        let list = &self.pipelines.layouts.rays;
+        let list = &host.layouts().rays;
         let (hits, device): (Vec<Hit>, _) =
-            self.run_list(pipeline, list, rays, 1 << 20, None, true)?;
-        self.lists.trace_device_time = device;
-        if self.loops_were_cut()? {
+            self.run_list(host, timer, pipeline, list, rays, 1 << 20, None)?;
+        self.trace_device_time = device;
+        if host.loops_were_cut()? {
             return Err(Error::LoopsCut(format!(
                 "{} cut the shader's loops short on a ray of this query (Mesa's llvmpipe \
                  ends loops after 65535 iterations an invocation group)",
-                self.gpu.describe()
+                host.gpu().describe()
             )));
         }
         Ok(hits
@@ -70,28 +89,38 @@ impl GpuRenderer {
             .collect())
     }
 
-    /// Renders the listed pixels with the current sampling (adaptive
-    /// sampling's later passes): mean colour and variance of the mean. In
-    /// the wavefront where the render is (`shadows_apart`), else in one
-    /// pass; the same bits either way.
-    pub fn render_pixel_list(&mut self, pixels: &[[u32; 2]]) -> Result<Vec<[f32; 4]>> {
-        if self.shadows_apart() {
-            return self.render_list_apart(pixels);
+    /// Device time of the last `trace`, from timestamp queries (None
+    /// where the adapter has none).
+    pub fn trace_device_time(&self) -> Option<Duration> {
+        self.trace_device_time
+    }
+
+    /// Builds the `render_pixel_list` pipeline if not built yet.
+    pub fn prepare_pixel_list(&mut self, host: Host<'_>) -> Result<()> {
+        if self.pixel_list.is_none() {
+            let layout = &host.layouts().pixels.layout;
+            self.pixel_list = Some(host.build("render_pixel_list", layout)?);
         }
-        self.prepare_pixel_list()?;
-        loop {
-            let pipeline = self.pipelines.pixel_list.as_ref().expect("built");
-            let list = &self.pipelines.layouts.pixels;
-            let step = self.samples_per_dispatch.min(self.params.spp);
-            // As many samples per dispatch as a full tile at 1 spp.
-            let batch =
-                ((TILE * TILE) / step).max(RENDER_WORKGROUP[0] * RENDER_WORKGROUP[1]) as usize;
-            let (results, _) = self.run_list(pipeline, list, pixels, batch, Some(step), false)?;
-            if !self.loops_were_cut()? {
-                return Ok(results);
-            }
-            self.fewer_samples_per_dispatch()?;
-        }
+        Ok(())
+    }
+
+    /// The listed pixels rendered in one pass with the view's uniform
+    /// `params`, `step` samples a dispatch (`prepare_pixel_list` first):
+    /// mean colour and variance of the mean.
+    pub fn render_pixel_list(
+        &self,
+        host: Host<'_>,
+        params: &Params,
+        pixels: &[[u32; 2]],
+        step: u32,
+    ) -> Result<Vec<[f32; 4]>> {
+        let pipeline = self.pixel_list.as_ref().expect("prepared");
+        let list = &host.layouts().pixels;
+        // As many samples per dispatch as a full tile at 1 spp.
+        let batch = ((TILE * TILE) / step).max(RENDER_WORKGROUP[0] * RENDER_WORKGROUP[1]) as usize;
+        let sampling = Some((params, step));
+        let (results, _) = self.run_list(host, None, pipeline, list, pixels, batch, sampling)?;
+        Ok(results)
     }
 
     /// A list pass's input (written by the host, read by the shader),
@@ -99,9 +128,9 @@ impl GpuRenderer {
     /// `input` and `output` bytes: kept between calls and grown as needed,
     /// since creating them anew cost lavapipe a sixth of a million-ray
     /// query.
-    pub(super) fn list_buffers(&self, input: u64, output: u64) -> [wgpu::Buffer; 3] {
+    pub fn buffers(&self, host: Host<'_>, input: u64, output: u64) -> [wgpu::Buffer; 3] {
         use wgpu::BufferUsages as U;
-        let mut cache = self.lists.buffers.borrow_mut();
+        let mut cache = self.buffers.borrow_mut();
         [
             ("list input", input, U::STORAGE | U::COPY_DST),
             ("list output", output, U::STORAGE | U::COPY_SRC),
@@ -110,7 +139,7 @@ impl GpuRenderer {
         .map(|(label, size, usage)| {
             let kept = cache.get(label).filter(|b| b.size() >= size).cloned();
             kept.unwrap_or_else(|| {
-                let buffer = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                let buffer = host.gpu().device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some(label),
                     size,
                     usage,
@@ -122,50 +151,34 @@ impl GpuRenderer {
         })
     }
 
-    /// Uploads the uniform with `samples` (of the view's spp) as the next
-    /// dispatch's: a pixel list's samples, a dispatch at a time.
-    pub(super) fn upload_samples(&self, samples: std::ops::Range<u32>) {
-        let params = Params {
-            sample_begin: samples.start,
-            sample_end: samples.end,
-            ..self.params
-        };
-        self.gpu
-            .queue
-            .write_buffer(&self.resident.params_buffer, 0, bytemuck::bytes_of(&params));
-    }
-
-    /// Device time of the last `trace_rays`, from timestamp queries (None
-    /// where the adapter has none).
-    pub fn trace_device_time(&self) -> Option<Duration> {
-        self.lists.trace_device_time
-    }
-
     /// Runs a one-invocation-per-item entry point over `inputs` (bound at
     /// `list`'s first binding, outputs at its second), `batch` items per
-    /// dispatch so that no dispatch runs long; with `step`, the scene's
-    /// samples that many at a time, a dispatch each. With `timed`, also
+    /// dispatch so that no dispatch runs long; with `sampling` (a view's
+    /// uniform and a step), its samples that many at a time, a dispatch
+    /// each, else one dispatch with the scene's uniform. With `timer`, also
     /// returns the dispatches' device time, summed, where timestamps work
     /// (reading it back waits on each dispatch's queries).
+    #[allow(clippy::too_many_arguments)]
     fn run_list<I: bytemuck::Pod, O: bytemuck::Pod>(
         &self,
+        host: Host<'_>,
+        timer: Option<&Timer>,
         pipeline: &wgpu::ComputePipeline,
         list: &ListLayout,
         inputs: &[I],
         batch: usize,
-        step: Option<u32>,
-        timed: bool,
+        sampling: Option<(&Params, u32)>,
     ) -> Result<(Vec<O>, Option<Duration>)> {
         const LIST_WORKGROUP: usize = WORKGROUP_INVOCATIONS as usize;
         let table = list.table;
         let [input, output] = table.entries else {
             unreachable!("a list's bindings are its input and its output")
         };
-        let timer = self.timer.as_ref().filter(|_| timed);
         let mut device = timer.map(|_| Duration::ZERO);
-        let gpu = &self.gpu;
+        let gpu = host.gpu();
         let batch = batch.min(inputs.len()).max(1);
-        let [in_buffer, out_buffer, staging] = self.list_buffers(
+        let [in_buffer, out_buffer, staging] = self.buffers(
+            host,
             (batch * size_of::<I>()) as u64,
             (batch * size_of::<O>()) as u64,
         );
@@ -184,10 +197,12 @@ impl GpuRenderer {
                     (output.name, leading_bytes(&out_buffer, out_len)),
                 ],
             );
-            let spp = self.params.spp;
-            let step = step.unwrap_or(spp);
+            let (params, spp, step) = match sampling {
+                Some((params, step)) => (params, params.spp, step),
+                None => (host.scene_params(), 1, 1),
+            };
             for begin in (0..spp).step_by(step as usize) {
-                self.upload_samples(begin..(begin + step).min(spp));
+                host.write_samples(params, begin..(begin + step).min(spp));
                 let mut encoder = gpu.device.create_command_encoder(&Default::default());
                 {
                     let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -195,7 +210,7 @@ impl GpuRenderer {
                         timestamp_writes: timer.map(Timer::writes),
                     });
                     pass.set_pipeline(pipeline);
-                    pass.set_bind_group(SCENE.group, &self.resident.scene_group, &[]);
+                    pass.set_bind_group(SCENE.group, host.scene_group(), &[]);
                     pass.set_bind_group(table.group, &group, &[]);
                     pass.dispatch_workgroups(chunk.len().div_ceil(LIST_WORKGROUP) as u32, 1, 1);
                 }

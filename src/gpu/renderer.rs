@@ -1,46 +1,61 @@
-//! `GpuRenderer`: a scene resident on the device, and the steps that put
-//! it there.
+//! `GpuRenderer`: a scene resident on the device, the steps that put it
+//! there, and the uniform each call writes from its view.
 
+use std::ops::Range;
+use std::sync::Weak;
+use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
-use glam::DVec3;
-use wgpu::util::DeviceExt;
-
-use crate::camera::f32::CameraBasis;
-use crate::camera::{View, strata_columns};
+use crate::camera::View;
 use crate::error::{Error, Result};
-use crate::layout::Params;
-use crate::scene::Scene;
+use crate::layout::{ClosestPoint, Hit, ListedHit, Params, Ray};
+use crate::output::{Image, Rendered};
+use crate::progress::Progress;
+use crate::scene::{Intersect, Scene};
 
-use super::adapter::is_llvmpipe;
-use super::bindings::{IMAGE_TILE, SCENE};
 use super::device::Gpu;
 use super::pipelines::{Layouts, Pipelines, resident_constants};
-use super::query::ListState;
-use super::readback::{LoopStatus, TileTargets};
-use super::render::{LLVMPIPE_SAMPLES_PER_DISPATCH, ShadowDispatch};
+use super::proximity::Proximity;
+use super::query::Lists;
+use super::render::Tiles;
+use super::resident::{Host, Resident};
 use super::shader::{SHADER_SOURCE, specialisation};
-use super::timer::Timer;
+use super::timer::GpuTimings;
 use super::upload::{BvhStorage, SceneBuffers};
+use super::wavefront::ShadowDispatch;
 
-/// A scene resident on the device: buffers and pipeline are built once;
-/// a new view only rewrites the uniform. It keeps all it renders with (the
-/// scene's uniform, its placement), so the host's scene may go once it is
-/// built; it starts at the scene's default view (`Scene::view`).
+/// A scene resident on the device, rendered from any view: each render
+/// call takes its `View` and writes the uniform from it and the scene's
+/// part (`Resident`), so no call leaves state another reads. It keeps all
+/// it renders with (the scene's part of the uniform, its placement), so
+/// the host's scene may go once it is built.
+///
+/// Its parts, each in its own file with its own `impl`, reached only
+/// through their methods: the device context (`Gpu`), the shader module
+/// and its layouts (`Pipelines`), the scene's upload (`Resident`: its
+/// buffers, the BVH, textures, the uniform), and one part per pass or
+/// kernel family: the tile renders (`Tiles`, render.rs: the megakernel or
+/// the `Wavefront`; progressive batches and the wavefront's pixel lists),
+/// the ray queries and pixel lists (`Lists`, query.rs) and the geometric
+/// queries (`Proximity`, proximity.rs). A pass reads the others through
+/// `Host`.
+///
+/// When each is built (the rule): what every call needs when the renderer
+/// is opened (`new`): the device context, the scene's upload, the shader
+/// module, the tile's buffers and the timer. Every pipeline on the first
+/// use of its pass, by its `prepare_*` (which a caller may call first to
+/// leave the compile out of a timing): the megakernel's `render` pipeline
+/// or the wavefront's passes and lists (`prepare_render`), the wavefront's
+/// pixel-list pass, `trace_rays`'s pipelines (`prepare_trace`),
+/// `render_pixel_list`'s, and the geometric queries' (each on its first
+/// query; the winding tree on the first winding query).
 pub struct GpuRenderer {
-    pub(super) gpu: Gpu,
-    pub(super) pipelines: Pipelines,
-    pub(super) resident: Resident,
-    pub(super) tile: TileTargets,
-    /// The uniform as the next dispatch writes it.
-    pub(super) params: Params,
-    /// Samples one dispatch adds to a pixel: few enough that no invocation
-    /// trips llvmpipe's loop limit (`loops_completed` in the shader);
-    /// halved whenever one still does.
-    pub(super) samples_per_dispatch: u32,
-    pub(super) timer: Option<Timer>,
-    pub(super) lists: ListState,
-    pub(super) proximity: super::proximity::ProximityState,
+    gpu: Gpu,
+    pipelines: Pipelines,
+    resident: Resident,
+    tiles: Tiles,
+    lists: Lists,
+    proximity: Proximity,
     /// How a render traces its shadow rays (the tests set either).
     pub shadow_dispatch: ShadowDispatch,
     /// Bytes of the scene's buffers on the device.
@@ -52,54 +67,6 @@ pub struct GpuRenderer {
     pub upload_time: Duration,
     /// The resident scene's placement: `trace_rays` takes world rays.
     pub placement: crate::placement::Placement,
-}
-
-/// The bind groups every pass binds (the scene's buffers live on in
-/// them), the uniform and the shader's loop flag.
-pub(super) struct Resident {
-    pub scene_group: wgpu::BindGroup,
-    pub image_group: wgpu::BindGroup,
-    pub params_buffer: wgpu::Buffer,
-    pub loop_status: LoopStatus,
-}
-
-/// The uniform for `scene` seen from `view`.
-fn params_for(scene: &Scene, view: &View) -> Params {
-    let scene_params = Params {
-        background: scene.background,
-        num_triangles: scene.triangles.len() as u32,
-        ambient: scene.ambient,
-        num_spheres: scene.spheres.len() as u32,
-        num_lights: scene.lights.len() as u32,
-        shadows: scene.shadows as u32,
-        canary_loops: 2,
-        ..bytemuck::Zeroable::zeroed()
-    };
-    with_view(scene_params, scene.offset, view)
-}
-
-/// `params` seen from `view` (the geometry relative to `offset`): the f32
-/// reference's basis, so both paths shoot the very same rays.
-fn with_view(params: Params, offset: DVec3, view: &View) -> Params {
-    let basis = CameraBasis::new(&view.camera.relative_to(offset));
-    Params {
-        eye: basis.eye.to_array(),
-        width: basis.width,
-        right: basis.right.to_array(),
-        height: basis.height,
-        up: basis.up.to_array(),
-        tan_half_x: basis.tan_half_x,
-        forward: basis.forward.to_array(),
-        tan_half_y: basis.tan_half_y,
-        tile_origin: [0, 0],
-        spp: view.spp,
-        seed: view.seed,
-        strata_x: strata_columns(view.spp),
-        sample_begin: 0,
-        sample_end: view.spp,
-        cone_spread: crate::texture::cone_spread(basis.tan_half_y, basis.height, view.spp),
-        ..params
-    }
 }
 
 impl GpuRenderer {
@@ -135,34 +102,14 @@ impl GpuRenderer {
     ) -> Result<GpuRenderer> {
         let start = Instant::now();
         let device = &gpu.device;
-        let params = params_for(scene, &scene.view);
-        let params_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("params"),
-            contents: bytemuck::bytes_of(&params),
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-        });
         let buffers = SceneBuffers::upload(&gpu, scene, storage)?;
         let constants = resident_constants(constants, &buffers, storage, scene, &gpu);
-        let tile = TileTargets::new(device);
-        let loop_status = LoopStatus::new(device);
+        let lights = scene.lights.len().min(u32::MAX as usize) as u32;
+        let tiles = Tiles::new(&gpu, lights);
         let layouts = Layouts::new(device);
 
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let scene_group = scene_bind_group(
-            device,
-            &layouts,
-            &buffers,
-            [&params_buffer, &loop_status.buffer],
-        );
-        let image_group = IMAGE_TILE.bind_group(
-            device,
-            IMAGE_TILE.label,
-            &layouts.image,
-            vec![
-                ("out_prim", tile.prim.as_entire_binding()),
-                ("tile_sums", tile.sums.as_entire_binding()),
-            ],
-        );
+        let resident = Resident::new(device, scene, &layouts, &buffers, tiles.targets());
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("lambert shader"),
             source: wgpu::ShaderSource::Wgsl(SHADER_SOURCE.into()),
@@ -171,31 +118,17 @@ impl GpuRenderer {
             return Err(Error::Gpu(format!("uploading the scene: {e}")));
         }
         gpu.wait()?;
-        let timer = Timer::new(&gpu);
         let shadow_dispatch = ShadowDispatch::for_scene(
             scene,
             gpu.options.shadow_dispatch.as_deref(),
             gpu.limits.max_storage_buffer_binding_size as u64,
         )?;
-        let samples_per_dispatch = if is_llvmpipe(&gpu.info) {
-            LLVMPIPE_SAMPLES_PER_DISPATCH
-        } else {
-            u32::MAX
-        };
         Ok(GpuRenderer {
             gpu,
             pipelines: Pipelines::new(module, constants, layouts),
-            resident: Resident {
-                scene_group,
-                image_group,
-                params_buffer,
-                loop_status,
-            },
-            tile,
-            params,
-            samples_per_dispatch,
-            timer,
-            lists: ListState::default(),
+            resident,
+            tiles,
+            lists: Lists::default(),
             proximity: Default::default(),
             shadow_dispatch,
             device_bytes: buffers.device_bytes,
@@ -210,58 +143,232 @@ impl GpuRenderer {
         &self.gpu
     }
 
-    /// Sets the view (camera, size, spp, seed) the resident scene is
-    /// rendered from; uploads nothing else (the scene's own part of the
-    /// uniform stays the one uploaded).
-    pub fn set_view(&mut self, view: &View) {
-        self.params = with_view(self.params, self.placement.offset, view);
+    /// The uniform of a render of `view` (camera, size, spp, seed): the
+    /// scene's part as uploaded, the view's from `view`.
+    pub(super) fn uniform(&self, view: &View) -> Params {
+        self.resident.uniform(self.placement.offset, view)
     }
-}
 
-/// Group 0: the uniform, the scene's arrays (low and high ranges), the
-/// loop flag and the BVH's texels.
-fn scene_bind_group(
-    device: &wgpu::Device,
-    layouts: &Layouts,
-    buffers: &SceneBuffers,
-    [params_buffer, loop_status]: [&wgpu::Buffer; 2],
-) -> wgpu::BindGroup {
-    let node_view = buffers.node_texture.create_view(&Default::default());
-    let block_view = buffers.block_texture.create_view(&Default::default());
-    let triangle_view = buffers.triangle_texture.create_view(&Default::default());
-    SCENE.bind_group(
-        device,
-        SCENE.label,
-        &layouts.scene,
-        vec![
-            ("params", params_buffer.as_entire_binding()),
-            ("triangles", buffers.triangles.low_binding()),
-            ("triangle_normals", buffers.normals.low_binding()),
-            ("spheres", buffers.spheres.as_entire_binding()),
-            ("materials", buffers.materials.as_entire_binding()),
-            ("lights", buffers.lights.as_entire_binding()),
-            ("bvh_nodes", buffers.nodes.low_binding()),
-            ("bvh_blocks", buffers.blocks.low_binding()),
-            ("triangles_hi", buffers.triangles.high_binding()),
-            ("triangle_normals_hi", buffers.normals.high_binding()),
-            ("bvh_nodes_hi", buffers.nodes.high_binding()),
-            ("bvh_blocks_hi", buffers.blocks.high_binding()),
-            ("loop_status", loop_status.as_entire_binding()),
-            ("triangle_attributes", buffers.attributes.low_binding()),
-            ("triangle_attributes_hi", buffers.attributes.high_binding()),
-            ("textures", buffers.textures.as_entire_binding()),
-            (
-                "bvh_node_texels",
-                wgpu::BindingResource::TextureView(&node_view),
-            ),
-            (
-                "bvh_block_texels",
-                wgpu::BindingResource::TextureView(&block_view),
-            ),
-            (
-                "triangle_texels",
-                wgpu::BindingResource::TextureView(&triangle_view),
-            ),
-        ],
-    )
+    /// Spheres in the resident scene (the geometric queries are over
+    /// triangles).
+    pub fn sphere_count(&self) -> u32 {
+        self.resident.scene_params().num_spheres
+    }
+
+    /// Where a winding query finds the scene's winding tree (the engine
+    /// sets it when it opens the renderer from an `Arc<Scene>`).
+    pub fn set_winding_source(&mut self, scene: Weak<Scene>) {
+        self.proximity.set_winding_source(scene);
+    }
+
+    /// What a pass reads of the renderer's other parts.
+    fn host(&self) -> Host<'_> {
+        Host::new(&self.gpu, &self.pipelines, &self.resident)
+    }
+
+    /// Renders the scene as `view` sees it, tile by tile, reading each
+    /// back before the next.
+    pub fn render(&mut self, view: &View, progress: &Progress) -> Result<(Rendered, GpuTimings)> {
+        self.render_rows(view, 0..view.camera.height, progress)
+    }
+
+    /// Renders rows `rows` of `view`'s image alone (a part of it), tile by
+    /// tile; fails rather than return a picture whose loops the driver
+    /// cut short (`Tiles::render_rows`).
+    pub fn render_rows(
+        &mut self,
+        view: &View,
+        rows: std::ops::Range<u32>,
+        progress: &Progress,
+    ) -> Result<(Rendered, GpuTimings)> {
+        let params = self.uniform(view);
+        self.prepare_render()?;
+        let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
+        let dispatch = self.shadow_dispatch;
+        self.tiles
+            .render_rows(host, dispatch, &params, rows, progress)
+    }
+
+    /// Builds the passes a render runs if not built yet: the megakernel's
+    /// pipeline, or the wavefront (so that timing a render can leave the
+    /// compile out).
+    pub fn prepare_render(&mut self) -> Result<()> {
+        let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
+        self.tiles.prepare(host, self.shadow_dispatch)
+    }
+
+    /// Whether this renderer renders in the wavefront, as `shadow_dispatch`
+    /// asks. Each of its dispatches takes every sample of the tile's pixels
+    /// a megakernel dispatch would, in one submission: an earlier version
+    /// that dispatched each sample's passes and waited took 152 s rather
+    /// than 19 over the sampling tests.
+    pub fn is_wavefront(&self) -> bool {
+        self.shadow_dispatch == ShadowDispatch::Wavefront
+    }
+
+    /// Side of the tiles `render` dispatches for `view`.
+    pub fn tile_side(&self, view: &View) -> u32 {
+        self.tiles.tile_side(self.shadow_dispatch, view.spp)
+    }
+
+    /// Number of tiles `render` dispatches for `view`.
+    pub fn tile_count(&self, view: &View) -> u64 {
+        let side = self.tile_side(view);
+        let camera = &view.camera;
+        camera.width.div_ceil(side) as u64 * camera.height.div_ceil(side) as u64
+    }
+
+    /// Adds samples `samples` of `view` (of its `spp`) to `sums` (one per
+    /// pixel, row by row: colour sums and squared luminance, as the shader
+    /// keeps them), which hold samples `0..samples.start`. When
+    /// `samples.end` is the view's spp, returns the finished image: the
+    /// shader's means, bit for bit the image `render` returns.
+    pub fn add_samples(
+        &mut self,
+        view: &View,
+        samples: Range<u32>,
+        sums: &mut [[f32; 4]],
+    ) -> Result<Option<Image>> {
+        self.add_samples_or_cancel(view, samples, sums, &AtomicBool::new(false))
+    }
+
+    /// `add_samples`, stopped before its next tile once `cancel` is set
+    /// (then `sums` are as they were, and None comes back).
+    pub fn add_samples_or_cancel(
+        &mut self,
+        view: &View,
+        samples: Range<u32>,
+        sums: &mut [[f32; 4]],
+        cancel: &AtomicBool,
+    ) -> Result<Option<Image>> {
+        let params = self.uniform(view);
+        let (width, height, spp) = (params.width, params.height, params.spp);
+        crate::camera::check_batch((width, height, spp), &samples, sums.len())
+            .map_err(Error::Usage)?;
+        if samples == (0..spp) {
+            let (rendered, _) = self.render(view, &Progress::hidden())?;
+            return Ok(Some(rendered.image));
+        }
+        self.prepare_render()?;
+        let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
+        let dispatch = self.shadow_dispatch;
+        self.tiles
+            .add_samples(host, dispatch, &params, samples, sums, cancel)
+    }
+
+    /// Traces `rays` (world coordinates, as in a ray file) against the
+    /// resident scene with the ray/triangle test `intersect`: closest hits,
+    /// or with `any_hit` the first hit each ray finds. Misses come back as
+    /// t = +inf, prim = NO_HIT.
+    pub fn trace_rays(
+        &mut self,
+        rays: &[Ray],
+        any_hit: bool,
+        intersect: Intersect,
+    ) -> Result<Vec<Hit>> {
+        let local = self.placement.localize(rays);
+        let mut hits = self.trace_local_rays(&local.rays, any_hit, intersect)?;
+        local.to_world(&mut hits);
+        Ok(hits)
+    }
+
+    /// `trace_rays` for rays already in the scene's local frame
+    /// (`Placement::local_ray`), hits in that frame.
+    pub fn trace_local_rays(
+        &mut self,
+        rays: &[Ray],
+        any_hit: bool,
+        intersect: Intersect,
+    ) -> Result<Vec<Hit>> {
+        self.prepare_trace(any_hit, intersect)?;
+        let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
+        let timer = self.tiles.timer();
+        self.lists.trace(host, timer, rays, any_hit, intersect)
+    }
+
+    /// Builds the `trace_rays` pipeline for closest or any hit with the
+    /// given ray/triangle test, if not built yet.
+    pub fn prepare_trace(&mut self, any_hit: bool, intersect: Intersect) -> Result<()> {
+        let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
+        self.lists.prepare_trace(host, any_hit, intersect)
+    }
+
+    /// Device time of the last `trace_rays`, from timestamp queries (None
+    /// where the adapter has none).
+    pub fn trace_device_time(&self) -> Option<Duration> {
+        self.lists.trace_device_time()
+    }
+
+    /// Renders the listed pixels with `view`'s spp and seed (adaptive
+    /// sampling's later passes): mean colour and variance of the mean. In
+    /// the wavefront where the render is (`is_wavefront`), else in one
+    /// pass; the same bits either way.
+    pub fn render_pixel_list(&mut self, view: &View, pixels: &[[u32; 2]]) -> Result<Vec<[f32; 4]>> {
+        let params = self.uniform(view);
+        if self.is_wavefront() {
+            let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
+            return self
+                .tiles
+                .render_list_wavefront(host, &self.lists, &params, pixels);
+        }
+        let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
+        self.lists.prepare_pixel_list(host)?;
+        loop {
+            let step = self.tiles.samples_per_dispatch(ShadowDispatch::Megakernel);
+            let step = step.min(params.spp);
+            let results = self
+                .lists
+                .render_pixel_list(self.host(), &params, pixels, step)?;
+            if !self.resident.loops_were_cut(&self.gpu)? {
+                return Ok(results);
+            }
+            let dispatch = ShadowDispatch::Megakernel;
+            self.tiles
+                .fewer_samples_per_dispatch(&self.gpu, dispatch, params.spp)?;
+        }
+    }
+
+    /// The geometric queries' part, and what it reads of the others.
+    fn proximity(&mut self) -> (Host<'_>, &mut Proximity) {
+        let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
+        (host, &mut self.proximity)
+    }
+
+    /// `cpu::closest_points` on the device (`margins`: each point's cull
+    /// margin, the CPU's `query_margin`).
+    pub fn closest_points(
+        &mut self,
+        points: &[[f32; 3]],
+        margins: &[f32],
+        max_distance: f32,
+    ) -> Result<Vec<ClosestPoint>> {
+        let (host, proximity) = self.proximity();
+        proximity.closest_points(host, points, margins, max_distance)
+    }
+
+    /// `cpu::winding_numbers` on the device: the same tree (uploaded on the
+    /// first call) walked in the same order.
+    pub fn winding_numbers(&mut self, points: &[[f32; 3]]) -> Result<Vec<f32>> {
+        let (host, proximity) = self.proximity();
+        proximity.winding_numbers(host, points)
+    }
+
+    /// `cpu::count_intersections` on the device (`pad`: the CPU's
+    /// `box_pad`).
+    pub fn count_intersections(&mut self, rays: &[Ray], pad: f32) -> Result<Vec<u32>> {
+        let (host, proximity) = self.proximity();
+        proximity.count_intersections(host, rays, pad)
+    }
+
+    /// `cpu::list_intersections` on the device, each ray's hits in the
+    /// order the traversal found them (the engine sorts them); a ray whose
+    /// crossings alone exceed one binding is `Error::GpuLimit`.
+    pub fn list_intersections(
+        &mut self,
+        rays: &[Ray],
+        pad: f32,
+    ) -> Result<(Vec<u64>, Vec<ListedHit>)> {
+        let (host, proximity) = self.proximity();
+        proximity.list_intersections(host, rays, pad)
+    }
 }

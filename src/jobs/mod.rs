@@ -50,8 +50,7 @@ pub fn oracle_scene(scene: &Scene) -> Scene {
 /// included), showing no progress.
 pub fn render_gpu(scene: &Scene, view: &View, request: &AdapterRequest) -> Result<Rendered> {
     let mut renderer = open_gpu(scene, request)?;
-    renderer.set_view(view);
-    Ok(renderer.render(&Progress::hidden())?.0)
+    Ok(renderer.render(view, &Progress::hidden())?.0)
 }
 
 /// Seconds as the reports print them: `1.234 s`.

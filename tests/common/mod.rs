@@ -59,7 +59,10 @@ pub fn open_gpu() -> Gpu {
 
 pub fn render_gpu(scene: &Scene) -> Rendered {
     let mut renderer = GpuRenderer::new(open_gpu(), scene).expect("scene uploads");
-    renderer.render(&Progress::hidden()).expect("GPU render").0
+    renderer
+        .render(&scene.view, &Progress::hidden())
+        .expect("GPU render")
+        .0
 }
 
 pub fn render_cpu(scene: &Scene) -> Rendered {
