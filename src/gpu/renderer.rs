@@ -216,6 +216,34 @@ impl GpuRenderer {
     pub fn set_view(&mut self, view: &View) {
         self.params = with_view(self.params, self.placement.offset, view);
     }
+
+    /// Turns shadows on or off (the viewer's key): the uniform's flag,
+    /// the HAS_SHADOWS override (where the shader is specialised) and the
+    /// shadow dispatch, the pipelines built on them rebuilt on next use.
+    /// The scene's buffers stay: the same image as a renderer opened on
+    /// the scene with that setting.
+    pub fn set_shadows(&mut self, on: bool) -> Result<()> {
+        if self.params.shadows == on as u32 {
+            return Ok(());
+        }
+        let lights = self.params.num_lights;
+        self.shadow_dispatch = ShadowDispatch::for_lights(
+            on,
+            lights,
+            self.gpu.options.shadow_dispatch.as_deref(),
+            self.gpu.limits.max_storage_buffer_binding_size as u64,
+        )?;
+        self.params.shadows = on as u32;
+        let p = &mut self.pipelines;
+        if let Some((_, flag)) = p.constants.iter_mut().find(|(n, _)| *n == "HAS_SHADOWS") {
+            *flag = (on && lights > 0) as u32 as f64;
+        }
+        p.render = None;
+        p.split = None;
+        p.pixel_list = None;
+        p.trace = Default::default();
+        Ok(())
+    }
 }
 
 /// Group 0: the uniform, the scene's arrays (low and high ranges), the
