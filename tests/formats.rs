@@ -47,8 +47,8 @@ fn ply_and_obj_give_the_same_image_bit_for_bit_on_both_paths() {
         "meshes/bunny_lowres_ascii.ply.gz",
     ] {
         let ply = bunny_from(ply);
-        assert_eq!(obj.triangles, ply.triangles);
-        assert_eq!(obj.normals, ply.normals, "smooth normals");
+        assert_eq!(obj.triangles(), ply.triangles());
+        assert_eq!(obj.normals(), ply.normals(), "smooth normals");
         assert_eq!(bits(&render_cpu(&obj)), bits(&render_cpu(&ply)));
         assert_eq!(bits(&render_gpu(&obj)), bits(&render_gpu(&ply)));
     }
@@ -276,18 +276,18 @@ fn obj_materials_from_mtl_files() {
         Scene::from_toml(&text, &d.join("s.toml")).unwrap()
     };
     let s = scene_at("");
-    let albedo = |t: usize| s.materials[s.triangles[t].material as usize].albedo();
+    let albedo = |t: usize| s.materials()[s.triangles()[t].material as usize].albedo();
     assert_eq!(
         [albedo(0), albedo(1), albedo(2), albedo(3)],
         [[0.8; 3], [0.8, 0.1, 0.1], [0.1, 0.1, 0.9], [0.8; 3]]
     );
-    assert_eq!(s.warnings.len(), 2);
+    assert_eq!(s.warnings().len(), 2);
     let overridden = scene_at("albedo = [0.2, 0.3, 0.4]\n");
     assert!(
         overridden
-            .triangles
+            .triangles()
             .iter()
-            .all(|t| overridden.materials[t.material as usize].albedo() == [0.2, 0.3, 0.4])
+            .all(|t| overridden.materials()[t.material as usize].albedo() == [0.2, 0.3, 0.4])
     );
     // Per-face materials on both paths: ambient 1 shows each face's albedo.
     let (gpu, cpu) = (render_gpu(&s), render_cpu(&s));
@@ -360,19 +360,19 @@ fn gltf_hierarchy_camera_lights_and_materials() {
 
     let scene = Scene::load(&path).unwrap();
     assert_eq!(
-        (scene.view.camera.width, scene.view.camera.height),
+        (scene.view().camera.width, scene.view().camera.height),
         (1024, 768)
     );
-    assert_eq!(scene.lights.len(), 2);
+    assert_eq!(scene.lights().len(), 2);
     let point = scene
-        .lights
+        .lights()
         .iter()
         .find(|l| l.kind == lambert::layout::LIGHT_POINT)
         .unwrap();
     assert_eq!(point.vector, [-3.0, 4.0, 3.0]);
     assert_eq!(point.color, [40.0, 36.0, 32.0]);
     let sun = scene
-        .lights
+        .lights()
         .iter()
         .find(|l| l.kind == lambert::layout::LIGHT_DIRECTIONAL)
         .unwrap();
@@ -381,8 +381,8 @@ fn gltf_hierarchy_camera_lights_and_materials() {
     assert!((glam::Vec3::from(sun.color) - glam::Vec3::new(0.75, 0.75, 0.9)).length() < 1e-6);
 
     let mut small = scene.clone();
-    small.view.camera.width = 64;
-    small.view.camera.height = 48;
+    small.view_mut().camera.width = 64;
+    small.view_mut().camera.height = 48;
     let (gpu, cpu) = (render_gpu(&small), render_cpu(&small));
     let stats = lambert::diff::compare(&gpu, &cpu, &Default::default()).unwrap();
     assert!(stats.passed, "{stats}");
@@ -398,11 +398,11 @@ fn gltf_in_a_toml_scene_brings_geometry_only() {
     std::fs::create_dir(dir.path().join("meshes")).unwrap();
     std::fs::copy(meshes("boxes.glb"), dir.path().join("meshes/BOXES.GLB")).unwrap();
     let s = Scene::from_toml(text, &dir.path().join("s.toml")).unwrap();
-    assert_eq!(s.lights.len(), 1);
-    assert_eq!(s.view.camera.vfov, 50.0);
-    assert_eq!(s.triangles.len(), 14);
+    assert_eq!(s.lights().len(), 1);
+    assert_eq!(s.view().camera.vfov, 50.0);
+    assert_eq!(s.triangles().len(), 14);
     let max_x = s
-        .triangles
+        .triangles()
         .iter()
         .flat_map(|t| [t.v0[0], t.v1[0], t.v2[0]])
         .fold(f32::MIN, f32::max);
@@ -586,7 +586,7 @@ fn gltf_data_uris_external_buffers_and_malformed_files() {
         ),
     );
     let scene = Scene::load(&warned).unwrap();
-    let warnings = scene.warnings.join("\n");
+    let warnings = scene.warnings().join("\n");
     for expected in [
         "light spot: a spot light, skipped",
         "light lamp: its range is ignored",
@@ -599,11 +599,11 @@ fn gltf_data_uris_external_buffers_and_malformed_files() {
             "lacks '{expected}': {warnings}"
         );
     }
-    assert_eq!(scene.lights.len(), 1);
-    assert_eq!(scene.lights[0].vector, [0.0, 0.0, 4.0]);
-    assert_eq!(scene.lights[0].color, [3.0; 3]);
+    assert_eq!(scene.lights().len(), 1);
+    assert_eq!(scene.lights()[0].vector, [0.0, 0.0, 4.0]);
+    assert_eq!(scene.lights()[0].color, [3.0; 3]);
     // The node's matrix (column-major) moved the triangle 5 along x.
-    assert_eq!(scene.triangles[0].v1, [6.0, 0.0, 0.0]);
+    assert_eq!(scene.triangles()[0].v1, [6.0, 0.0, 0.0]);
 
     for (path, expected) in cases {
         let message = error_of(&path);
@@ -1177,15 +1177,15 @@ fn toml_mirrored_meshes_keep_their_normals_facing_out() {
              [[point_light]]\nposition = [0.0, 5.0, 0.0]\nintensity = 1.0\n"
         );
         let s = Scene::from_toml(&text, &dir.path().join("s.toml")).unwrap();
-        assert_eq!(s.triangles.len(), 4, "{scale}");
+        assert_eq!(s.triangles().len(), 4, "{scale}");
         let v = |p: [f32; 3]| DVec3::from(p.map(f64::from));
         let corners: Vec<DVec3> = s
-            .triangles
+            .triangles()
             .iter()
             .flat_map(|t| [v(t.v0), v(t.v1), v(t.v2)])
             .collect();
         let centre = corners.iter().sum::<DVec3>() / corners.len() as f64;
-        for t in &s.triangles {
+        for t in s.triangles() {
             let [a, b, c] = [v(t.v0), v(t.v1), v(t.v2)];
             let outward = (a + b + c) / 3.0 - centre;
             assert!(
@@ -1194,14 +1194,14 @@ fn toml_mirrored_meshes_keep_their_normals_facing_out() {
             );
         }
         // The first face (1, 3, 2) keeps its first corner; a mirror swaps the others.
-        let first = &s.triangles[0];
+        let first = &s.triangles()[0];
         let expected_v1 = if mirrored { v(first.v2) } else { v(first.v1) };
         assert_eq!(v(first.v0), DVec3::ZERO, "{scale}");
         assert!(
             expected_v1.x == 0.0 && expected_v1.z == 0.0,
             "{scale}: {first:?}"
         );
-        assert_eq!(s.normals.len(), 4, "{scale}: smooth normals kept");
+        assert_eq!(s.normals().len(), 4, "{scale}: smooth normals kept");
     }
 }
 

@@ -107,6 +107,20 @@ impl Scene {
         self.offset
     }
 
+    /// Adds `triangles` (flat shaded, with no vertex attributes: their
+    /// entries in `normals` and `attributes`, where those are kept, are
+    /// zero); `rebuild_bvh` after.
+    pub fn add_triangles(&mut self, triangles: impl IntoIterator<Item = Triangle>) {
+        self.triangles.extend(triangles);
+        let n = self.triangles.len();
+        if !self.normals.is_empty() {
+            self.normals.resize(n, TriangleNormals::default());
+        }
+        if !self.attributes.is_empty() {
+            self.attributes.resize(n, TriangleAttributes::default());
+        }
+    }
+
     /// The triangles, to edit by hand; `rebuild_bvh` after.
     pub fn triangles_mut(&mut self) -> &mut Vec<Triangle> {
         &mut self.triangles
