@@ -665,6 +665,45 @@ fn the_environment_check_finds_reads() {
     assert_eq!(reads, ["src/cpu/simd.rs:3", "src/gpu/device.rs:3"]);
 }
 
+// ---- no source fragments ----------------------------------------------------
+
+/// No file of src/ pastes a `.rs` file into another with `include!`: every
+/// Rust file is a module of its own, which tools (rust-analyzer, this
+/// file's checks) can place; code written once for both precisions is a
+/// macro that each precision's module expands (src/cpu/kernel.rs). The
+/// check itself finds such an include in code, not in a comment or a
+/// string, nor an `include_str!` of a shader.
+#[test]
+fn no_rust_file_is_included_into_another() {
+    let includes = |files: &[(PathBuf, String)]| {
+        let mut found = Vec::new();
+        for (path, text) in files {
+            let lines: Vec<&str> = text.lines().collect();
+            for (i, line) in code_only(text).lines().enumerate() {
+                let pasted = line.match_indices("include!(").any(|(at, _)| {
+                    !line[..at].ends_with(|c: char| is_ident(c)) && lines[i].contains(".rs\"")
+                });
+                if pasted {
+                    found.push(format!("{}:{}", path.display(), i + 1));
+                }
+            }
+        }
+        found
+    };
+    let file = |path: &str, text: &str| (PathBuf::from(path), text.to_string());
+    let planted = includes(&[file(
+        "src/cpu/f32.rs",
+        "// include!(\"kernel.rs\");\nconst S: &str = include_str!(\"../../shaders/a.wgsl\");\nlet s = \"include!(\\\"x.rs\\\")\";\ninclude!(\"kernel.rs\");",
+    )]);
+    assert_eq!(planted, ["src/cpu/f32.rs:4"]);
+    let found = includes(&source_files());
+    assert!(
+        found.is_empty(),
+        "`.rs` files pasted in with include! (make them modules, docs/architecture.md):\n{}",
+        found.join("\n")
+    );
+}
+
 // ---- settings in their place -------------------------------------------------
 
 /// The `pub` fields of `struct Scene` in `text` (src/scene/mod.rs's code):

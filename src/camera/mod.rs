@@ -9,22 +9,18 @@ use serde::Deserialize;
 use crate::layout::{LIGHT_DIRECTIONAL, Light};
 use crate::limits::{checked_point, validate_resolution, vector_text};
 
+mod basis;
+
 /// The basis in single precision, as on the GPU.
 #[allow(clippy::unnecessary_cast)]
 pub mod f32 {
-    use super::Camera;
-    type Real = f32;
-    type Vec3 = glam::Vec3;
-    include!("basis.rs");
+    super::basis::basis!(f32, glam::Vec3);
 }
 
 /// The basis in double precision, for the oracle.
 #[allow(clippy::unnecessary_cast)]
 pub mod f64 {
-    use super::Camera;
-    type Real = f64;
-    type Vec3 = glam::DVec3;
-    include!("basis.rs");
+    super::basis::basis!(f64, glam::DVec3);
 }
 
 /// What one render looks at: the camera (image size included), samples

@@ -1,10 +1,8 @@
-//! Single precision, as on the GPU: the kernel (kernel.rs) with `Real =
-//! f32`, the NaN-ignoring selects in SSE, and the vector variants of the
+//! Single precision, as on the GPU: the kernel (`kernel!`, kernel.rs)
+//! with `Real = f32`, the NaN-ignoring selects in SSE, and the vector variants of the
 //! slab test and of the ordering of entered children.
 
-pub type Real = f32;
-pub type Vec3 = glam::Vec3;
-pub type Vec4 = glam::Vec4;
+super::kernel::kernel!(f32, glam::Vec2, glam::Vec3, glam::Vec4);
 
 /// `a` where a > b, else `b` (a NaN in either yields `b`): the shader's
 /// `select(b, a, a > b)`, in one instruction where SSE's maxps and
@@ -203,5 +201,3 @@ fn high_half(x: Real) -> Real {
 }
 
 pub use crate::camera::f32::CameraBasis;
-
-include!("kernel.rs");

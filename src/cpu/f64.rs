@@ -1,9 +1,7 @@
-//! Double precision, the oracle: the kernel (kernel.rs) with `Real = f64`,
-//! portable throughout.
+//! Double precision, the oracle: the kernel (`kernel!`, kernel.rs) with
+//! `Real = f64`, portable throughout.
 
-pub type Real = f64;
-pub type Vec3 = glam::DVec3;
-pub type Vec4 = glam::DVec4;
+super::kernel::kernel!(f64, glam::DVec2, glam::DVec3, glam::DVec4);
 
 /// `a` where a > b, else `b` (a NaN in either yields `b`).
 #[inline(always)]
@@ -40,5 +38,3 @@ fn high_half(x: Real) -> Real {
 }
 
 pub use crate::camera::f64::CameraBasis;
-
-include!("kernel.rs");

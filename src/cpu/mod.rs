@@ -2,6 +2,7 @@
 //! with rayon. `f32` is the reference the GPU is diffed against; `f64` is the
 //! same code in double precision, the oracle that measures both.
 
+mod all_hits;
 pub mod closest;
 /// Single precision, as on the GPU.
 #[allow(clippy::unnecessary_cast)]
@@ -9,12 +10,20 @@ pub mod f32;
 /// Double precision: the oracle.
 #[allow(clippy::unnecessary_cast)]
 pub mod f64;
+mod fetch;
+mod intersect;
+mod kernel;
+mod layout;
 mod prefetch;
 mod proximity;
 mod query;
 mod render;
+mod sample;
+mod shade;
 mod simd;
 pub mod texture;
+mod traverse;
+mod traverse_cpu;
 pub mod winding;
 
 pub use prefetch::LARGE_BVH_BYTES;

@@ -135,4 +135,21 @@ impl Scene {
     pub fn lights_mut(&mut self) -> &mut Vec<Light> {
         &mut self.lights
     }
+
+    /// The materials, to edit by hand (a texture given to one, say).
+    pub fn materials_mut(&mut self) -> &mut Vec<Material> {
+        &mut self.materials
+    }
+
+    /// The textures, to replace by hand, with `attributes_mut` for the
+    /// texture coordinates that read them.
+    pub fn textures_mut(&mut self) -> &mut TextureStore {
+        &mut self.textures
+    }
+
+    /// The per-triangle attributes (one per triangle, or none), to edit by
+    /// hand.
+    pub fn attributes_mut(&mut self) -> &mut Vec<TriangleAttributes> {
+        &mut self.attributes
+    }
 }

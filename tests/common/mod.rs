@@ -11,7 +11,10 @@ use lambert::output::Rendered;
 use lambert::progress::Progress;
 
 mod bin;
+pub mod cli;
+pub mod formats;
 mod settings;
+pub mod stress;
 // Each test file uses some of these; unused ones are no warning.
 #[allow(unused_imports)]
 pub use bin::*;

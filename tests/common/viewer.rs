@@ -82,6 +82,12 @@ pub fn xvfb() -> Option<Xvfb> {
             "640x480x24",
             "-nolisten",
             "tcp",
+            // No autorepeat: on a loaded machine xdotool's key release can
+            // come half a second after its press, and the server's repeats
+            // would press `c` twice (two camera tables, the second read
+            // as the next one's).
+            "-ardelay",
+            "30000",
         ])
         .stdout(Stdio::piped())
         .stderr(Stdio::null())

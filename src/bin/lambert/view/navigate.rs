@@ -16,6 +16,7 @@ use lambert::scene::Scene;
 pub struct Reach {
     lo: DVec3,
     hi: DVec3,
+    offset: DVec3,
     min_distance: f64,
 }
 
@@ -25,6 +26,11 @@ const MIN_DISTANCE_OF_SIZE: f64 = 1e-6;
 /// that the view direction, eye − look_at, is right to 2e-4 rad: a
 /// fraction of a pixel.
 const MIN_DISTANCE_OF_POSITION: f64 = 1e-12;
+/// ... and of look_at's distance from the scene's offset: the renderer
+/// takes the camera in f32 in the scene's frame, where eye and look_at
+/// must stay about a thousand of f32's steps apart (2^-13) for the view
+/// direction to hold to a fraction of a pixel, and not become one point.
+const MIN_DISTANCE_OF_LOCAL_POSITION: f64 = 1.0 / 8192.0;
 
 impl Reach {
     /// `scene`'s: its offset, and the size of its geometry (of the view's
@@ -53,6 +59,7 @@ impl Reach {
         Reach {
             lo: (offset - local).max(-world),
             hi: (offset + local).min(world),
+            offset,
             min_distance,
         }
     }
@@ -61,6 +68,7 @@ impl Reach {
     fn min_distance(&self, look_at: DVec3) -> f64 {
         self.min_distance
             .max(MIN_DISTANCE_OF_POSITION * look_at.abs().max_element())
+            .max(MIN_DISTANCE_OF_LOCAL_POSITION * (look_at - self.offset).abs().max_element())
     }
 
     /// `camera` moved back within reach (`before` where the move left
