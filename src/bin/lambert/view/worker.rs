@@ -187,12 +187,19 @@ impl Worker {
                 // On a GPU, its pipelines specialised again; the scene
                 // stays uploaded.
                 let on = !self.shadows;
-                self.renderer.set_shadows(on)?;
-                // The CPU path's scene, changed: ours too, so that the one
-                // before goes.
-                if let Some(scene) = self.renderer.shared_scene() {
-                    self.scene = Arc::clone(scene);
+                // The CPU path shares our scene: ours goes first, so that
+                // the renderer changes it in place (never two copies at
+                // once), and comes back changed.
+                let empty = Arc::new(Scene::from_triangles(Vec::new()));
+                let ours = std::mem::replace(&mut self.scene, empty);
+                let kept = self.renderer.shared_scene().is_none().then_some(ours);
+                let changed = self.renderer.set_shadows(on);
+                match (self.renderer.shared_scene(), kept) {
+                    (Some(scene), _) => self.scene = Arc::clone(scene),
+                    (None, Some(ours)) => self.scene = ours,
+                    (None, None) => {}
                 }
+                changed?;
                 self.shadows = on;
                 report(Report::Say(format!(
                     "shadows {}",
