@@ -1,8 +1,8 @@
 //! Choosing where a scene renders (GPU through wgpu, or the CPU reference)
 //! and rendering it there.
 
-use std::sync::{Arc, Mutex};
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use crate::camera::View;

@@ -739,7 +739,10 @@ fn the_scene_has_no_public_field() {
 fn the_field_check_finds_public_fields() {
     let text = "/// pub view: View\npub struct Scene {\n    /// pub x\n    pub view: View,\n    \
                 pub(crate) spp: u32,\n    pub shadows: bool,\n}\npub struct Other {\n    pub a: u8,\n}\n";
-    assert_eq!(public_scene_fields(text), ["pub view: View", "pub shadows: bool"]);
+    assert_eq!(
+        public_scene_fields(text),
+        ["pub view: View", "pub shadows: bool"]
+    );
 }
 
 /// `file:line` of each `Renderer::Gpu` or `Renderer::Cpu` in the code of
@@ -784,7 +787,13 @@ fn the_variant_check_finds_them_in_code_only() {
             "python/src/lib.rs",
             "// Renderer::Cpu\nlet s = \"Renderer::Gpu\";\nlet r = Renderer::Cpu(scene);",
         ),
-        file("src/bin/lambert/view/app.rs", "match r {\n    Renderer::Gpu(g) => g,\n}"),
+        file(
+            "src/bin/lambert/view/app.rs",
+            "match r {\n    Renderer::Gpu(g) => g,\n}",
+        ),
     ]);
-    assert_eq!(named, ["python/src/lib.rs:3", "src/bin/lambert/view/app.rs:2"]);
+    assert_eq!(
+        named,
+        ["python/src/lib.rs:3", "src/bin/lambert/view/app.rs:2"]
+    );
 }

@@ -558,7 +558,13 @@ fn every_cpu_kernel_equals_the_portable_one() {
                         scene.default_settings().intersect,
                         CpuKernel::Portable,
                     );
-                    let simd = trace_rays_with(scene, &rays, any_hit, scene.default_settings().intersect, kernel);
+                    let simd = trace_rays_with(
+                        scene,
+                        &rays,
+                        any_hit,
+                        scene.default_settings().intersect,
+                        kernel,
+                    );
                     for (i, (a, b)) in portable.iter().zip(&simd).enumerate() {
                         assert_eq!(
                             (a.prim, a.t.to_bits(), a.u.to_bits(), a.v.to_bits()),
@@ -641,7 +647,8 @@ fn rays_with_nan_or_infinite_components_trace_like_brute_force() {
     let sphere = sphere([0.0, 3.0, 0.0], 0.5);
     let scene = scene_of(vec![t, far_t], vec![sphere]);
     assert_ne!(
-        scene.bvh().nodes[0].occupied, 0b1111,
+        scene.bvh().nodes[0].occupied,
+        0b1111,
         "the root has no empty slot"
     );
     let (nan, inf) = (f32::NAN, f32::INFINITY);

@@ -136,7 +136,8 @@ fn meshes_far_from_the_origin_trace_as_at_the_origin() {
             ("CPU", trace_cpu(&scene, &f32_rays, false)),
             (
                 "GPU",
-                gpu.trace_rays(&f32_rays, false, scene.default_settings().intersect).unwrap(),
+                gpu.trace_rays(&f32_rays, false, scene.default_settings().intersect)
+                    .unwrap(),
             ),
         ] {
             for (i, (ray, hit)) in f32_rays.iter().zip(&hits).enumerate() {

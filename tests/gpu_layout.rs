@@ -67,7 +67,12 @@ fn gpu_hits_equal_the_twins_bit_for_bit() {
                 let gpu = renderer
                     .trace_rays(&rays, any_hit, scene.default_settings().intersect)
                     .expect("GPU trace");
-                let twin = cpu::trace_rays_gpu_twin(&scene, &rays, any_hit, scene.default_settings().intersect);
+                let twin = cpu::trace_rays_gpu_twin(
+                    &scene,
+                    &rays,
+                    any_hit,
+                    scene.default_settings().intersect,
+                );
                 let hits = twin.iter().filter(|h| h.prim != NO_HIT).count();
                 println!(
                     "{name}, {storage:?}, any hit {any_hit}: {} rays, {hits} hits, GPU vs twin (other primitive, other bits) {:?}",
@@ -169,7 +174,8 @@ fn quantised_boxes_lose_no_hit_at_any_scale_or_offset() {
         assert_twin_is_exact(&name, &scene, &random_rays(&scene, &mut rng, 4000));
         let rays = random_rays(&scene, &mut rng, 4000);
         let gpu = trace_gpu(&scene, &rays, false);
-        let twin = cpu::trace_rays_gpu_twin(&scene, &rays, false, scene.default_settings().intersect);
+        let twin =
+            cpu::trace_rays_gpu_twin(&scene, &rays, false, scene.default_settings().intersect);
         assert_eq!(mismatches(&gpu, &twin), (0, 0), "{name}: GPU vs twin");
     }
 }
@@ -234,7 +240,8 @@ fn assert_short_stacks_agree(name: &str, scene: &Scene, rays: &[Ray]) {
     let depth = scene.bvh().depth();
     let nodes = lambert::cwbvh::compress(&scene.bvh());
     for any_hit in [false, true] {
-        let twin = cpu::trace_rays_gpu_twin(scene, rays, any_hit, scene.default_settings().intersect);
+        let twin =
+            cpu::trace_rays_gpu_twin(scene, rays, any_hit, scene.default_settings().intersect);
         for entries in [1, 2] {
             let mut kernel = cpu::f32::Kernel::new(scene);
             kernel.compressed = Some(&nodes);

@@ -327,7 +327,9 @@ fn workgroups_spread_over_any_thread_count_change_no_pixel_or_hit() {
             let r = renderer.render(&hidden).unwrap().0;
             images.push((bits(&r), r.prims.clone()));
         }
-        let hits = renderer.trace_rays(&rays, false, scene.default_settings().intersect).unwrap();
+        let hits = renderer
+            .trace_rays(&rays, false, scene.default_settings().intersect)
+            .unwrap();
         let hits: Vec<[u32; 4]> = hits
             .iter()
             .map(|h| [h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits()])

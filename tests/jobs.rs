@@ -32,7 +32,10 @@ impl ProgressSink for Lines {
 
 fn small(name: &str) -> lambert::Scene {
     let mut scene = common::load(name);
-    (scene.view_mut().camera.width, scene.view_mut().camera.height) = (16, 12);
+    (
+        scene.view_mut().camera.width,
+        scene.view_mut().camera.height,
+    ) = (16, 12);
     scene
 }
 

@@ -622,8 +622,24 @@ fn a_hint_changes_no_closest_point() {
         let t = &triangles[0];
         let hint = Some((0, [t.v0, t.v1, t.v2].map(glam::Vec3::from)));
         assert_eq!(
-            closest_point(&scene.bvh(), triangles.len(), p, 0.01, 1e-5, hint, &mut queue),
-            closest_point(&scene.bvh(), triangles.len(), p, 0.01, 1e-5, None, &mut queue),
+            closest_point(
+                &scene.bvh(),
+                triangles.len(),
+                p,
+                0.01,
+                1e-5,
+                hint,
+                &mut queue
+            ),
+            closest_point(
+                &scene.bvh(),
+                triangles.len(),
+                p,
+                0.01,
+                1e-5,
+                None,
+                &mut queue
+            ),
         );
     }
 }

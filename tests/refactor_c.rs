@@ -84,7 +84,10 @@ fn shadows_set_on_the_cpu_path_render_as_the_scene_with_them() {
     let (image, _) = renderer.render(&on.view, None).unwrap();
     let off = small(&scene, false);
     assert_eq!(image, common::render_cpu(&scene.with_settings(&off)));
-    assert!(shared.default_settings().shadows, "the caller's scene changed");
+    assert!(
+        shared.default_settings().shadows,
+        "the caller's scene changed"
+    );
     assert!(!renderer.shared_scene().unwrap().default_settings().shadows);
 }
 
@@ -95,7 +98,10 @@ fn default_settings_and_with_settings_agree() {
     let scene = common::load("spheres");
     let defaults = scene.default_settings();
     assert_eq!(&defaults.view, scene.view());
-    assert_eq!(scene.clone().with_settings(&defaults).default_settings(), defaults);
+    assert_eq!(
+        scene.clone().with_settings(&defaults).default_settings(),
+        defaults
+    );
     let other = RenderSettings {
         shadows: !defaults.shadows,
         ambient: [0.25, 0.5, 0.125],
@@ -136,7 +142,10 @@ fn the_image_job_renders_with_the_settings_it_is_given() {
     let expected = dir.path().join("expected.pfm");
     let rendered = common::render_cpu(&scene.with_settings(&settings));
     rendered.image.save(&expected).unwrap();
-    assert_eq!(std::fs::read(&output).unwrap(), std::fs::read(&expected).unwrap());
+    assert_eq!(
+        std::fs::read(&output).unwrap(),
+        std::fs::read(&expected).unwrap()
+    );
 }
 
 /// `Renderers::run` holds its lock only while a GPU works: on the CPU
@@ -147,7 +156,10 @@ fn renderers_run_lets_the_lock_go_on_the_cpu_path() {
     let renderers = Mutex::new(Renderers::new(Arc::clone(&scene), Default::default()));
     let view = small(&scene, true).view;
     let (image, note) = Renderers::run(&renderers, DeviceChoice::Cpu, |renderer| {
-        assert!(renderers.try_lock().is_ok(), "the lock is held on the CPU path");
+        assert!(
+            renderers.try_lock().is_ok(),
+            "the lock is held on the CPU path"
+        );
         assert!(renderer.is_cpu() && renderer.gpu().is_none());
         Ok(renderer.render(&view, None)?.0)
     })
@@ -173,7 +185,9 @@ fn trace_local_is_trace_in_the_scenes_frame() {
         Renderer::open_on(Arc::clone(&scene), Some(&gpu)).unwrap(),
     ] {
         for any_hit in [false, true] {
-            let world = renderer.trace(&rays, any_hit, Intersect::Watertight).unwrap();
+            let world = renderer
+                .trace(&rays, any_hit, Intersect::Watertight)
+                .unwrap();
             let local = renderer
                 .trace_local(&rays, any_hit, Intersect::Watertight)
                 .unwrap();

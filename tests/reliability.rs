@@ -473,7 +473,10 @@ fn a_gpu_render_does_not_need_the_hosts_geometry() {
     use std::sync::Arc;
     for name in ["bunny", "spheres", "cornell"] {
         let mut scene = common::load(name);
-        (scene.view_mut().camera.width, scene.view_mut().camera.height) = (64, 48);
+        (
+            scene.view_mut().camera.width,
+            scene.view_mut().camera.height,
+        ) = (64, 48);
         scene.view_mut().spp = 2;
         let view = scene.view().clone();
         let scene = Arc::new(scene);

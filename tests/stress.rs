@@ -424,7 +424,8 @@ fn gpu_and_cpu_agree_on_ray_sets_for_the_default_variant() {
         // The GPU's twin: the CPU path's own BVH visits children in another
         // order, and takes the other primitive where two tie on t (the
         // Cornell box's shared edges).
-        let cpu_hits = cpu::trace_rays_gpu_twin(&scene, &rays, false, scene.default_settings().intersect);
+        let cpu_hits =
+            cpu::trace_rays_gpu_twin(&scene, &rays, false, scene.default_settings().intersect);
         let gpu_hits = trace_gpu(&scene, &rays, false);
         let oracle = Agreement::measure(&gpu_hits, &cpu::trace_rays_f64(&scene, &rays, false));
         let mut scene_same = 0;

@@ -152,7 +152,12 @@ fn nan_rays_miss_on_every_path() {
             ("CPU", trace_cpu(&scene, &rays, any_hit)),
             (
                 "twin",
-                cpu::trace_rays_gpu_twin(&scene, &rays, any_hit, scene.default_settings().intersect),
+                cpu::trace_rays_gpu_twin(
+                    &scene,
+                    &rays,
+                    any_hit,
+                    scene.default_settings().intersect,
+                ),
             ),
             ("GPU", trace_gpu(&scene, &rays, any_hit)),
         ] {

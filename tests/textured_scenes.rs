@@ -336,7 +336,11 @@ fn broken_images_are_warnings_and_the_model_renders() {
     ] {
         let scene = Scene::load(&dir.join(name)).unwrap();
         if warning.is_empty() {
-            assert!(scene.warnings().is_empty(), "{name}: {:?}", scene.warnings());
+            assert!(
+                scene.warnings().is_empty(),
+                "{name}: {:?}",
+                scene.warnings()
+            );
             assert_eq!(scene.textures().images().len(), 1, "{name}");
         } else {
             assert!(

@@ -216,7 +216,12 @@ pub fn render_image(
     let primitives = scene.primitive_count();
     let bvh = BvhSummary::of(&scene.bvh);
     let view = settings.view.clone();
-    let (mut renderer, upload) = open(Arc::new(scene.with_settings(settings)), job.device, job.adapter, sink)?;
+    let (mut renderer, upload) = open(
+        Arc::new(scene.with_settings(settings)),
+        job.device,
+        job.adapter,
+        sink,
+    )?;
     let device = renderer.describe();
     say(sink, &format!("rendering on {device}"));
     let sampled = render_view(&mut renderer, &view, job.sampling, sink)?;

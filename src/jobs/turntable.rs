@@ -63,7 +63,12 @@ pub fn render_turntable(
 ) -> Result<TurntableReport> {
     let paths = frame_paths(job.pattern, job.range.clone())?;
     let mut view = settings.view.clone();
-    let (mut renderer, _) = open(Arc::new(scene.with_settings(settings)), job.device, job.adapter, sink)?;
+    let (mut renderer, _) = open(
+        Arc::new(scene.with_settings(settings)),
+        job.device,
+        job.adapter,
+        sink,
+    )?;
     let device = renderer.describe();
     let count = paths.len();
     let of = if count as u32 == job.frames {

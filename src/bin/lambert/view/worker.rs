@@ -321,7 +321,10 @@ impl Worker {
     /// is quitting) reports nothing.
     fn add_frame(&mut self, report: &impl Fn(Report) -> bool) -> Result<()> {
         let start = Instant::now();
-        if !self.renderer.add_samples_or_cancel(&mut self.progressive, 1, &self.cancel)? {
+        if !self
+            .renderer
+            .add_samples_or_cancel(&mut self.progressive, 1, &self.cancel)?
+        {
             return Ok(());
         }
         let frame_time = start.elapsed();
