@@ -36,7 +36,7 @@ fn cpu_pieces(c: &mut Criterion) {
     group.measurement_time(Duration::from_secs(10));
     group.throughput(Throughput::Elements(scene.triangles().len() as u64));
     group.bench_function(BenchmarkId::new("bvh_build", &name), |b| {
-        b.iter(|| Bvh::build(black_box(&scene.triangles()), black_box(&scene.spheres())))
+        b.iter(|| Bvh::build(black_box(scene.triangles()), black_box(scene.spheres())))
     });
 
     let (name, path) = common::smallest();
@@ -82,11 +82,11 @@ fn builders(c: &mut Criterion) {
         group.measurement_time(Duration::from_secs(if big { 8 } else { 3 }));
         group.throughput(Throughput::Elements(tris as u64));
         group.bench_function("ours", |b| {
-            b.iter(|| Bvh::build(black_box(&scene.triangles()), black_box(&scene.spheres())))
+            b.iter(|| Bvh::build(black_box(scene.triangles()), black_box(scene.spheres())))
         });
         for (label, params) in timed_presets {
             group.bench_function(*label, |b| {
-                b.iter(|| common::build_obvhs(black_box(&scene.triangles()), *params).0)
+                b.iter(|| common::build_obvhs(black_box(scene.triangles()), *params).0)
             });
         }
         group.finish();
@@ -96,7 +96,7 @@ fn builders(c: &mut Criterion) {
         for (label, params) in &presets {
             trees.push((
                 label.to_string(),
-                common::build_obvhs(&scene.triangles(), *params).0,
+                common::build_obvhs(scene.triangles(), *params).0,
             ));
         }
         let reference = cpu::trace_rays(&scene, &camera_rays, false);

@@ -85,8 +85,8 @@ fn main() {
                 .map(|(label, params)| (label.to_string(), Builder::Obvhs(params))),
         );
         let build = |b: &Builder| match b {
-            Builder::Ours => Bvh::build(&scene.triangles(), &scene.spheres()),
-            Builder::Obvhs(params) => common::build_obvhs(&scene.triangles(), *params).0,
+            Builder::Ours => Bvh::build(scene.triangles(), scene.spheres()),
+            Builder::Obvhs(params) => common::build_obvhs(scene.triangles(), *params).0,
         };
         let mut trees: Vec<Bvh> = Vec::new();
         let build_times = interleaved(&mut builders, if big { 3 } else { 7 }, |(_, b)| {

@@ -14,7 +14,7 @@ use proptest::prelude::*;
 fn check_structure(scene: &Scene) {
     let bvh = &scene.bvh();
     let stats = bvh
-        .validate(&scene.triangles(), &scene.spheres())
+        .validate(scene.triangles(), scene.spheres())
         .unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(
         (stats.nodes, stats.leaves, stats.depth),
@@ -191,7 +191,7 @@ fn validate_names_what_is_wrong_in_a_corrupted_tree() {
         vec![],
     );
     let error = |bvh: &lambert::bvh::Bvh| {
-        bvh.validate(&scene.triangles(), &scene.spheres())
+        bvh.validate(scene.triangles(), scene.spheres())
             .expect_err("a corrupted tree passed")
             .to_string()
     };
@@ -263,15 +263,15 @@ fn validate_names_what_is_wrong_in_a_corrupted_tree() {
     );
 
     // A compressed child's box shrunk to its minimum along x.
-    let mut nodes = lambert::cwbvh::compress(&scene.bvh());
-    lambert::cwbvh::validate(&nodes, &scene.bvh()).expect("the compressed tree is valid");
+    let mut nodes = lambert::cwbvh::compress(scene.bvh());
+    lambert::cwbvh::validate(&nodes, scene.bvh()).expect("the compressed tree is valid");
     let slot = (0..BVH_WIDTH)
         .find(|&s| CompressedNode::byte(nodes[0].child_meta, s) != 0)
         .unwrap();
     let min = CompressedNode::byte(nodes[0].q[0], slot);
     let row = &mut nodes[0].q[1][slot / 4];
     *row = *row & !(0xff << (8 * (slot % 4))) | min << (8 * (slot % 4));
-    let message = lambert::cwbvh::validate(&nodes, &scene.bvh())
+    let message = lambert::cwbvh::validate(&nodes, scene.bvh())
         .expect_err("a shrunk compressed box passed")
         .to_string();
     assert!(

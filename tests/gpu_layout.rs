@@ -238,7 +238,7 @@ fn a_short_stack_that_spills_traces_as_a_whole_one() {
 /// twin's, closest and any hit; so do the twin's through such stacks.
 fn assert_short_stacks_agree(name: &str, scene: &Scene, rays: &[Ray]) {
     let depth = scene.bvh().depth();
-    let nodes = lambert::cwbvh::compress(&scene.bvh());
+    let nodes = lambert::cwbvh::compress(scene.bvh());
     for any_hit in [false, true] {
         let twin =
             cpu::trace_rays_gpu_twin(scene, rays, any_hit, scene.default_settings().intersect);

@@ -538,7 +538,7 @@ fn fuzz_models_build_valid_trees() {
             continue;
         };
         let bvh = &scene.bvh();
-        bvh.validate(&scene.triangles(), &scene.spheres())
+        bvh.validate(scene.triangles(), scene.spheres())
             .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         lambert::cwbvh::validate(&lambert::cwbvh::compress(bvh), bvh)
             .unwrap_or_else(|e| panic!("{}: {e}", path.display()));

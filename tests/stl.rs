@@ -396,10 +396,10 @@ fn degenerate_facets_are_kept() {
     assert_eq!(scene.triangles().len(), 4);
     scene
         .bvh()
-        .validate(&scene.triangles(), &scene.spheres())
+        .validate(scene.triangles(), scene.spheres())
         .unwrap();
-    let compressed = lambert::cwbvh::compress(&scene.bvh());
-    lambert::cwbvh::validate(&compressed, &scene.bvh()).unwrap();
+    let compressed = lambert::cwbvh::compress(scene.bvh());
+    lambert::cwbvh::validate(&compressed, scene.bvh()).unwrap();
     assert_eq!(bits(&render_cpu(&scene)), bits(&render_gpu(&scene)));
     let output = lambert(&["info", s(&path)]);
     assert!(String::from_utf8_lossy(&output.stdout).contains("triangles: 4"));

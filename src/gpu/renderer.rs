@@ -231,7 +231,7 @@ impl GpuRenderer {
             on,
             lights,
             self.gpu.options.shadow_dispatch.as_deref(),
-            self.gpu.limits.max_storage_buffer_binding_size as u64,
+            self.gpu.limits.max_storage_buffer_binding_size,
         )?;
         self.params.shadows = on as u32;
         let p = &mut self.pipelines;

@@ -36,11 +36,11 @@ pub(super) fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> 
     let invalid = |e: lambert::bvh::Invalid| Error::scene(path, format!("{e} (a bug in lambert)"));
     let bvh = scene
         .bvh()
-        .validate(&scene.triangles(), &scene.spheres())
+        .validate(scene.triangles(), scene.spheres())
         .map_err(invalid)?;
     println!("  BVH (CPU): {bvh}");
-    let compressed = lambert::cwbvh::compress(&scene.bvh());
-    let compressed = lambert::cwbvh::validate(&compressed, &scene.bvh()).map_err(invalid)?;
+    let compressed = lambert::cwbvh::compress(scene.bvh());
+    let compressed = lambert::cwbvh::validate(&compressed, scene.bvh()).map_err(invalid)?;
     println!("  compressed BVH (GPU): {compressed}");
     let smooth = !scene.normals().is_empty();
     println!(
