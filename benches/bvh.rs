@@ -34,9 +34,9 @@ fn cpu_pieces(c: &mut Criterion) {
     let (name, path) = common::largest();
     let scene = bench::scene_for_obj(&path, TRACE_SIZE).expect("load model");
     group.measurement_time(Duration::from_secs(10));
-    group.throughput(Throughput::Elements(scene.triangles.len() as u64));
+    group.throughput(Throughput::Elements(scene.triangles().len() as u64));
     group.bench_function(BenchmarkId::new("bvh_build", &name), |b| {
-        b.iter(|| Bvh::build(black_box(&scene.triangles), black_box(&scene.spheres)))
+        b.iter(|| Bvh::build(black_box(scene.triangles()), black_box(scene.spheres())))
     });
 
     let (name, path) = common::smallest();
@@ -53,7 +53,7 @@ fn cpu_pieces(c: &mut Criterion) {
 fn builders(c: &mut Criterion) {
     for (name, path) in common::ladder() {
         let mut scene = bench::scene_for_obj(&path, TRACE_SIZE).expect("load model");
-        let tris = scene.triangles.len();
+        let tris = scene.triangles().len();
         let big = tris > 300_000;
         // Criterion times a subset of the presets (bvh_compare has them all):
         // obvhs's fast, medium and slow, and medium with leaves collapsed
@@ -82,21 +82,21 @@ fn builders(c: &mut Criterion) {
         group.measurement_time(Duration::from_secs(if big { 8 } else { 3 }));
         group.throughput(Throughput::Elements(tris as u64));
         group.bench_function("ours", |b| {
-            b.iter(|| Bvh::build(black_box(&scene.triangles), black_box(&scene.spheres)))
+            b.iter(|| Bvh::build(black_box(scene.triangles()), black_box(scene.spheres())))
         });
         for (label, params) in timed_presets {
             group.bench_function(*label, |b| {
-                b.iter(|| common::build_obvhs(black_box(&scene.triangles), *params).0)
+                b.iter(|| common::build_obvhs(black_box(scene.triangles()), *params).0)
             });
         }
         group.finish();
 
         let camera_rays = rays::camera_rays(&scene);
-        let mut trees = vec![("ours".to_string(), scene.bvh.clone())];
+        let mut trees = vec![("ours".to_string(), scene.bvh().clone())];
         for (label, params) in &presets {
             trees.push((
                 label.to_string(),
-                common::build_obvhs(&scene.triangles, *params).0,
+                common::build_obvhs(scene.triangles(), *params).0,
             ));
         }
         let reference = cpu::trace_rays(&scene, &camera_rays, false);
@@ -107,7 +107,7 @@ fn builders(c: &mut Criterion) {
         group.measurement_time(Duration::from_secs(if big { 5 } else { 2 }));
         group.throughput(Throughput::Elements(camera_rays.len() as u64));
         for (label, bvh) in trees {
-            scene.bvh = bvh;
+            scene.replace_bvh(bvh);
             // Quick check: the converted tree finds the same hits.
             let a = common::agreement(&reference, &cpu::trace_rays(&scene, &camera_rays, false));
             assert!(

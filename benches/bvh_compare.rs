@@ -71,8 +71,8 @@ fn main() {
     println!("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|");
     for (name, path) in common::ladder() {
         let mut scene = bench::scene_for_obj(&path, size).expect("load model");
-        assert!(scene.spheres.is_empty(), "OBJ scenes have no spheres");
-        let tris = scene.triangles.len();
+        assert!(scene.spheres().is_empty(), "OBJ scenes have no spheres");
+        let tris = scene.triangles().len();
         let big = tris > 300_000;
         let camera_rays = rays::camera_rays(&scene);
 
@@ -85,8 +85,8 @@ fn main() {
                 .map(|(label, params)| (label.to_string(), Builder::Obvhs(params))),
         );
         let build = |b: &Builder| match b {
-            Builder::Ours => Bvh::build(&scene.triangles, &scene.spheres),
-            Builder::Obvhs(params) => common::build_obvhs(&scene.triangles, *params).0,
+            Builder::Ours => Bvh::build(scene.triangles(), scene.spheres()),
+            Builder::Obvhs(params) => common::build_obvhs(scene.triangles(), *params).0,
         };
         let mut trees: Vec<Bvh> = Vec::new();
         let build_times = interleaved(&mut builders, if big { 3 } else { 7 }, |(_, b)| {
@@ -96,13 +96,13 @@ fn main() {
             trees.push(build(b));
         }
 
-        scene.bvh = trees[0].clone();
+        scene.replace_bvh(trees[0].clone());
         let reference = cpu::trace_rays(&scene, &camera_rays, false);
         // Agreement per tree (deterministic), then timed rounds.
         // (Every tree fits the traversal stack: `Bvh::from_binary` checks.)
         let mut facts = Vec::new();
         for bvh in &trees {
-            scene.bvh = bvh.clone();
+            scene.replace_bvh(bvh.clone());
             facts.push(common::agreement(
                 &reference,
                 &cpu::trace_rays(&scene, &camera_rays, false),
@@ -116,11 +116,11 @@ fn main() {
             let rounds = if big { 4 } else { 7 };
             for round in 0..=rounds {
                 for i in 0..trees.len() {
-                    scene.bvh = std::mem::take(&mut trees[i]);
+                    scene.replace_bvh(std::mem::take(&mut trees[i]));
                     let start = Instant::now();
                     black_box(cpu::trace_rays(&scene, &camera_rays, false));
                     let t = start.elapsed();
-                    trees[i] = std::mem::take(&mut scene.bvh);
+                    trees[i] = scene.replace_bvh(Default::default());
                     if round > 0 {
                         per[i].push(t);
                     }

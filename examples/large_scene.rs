@@ -37,7 +37,7 @@ fn main() -> lambert::Result<()> {
     drop((vertices, faces));
     let generated = start.elapsed();
     let mut scene = Scene::from_triangles(triangles);
-    scene.view.camera = Camera {
+    scene.view_mut().camera = Camera {
         eye: [0.0, 0.6, 3.2],
         look_at: [0.0; 3],
         up: [0.0, 1.0, 0.0],
@@ -45,20 +45,24 @@ fn main() -> lambert::Result<()> {
         width: size,
         height: size,
     };
-    scene.lights.push(Light {
+    scene.lights_mut().push(Light {
         vector: Vec3::new(0.5, 0.7, 0.5).normalize().to_array(),
         kind: LIGHT_DIRECTIONAL,
         color: [2.5; 3],
         _pad: 0,
     });
-    scene.ambient = [0.05; 3];
-    scene.shadows = true;
+    let settings = lambert::scene::RenderSettings {
+        ambient: [0.05; 3],
+        shadows: true,
+        ..scene.default_settings()
+    };
+    let scene = scene.with_settings(&settings);
     println!(
         "{} triangles: generated in {:.2} s, BVH ({} nodes) built in {:.2} s",
-        scene.triangles.len(),
+        scene.triangles().len(),
         generated.as_secs_f64(),
-        scene.bvh.nodes.len(),
-        scene.bvh.build_time.as_secs_f64()
+        scene.bvh().nodes.len(),
+        scene.bvh().build_time.as_secs_f64()
     );
 
     let gpu = Gpu::open(&AdapterRequest::default(), false)?;
@@ -69,19 +73,19 @@ fn main() -> lambert::Result<()> {
         "GPU {}: uploaded {:.1} MiB ({:.1} bytes per triangle) in {:.2} s; one binding holds {} MiB, arrays split over two: {:?}",
         renderer.gpu().describe(),
         renderer.device_bytes as f64 / (1 << 20) as f64,
-        renderer.device_bytes as f64 / scene.triangles.len() as f64,
+        renderer.device_bytes as f64 / scene.triangles().len() as f64,
         start.elapsed().as_secs_f64(),
         limit >> 20,
         renderer.split_arrays
     );
     renderer.prepare_render()?;
     let start = Instant::now();
-    let (gpu_image, _) = renderer.render(&scene.view, &Progress::hidden())?;
+    let (gpu_image, _) = renderer.render(scene.view(), &Progress::hidden())?;
     let gpu_time = start.elapsed();
     let start = Instant::now();
     let cpu_image = cpu::render(
         &scene,
-        &scene.view,
+        scene.view(),
         cpu::Precision::F32,
         &Progress::hidden(),
     );

@@ -33,13 +33,13 @@ fn mib(bytes: u64) -> String {
 /// CPU path read them.
 fn scene_bytes(scene: &Scene) -> u64 {
     use std::mem::size_of_val;
-    (size_of_val(&scene.triangles[..])
-        + size_of_val(&scene.normals[..])
-        + size_of_val(&scene.spheres[..])
-        + size_of_val(&scene.materials[..])
-        + size_of_val(&scene.lights[..])
-        + size_of_val(&scene.bvh.nodes[..])
-        + size_of_val(&scene.bvh.blocks[..])) as u64
+    (size_of_val(&scene.triangles()[..])
+        + size_of_val(&scene.normals()[..])
+        + size_of_val(&scene.spheres()[..])
+        + size_of_val(&scene.materials()[..])
+        + size_of_val(&scene.lights()[..])
+        + size_of_val(&scene.bvh().nodes[..])
+        + size_of_val(&scene.bvh().blocks[..])) as u64
 }
 
 /// Heap bytes of the phase just run: (peak, live after), and the peak RSS.
@@ -85,11 +85,10 @@ fn icosphere_scene() -> Scene {
     drop((vertices, faces));
     let mut scene = Scene::from_triangles(triangles);
     // A sphere: never flat.
-    scene.view.camera =
+    scene.view_mut().camera =
         lambert::camera::frame_camera(&(glam::DVec3::splat(-1.0), glam::DVec3::ONE), None);
-    scene
-        .lights
-        .push(lambert::camera::default_light(&scene.view.camera));
+    let light = lambert::camera::default_light(&scene.view().camera);
+    scene.lights_mut().push(light);
     scene
 }
 
@@ -103,15 +102,15 @@ fn run(model: &str) -> lambert::Result<()> {
             Scene::load(Path::new(model))
         }
     })?;
-    scene.view.camera.width = SIZE;
-    scene.view.camera.height = SIZE;
-    let triangles = scene.triangles.len() as u64;
+    scene.view_mut().camera.width = SIZE;
+    scene.view_mut().camera.height = SIZE;
+    let triangles = scene.triangles().len() as u64;
     let needed = scene_bytes(&scene);
     let after_load = memory::live() as u64 - baseline;
     measure("CPU render", &mut phases, || {
         cpu::render(
             &scene,
-            &scene.view,
+            scene.view(),
             cpu::Precision::F32,
             &Progress::hidden(),
         )
@@ -121,7 +120,7 @@ fn run(model: &str) -> lambert::Result<()> {
     let mut renderer = measure("GPU upload", &mut phases, || GpuRenderer::new(gpu, &scene))?;
     let device_bytes = renderer.device_bytes;
     measure("GPU render", &mut phases, || {
-        renderer.render(&scene.view, &Progress::hidden()).map(drop)
+        renderer.render(scene.view(), &Progress::hidden()).map(drop)
     })?;
 
     let name = Path::new(model)

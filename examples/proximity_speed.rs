@@ -23,7 +23,7 @@ fn main() -> lambert::Result<()> {
         .next()
         .map_or(20_000, |a| a.parse().expect("GPU points"));
     let scene = Arc::new(Scene::load(std::path::Path::new(&model))?);
-    let b = scene.bvh.bounds().expect("a model with triangles");
+    let b = scene.bvh().bounds().expect("a model with triangles");
     let (c, h) = (b.centre(), (b.max - b.min) * 0.75);
     // A fixed sequence (an LCG), so that every run queries the same points.
     let mut state: u64 = 1;
@@ -45,7 +45,7 @@ fn main() -> lambert::Result<()> {
     let mut cpu = Renderer::Cpu(Arc::clone(&scene));
     println!(
         "{model}: {} triangles, {n} points, {}",
-        scene.triangles.len(),
+        scene.triangles().len(),
         cpu.describe()
     );
     let start = Instant::now();

@@ -26,7 +26,7 @@ fn main() -> lambert::Result<()> {
     let rounds: usize = args.next().map_or(5, |a| a.parse().expect("rounds"));
     let mut scene = Scene::load(std::path::Path::new(&path))?;
     if let Some(spp) = args.next() {
-        scene.view.spp = spp.parse().expect("spp");
+        scene.view_mut().spp = spp.parse().expect("spp");
     }
     let request = AdapterRequest::default().with_environment(|v| std::env::var(v).ok());
     let mut gpu = lambert::render::open_gpu(&scene, &request)?;
@@ -39,9 +39,9 @@ fn main() -> lambert::Result<()> {
     let shadow = lambert::bench::shadow_rays(&scene, &primary, &hits);
     println!(
         "{path}: {}x{} at {} spp, {} camera rays, {} shadow rays traced alone; {}",
-        scene.view.camera.width,
-        scene.view.camera.height,
-        scene.view.spp,
+        scene.view().camera.width,
+        scene.view().camera.height,
+        scene.view().spp,
         primary.len(),
         shadow.len(),
         gpu.gpu().describe()
@@ -57,11 +57,11 @@ fn main() -> lambert::Result<()> {
             let t = if which < 2 {
                 gpu.shadow_dispatch =
                     [ShadowDispatch::Wavefront, ShadowDispatch::Megakernel][which];
-                gpu.render(&scene.view, &hidden)?.1.device
+                gpu.render(scene.view(), &hidden)?.1.device
             } else {
-                tracer.trace_rays(&primary, false, scene.intersect)?;
+                tracer.trace_rays(&primary, false, scene.default_settings().intersect)?;
                 let p = tracer.trace_device_time();
-                tracer.trace_rays(&shadow, true, scene.intersect)?;
+                tracer.trace_rays(&shadow, true, scene.default_settings().intersect)?;
                 p.zip(tracer.trace_device_time()).map(|(p, s)| p + s)
             };
             let t = t.expect("timestamp queries on this adapter");

@@ -1,8 +1,8 @@
 //! Choosing where a scene renders (GPU through wgpu, or the CPU reference)
 //! and rendering it there.
 
-use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use crate::camera::View;
@@ -30,7 +30,8 @@ pub enum DeviceChoice {
 /// path sharing the scene): render it again from another view, or trace
 /// ray queries against it, and nothing but the view or the rays is
 /// uploaded. The GPU renderer keeps its own copy of all it needs, so the
-/// host's geometry may go once it is opened.
+/// host's geometry may go once it is opened. The front ends ask it through
+/// its methods, never naming its variants.
 pub enum Renderer {
     Gpu(Box<GpuRenderer>),
     Cpu(Arc<Scene>),
@@ -159,6 +160,25 @@ impl Renderers {
         }
     }
 
+    /// Runs `work` on the renderer `choice` asks for from `renderers`
+    /// (opened if need be), holding its lock only while a GPU works: the
+    /// CPU path runs on a renderer of its own sharing the scene, so that
+    /// threads render and query at once. Returns `get`'s note too.
+    pub fn run<T>(
+        renderers: &Mutex<Renderers>,
+        choice: DeviceChoice,
+        work: impl FnOnce(&mut Renderer) -> Result<T>,
+    ) -> Result<(T, Option<String>)> {
+        let mut guard = renderers.lock().unwrap_or_else(|e| e.into_inner());
+        let (renderer, note) = guard.get(choice)?;
+        if !renderer.is_cpu() {
+            return Ok((work(renderer)?, note));
+        }
+        let mut cpu = Renderer::Cpu(Arc::clone(&guard.scene));
+        drop(guard);
+        Ok((work(&mut cpu)?, note))
+    }
+
     /// The renderer `choice` asks for, opening it if need be. The note, on
     /// the first fallback of `auto` to the CPU path only, says why.
     pub fn get(&mut self, choice: DeviceChoice) -> Result<(&mut Renderer, Option<String>)> {
@@ -229,8 +249,54 @@ impl Renderer {
         })
     }
 
+    /// A renderer of `scene` on `gpu` (a device already open: the
+    /// viewer's, for another scene), or with none on the CPU path sharing
+    /// it.
+    pub fn open_on(scene: Arc<Scene>, gpu: Option<&Gpu>) -> Result<Renderer> {
+        Ok(match gpu {
+            Some(gpu) => {
+                let mut renderer = GpuRenderer::new(gpu.clone(), &scene)?;
+                renderer.set_winding_source(Arc::downgrade(&scene));
+                Renderer::Gpu(Box::new(renderer))
+            }
+            None => Renderer::Cpu(scene),
+        })
+    }
+
     pub fn is_cpu(&self) -> bool {
         matches!(self, Renderer::Cpu(_))
+    }
+
+    /// The GPU it renders on; None on the CPU path.
+    pub fn gpu(&self) -> Option<&Gpu> {
+        match self {
+            Renderer::Gpu(r) => Some(r.gpu()),
+            Renderer::Cpu(_) => None,
+        }
+    }
+
+    /// The scene the CPU path shares; None on a GPU (which keeps its own
+    /// copy of what it renders).
+    pub fn shared_scene(&self) -> Option<&Arc<Scene>> {
+        match self {
+            Renderer::Gpu(_) => None,
+            Renderer::Cpu(scene) => Some(scene),
+        }
+    }
+
+    /// Turns shadows on or off for the renders that follow: on a GPU its
+    /// pipelines are specialised again (the scene stays uploaded); the
+    /// CPU path changes its scene, in place where no one else holds it.
+    pub fn set_shadows(&mut self, on: bool) -> Result<()> {
+        match self {
+            Renderer::Gpu(renderer) => renderer.set_shadows(on),
+            Renderer::Cpu(scene) => {
+                if scene.shadows != on {
+                    Arc::make_mut(scene).shadows = on;
+                }
+                Ok(())
+            }
+        }
     }
 
     /// Device time of the last GPU `trace`, from timestamp queries.
@@ -361,6 +427,41 @@ impl Renderer {
         match self {
             Renderer::Gpu(renderer) => renderer.prepare_trace(any_hit, intersect),
             Renderer::Cpu(_) => Ok(()),
+        }
+    }
+
+    /// `trace` for rays already in the scene's local frame
+    /// (`Placement::local_ray`), hits in that frame.
+    pub fn trace_local(
+        &mut self,
+        rays: &[Ray],
+        any_hit: bool,
+        intersect: Intersect,
+    ) -> Result<Vec<Hit>> {
+        match self {
+            Renderer::Gpu(renderer) => renderer.trace_local_rays(rays, any_hit, intersect),
+            Renderer::Cpu(scene) => {
+                let mut hits = vec![Hit::MISS; rays.len()];
+                let out = cpu::SharedOut::new(&mut hits);
+                let options = cpu::QueryOptions {
+                    any_hit,
+                    intersect,
+                    cpu_kernel: cpu::CpuKernel::active(),
+                    normals: false,
+                };
+                let rays = cpu::QueryRays::Slice(rays);
+                cpu::trace_local_rays_each(scene, rays, options, &|chunk| {
+                    // SAFETY: chunks are disjoint and within `hits`.
+                    unsafe {
+                        std::ptr::copy_nonoverlapping(
+                            chunk.hits.as_ptr(),
+                            out.at(chunk.start),
+                            chunk.hits.len(),
+                        )
+                    }
+                });
+                Ok(hits)
+            }
         }
     }
 

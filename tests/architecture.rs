@@ -703,3 +703,97 @@ fn no_rust_file_is_included_into_another() {
         found.join("\n")
     );
 }
+
+// ---- settings in their place -------------------------------------------------
+
+/// The `pub` fields of `struct Scene` in `text` (src/scene/mod.rs's code):
+/// its fields are the crate's, read through methods; what a render may
+/// change is a `RenderSettings`.
+fn public_scene_fields(text: &str) -> Vec<String> {
+    let code = code_only(text);
+    let Some(start) = code.find("pub struct Scene {") else {
+        return vec!["no `pub struct Scene {` found".into()];
+    };
+    let body = &code[start..];
+    let body = &body[..body.find("\n}").unwrap_or(body.len())];
+    body.lines()
+        .skip(1)
+        .map(str::trim)
+        .filter(|line| line.starts_with("pub ") || line.starts_with("pub(super)"))
+        .map(|line| line.trim_end_matches(',').to_string())
+        .collect()
+}
+
+#[test]
+fn the_scene_has_no_public_field() {
+    let text = std::fs::read_to_string(Path::new(ROOT).join("src/scene/mod.rs")).unwrap();
+    let public = public_scene_fields(&text);
+    assert!(
+        public.is_empty(),
+        "src/scene/mod.rs: `Scene` has public fields (make them pub(crate) and add a method):\n{}",
+        public.join("\n")
+    );
+}
+
+#[test]
+fn the_field_check_finds_public_fields() {
+    let text = "/// pub view: View\npub struct Scene {\n    /// pub x\n    pub view: View,\n    \
+                pub(crate) spp: u32,\n    pub shadows: bool,\n}\npub struct Other {\n    pub a: u8,\n}\n";
+    assert_eq!(
+        public_scene_fields(text),
+        ["pub view: View", "pub shadows: bool"]
+    );
+}
+
+/// `file:line` of each `Renderer::Gpu` or `Renderer::Cpu` in the code of
+/// the front ends' files (the binary's, the Python extension's): they ask
+/// a `Renderer` through its methods.
+fn renderer_variants_named(files: &[(PathBuf, String)]) -> Vec<String> {
+    let mut found = Vec::new();
+    for (path, text) in files {
+        for (i, line) in code_only(text).lines().enumerate() {
+            if line.contains("Renderer::Gpu") || line.contains("Renderer::Cpu") {
+                found.push(format!("{}:{}", path.display(), i + 1));
+            }
+        }
+    }
+    found
+}
+
+#[test]
+fn no_front_end_names_the_renderers_variants() {
+    let front_ends: Vec<(PathBuf, String)> = files("src/bin", ".rs")
+        .into_iter()
+        .chain(files("python/src", ".rs"))
+        .map(|path| {
+            let text = std::fs::read_to_string(Path::new(ROOT).join(&path)).unwrap();
+            (path, text)
+        })
+        .collect();
+    assert!(front_ends.len() > 10, "front ends not found");
+    let named = renderer_variants_named(&front_ends);
+    assert!(
+        named.is_empty(),
+        "front ends match on Renderer's variants (use its methods):\n{}",
+        named.join("\n")
+    );
+}
+
+#[test]
+fn the_variant_check_finds_them_in_code_only() {
+    let file = |path: &str, text: &str| (PathBuf::from(path), text.to_string());
+    let named = renderer_variants_named(&[
+        file(
+            "python/src/lib.rs",
+            "// Renderer::Cpu\nlet s = \"Renderer::Gpu\";\nlet r = Renderer::Cpu(scene);",
+        ),
+        file(
+            "src/bin/lambert/view/app.rs",
+            "match r {\n    Renderer::Gpu(g) => g,\n}",
+        ),
+    ]);
+    assert_eq!(
+        named,
+        ["python/src/lib.rs:3", "src/bin/lambert/view/app.rs:2"]
+    );
+}

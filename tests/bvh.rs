@@ -7,15 +7,14 @@ use glam::Vec3;
 use lambert::Scene;
 use lambert::cpu::f32::{Kernel, Ray, ray_shear};
 use lambert::layout::{BVH_WIDTH, NO_HIT, Sphere, Triangle};
-use lambert::scene::Accel;
 use proptest::prelude::*;
 
 /// The wide tree's invariants (`Bvh::validate`) and the compressed tree's
 /// (`cwbvh::validate`), whose statistics agree with the wide tree's.
 fn check_structure(scene: &Scene) {
-    let bvh = &scene.bvh;
+    let bvh = &scene.bvh();
     let stats = bvh
-        .validate(&scene.triangles, &scene.spheres)
+        .validate(scene.triangles(), scene.spheres())
         .unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(
         (stats.nodes, stats.leaves, stats.depth),
@@ -53,8 +52,7 @@ fn sphere(center: [f32; 3], radius: f32) -> Sphere {
 /// Closest hits through the BVH and by brute force agree (prim and t) for
 /// each ray; any-hit agrees on occlusion.
 fn check_rays(scene: &Scene, rays: &[Ray]) {
-    let mut brute = scene.clone();
-    brute.accel = Accel::BruteForce;
+    let brute = common::brute_force(scene);
     let (fast, slow) = (Kernel::new(scene), Kernel::new(&brute));
     let mut hits = 0;
     for ray in rays {
@@ -118,15 +116,15 @@ fn bundled_scenes_build_valid_trees_and_trace_like_brute_force() {
     for name in ["cornell", "spheres", "bunny", "dragon", "edge_cases"] {
         let s = load(name);
         check_structure(&s);
-        let root = s.bvh.bounds().expect("a non-empty scene");
+        let root = s.bvh().bounds().expect("a non-empty scene");
         let centre = root.centre().to_array();
         let spread = (root.max - root.min).max_element();
         check_rays(&s, &random_rays(7, 2000, centre, spread));
         println!(
             "{name}: {} nodes, depth {}, SAH cost {:.2}",
-            s.bvh.nodes.len(),
-            s.bvh.depth(),
-            s.bvh.sah_cost()
+            s.bvh().nodes.len(),
+            s.bvh().depth(),
+            s.bvh().sah_cost()
         );
     }
 }
@@ -172,7 +170,7 @@ fn degenerate_inputs_build_and_trace() {
             })
             .collect();
         check_rays(&s, &rays);
-        println!("{what}: depth {}", s.bvh.depth());
+        println!("{what}: depth {}", s.bvh().depth());
     }
 }
 
@@ -193,13 +191,13 @@ fn validate_names_what_is_wrong_in_a_corrupted_tree() {
         vec![],
     );
     let error = |bvh: &lambert::bvh::Bvh| {
-        bvh.validate(&scene.triangles, &scene.spheres)
+        bvh.validate(scene.triangles(), scene.spheres())
             .expect_err("a corrupted tree passed")
             .to_string()
     };
     // Every leaf as (node, slot, first block, blocks).
     let leaves: Vec<(usize, usize, usize, usize)> = scene
-        .bvh
+        .bvh()
         .nodes
         .iter()
         .enumerate()
@@ -214,7 +212,7 @@ fn validate_names_what_is_wrong_in_a_corrupted_tree() {
 
     // A leaf's box shrunk to its minimum along x.
     let (node, slot, first, _) = leaves[0];
-    let mut bvh = scene.bvh.clone();
+    let mut bvh = scene.bvh().clone();
     bvh.nodes[node].bounds[1][slot] = bvh.nodes[node].bounds[0][slot];
     let p = bvh.blocks[first].prims[0];
     let message = error(&bvh);
@@ -227,7 +225,7 @@ fn validate_names_what_is_wrong_in_a_corrupted_tree() {
 
     // The first leaf's first primitive copied over a lane of the last leaf.
     let (node, slot, last, _) = *leaves.last().unwrap();
-    let mut bvh = scene.bvh.clone();
+    let mut bvh = scene.bvh().clone();
     let (from, mut to) = (bvh.blocks[first], bvh.blocks[last]);
     to.prims[0] = from.prims[0];
     for k in 0..3 {
@@ -248,9 +246,9 @@ fn validate_names_what_is_wrong_in_a_corrupted_tree() {
     // A primitive dropped from a one-block leaf of two or more.
     let &(_, _, block, _) = leaves
         .iter()
-        .find(|&&(_, _, first, count)| count == 1 && used(&scene.bvh.blocks[first]) >= 2)
+        .find(|&&(_, _, first, count)| count == 1 && used(&scene.bvh().blocks[first]) >= 2)
         .expect("a one-block leaf of two primitives or more");
-    let mut bvh = scene.bvh.clone();
+    let mut bvh = scene.bvh().clone();
     let lane = used(&bvh.blocks[block]) - 1;
     let dropped = bvh.blocks[block].prims[lane];
     bvh.blocks[block].prims[lane] = NO_HIT;
@@ -265,15 +263,15 @@ fn validate_names_what_is_wrong_in_a_corrupted_tree() {
     );
 
     // A compressed child's box shrunk to its minimum along x.
-    let mut nodes = lambert::cwbvh::compress(&scene.bvh);
-    lambert::cwbvh::validate(&nodes, &scene.bvh).expect("the compressed tree is valid");
+    let mut nodes = lambert::cwbvh::compress(scene.bvh());
+    lambert::cwbvh::validate(&nodes, scene.bvh()).expect("the compressed tree is valid");
     let slot = (0..BVH_WIDTH)
         .find(|&s| CompressedNode::byte(nodes[0].child_meta, s) != 0)
         .unwrap();
     let min = CompressedNode::byte(nodes[0].q[0], slot);
     let row = &mut nodes[0].q[1][slot / 4];
     *row = *row & !(0xff << (8 * (slot % 4))) | min << (8 * (slot % 4));
-    let message = lambert::cwbvh::validate(&nodes, &scene.bvh)
+    let message = lambert::cwbvh::validate(&nodes, scene.bvh())
         .expect_err("a shrunk compressed box passed")
         .to_string();
     assert!(
@@ -304,8 +302,7 @@ proptest! {
 fn gpu_bvh_and_brute_force_render_the_same_image() {
     for name in ["cornell", "bunny", "spheres", "edge_cases"] {
         let s = load(name);
-        let mut brute = s.clone();
-        brute.accel = Accel::BruteForce;
+        let brute = common::brute_force(&s);
         let (a, b) = (render_gpu(&s), render_gpu(&brute));
         // edge_cases aims its centre row and column exactly along shared
         // edges, where two triangles tie on t: brute force takes the lower
@@ -504,7 +501,7 @@ fn soup() -> Scene {
             .collect(),
         Vec::new(),
     );
-    let bvh_bytes = soup.bvh.device_bytes();
+    let bvh_bytes = soup.bvh().device_bytes();
     assert!(
         bvh_bytes > lambert::cpu::LARGE_BVH_BYTES,
         "{bvh_bytes} bytes"
@@ -514,7 +511,7 @@ fn soup() -> Scene {
 
 /// Random rays from around `scene`'s bounds, as a ray query.
 fn query_rays(scene: &Scene, seed: u64, n: usize) -> Vec<lambert::layout::Ray> {
-    let root = scene.bvh.bounds().expect("a non-empty scene");
+    let root = scene.bvh().bounds().expect("a non-empty scene");
     let spread = (root.max - root.min).max_element();
     random_rays(seed, n, root.centre().to_array(), spread)
         .iter()
@@ -558,10 +555,16 @@ fn every_cpu_kernel_equals_the_portable_one() {
                         scene,
                         &rays,
                         any_hit,
-                        scene.intersect,
+                        scene.default_settings().intersect,
                         CpuKernel::Portable,
                     );
-                    let simd = trace_rays_with(scene, &rays, any_hit, scene.intersect, kernel);
+                    let simd = trace_rays_with(
+                        scene,
+                        &rays,
+                        any_hit,
+                        scene.default_settings().intersect,
+                        kernel,
+                    );
                     for (i, (a, b)) in portable.iter().zip(&simd).enumerate() {
                         assert_eq!(
                             (a.prim, a.t.to_bits(), a.u.to_bits(), a.v.to_bits()),
@@ -576,12 +579,12 @@ fn every_cpu_kernel_equals_the_portable_one() {
                 let hidden = lambert::progress::Progress::hidden();
                 let portable = render_with(
                     scene,
-                    &scene.view,
+                    scene.view(),
                     Precision::F32,
                     &hidden,
                     CpuKernel::Portable,
                 );
-                let simd = render_with(scene, &scene.view, Precision::F32, &hidden, kernel);
+                let simd = render_with(scene, scene.view(), Precision::F32, &hidden, kernel);
                 assert_eq!(
                     portable.prims,
                     simd.prims,
@@ -644,7 +647,8 @@ fn rays_with_nan_or_infinite_components_trace_like_brute_force() {
     let sphere = sphere([0.0, 3.0, 0.0], 0.5);
     let scene = scene_of(vec![t, far_t], vec![sphere]);
     assert_ne!(
-        scene.bvh.nodes[0].occupied, 0b1111,
+        scene.bvh().nodes[0].occupied,
+        0b1111,
         "the root has no empty slot"
     );
     let (nan, inf) = (f32::NAN, f32::INFINITY);
@@ -671,8 +675,7 @@ fn rays_with_nan_or_infinite_components_trace_like_brute_force() {
         // A finite ray that hits, so that the comparison is not all misses.
         query([0.2, 0.2, 1.0], down, 0.0, inf),
     ];
-    let mut brute = scene.clone();
-    brute.accel = Accel::BruteForce;
+    let brute = common::brute_force(&scene);
     let expected = |any_hit| {
         let prims = hit_prims(&trace_cpu(&brute, &rays, any_hit));
         assert_eq!(prims.last(), Some(&0), "the finite ray hits triangle 0");
@@ -759,7 +762,7 @@ fn block_lanes_that_hold_no_triangle_never_hit() {
     let sphere = sphere([3.0, 0.5, 0.0], 0.5);
     for (what, spheres) in [("empty lane", vec![]), ("sphere lane", vec![sphere])] {
         let scene = scene_of(vec![t, u], spheres);
-        assert_eq!(scene.bvh.blocks.len(), 1, "{what}: one block");
+        assert_eq!(scene.bvh().blocks.len(), 1, "{what}: one block");
         let rays: Vec<lambert::layout::Ray> = random_rays(31, 400, [0.5, 0.5, 3.0], 2.0)
             .iter()
             .map(|r| lambert::layout::Ray {
@@ -770,7 +773,8 @@ fn block_lanes_that_hold_no_triangle_never_hit() {
             })
             .collect();
         let mut doctored = scene.clone();
-        let block = &mut doctored.bvh.blocks[0];
+        let mut bvh = doctored.bvh().clone();
+        let block = &mut bvh.blocks[0];
         let cover = [[-50.0, -50.0, 1.0], [50.0, -50.0, 1.0], [0.0, 50.0, 1.0]];
         for (k, vertex) in cover.iter().enumerate() {
             for (a, &x) in vertex.iter().enumerate() {
@@ -778,6 +782,7 @@ fn block_lanes_that_hold_no_triangle_never_hit() {
                 block.v[k][a][3] = x;
             }
         }
+        doctored.replace_bvh(bvh);
         let expected = |any_hit| {
             let prims = hit_prims(&trace_cpu(&scene, &rays, any_hit));
             assert!(prims.iter().any(|&p| p != NO_HIT), "{what}: nothing hit");

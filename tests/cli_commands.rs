@@ -499,11 +499,11 @@ fn info_prints_the_trees_statistics() {
     let stdout = String::from_utf8_lossy(&info.stdout);
     let scene = lambert::Scene::load(&path).unwrap();
     let bvh = scene
-        .bvh
-        .validate(&scene.triangles, &scene.spheres)
+        .bvh()
+        .validate(scene.triangles(), scene.spheres())
         .unwrap();
-    let nodes = lambert::cwbvh::compress(&scene.bvh);
-    let compressed = lambert::cwbvh::validate(&nodes, &scene.bvh).unwrap();
+    let nodes = lambert::cwbvh::compress(scene.bvh());
+    let compressed = lambert::cwbvh::validate(&nodes, scene.bvh()).unwrap();
     assert!(bvh.nodes > 1 && bvh.leaves > bvh.nodes, "{bvh}");
     for line in [
         format!("  BVH (CPU): {bvh}\n"),

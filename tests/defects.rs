@@ -134,8 +134,7 @@ fn tiny_directions_hit_through_the_bvh() {
             assert_eq!(oracle[i].prim, prim, "oracle: ray {i}");
         }
     }
-    let mut brute = scene.clone();
-    brute.accel = lambert::scene::Accel::BruteForce;
+    let brute = common::brute_force(&scene);
     let brute_hits = trace_cpu(&brute, &rays, false);
     assert!(brute_hits.iter().all(|h| h.prim != NO_HIT));
 }

@@ -67,7 +67,7 @@ fn trace_local_cpu(scene: &lambert::Scene, rays: &[Ray]) -> Vec<lambert::layout:
     let hits = std::sync::Mutex::new(vec![lambert::layout::Hit::MISS; rays.len()]);
     let options = QueryOptions {
         any_hit: false,
-        intersect: scene.intersect,
+        intersect: scene.default_settings().intersect,
         cpu_kernel: CpuKernel::active(),
         normals: false,
     };
@@ -102,7 +102,7 @@ fn meshes_far_from_the_origin_trace_as_at_the_origin() {
             .unzip();
         let mut gpu = lambert::gpu::GpuRenderer::new(open_gpu(), &scene).unwrap();
         let gpu_hits = gpu
-            .trace_local_rays(&local, false, scene.intersect)
+            .trace_local_rays(&local, false, scene.default_settings().intersect)
             .unwrap();
         for (what, hits) in [("CPU", trace_local_cpu(&scene, &local)), ("GPU", gpu_hits)] {
             let mut worst = 0.0f64;
@@ -136,7 +136,8 @@ fn meshes_far_from_the_origin_trace_as_at_the_origin() {
             ("CPU", trace_cpu(&scene, &f32_rays, false)),
             (
                 "GPU",
-                gpu.trace_rays(&f32_rays, false, scene.intersect).unwrap(),
+                gpu.trace_rays(&f32_rays, false, scene.default_settings().intersect)
+                    .unwrap(),
             ),
         ] {
             for (i, (ray, hit)) in f32_rays.iter().zip(&hits).enumerate() {
@@ -283,7 +284,7 @@ fn a_scene_at_1e8_renders_as_at_the_origin() {
         lambert::Scene::load(&path).unwrap()
     };
     let (near, far) = (at([0.0; 3]), at([1e8, -3e7, 1e8]));
-    assert_eq!(near.offset, glam::DVec3::ZERO);
+    assert_eq!(near.offset(), glam::DVec3::ZERO);
     for (what, a, b) in [
         ("CPU", render_cpu(&near), render_cpu(&far)),
         ("GPU", render_gpu(&near), render_gpu(&far)),

@@ -29,8 +29,8 @@ fn ply_and_obj_give_the_same_image_bit_for_bit_on_both_paths() {
         "meshes/bunny_lowres_ascii.ply.gz",
     ] {
         let ply = bunny_from(ply);
-        assert_eq!(obj.triangles, ply.triangles);
-        assert_eq!(obj.normals, ply.normals, "smooth normals");
+        assert_eq!(obj.triangles(), ply.triangles());
+        assert_eq!(obj.normals(), ply.normals(), "smooth normals");
         assert_eq!(bits(&render_cpu(&obj)), bits(&render_cpu(&ply)));
         assert_eq!(bits(&render_gpu(&obj)), bits(&render_gpu(&ply)));
     }
@@ -258,18 +258,18 @@ fn obj_materials_from_mtl_files() {
         Scene::from_toml(&text, &d.join("s.toml")).unwrap()
     };
     let s = scene_at("");
-    let albedo = |t: usize| s.materials[s.triangles[t].material as usize].albedo();
+    let albedo = |t: usize| s.materials()[s.triangles()[t].material as usize].albedo();
     assert_eq!(
         [albedo(0), albedo(1), albedo(2), albedo(3)],
         [[0.8; 3], [0.8, 0.1, 0.1], [0.1, 0.1, 0.9], [0.8; 3]]
     );
-    assert_eq!(s.warnings.len(), 2);
+    assert_eq!(s.warnings().len(), 2);
     let overridden = scene_at("albedo = [0.2, 0.3, 0.4]\n");
     assert!(
         overridden
-            .triangles
+            .triangles()
             .iter()
-            .all(|t| overridden.materials[t.material as usize].albedo() == [0.2, 0.3, 0.4])
+            .all(|t| overridden.materials()[t.material as usize].albedo() == [0.2, 0.3, 0.4])
     );
     // Per-face materials on both paths: ambient 1 shows each face's albedo.
     let (gpu, cpu) = (render_gpu(&s), render_cpu(&s));
@@ -550,15 +550,15 @@ fn toml_mirrored_meshes_keep_their_normals_facing_out() {
              [[point_light]]\nposition = [0.0, 5.0, 0.0]\nintensity = 1.0\n"
         );
         let s = Scene::from_toml(&text, &dir.path().join("s.toml")).unwrap();
-        assert_eq!(s.triangles.len(), 4, "{scale}");
+        assert_eq!(s.triangles().len(), 4, "{scale}");
         let v = |p: [f32; 3]| DVec3::from(p.map(f64::from));
         let corners: Vec<DVec3> = s
-            .triangles
+            .triangles()
             .iter()
             .flat_map(|t| [v(t.v0), v(t.v1), v(t.v2)])
             .collect();
         let centre = corners.iter().sum::<DVec3>() / corners.len() as f64;
-        for t in &s.triangles {
+        for t in s.triangles() {
             let [a, b, c] = [v(t.v0), v(t.v1), v(t.v2)];
             let outward = (a + b + c) / 3.0 - centre;
             assert!(
@@ -567,13 +567,13 @@ fn toml_mirrored_meshes_keep_their_normals_facing_out() {
             );
         }
         // The first face (1, 3, 2) keeps its first corner; a mirror swaps the others.
-        let first = &s.triangles[0];
+        let first = &s.triangles()[0];
         let expected_v1 = if mirrored { v(first.v2) } else { v(first.v1) };
         assert_eq!(v(first.v0), DVec3::ZERO, "{scale}");
         assert!(
             expected_v1.x == 0.0 && expected_v1.z == 0.0,
             "{scale}: {first:?}"
         );
-        assert_eq!(s.normals.len(), 4, "{scale}: smooth normals kept");
+        assert_eq!(s.normals().len(), 4, "{scale}: smooth normals kept");
     }
 }

@@ -42,19 +42,19 @@ fn gltf_hierarchy_camera_lights_and_materials() {
 
     let scene = Scene::load(&path).unwrap();
     assert_eq!(
-        (scene.view.camera.width, scene.view.camera.height),
+        (scene.view().camera.width, scene.view().camera.height),
         (1024, 768)
     );
-    assert_eq!(scene.lights.len(), 2);
+    assert_eq!(scene.lights().len(), 2);
     let point = scene
-        .lights
+        .lights()
         .iter()
         .find(|l| l.kind == lambert::layout::LIGHT_POINT)
         .unwrap();
     assert_eq!(point.vector, [-3.0, 4.0, 3.0]);
     assert_eq!(point.color, [40.0, 36.0, 32.0]);
     let sun = scene
-        .lights
+        .lights()
         .iter()
         .find(|l| l.kind == lambert::layout::LIGHT_DIRECTIONAL)
         .unwrap();
@@ -63,8 +63,8 @@ fn gltf_hierarchy_camera_lights_and_materials() {
     assert!((glam::Vec3::from(sun.color) - glam::Vec3::new(0.75, 0.75, 0.9)).length() < 1e-6);
 
     let mut small = scene.clone();
-    small.view.camera.width = 64;
-    small.view.camera.height = 48;
+    small.view_mut().camera.width = 64;
+    small.view_mut().camera.height = 48;
     let (gpu, cpu) = (render_gpu(&small), render_cpu(&small));
     let stats = lambert::diff::compare(&gpu, &cpu, &Default::default()).unwrap();
     assert!(stats.passed, "{stats}");
@@ -80,11 +80,11 @@ fn gltf_in_a_toml_scene_brings_geometry_only() {
     std::fs::create_dir(dir.path().join("meshes")).unwrap();
     std::fs::copy(meshes("boxes.glb"), dir.path().join("meshes/BOXES.GLB")).unwrap();
     let s = Scene::from_toml(text, &dir.path().join("s.toml")).unwrap();
-    assert_eq!(s.lights.len(), 1);
-    assert_eq!(s.view.camera.vfov, 50.0);
-    assert_eq!(s.triangles.len(), 14);
+    assert_eq!(s.lights().len(), 1);
+    assert_eq!(s.view().camera.vfov, 50.0);
+    assert_eq!(s.triangles().len(), 14);
     let max_x = s
-        .triangles
+        .triangles()
         .iter()
         .flat_map(|t| [t.v0[0], t.v1[0], t.v2[0]])
         .fold(f32::MIN, f32::max);
@@ -268,7 +268,7 @@ fn gltf_data_uris_external_buffers_and_malformed_files() {
         ),
     );
     let scene = Scene::load(&warned).unwrap();
-    let warnings = scene.warnings.join("\n");
+    let warnings = scene.warnings().join("\n");
     for expected in [
         "light spot: a spot light, skipped",
         "light lamp: its range is ignored",
@@ -281,11 +281,11 @@ fn gltf_data_uris_external_buffers_and_malformed_files() {
             "lacks '{expected}': {warnings}"
         );
     }
-    assert_eq!(scene.lights.len(), 1);
-    assert_eq!(scene.lights[0].vector, [0.0, 0.0, 4.0]);
-    assert_eq!(scene.lights[0].color, [3.0; 3]);
+    assert_eq!(scene.lights().len(), 1);
+    assert_eq!(scene.lights()[0].vector, [0.0, 0.0, 4.0]);
+    assert_eq!(scene.lights()[0].color, [3.0; 3]);
     // The node's matrix (column-major) moved the triangle 5 along x.
-    assert_eq!(scene.triangles[0].v1, [6.0, 0.0, 0.0]);
+    assert_eq!(scene.triangles()[0].v1, [6.0, 0.0, 0.0]);
 
     for (path, expected) in cases {
         let message = error_of(&path);

@@ -34,7 +34,7 @@ fn mismatches(a: &[Hit], b: &[Hit]) -> (usize, usize) {
 
 /// Rays from around the scene's box towards points inside it.
 fn random_rays(scene: &Scene, rng: &mut Rng, n: usize) -> Vec<Ray> {
-    let root = scene.bvh.bounds().expect("a non-empty scene");
+    let root = scene.bvh().bounds().expect("a non-empty scene");
     let (lo, hi) = (root.min.as_dvec3(), root.max.as_dvec3());
     let size = (hi - lo).max_element();
     (0..n)
@@ -65,9 +65,14 @@ fn gpu_hits_equal_the_twins_bit_for_bit() {
                 GpuRenderer::with_bvh_storage(open_gpu(), &scene, storage).expect("scene uploads");
             for any_hit in [false, true] {
                 let gpu = renderer
-                    .trace_rays(&rays, any_hit, scene.intersect)
+                    .trace_rays(&rays, any_hit, scene.default_settings().intersect)
                     .expect("GPU trace");
-                let twin = cpu::trace_rays_gpu_twin(&scene, &rays, any_hit, scene.intersect);
+                let twin = cpu::trace_rays_gpu_twin(
+                    &scene,
+                    &rays,
+                    any_hit,
+                    scene.default_settings().intersect,
+                );
                 let hits = twin.iter().filter(|h| h.prim != NO_HIT).count();
                 println!(
                     "{name}, {storage:?}, any hit {any_hit}: {} rays, {hits} hits, GPU vs twin (other primitive, other bits) {:?}",
@@ -92,12 +97,11 @@ fn gpu_hits_equal_the_twins_bit_for_bit() {
 /// report a hit nowhere near them; such hits (the point o + t·d off the
 /// triangle's box) are left out, and a BVH rightly culls them.
 fn assert_twin_is_exact(name: &str, scene: &Scene, rays: &[Ray]) {
-    let mut brute = scene.clone();
-    brute.accel = lambert::scene::Accel::BruteForce;
-    let twin = cpu::trace_rays_gpu_twin(scene, rays, false, scene.intersect);
+    let brute = common::brute_force(scene);
+    let twin = cpu::trace_rays_gpu_twin(scene, rays, false, scene.default_settings().intersect);
     let truth = cpu::trace_rays(&brute, rays, false);
     let on_triangle = |ray: &Ray, hit: &Hit| {
-        let t = &scene.triangles[hit.prim as usize];
+        let t = &scene.triangles()[hit.prim as usize];
         let p = Vec3::from(ray.origin) + hit.t * Vec3::from(ray.dir);
         let (lo, hi) = (
             Vec3::from(t.v0).min(t.v1.into()).min(t.v2.into()),
@@ -170,7 +174,8 @@ fn quantised_boxes_lose_no_hit_at_any_scale_or_offset() {
         assert_twin_is_exact(&name, &scene, &random_rays(&scene, &mut rng, 4000));
         let rays = random_rays(&scene, &mut rng, 4000);
         let gpu = trace_gpu(&scene, &rays, false);
-        let twin = cpu::trace_rays_gpu_twin(&scene, &rays, false, scene.intersect);
+        let twin =
+            cpu::trace_rays_gpu_twin(&scene, &rays, false, scene.default_settings().intersect);
         assert_eq!(mismatches(&gpu, &twin), (0, 0), "{name}: GPU vs twin");
     }
 }
@@ -187,7 +192,7 @@ fn trees_as_deep_as_the_builder_makes_trace_within_the_stack() {
         triangles.push(triangle(p, p + Vec3::X * s * 0.2, p + Vec3::Y * s * 0.2));
     }
     let scene = scene_of(triangles, vec![]);
-    let depth = scene.bvh.depth();
+    let depth = scene.bvh().depth();
     println!("depth {depth} (limit {})", lambert::bvh::MAX_DEPTH);
     assert!(depth >= 10, "the tree is only {depth} levels deep");
     // Rays at each scale from a few times its size away, so that every
@@ -232,10 +237,11 @@ fn a_short_stack_that_spills_traces_as_a_whole_one() {
 /// and of 2 entries (the device's workgroup memory lowered), equal the
 /// twin's, closest and any hit; so do the twin's through such stacks.
 fn assert_short_stacks_agree(name: &str, scene: &Scene, rays: &[Ray]) {
-    let depth = scene.bvh.depth();
-    let nodes = lambert::cwbvh::compress(&scene.bvh);
+    let depth = scene.bvh().depth();
+    let nodes = lambert::cwbvh::compress(scene.bvh());
     for any_hit in [false, true] {
-        let twin = cpu::trace_rays_gpu_twin(scene, rays, any_hit, scene.intersect);
+        let twin =
+            cpu::trace_rays_gpu_twin(scene, rays, any_hit, scene.default_settings().intersect);
         for entries in [1, 2] {
             let mut kernel = cpu::f32::Kernel::new(scene);
             kernel.compressed = Some(&nodes);
@@ -260,7 +266,7 @@ fn assert_short_stacks_agree(name: &str, scene: &Scene, rays: &[Ray]) {
             }
             let hits = GpuRenderer::new(gpu, scene)
                 .expect("scene uploads")
-                .trace_rays(rays, any_hit, scene.intersect)
+                .trace_rays(rays, any_hit, scene.default_settings().intersect)
                 .expect("GPU trace");
             println!("{name}: short stack {shape:?}, any hit {any_hit}: GPU vs twin");
             assert_eq!(
@@ -276,7 +282,7 @@ fn assert_short_stacks_agree(name: &str, scene: &Scene, rays: &[Ray]) {
 fn a_tree_too_large_for_the_devices_textures_is_read_from_buffers() {
     let scene = load("bunny");
     let rays = lambert::rays::camera_rays(&scene);
-    let twin = cpu::trace_rays_gpu_twin(&scene, &rays, false, scene.intersect);
+    let twin = cpu::trace_rays_gpu_twin(&scene, &rays, false, scene.default_settings().intersect);
     let default = GpuRenderer::new(open_gpu(), &scene).expect("scene uploads");
     println!("default storage on this adapter: {:?}", default.bvh_storage);
     // Textures of fewer texels a row than TEXELS_PER_ROW hold no tree.
@@ -285,7 +291,7 @@ fn a_tree_too_large_for_the_devices_textures_is_read_from_buffers() {
     let mut renderer = GpuRenderer::new(gpu, &scene).expect("scene uploads");
     assert_eq!(renderer.bvh_storage, BvhStorage::Buffers);
     let hits = renderer
-        .trace_rays(&rays, false, scene.intersect)
+        .trace_rays(&rays, false, scene.default_settings().intersect)
         .expect("GPU trace");
     assert_eq!(mismatches(&hits, &twin), (0, 0));
 }

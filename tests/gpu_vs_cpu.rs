@@ -68,7 +68,7 @@ fn closed_mesh_with_shadows() {
 #[test]
 fn mesh_of_11k_triangles() {
     let scene = load("dragon");
-    assert!(scene.triangles.len() >= 10_000);
+    assert!(scene.triangles().len() >= 10_000);
     check("dragon");
 }
 
@@ -93,7 +93,7 @@ fn cpu_reference_agrees_with_f64_oracle() {
 #[test]
 fn edge_case_scene_behaves() {
     let scene = load("edge_cases");
-    let (w, h) = (scene.view.camera.width, scene.view.camera.height);
+    let (w, h) = (scene.view().camera.width, scene.view().camera.height);
     for r in [render_gpu(&scene), render_cpu(&scene)] {
         // The triangle whose plane holds the eye (mesh 1, primitive 4) is
         // never hit: its rays start in its plane or run parallel to it.
@@ -125,9 +125,9 @@ fn scenes_split_across_bindings_render_the_same() {
     for name in ["bunny", "dragon"] {
         let scene = load(name);
         let mut gpu = open_gpu();
-        let largest = (scene.triangles.len() * 48)
-            .max(scene.bvh.nodes.len() * 128)
-            .max(scene.bvh.blocks.len() * 160) as u64;
+        let largest = (scene.triangles().len() * 48)
+            .max(scene.bvh().nodes.len() * 128)
+            .max(scene.bvh().blocks.len() * 160) as u64;
         // Just over half the largest array, rounded to 256 elements.
         gpu.limits.max_storage_buffer_binding_size =
             (largest / 2 + 256 * 48) / (256 * 48) * (256 * 48);
@@ -140,7 +140,7 @@ fn scenes_split_across_bindings_render_the_same() {
         )
         .expect("split upload");
         // The bunny has shading normals, as many bytes as its triangles.
-        let expected: &[&str] = if scene.normals.is_empty() {
+        let expected: &[&str] = if scene.normals().is_empty() {
             &["triangles", "BVH leaf blocks"]
         } else {
             &["triangles", "triangle normals", "BVH leaf blocks"]
@@ -150,7 +150,7 @@ fn scenes_split_across_bindings_render_the_same() {
             "{name}: the arrays the limit split"
         );
         let split = renderer
-            .render(&scene.view, &lambert::progress::Progress::hidden())
+            .render(scene.view(), &lambert::progress::Progress::hidden())
             .unwrap()
             .0;
         let stats = lambert::diff::compare(
@@ -178,18 +178,18 @@ fn the_wavefront_renders_as_the_megakernel_does() {
     for name in ["cornell", "spheres", "bunny", "dragon", "edge_cases"] {
         let mut scene = load(name);
         for spp in [1, 3] {
-            scene.view.spp = spp;
+            scene.view_mut().spp = spp;
             wavefront_as_megakernel(&scene, &format!("{name} at {spp} spp"));
         }
     }
     for name in ["spheres", "edge_cases"] {
         let mut scene = load(name);
-        scene.view.spp = 40;
+        scene.view_mut().spp = 40;
         wavefront_as_megakernel(&scene, &format!("{name} at 40 spp"));
     }
     let mut many = ring_of_lights();
     for spp in [1, 4] {
-        many.view.spp = spp;
+        many.view_mut().spp = spp;
         let wavefront = wavefront_as_megakernel(&many, &format!("40 lights at {spp} spp"));
         let stats = compare(&wavefront, &render_cpu(&many), &Tolerance::default()).unwrap();
         assert!(stats.passed, "40 lights at {spp} spp: GPU vs CPU\n{stats}");
@@ -228,7 +228,7 @@ fn pixel_lists_render_in_the_wavefront_as_the_megakernel_does() {
         ("spheres", load("spheres")),
         ("40 lights", many),
     ] {
-        let (w, h) = (scene.view.camera.width, scene.view.camera.height);
+        let (w, h) = (scene.view().camera.width, scene.view().camera.height);
         // Every 7th pixel, then some twice, out of order.
         let mut pixels: Vec<[u32; 2]> = (0..w * h).step_by(7).map(|i| [i % w, i / w]).collect();
         pixels.extend([[w / 2, h / 2], [0, 0], [w / 2, h / 2], [w - 1, h - 1]]);
@@ -237,7 +237,7 @@ fn pixel_lists_render_in_the_wavefront_as_the_megakernel_does() {
             let view = lambert::camera::View {
                 spp,
                 seed: 0x5eed + spp,
-                ..scene.view.clone()
+                ..scene.view().clone()
             };
             renderer.shadow_dispatch = ShadowDispatch::Wavefront;
             let wavefront = renderer.render_pixel_list(&view, &pixels).unwrap();
@@ -275,9 +275,9 @@ fn wavefront_as_megakernel(scene: &lambert::Scene, label: &str) -> lambert::outp
         "{label}: the wavefront by default, at any spp"
     );
     assert!(renderer.is_wavefront(), "{label}");
-    let wavefront = renderer.render(&scene.view, &hidden).unwrap().0;
+    let wavefront = renderer.render(scene.view(), &hidden).unwrap().0;
     renderer.shadow_dispatch = ShadowDispatch::Megakernel;
-    let mega = renderer.render(&scene.view, &hidden).unwrap().0;
+    let mega = renderer.render(scene.view(), &hidden).unwrap().0;
     let bits = |r: &lambert::output::Rendered| {
         let rgb: Vec<u32> = r.image.rgb.iter().flatten().map(|c| c.to_bits()).collect();
         let var: Vec<u32> = r.variance.iter().map(|v| v.to_bits()).collect();
@@ -302,9 +302,9 @@ fn workgroups_spread_over_any_thread_count_change_no_pixel_or_hit() {
     use lambert::gpu::{AdapterRequest, Gpu, GpuOptions, GpuRenderer, ShadowDispatch};
     let hidden = lambert::progress::Progress::hidden();
     let mut scene = load("bunny");
-    scene.view.camera.width = 72;
-    scene.view.camera.height = 40;
-    scene.view.spp = 3;
+    scene.view_mut().camera.width = 72;
+    scene.view_mut().camera.height = 40;
+    scene.view_mut().spp = 3;
     let rays = lambert::rays::camera_rays(&scene);
     let outputs = |threads: &str| {
         let request = AdapterRequest {
@@ -326,10 +326,12 @@ fn workgroups_spread_over_any_thread_count_change_no_pixel_or_hit() {
         let mut images = Vec::new();
         for dispatch in [ShadowDispatch::Wavefront, ShadowDispatch::Megakernel] {
             renderer.shadow_dispatch = dispatch;
-            let r = renderer.render(&scene.view, &hidden).unwrap().0;
+            let r = renderer.render(scene.view(), &hidden).unwrap().0;
             images.push((bits(&r), r.prims.clone()));
         }
-        let hits = renderer.trace_rays(&rays, false, scene.intersect).unwrap();
+        let hits = renderer
+            .trace_rays(&rays, false, scene.default_settings().intersect)
+            .unwrap();
         let hits: Vec<[u32; 4]> = hits
             .iter()
             .map(|h| [h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits()])

@@ -32,7 +32,10 @@ impl ProgressSink for Lines {
 
 fn small(name: &str) -> lambert::Scene {
     let mut scene = common::load(name);
-    (scene.view.camera.width, scene.view.camera.height) = (16, 12);
+    (
+        scene.view_mut().camera.width,
+        scene.view_mut().camera.height,
+    ) = (16, 12);
     scene
 }
 
@@ -48,7 +51,9 @@ fn a_turntable_job_writes_its_frames_and_says_each() {
         adapter: &Default::default(),
     };
     let lines = Lines::default();
-    let report = jobs::render_turntable(small("spheres"), &job, Some(&lines)).unwrap();
+    let scene = small("spheres");
+    let settings = scene.default_settings();
+    let report = jobs::render_turntable(scene, &settings, &job, Some(&lines)).unwrap();
     let frames: Vec<u32> = report.written.iter().map(|f| f.frame).collect();
     assert_eq!(frames, [1, 2]);
     assert_eq!(report.frames, 4);
@@ -78,7 +83,9 @@ fn an_image_job_reports_what_its_sampling_chose() {
         sampling: Sampling::Budget(budget),
     };
     let lines = Lines::default();
-    let report = jobs::render_image(small("spheres"), &job, Some(&lines)).unwrap();
+    let scene = small("spheres");
+    let settings = scene.default_settings();
+    let report = jobs::render_image(scene, &settings, &job, Some(&lines)).unwrap();
     assert!(output.is_file());
     let chosen = report.budget.expect("a budget's report").plan.spp;
     assert_eq!(report.samples, (16 * 12 * chosen) as f64);
@@ -98,9 +105,10 @@ fn an_image_job_reports_what_its_sampling_chose() {
         },
         ..job
     };
-    let mut scene = small("spheres");
-    scene.view.spp = 1;
-    let report = jobs::render_image(scene, &job, None).unwrap();
+    let scene = small("spheres");
+    let mut settings = scene.default_settings();
+    settings.view.spp = 1;
+    let report = jobs::render_image(scene, &settings, &job, None).unwrap();
     let adaptive = report.adaptive.expect("an adaptive report");
     // From 4 samples (the scene asks for 1), refined where above the target.
     assert!(!adaptive.refined_per_pass.is_empty(), "{adaptive:?}");
@@ -115,12 +123,12 @@ fn a_view_renders_as_a_scene_with_its_settings() {
     let scene = common::load("spheres");
     let view = View {
         spp: 3,
-        ..small("spheres").view
+        ..small("spheres").view().clone()
     };
     let mut renderer = Renderer::Cpu(Arc::new(scene));
     let sampled = jobs::render_view(&mut renderer, &view, Sampling::Fixed, None).unwrap();
     let mut reference = small("spheres");
-    reference.view.spp = 3;
+    reference.view_mut().spp = 3;
     assert_eq!(sampled.rendered, common::render_cpu(&reference));
     assert_eq!(sampled.samples, (16 * 12 * 3) as f64);
 }

@@ -118,13 +118,13 @@ fn a_texture_naming_a_missing_uv_set_is_kept_with_a_warning() {
     for (i, (material, expected)) in cases.into_iter().enumerate() {
         let path = write(d, &format!("uv{i}.glb"), quad_glb(material, embedded()));
         let scene = Scene::load(&path).unwrap();
-        let warnings = scene.warnings.join("\n");
+        let warnings = scene.warnings().join("\n");
         assert!(warnings.contains(expected), "{warnings}");
         assert!(
             warnings.contains("which mesh 0 primitive 0 (the first such) does not have"),
             "{warnings}"
         );
-        assert_eq!(scene.textures.images().len(), 1, "case {i}: {warnings}");
+        assert_eq!(scene.textures().images().len(), 1, "case {i}: {warnings}");
         let out = lambert(&["info", s(&path)]);
         let stdout = String::from_utf8_lossy(&out.stdout);
         assert!(out.status.success(), "{}", stderr(&out));
@@ -344,8 +344,8 @@ fn flat_models_are_framed_from_off_their_plane() {
         obj += "f 1 2 3\nf 1 3 4\n";
         let path = write(dir.path(), &format!("{name}.obj"), obj);
         let mut scene = Scene::load(&path).unwrap();
-        scene.view.camera.width = 64;
-        scene.view.camera.height = 48;
+        scene.view_mut().camera.width = 64;
+        scene.view_mut().camera.height = 48;
         let image = render_cpu(&scene);
         let hit = image.prims.iter().filter(|&&p| p != NO_HIT).count();
         covered.push((name, hit as f64 / image.prims.len() as f64, least));
@@ -381,8 +381,8 @@ fn mtl_clamp_on_clamps_in_the_render() {
             format!("newmtl m\nKd 1 1 1\nmap_Kd -clamp {clamp} rb.png\n"),
         );
         let mut scene = Scene::load(&write(d, "q.obj", obj)).unwrap();
-        scene.view.camera.width = 64;
-        scene.view.camera.height = 48;
+        scene.view_mut().camera.width = 64;
+        scene.view_mut().camera.height = 48;
         let image = render_cpu(&scene);
         let hit: Vec<[f32; 3]> = (0..image.prims.len())
             .filter(|&i| image.prims[i] != NO_HIT)

@@ -161,7 +161,7 @@ fn obj_vertex_colours_reach_the_pixel_on_both_paths() {
         3.0,
         "[render]\nambient = 1.0\n[[mesh]]\nfile = \"coloured.obj\"\n",
     );
-    assert_eq!(scene.colored_triangles, 2);
+    assert_eq!(scene.colored_triangles(), 2);
     let image = render_both(&scene, "coloured quad");
     // Near each corner, half its colour (Kd 0.5); the middle of the
     // diagonal (corners 1 and 3), half of their mean.
@@ -363,7 +363,7 @@ fn texture_coordinates_of_every_format_are_read() {
         }
         let texture = mesh.materials[0].base_color_texture.expect("its texture");
         let scene = Scene::load(&path).unwrap();
-        let warnings = scene.warnings.join("\n");
+        let warnings = scene.warnings().join("\n");
         // Textures render now: this one's bytes are no image, which the
         // scene says, naming the image and the material (it keeps its
         // factor).
@@ -470,7 +470,7 @@ fn alpha_masks_cut_out_for_camera_and_shadow_rays() {
         let scene = masked_scene(d, mode, 6.0);
         assert!(scene.has_alpha_mask());
         if mode == "BLEND" {
-            let warnings = scene.warnings.join("\n");
+            let warnings = scene.warnings().join("\n");
             assert!(
                 warnings.contains(
                     "material leaf: alphaMode BLEND is rendered as MASK with alphaCutoff 0.5"
@@ -616,7 +616,7 @@ fn info_lists_colours_alpha_modes_and_emission() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let scene = masked_scene(d, "MASK", 6.0);
-    assert_eq!(scene.colored_triangles, 2);
+    assert_eq!(scene.colored_triangles(), 2);
     let colour = Attribute {
         name: "COLOR_0",
         bytes: floats(&[1.0; 12]),

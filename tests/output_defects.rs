@@ -214,7 +214,7 @@ fn turntable_and_part_outputs_are_refused_over_a_texture() {
 /// A scene's part hash (the CPU path's).
 fn hash_of(scene: &Path) -> String {
     let scene = Scene::load(scene).expect("test scene loads");
-    lambert::parts::settings_hash(&scene, &scene.view, "cpu")
+    lambert::parts::settings_hash(&scene, scene.view(), "cpu")
 }
 
 #[test]

@@ -20,11 +20,11 @@ use lambert::render::{Progressive, Renderer};
 /// be carried to its next batch past the others.
 fn small_view(spp: u32) -> (Arc<lambert::Scene>, View) {
     let mut scene = load("cornell");
-    scene.view.camera.width = 517;
-    scene.view.camera.height = 263;
-    scene.view.spp = spp;
-    scene.view.seed = 7;
-    let view = scene.view.clone();
+    scene.view_mut().camera.width = 517;
+    scene.view_mut().camera.height = 263;
+    scene.view_mut().spp = spp;
+    scene.view_mut().seed = 7;
+    let view = scene.view().clone();
     (Arc::new(scene), view)
 }
 

@@ -596,7 +596,7 @@ fn a_hint_changes_no_closest_point() {
     for p in points {
         let p = glam::Vec3::from(p);
         let plain = closest_point(
-            &scene.bvh,
+            scene.bvh(),
             triangles.len(),
             p,
             f32::INFINITY,
@@ -608,7 +608,7 @@ fn a_hint_changes_no_closest_point() {
             let t = &triangles[prim];
             let hint = Some((prim as u32, [t.v0, t.v1, t.v2].map(glam::Vec3::from)));
             let hinted = closest_point(
-                &scene.bvh,
+                scene.bvh(),
                 triangles.len(),
                 p,
                 f32::INFINITY,
@@ -622,8 +622,24 @@ fn a_hint_changes_no_closest_point() {
         let t = &triangles[0];
         let hint = Some((0, [t.v0, t.v1, t.v2].map(glam::Vec3::from)));
         assert_eq!(
-            closest_point(&scene.bvh, triangles.len(), p, 0.01, 1e-5, hint, &mut queue),
-            closest_point(&scene.bvh, triangles.len(), p, 0.01, 1e-5, None, &mut queue),
+            closest_point(
+                scene.bvh(),
+                triangles.len(),
+                p,
+                0.01,
+                1e-5,
+                hint,
+                &mut queue
+            ),
+            closest_point(
+                scene.bvh(),
+                triangles.len(),
+                p,
+                0.01,
+                1e-5,
+                None,
+                &mut queue
+            ),
         );
     }
 }

@@ -38,7 +38,7 @@ fn the_oracles_closest_points_are_f64() {
     let mut queue = cpu::f64::BoxQueue::new();
     let margin = cpu::f64::query_margin(p.abs().max_element(), 2e4);
     let nearest =
-        cpu::f64::closest_point(&scene.bvh, 1, p, f64::INFINITY, margin, None, &mut queue)
+        cpu::f64::closest_point(scene.bvh(), 1, p, f64::INFINITY, margin, None, &mut queue)
             .expect("the triangle is found");
     assert_eq!(nearest.prim, 0);
     assert!(
@@ -78,14 +78,14 @@ fn the_oracles_winding_numbers_are_f64() {
         ],
         vec![],
     );
-    let tree = WindingTree::build(&scene.bvh, scene.triangles.len());
+    let tree = WindingTree::build(scene.bvh(), scene.triangles().len());
     for (q, expected) in [
         (DVec3::new(0.2, 0.3, 0.1), 1.0),
         (DVec3::new(0.01, 0.02, 0.03), 1.0),
         (DVec3::new(0.5, 0.5, 0.5), 0.0),
         (DVec3::new(-0.3, 0.2, 0.4), 0.0),
     ] {
-        let w = cpu::f64::winding_number(&tree, &scene.triangles, q);
+        let w = cpu::f64::winding_number(&tree, scene.triangles(), q);
         assert!(
             (w - expected).abs() < 1e-13,
             "winding number {w} at {q} ({expected} exactly)"
@@ -129,16 +129,16 @@ fn the_oracles_texture_coordinates_are_f64() {
             transform: IDENTITY_UV_TRANSFORM,
         },
     );
-    scene.textures = store;
-    let material = scene.triangles[0].material as usize;
-    scene.materials[material].base_color = [1.0; 4];
-    scene.materials[material].base_color_texture = slot;
-    scene.attributes = vec![TriangleAttributes {
+    *scene.textures_mut() = store;
+    let material = scene.triangles()[0].material as usize;
+    scene.materials_mut()[material].base_color = [1.0; 4];
+    scene.materials_mut()[material].base_color_texture = slot;
+    *scene.attributes_mut() = vec![TriangleAttributes {
         uvs: [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]],
         ..Default::default()
     }];
     let kernel = cpu::f64::Kernel::new(&scene);
-    let tri = scene.triangles[0];
+    let tri = scene.triangles()[0];
     let color = |u: f64| kernel.base_color_at(&tri, 0, u, 0.25, DVec3::Z, 0.0).x;
     assert!(color(0.5 - 1e-9) > 0.99, "white left of the boundary");
     assert!(color(0.5 + 1e-9) < 0.01, "black right of it");

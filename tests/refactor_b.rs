@@ -265,12 +265,12 @@ fn each_render_call_renders_the_view_it_is_given() {
     let first = View {
         spp: 1,
         seed: 3,
-        ..scene.view.clone()
+        ..scene.view().clone()
     };
     let mut second = View {
         spp: 5,
         seed: 11,
-        ..scene.view.clone()
+        ..scene.view().clone()
     };
     second.camera.eye = [2.0, 2.5, 3.0];
     second.camera.width = 23;
@@ -287,7 +287,7 @@ fn each_render_call_renders_the_view_it_is_given() {
         let alone_first = fresh().render(&first, &hidden).unwrap().0;
         let alone_second = fresh().render(&second, &hidden).unwrap().0;
         let alone_list = fresh().render_pixel_list(&second, &pixels).unwrap();
-        let alone_hits = fresh().trace_rays(&rays, false, scene.intersect).unwrap();
+        let alone_hits = fresh().trace_rays(&rays, false, scene.default_settings().intersect).unwrap();
 
         let mut shared = fresh();
         let label = format!("{dispatch:?}");
@@ -328,7 +328,7 @@ fn each_render_call_renders_the_view_it_is_given() {
             bits(&alone_second).0,
             "{label}: the batches end as one render"
         );
-        let hits = shared.trace_rays(&rays, false, scene.intersect).unwrap();
+        let hits = shared.trace_rays(&rays, false, scene.default_settings().intersect).unwrap();
         let hit_bits = |hits: &[lambert::layout::Hit]| -> Vec<[u32; 2]> {
             hits.iter().map(|h| [h.t.to_bits(), h.prim]).collect()
         };

@@ -112,7 +112,7 @@ fn images_without_a_source_are_warnings_not_panics() {
     ] {
         let path = fuzz_dir("regressions").join("gltf").join(name);
         let scene = lambert::Scene::load(&path).unwrap();
-        let warnings = scene.warnings.join("\n");
+        let warnings = scene.warnings().join("\n");
         assert!(warnings.contains(why), "{name}: {warnings}");
     }
 }
@@ -359,7 +359,7 @@ fn a_scene_beyond_the_gpu_limits_says_what_and_by_how_much() {
     let scene = common::load("bunny");
     // On lavapipe the triangles lie in textures with the BVH; their
     // shading normals, as many bytes, in a buffer.
-    let bytes = scene.normals.len() * 48;
+    let bytes = scene.normals().len() * 48;
     let gpu = Gpu::open_limited(&AdapterRequest::default(), false, Some(SMALL_GPU))
         .expect("a GPU adapter (lavapipe: apt-get install mesa-vulkan-drivers)");
     assert_eq!(gpu.limits.max_buffer_size, SMALL_GPU);
@@ -448,7 +448,7 @@ fn a_lost_device_is_an_error_not_a_hang() {
     use lambert::gpu::GpuRenderer;
     let scene = common::load("spheres");
     let mut renderer = GpuRenderer::new(common::open_gpu(), &scene).expect("scene uploads");
-    let view = scene.view.clone();
+    let view = scene.view().clone();
     renderer.gpu().device.destroy();
     let (sender, receiver) = std::sync::mpsc::channel();
     std::thread::spawn(move || {
@@ -474,9 +474,12 @@ fn a_gpu_render_does_not_need_the_hosts_geometry() {
     use std::sync::Arc;
     for name in ["bunny", "spheres", "cornell"] {
         let mut scene = common::load(name);
-        (scene.view.camera.width, scene.view.camera.height) = (64, 48);
-        scene.view.spp = 2;
-        let view = scene.view.clone();
+        (
+            scene.view_mut().camera.width,
+            scene.view_mut().camera.height,
+        ) = (64, 48);
+        scene.view_mut().spp = 2;
+        let view = scene.view().clone();
         let scene = Arc::new(scene);
         let host = Arc::downgrade(&scene);
         let (mut renderer, _) =
@@ -510,7 +513,7 @@ fn a_gpu_render_does_not_need_the_hosts_geometry() {
         moved.spp = 3;
         let (moved_image, _) = renderer.render(&moved, None).expect("renders");
         let mut reference = common::load(name);
-        reference.view = moved.clone();
+        *reference.view_mut() = moved.clone();
         let (fresh, _) =
             Renderer::open(Arc::new(reference), DeviceChoice::Gpu, &Default::default())
                 .expect("opens")
@@ -535,8 +538,8 @@ fn fuzz_models_build_valid_trees() {
         let Ok(Some(scene)) = input.model_scene(&bytes, &path) else {
             continue;
         };
-        let bvh = &scene.bvh;
-        bvh.validate(&scene.triangles, &scene.spheres)
+        let bvh = &scene.bvh();
+        bvh.validate(scene.triangles(), scene.spheres())
             .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         lambert::cwbvh::validate(&lambert::cwbvh::compress(bvh), bvh)
             .unwrap_or_else(|e| panic!("{}: {e}", path.display()));

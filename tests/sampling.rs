@@ -20,12 +20,12 @@ fn adaptive_on(
 ) -> (lambert::output::Rendered, lambert::adaptive::AdaptiveReport) {
     let shared = Arc::new(scene.clone());
     let (mut renderer, _) = Renderer::open(shared, device, &Default::default()).unwrap();
-    lambert::adaptive::render_adaptive(&mut renderer, &scene.view, settings).unwrap()
+    lambert::adaptive::render_adaptive(&mut renderer, scene.view(), settings).unwrap()
 }
 
 fn at_spp(scene: &Scene, spp: u32) -> Scene {
     let mut s = scene.clone();
-    s.view.spp = spp;
+    s.view_mut().spp = spp;
     s
 }
 
@@ -50,7 +50,7 @@ fn strata_form_a_full_grid() {
 #[test]
 fn samples_stay_in_their_pixel_and_cover_its_cells() {
     let mut s = load("edge_cases");
-    s.view.spp = 16;
+    s.view_mut().spp = 16;
     let kernel = cpu::f32::Kernel::new(&s);
     for (x, y) in [(0, 0), (7, 3), (64, 64)] {
         let mut cells = [false; 16];
@@ -69,7 +69,7 @@ fn samples_stay_in_their_pixel_and_cover_its_cells() {
         );
     }
     // spp = 1 keeps the pixel centre.
-    s.view.spp = 1;
+    s.view_mut().spp = 1;
     assert_eq!(
         cpu::f32::Kernel::new(&s).sample_position(3, 5, 0),
         (3.5, 5.5)
@@ -82,8 +82,12 @@ fn error_falls_as_spp_rises_on_hard_edges() {
     for name in ["edge_cases", "spheres"] {
         let scene = load(name);
         let mut reference = at_spp(&scene, 256);
-        reference.view.seed = 12345;
-        reference.intersect = Intersect::Watertight;
+        reference.view_mut().seed = 12345;
+        let settings = lambert::scene::RenderSettings {
+            intersect: Intersect::Watertight,
+            ..reference.default_settings()
+        };
+        let reference = reference.with_settings(&settings);
         let reference = render_oracle(&reference);
         let mut last = f64::INFINITY;
         for spp in [1, 4, 16, 64] {
@@ -122,7 +126,7 @@ fn specialised_and_full_shaders_render_the_same_image() {
     for name in ["spheres", "bunny", "triangle_oblique"] {
         let scene = load(name);
         let mut full = GpuRenderer::with_full_shader(open_gpu(), &scene).unwrap();
-        let full = full.render(&scene.view, &Progress::hidden()).unwrap().0;
+        let full = full.render(scene.view(), &Progress::hidden()).unwrap().0;
         let stats = compare(&render_gpu(&scene), &full, &Tolerance::default()).unwrap();
         assert_eq!(
             stats.max_abs, 0.0,
@@ -138,7 +142,7 @@ fn adaptive_sampling_beats_uniform_at_the_same_sample_count() {
     for name in ["edge_cases", "spheres"] {
         let scene = load(name);
         let mut reference = at_spp(&scene, 256);
-        reference.view.seed = 777;
+        reference.view_mut().seed = 777;
         let reference = render_oracle(&reference);
         let settings = AdaptiveSettings {
             target_error: 0.01,
@@ -195,9 +199,9 @@ fn high_spp_renders_agree_on_both_paths_at_every_size() {
                 continue;
             }
             let mut scene = at_spp(&bunny, spp);
-            scene.view.camera.width = width;
-            scene.view.camera.height = height;
-            let gpu_image = renderer.render(&scene.view, &Progress::hidden()).unwrap().0;
+            scene.view_mut().camera.width = width;
+            scene.view_mut().camera.height = height;
+            let gpu_image = renderer.render(scene.view(), &Progress::hidden()).unwrap().0;
             let cpu_image = render_cpu(&scene);
             let stats = compare(&gpu_image, &cpu_image, &Tolerance::default()).unwrap();
             assert!(
@@ -211,8 +215,8 @@ fn high_spp_renders_agree_on_both_paths_at_every_size() {
         }
     }
     let mut scene = bunny.clone();
-    scene.view.camera.width = 7;
-    scene.view.camera.height = 5;
+    scene.view_mut().camera.width = 7;
+    scene.view_mut().camera.height = 5;
     let settings = AdaptiveSettings {
         target_error: 1e-5,
         base_spp: 4,

@@ -101,15 +101,15 @@ fn binary_ascii_and_obj_of_the_same_triangles_are_the_same_scene() {
     write(dir.path(), "a.stl", solid("bunny", &facets));
     write(dir.path(), "o.obj", obj(&facets));
     let reference = scene_of_file(dir.path(), "o.obj");
-    assert_eq!(reference.triangles.len(), 3674);
+    assert_eq!(reference.triangles().len(), 3674);
     for file in ["b.stl", "a.stl"] {
         let stl = scene_of_file(dir.path(), file);
-        assert_eq!(stl.triangles, reference.triangles, "{file}");
-        assert!(!stl.normals.is_empty(), "{file}: smooth");
+        assert_eq!(stl.triangles(), reference.triangles(), "{file}");
+        assert!(!stl.normals().is_empty(), "{file}: smooth");
         // The OBJ's corners are apart too, so its smooth normals are face
         // normals; the STL's are welded, so they differ from the OBJ's...
-        assert_ne!(stl.normals, reference.normals, "{file}: welded");
-        assert!(stl.warnings.is_empty(), "{file}: {:?}", stl.warnings);
+        assert_ne!(stl.normals(), reference.normals(), "{file}: welded");
+        assert!(stl.warnings().is_empty(), "{file}: {:?}", stl.warnings());
     }
     // ...and agree with the bundled OBJ, whose vertices are shared.
     let welded = load_mesh(&dir.path().join("b.stl"), NormalMode::Smooth).unwrap();
@@ -126,8 +126,8 @@ fn binary_ascii_and_obj_of_the_same_triangles_are_the_same_scene() {
     let obj_scene = face("o.obj");
     for file in ["b.stl", "a.stl"] {
         let stl = face(file);
-        assert_eq!(stl.triangles, obj_scene.triangles, "{file}");
-        assert_eq!(stl.normals, obj_scene.normals, "{file}");
+        assert_eq!(stl.triangles(), obj_scene.triangles(), "{file}");
+        assert_eq!(stl.normals(), obj_scene.normals(), "{file}");
         assert_eq!(
             bits(&render_cpu(&stl)),
             bits(&render_cpu(&obj_scene)),
@@ -142,7 +142,7 @@ fn binary_ascii_and_obj_of_the_same_triangles_are_the_same_scene() {
     // And with the smooth scenes: the binary and ASCII STL render alike.
     let binary_scene = scene_of_file(dir.path(), "b.stl");
     let ascii_scene = scene_of_file(dir.path(), "a.stl");
-    assert_eq!(binary_scene.normals, ascii_scene.normals);
+    assert_eq!(binary_scene.normals(), ascii_scene.normals());
     assert_eq!(
         bits(&render_cpu(&binary_scene)),
         bits(&render_cpu(&ascii_scene))
@@ -393,13 +393,13 @@ fn degenerate_facets_are_kept() {
         "one welded point"
     );
     let scene = Scene::load(&path).unwrap();
-    assert_eq!(scene.triangles.len(), 4);
+    assert_eq!(scene.triangles().len(), 4);
     scene
-        .bvh
-        .validate(&scene.triangles, &scene.spheres)
+        .bvh()
+        .validate(scene.triangles(), scene.spheres())
         .unwrap();
-    let compressed = lambert::cwbvh::compress(&scene.bvh);
-    lambert::cwbvh::validate(&compressed, &scene.bvh).unwrap();
+    let compressed = lambert::cwbvh::compress(scene.bvh());
+    lambert::cwbvh::validate(&compressed, scene.bvh()).unwrap();
     assert_eq!(bits(&render_cpu(&scene)), bits(&render_gpu(&scene)));
     let output = lambert(&["info", s(&path)]);
     assert!(String::from_utf8_lossy(&output.stdout).contains("triangles: 4"));
@@ -454,7 +454,7 @@ fn the_extension_in_any_case() {
     let dir = tempfile::tempdir().unwrap();
     for name in ["a.stl", "b.STL", "c.Stl"] {
         let path: PathBuf = write(dir.path(), name, binary(b"", 2, &UNIT));
-        assert_eq!(Scene::load(&path).unwrap().triangles.len(), 2, "{name}");
+        assert_eq!(Scene::load(&path).unwrap().triangles().len(), 2, "{name}");
     }
 }
 

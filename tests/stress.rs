@@ -199,7 +199,7 @@ fn lit_plane(scale: f64, translate: [f64; 3], intersect: Intersect) -> Scene {
             p[2] * scale + translate[2]
         )
     };
-    let mut s = scene(&format!(
+    let s = scene(&format!(
         "[camera]\neye = {}\nlook_at = {}\nvfov = 40.0\nwidth = 48\nheight = 48\n\
          [[mesh]]\nobj = \"meshes/quad.obj\"\nscale = {:e}\ntranslate = {}\nalbedo = 0.5\n\
          [[directional_light]]\ndirection = [0.0, -0.5, -0.8660254037844386]\nirradiance = 2.0\n",
@@ -208,8 +208,11 @@ fn lit_plane(scale: f64, translate: [f64; 3], intersect: Intersect) -> Scene {
         4.0 * scale,
         at([0.0; 3]),
     ));
-    s.intersect = intersect;
-    s
+    let settings = lambert::scene::RenderSettings {
+        intersect,
+        ..s.default_settings()
+    };
+    s.with_settings(&settings)
 }
 
 #[test]
@@ -269,18 +272,18 @@ fn transformed_spheres(scale: f64, translate: f64) -> Scene {
     let mut s = load("spheres");
     let map = |p: [f32; 3]| p.map(|c| (c as f64 * scale + translate) as f32);
     let map64 = |p: [f64; 3]| p.map(|c| c * scale + translate);
-    s.view.camera.eye = map64(s.view.camera.eye);
-    s.view.camera.look_at = map64(s.view.camera.look_at);
-    for t in &mut s.triangles {
+    s.view_mut().camera.eye = map64(s.view().camera.eye);
+    s.view_mut().camera.look_at = map64(s.view().camera.look_at);
+    for t in s.triangles_mut() {
         t.v0 = map(t.v0);
         t.v1 = map(t.v1);
         t.v2 = map(t.v2);
     }
-    for sp in &mut s.spheres {
+    for sp in s.spheres_mut() {
         sp.center = map(sp.center);
         sp.radius = (sp.radius as f64 * scale) as f32;
     }
-    for l in &mut s.lights {
+    for l in s.lights_mut() {
         if l.kind == lambert::layout::LIGHT_POINT {
             l.vector = map(l.vector);
             l.color = l.color.map(|c| (c as f64 * scale * scale) as f32);
@@ -407,7 +410,7 @@ fn gpu_and_cpu_agree_on_ray_sets_for_the_default_variant() {
     let mut ulps = Vec::new();
     for name in ["bunny", "dragon", "cornell", "spheres"] {
         let scene = load(name);
-        let root = scene.bvh.bounds().expect("a non-empty scene");
+        let root = scene.bvh().bounds().expect("a non-empty scene");
         let (lo, hi) = (root.min.as_dvec3(), root.max.as_dvec3());
         let size = (hi - lo).max_element();
         let rays: Vec<Ray> = (0..20_000)
@@ -421,7 +424,8 @@ fn gpu_and_cpu_agree_on_ray_sets_for_the_default_variant() {
         // The GPU's twin: the CPU path's own BVH visits children in another
         // order, and takes the other primitive where two tie on t (the
         // Cornell box's shared edges).
-        let cpu_hits = cpu::trace_rays_gpu_twin(&scene, &rays, false, scene.intersect);
+        let cpu_hits =
+            cpu::trace_rays_gpu_twin(&scene, &rays, false, scene.default_settings().intersect);
         let gpu_hits = trace_gpu(&scene, &rays, false);
         let oracle = Agreement::measure(&gpu_hits, &cpu::trace_rays_f64(&scene, &rays, false));
         let mut scene_same = 0;
@@ -465,9 +469,8 @@ fn gpu_bvh_traces_rays_like_gpu_brute_force() {
     let mut rng = Rng(3);
     for name in ["bunny", "cornell", "spheres", "edge_cases"] {
         let scene = load(name);
-        let mut brute = scene.clone();
-        brute.accel = lambert::scene::Accel::BruteForce;
-        let root = scene.bvh.bounds().expect("a non-empty scene");
+        let brute = common::brute_force(&scene);
+        let root = scene.bvh().bounds().expect("a non-empty scene");
         let centre = root.centre().as_dvec3();
         let size = (root.max - root.min).max_element() as f64;
         let rays: Vec<Ray> = (0..5000)

@@ -152,7 +152,12 @@ fn nan_rays_miss_on_every_path() {
             ("CPU", trace_cpu(&scene, &rays, any_hit)),
             (
                 "twin",
-                cpu::trace_rays_gpu_twin(&scene, &rays, any_hit, scene.intersect),
+                cpu::trace_rays_gpu_twin(
+                    &scene,
+                    &rays,
+                    any_hit,
+                    scene.default_settings().intersect,
+                ),
             ),
             ("GPU", trace_gpu(&scene, &rays, any_hit)),
         ] {
@@ -264,12 +269,8 @@ fn degenerate_geometry_renders_without_nan_pixels() {
         triangle([Vec3::ZERO, Vec3::X, Vec3::X * 2.0]),
         triangle([Vec3::ZERO, Vec3::Y, Vec3::Y]),
     ];
-    let material = s.triangles[0].material;
-    s.triangles
-        .extend(extra.iter().map(|t| Triangle { material, ..*t }));
-    if !s.normals.is_empty() {
-        s.normals.resize(s.triangles.len(), Default::default());
-    }
+    let material = s.triangles()[0].material;
+    s.add_triangles(extra.iter().map(|t| Triangle { material, ..*t }));
     s.rebuild_bvh();
     for intersect in Intersect::ALL {
         let scene = with_intersect(&s, intersect);

@@ -81,7 +81,7 @@ fn assert_same_bits(a: &lambert::output::Rendered, b: &lambert::output::Rendered
 
 /// The CPU render that traverses as the GPU does (`lambert diff`'s).
 fn gpu_twin(scene: &Scene) -> lambert::output::Rendered {
-    lambert::cpu::render_gpu_twin(scene, &scene.view, &lambert::progress::Progress::hidden())
+    lambert::cpu::render_gpu_twin(scene, scene.view(), &lambert::progress::Progress::hidden())
 }
 
 /// A scene of `model` in `dir`, lit by ambient 1 alone (so a pixel is its
@@ -94,7 +94,7 @@ fn scene_of(dir: &Path, model: &str, camera: &str, spp: u32) -> Scene {
     let path = dir.join(format!("{model}.toml"));
     std::fs::write(&path, toml).unwrap();
     let scene = Scene::load(&path).unwrap();
-    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert!(scene.warnings().is_empty(), "{:?}", scene.warnings());
     scene
 }
 
@@ -276,7 +276,7 @@ fn a_receding_checkerboard_reads_its_mip_levels() {
 fn the_bundled_textured_model_renders_alike_from_obj_and_gltf() {
     let glb = Scene::load(&asset("scenes/meshes/textured.glb")).unwrap();
     let obj = Scene::load(&asset("scenes/meshes/textured.obj")).unwrap();
-    assert!(glb.warnings.is_empty(), "{:?}", glb.warnings);
+    assert!(glb.warnings().is_empty(), "{:?}", glb.warnings());
     let (a, b) = (render_cpu(&glb), render_cpu(&obj));
     let stats = lambert::diff::compare(&a, &b, &lambert::diff::Tolerance::default()).unwrap();
     assert!(stats.passed, "glTF and OBJ differ:\n{stats}");
@@ -336,20 +336,24 @@ fn broken_images_are_warnings_and_the_model_renders() {
     ] {
         let scene = Scene::load(&dir.join(name)).unwrap();
         if warning.is_empty() {
-            assert!(scene.warnings.is_empty(), "{name}: {:?}", scene.warnings);
-            assert_eq!(scene.textures.images().len(), 1, "{name}");
+            assert!(
+                scene.warnings().is_empty(),
+                "{name}: {:?}",
+                scene.warnings()
+            );
+            assert_eq!(scene.textures().images().len(), 1, "{name}");
         } else {
             assert!(
                 scene
-                    .warnings
+                    .warnings()
                     .iter()
                     .any(|w| w.contains(name) && w.contains(warning)),
                 "{name}: {:?}",
-                scene.warnings
+                scene.warnings()
             );
-            assert!(scene.textures.images().is_empty(), "{name}");
+            assert!(scene.textures().images().is_empty(), "{name}");
             assert_eq!(
-                scene.materials[0].base_color_texture,
+                scene.materials()[0].base_color_texture,
                 lambert::layout::NO_TEXTURE
             );
         }
@@ -367,7 +371,7 @@ fn textures_beyond_the_gpu_limits_are_a_gpu_limit_error() {
     let dir = tempfile::tempdir().unwrap();
     let big = image::RgbaImage::from_fn(256, 256, |x, y| image::Rgba([x as u8, y as u8, 0, 255]));
     let scene = textured_plane(dir.path(), "big", &big, &sampler(LINEAR, REPEAT));
-    let bytes = 4 * scene.textures.words().len() as u64;
+    let bytes = 4 * scene.textures().words().len() as u64;
     assert!(bytes > 4 * 256 * 256, "{bytes}");
     let gpu = Gpu::open_limited(&AdapterRequest::default(), false, Some(SMALL_GPU)).unwrap();
     let Err(error) = GpuRenderer::new(gpu, &scene) else {

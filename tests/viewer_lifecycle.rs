@@ -74,7 +74,7 @@ fn start(centre: DVec3) -> (Camera, Reach) {
         centre.z
     );
     let scene = Scene::from_toml(&sphere_scene(centre, &camera, ""), Path::new("s.toml")).unwrap();
-    (scene.view.camera.clone(), Reach::of(&scene))
+    (scene.view().camera.clone(), Reach::of(&scene))
 }
 
 #[test]
@@ -434,10 +434,10 @@ fn a_cancelled_batch_adds_nothing_and_the_next_starts_from_the_first_sample() {
     use std::sync::Arc;
     use std::sync::atomic::AtomicBool;
     let mut scene = common::load("cornell");
-    scene.view.camera.width = 300;
-    scene.view.camera.height = 200;
-    scene.view.spp = 4;
-    let view = scene.view.clone();
+    scene.view_mut().camera.width = 300;
+    scene.view_mut().camera.height = 200;
+    scene.view_mut().spp = 4;
+    let view = scene.view().clone();
     let scene = Arc::new(scene);
     let gpu = lambert::gpu::GpuRenderer::new(common::open_gpu(), &scene).unwrap();
     for mut renderer in [

@@ -260,7 +260,7 @@ fn the_gpu_carries_the_rounding_errors_as_the_cpu_does() {
     let points = random_points(500);
     assert_eq!(
         gpu.winding_numbers(&points).unwrap(),
-        cpu(scene.triangles.clone())
+        cpu(scene.triangles().to_vec())
             .winding_numbers(&points)
             .unwrap()
     );

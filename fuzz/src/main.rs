@@ -488,9 +488,9 @@ enum Finding {
 /// or the input is no model a scene is made of.
 fn invalid_tree(input: Input, data: &[u8], path: &Path) -> Option<String> {
     let scene = input.model_scene(data, path).ok()??;
-    let bvh = &scene.bvh;
+    let bvh = scene.bvh();
     let invalid = bvh
-        .validate(&scene.triangles, &scene.spheres)
+        .validate(scene.triangles(), scene.spheres())
         .err()
         .or_else(|| lambert::cwbvh::validate(&lambert::cwbvh::compress(bvh), bvh).err())?;
     Some(invalid.to_string())

@@ -247,10 +247,11 @@ impl NativeScene {
         sink: &(dyn Fn(&TracedChunk) + Sync),
     ) -> Result<(Option<String>, Vec<String>), Error> {
         let scene = &self.scene;
-        let mut renderers = self.renderers.lock().unwrap_or_else(|e| e.into_inner());
-        let (renderer, note) = renderers.get(device)?;
-        if renderer.is_cpu() {
-            drop(renderers);
+        let (traced, note) = Renderers::run(&self.renderers, device, |renderer| {
+            if !renderer.is_cpu() {
+                return self.trace_gathered(&query, options, renderer).map(Some);
+            }
+            // The CPU path traces the rays as it reads them.
             match query {
                 Query::Records(r) => {
                     rays::validate_rays(r).map_err(|bad| Error::Usage(bad.to_string()))?;
@@ -269,23 +270,9 @@ impl NativeScene {
                     first_bad.result(&query)?;
                 }
             }
-        } else {
-            // The scene's buffer from an earlier query, if no other thread
-            // holds it: its pages are mapped already (fresh ones cost a
-            // fault each).
-            let buffer = self
-                .scratch
-                .try_lock()
-                .map(|mut b| std::mem::take(&mut *b))
-                .unwrap_or_default();
-            let rays = query.gathered(buffer)?;
-            let hits = match (query.local(), renderer) {
-                (Some(_), Renderer::Gpu(gpu)) => {
-                    gpu.trace_local_rays(&rays, options.any_hit, options.intersect)?
-                }
-                (_, renderer) => renderer.trace(&rays, options.any_hit, options.intersect)?,
-            };
-            drop(renderers);
+            Ok(None)
+        })?;
+        if let Some((rays, hits)) = traced {
             each_chunk(scene, &rays, &hits, options.normals, sink);
             if let (Gathered::Buffer(b), Ok(mut home)) = (rays, self.scratch.try_lock()) {
                 if home.capacity() < b.capacity() {
@@ -294,6 +281,30 @@ impl NativeScene {
             }
         }
         Ok((note, query.warnings(&scene.placement())))
+    }
+
+    /// `query`'s rays gathered into one buffer and traced on `renderer`
+    /// (a GPU's: one upload), in the scene's frame where they are f64.
+    fn trace_gathered<'q>(
+        &self,
+        query: &'q Query<'_>,
+        options: QueryOptions,
+        renderer: &mut Renderer,
+    ) -> Result<(Gathered<'q>, Vec<Hit>), Error> {
+        // The scene's buffer from an earlier query, if no other thread
+        // holds it: its pages are mapped already (fresh ones cost a
+        // fault each).
+        let buffer = self
+            .scratch
+            .try_lock()
+            .map(|mut b| std::mem::take(&mut *b))
+            .unwrap_or_default();
+        let rays = query.gathered(buffer)?;
+        let hits = match query.local() {
+            Some(_) => renderer.trace_local(&rays, options.any_hit, options.intersect)?,
+            None => renderer.trace(&rays, options.any_hit, options.intersect)?,
+        };
+        Ok((rays, hits))
     }
 
     fn warn(py: Python<'_>, notes: impl IntoIterator<Item = String>) -> PyResult<()> {
@@ -398,7 +409,7 @@ impl NativeScene {
     #[staticmethod]
     fn load(py: Python<'_>, path: PathBuf) -> PyResult<NativeScene> {
         let scene = detached(py, || Scene::load(&path))?;
-        for warning in &scene.warnings {
+        for warning in scene.warnings() {
             NativeScene::warn(py, Some(warning.clone()))?;
         }
         Ok(NativeScene::new(scene))
@@ -544,7 +555,7 @@ impl NativeScene {
         let scene = &self.scene;
         let (origins, directions) = detached(py, || {
             let camera = scene
-                .view
+                .view()
                 .camera
                 .resized(width, height)
                 .map_err(|e| Error::Usage(format!("width/height: {e}")))?;
@@ -575,30 +586,23 @@ impl NativeScene {
         let scene = &self.scene;
         let (image, note) = detached(py, || {
             let camera = scene
-                .view
+                .view()
                 .camera
                 .resized(width, height)
                 .map_err(|e| Error::Usage(format!("width/height: {e}")))?;
-            let spp = spp.unwrap_or(scene.view.spp);
+            let spp = spp.unwrap_or(scene.view().spp);
             lambert::limits::validate_spp(spp).map_err(Error::Usage)?;
             // Another size or sample count is only another view: the scene,
             // and the GPU's buffers, stay the ones uploaded.
             let view = View {
                 camera,
                 spp,
-                ..scene.view.clone()
+                ..scene.view().clone()
             };
-            let mut renderers = self.renderers.lock().unwrap_or_else(|e| e.into_inner());
-            let (renderer, note) = renderers.get(device)?;
             // The CLI's job code, at the view's spp.
-            let sampled = if renderer.is_cpu() {
-                // The CPU path shares the scene: other threads render at once.
-                drop(renderers);
-                let mut cpu = Renderer::Cpu(Arc::clone(scene));
-                jobs::render_view(&mut cpu, &view, Sampling::Fixed, None)?
-            } else {
-                jobs::render_view(renderer, &view, Sampling::Fixed, None)?
-            };
+            let (sampled, note) = Renderers::run(&self.renderers, device, |renderer| {
+                jobs::render_view(renderer, &view, Sampling::Fixed, None)
+            })?;
             Ok((sampled.rendered.image, note))
         })?;
         NativeScene::warn(py, note)?;
@@ -624,19 +628,19 @@ impl NativeScene {
 
     #[getter]
     fn triangle_count(&self) -> usize {
-        self.scene.triangles.len()
+        self.scene.triangles().len()
     }
 
     #[getter]
     fn sphere_count(&self) -> usize {
-        self.scene.spheres.len()
+        self.scene.spheres().len()
     }
 
     /// (min, max) corners of the scene's bounding box, or None if empty.
     #[getter]
     fn bounds(&self) -> Option<([f32; 3], [f32; 3])> {
         self.scene
-            .bvh
+            .bvh()
             .bounds()
             .map(|b| (b.min.to_array(), b.max.to_array()))
     }
@@ -644,7 +648,7 @@ impl NativeScene {
     /// The scene's camera: eye, look_at, up, vfov (degrees), width, height.
     #[getter]
     fn camera<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let c = &self.scene.view.camera;
+        let c = &self.scene.view().camera;
         let out = PyDict::new(py);
         out.set_item("eye", c.eye)?;
         out.set_item("look_at", c.look_at)?;
@@ -657,7 +661,7 @@ impl NativeScene {
 
     #[getter]
     fn spp(&self) -> u32 {
-        self.scene.view.spp
+        self.scene.view().spp
     }
 }
 

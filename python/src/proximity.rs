@@ -5,14 +5,13 @@
 //! device asked (`Renderer`'s queries, both paths).
 
 use std::borrow::Cow;
-use std::sync::Arc;
 
 use lambert::Error;
 use lambert::jobs::{self, Sign};
 use lambert::layout::{ListedHit, NO_HIT, Ray};
 use lambert::limits::checked_point;
 use lambert::placement::LocalRays;
-use lambert::render::{DeviceChoice, IntersectionList, Renderer, with_fallback};
+use lambert::render::{DeviceChoice, IntersectionList, Renderer, Renderers, with_fallback};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
@@ -47,21 +46,15 @@ fn on_device<T: Send>(
     device: DeviceChoice,
     work: impl Fn(&mut Renderer) -> Result<T, Error>,
 ) -> Result<(T, Option<String>), Error> {
-    if native.scene.triangles.is_empty() {
+    if native.scene.triangles().is_empty() {
         return Err(Error::Usage(
             "the scene has no triangles: proximity and crossing queries are over triangles".into(),
         ));
     }
-    let mut renderers = native.renderers.lock().unwrap_or_else(|e| e.into_inner());
-    let (renderer, note) = renderers.get(device)?;
-    if renderer.is_cpu() {
-        drop(renderers);
-        let mut cpu = Renderer::Cpu(Arc::clone(&native.scene));
-        Ok((work(&mut cpu)?, note))
-    } else {
-        let (out, fell_back) = with_fallback(renderer, device, &native.scene, work)?;
-        Ok((out, note.or(fell_back)))
-    }
+    let ((out, fell_back), note) = Renderers::run(&native.renderers, device, |renderer| {
+        with_fallback(renderer, device, &native.scene, work)
+    })?;
+    Ok((out, note.or(fell_back)))
 }
 
 /// A points query: the points read (any layout), `work` run on them; a

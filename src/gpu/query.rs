@@ -33,6 +33,13 @@ pub(super) struct Lists {
 }
 
 impl Lists {
+    /// Drops the pipelines built so far (the shader's overrides changed);
+    /// the kept buffers stay.
+    pub fn forget_pipelines(&mut self) {
+        self.trace = Default::default();
+        self.pixel_list = None;
+    }
+
     /// Builds the `trace_rays` pipeline for closest or any hit with the
     /// given ray/triangle test, if not built yet.
     pub fn prepare_trace(

@@ -87,6 +87,13 @@ impl Tiles {
         self.lights
     }
 
+    /// Drops the passes built so far (the shader's overrides changed):
+    /// `prepare` builds them again.
+    pub fn forget_pipelines(&mut self) {
+        self.megakernel = None;
+        self.wavefront = None;
+    }
+
     /// The wavefront, once `prepare` built it.
     pub fn wavefront(&self) -> Option<&Wavefront> {
         self.wavefront.as_ref()

@@ -371,4 +371,31 @@ impl GpuRenderer {
         let (host, proximity) = self.proximity();
         proximity.list_intersections(host, rays, pad)
     }
+
+    /// Turns shadows on or off (the viewer's key): the uniform's flag,
+    /// the HAS_SHADOWS override (where the shader is specialised) and the
+    /// shadow dispatch, the pipelines built on them rebuilt on next use.
+    /// The scene's buffers stay: the same image as a renderer opened on
+    /// the scene with that setting.
+    pub fn set_shadows(&mut self, on: bool) -> Result<()> {
+        let params = self.resident.scene_params();
+        if params.shadows == on as u32 {
+            return Ok(());
+        }
+        let lights = params.num_lights;
+        self.shadow_dispatch = ShadowDispatch::for_lights(
+            on,
+            lights,
+            self.gpu.options.shadow_dispatch.as_deref(),
+            self.gpu.limits.max_storage_buffer_binding_size,
+        )?;
+        self.resident.set_shadows(on);
+        let constants = &mut self.pipelines.constants;
+        if let Some((_, flag)) = constants.iter_mut().find(|(n, _)| *n == "HAS_SHADOWS") {
+            *flag = (on && lights > 0) as u32 as f64;
+        }
+        self.tiles.forget_pipelines();
+        self.lists.forget_pipelines();
+        Ok(())
+    }
 }

@@ -116,6 +116,12 @@ impl Resident {
     pub fn scene_params(&self) -> &Params {
         &self.scene_params
     }
+
+    /// Shadows on or off in the uniform's scene part (each call's uniform
+    /// starts from it).
+    pub fn set_shadows(&mut self, on: bool) {
+        self.scene_params.shadows = on as u32;
+    }
 }
 
 /// The uniform's part that `scene` sets.

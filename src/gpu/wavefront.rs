@@ -44,7 +44,18 @@ impl ShadowDispatch {
         max_binding: u64,
     ) -> Result<ShadowDispatch> {
         let lights = scene.lights.len().min(u32::MAX as usize) as u32;
-        let applies = scene.shadows && lights > 0 && wave_queue_bytes(lights) <= max_binding;
+        ShadowDispatch::for_lights(scene.shadows, lights, chosen, max_binding)
+    }
+
+    /// `for_scene` from the uniform's shadows and light count (what
+    /// `GpuRenderer::set_shadows` has).
+    pub(super) fn for_lights(
+        shadows: bool,
+        lights: u32,
+        chosen: Option<&str>,
+        max_binding: u64,
+    ) -> Result<ShadowDispatch> {
+        let applies = shadows && lights > 0 && wave_queue_bytes(lights) <= max_binding;
         match chosen {
             None | Some("wavefront") if applies => Ok(ShadowDispatch::Wavefront),
             None | Some("wavefront") | Some("megakernel") => Ok(ShadowDispatch::Megakernel),

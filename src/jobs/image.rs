@@ -16,7 +16,7 @@ use crate::limits::MAX_SPP;
 use crate::output::Rendered;
 use crate::progress::ProgressSink;
 use crate::render::{DeviceChoice, RenderTimings, Renderer};
-use crate::scene::Scene;
+use crate::scene::{RenderSettings, Scene};
 
 /// How many samples each pixel gets.
 #[derive(Clone, Copy, Debug)]
@@ -204,17 +204,24 @@ impl ImageReport {
     }
 }
 
-/// Renders `scene` from its own view as `job` asks and writes the image.
+/// Renders `scene` with `settings` (its view among them) as `job` asks
+/// and writes the image.
 pub fn render_image(
     scene: Scene,
+    settings: &RenderSettings,
     job: &ImageJob,
     sink: Option<&dyn ProgressSink>,
 ) -> Result<ImageReport> {
     // Taken before a GPU lets the host's geometry go.
     let primitives = scene.primitive_count();
     let bvh = BvhSummary::of(&scene.bvh);
-    let view = scene.view.clone();
-    let (mut renderer, upload) = open(Arc::new(scene), job.device, job.adapter, sink)?;
+    let view = settings.view.clone();
+    let (mut renderer, upload) = open(
+        Arc::new(scene.with_settings(settings)),
+        job.device,
+        job.adapter,
+        sink,
+    )?;
     let device = renderer.describe();
     say(sink, &format!("rendering on {device}"));
     let sampled = render_view(&mut renderer, &view, job.sampling, sink)?;

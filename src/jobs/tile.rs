@@ -13,7 +13,7 @@ use crate::gpu::AdapterRequest;
 use crate::parts::{Tile, settings_hash, write_part};
 use crate::progress::ProgressSink;
 use crate::render::DeviceChoice;
-use crate::scene::Scene;
+use crate::scene::{RenderSettings, Scene};
 
 /// One part to render and write.
 pub struct TileJob<'a> {
@@ -37,15 +37,16 @@ pub struct TileReport {
     pub elapsed: Duration,
 }
 
-/// Renders `job.tile`'s rows of `scene` from its own view and writes them.
+/// Renders `job.tile`'s rows of `scene` with `settings` and writes them.
 pub fn render_tile(
     scene: Scene,
+    settings: &RenderSettings,
     job: &TileJob,
     sink: Option<&dyn ProgressSink>,
 ) -> Result<TileReport> {
-    let view = scene.view.clone();
+    let view = settings.view.clone();
     let rows = job.tile.rows(view.camera.height)?;
-    let scene = Arc::new(scene);
+    let scene = Arc::new(scene.with_settings(settings));
     let (mut renderer, _) = open(Arc::clone(&scene), job.device, job.adapter, sink)?;
     let device = if renderer.is_cpu() { "cpu" } else { "gpu" };
     let hash = settings_hash(&scene, &view, device);

@@ -14,7 +14,7 @@ use crate::error::{Error, Result};
 use crate::gpu::AdapterRequest;
 use crate::progress::ProgressSink;
 use crate::render::DeviceChoice;
-use crate::scene::Scene;
+use crate::scene::{RenderSettings, Scene};
 
 /// Frames to render and write.
 pub struct TurntableJob<'a> {
@@ -53,16 +53,22 @@ impl TurntableReport {
     }
 }
 
-/// Renders `job`'s frames of `scene`, orbiting its camera, and writes
-/// each; says each frame on `sink` as it is written.
+/// Renders `job`'s frames of `scene` with `settings`, orbiting their
+/// camera, and writes each; says each frame on `sink` as it is written.
 pub fn render_turntable(
     scene: Scene,
+    settings: &RenderSettings,
     job: &TurntableJob,
     sink: Option<&dyn ProgressSink>,
 ) -> Result<TurntableReport> {
     let paths = frame_paths(job.pattern, job.range.clone())?;
-    let mut view = scene.view.clone();
-    let (mut renderer, _) = open(Arc::new(scene), job.device, job.adapter, sink)?;
+    let mut view = settings.view.clone();
+    let (mut renderer, _) = open(
+        Arc::new(scene.with_settings(settings)),
+        job.device,
+        job.adapter,
+        sink,
+    )?;
     let device = renderer.describe();
     let count = paths.len();
     let of = if count as u32 == job.frames {

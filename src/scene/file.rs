@@ -19,7 +19,7 @@ use crate::placement::centring_offset;
 struct SceneFile {
     camera: Camera,
     #[serde(default)]
-    render: RenderSettings,
+    render: RenderTable,
     #[serde(default)]
     mesh: Vec<MeshEntry>,
     #[serde(default)]
@@ -33,7 +33,7 @@ struct SceneFile {
 /// The `[render]` table.
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
-pub struct RenderSettings {
+pub struct RenderTable {
     pub background: Rgb,
     pub ambient: Rgb,
     pub shadows: bool,
@@ -43,9 +43,9 @@ pub struct RenderSettings {
     pub intersect: Intersect,
 }
 
-impl Default for RenderSettings {
+impl Default for RenderTable {
     fn default() -> Self {
-        RenderSettings {
+        RenderTable {
             background: Rgb::Uniform(0.0),
             ambient: Rgb::Uniform(0.0),
             shadows: true,

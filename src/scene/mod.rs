@@ -19,10 +19,18 @@ use crate::limits::{MAX_COORDINATE, MAX_LOCAL_COORDINATE, checked_point, vector_
 use crate::loading;
 use crate::placement::{Placement, checked_local};
 
+mod access;
 mod file;
 mod model;
+mod settings;
 
-/// A loaded, validated scene, flattened into the buffers the GPU receives.
+pub use settings::RenderSettings;
+
+/// A loaded, validated scene, flattened into the buffers the GPU receives:
+/// geometry, materials, lights and its default view, read through its
+/// methods (`access.rs`). What a render may change (size, spp, shadows,
+/// ambient, accel, intersect) is a `RenderSettings`: the scene's own are
+/// `default_settings()`, and the jobs render `with_settings`.
 ///
 /// Primitive ids: triangles in file order across meshes in scene order
 /// (polygons fan-triangulated), then spheres.
@@ -30,43 +38,43 @@ mod model;
 pub struct Scene {
     /// The view the scene's file asks for (its camera, spp and seed): the
     /// default of the front ends, which render any other view as well.
-    pub view: View,
+    pub(crate) view: View,
     /// Whether the file set `view.spp` (`render.spp`) rather than leaving
     /// it 1: the viewer refines to it only then.
-    pub spp_given: bool,
-    pub background: [f32; 3],
-    pub ambient: [f32; 3],
-    pub shadows: bool,
-    pub triangles: Vec<Triangle>,
+    pub(crate) spp_given: bool,
+    pub(crate) background: [f32; 3],
+    pub(crate) ambient: [f32; 3],
+    pub(crate) shadows: bool,
+    pub(crate) triangles: Vec<Triangle>,
     /// One entry per triangle when any mesh is smooth, else empty.
-    pub normals: Vec<TriangleNormals>,
+    pub(crate) normals: Vec<TriangleNormals>,
     /// One entry per triangle when any mesh has vertex colours or texture
     /// coordinates, else empty.
-    pub attributes: Vec<TriangleAttributes>,
+    pub(crate) attributes: Vec<TriangleAttributes>,
     /// Triangles whose file gave them vertex colours (for `lambert info`).
-    pub colored_triangles: usize,
-    pub spheres: Vec<Sphere>,
-    pub materials: Vec<Material>,
-    pub lights: Vec<Light>,
+    pub(crate) colored_triangles: usize,
+    pub(crate) spheres: Vec<Sphere>,
+    pub(crate) materials: Vec<Material>,
+    pub(crate) lights: Vec<Light>,
     /// Every texture the materials use, as both paths read it.
-    pub textures: crate::texture::TextureStore,
+    pub(crate) textures: crate::texture::TextureStore,
     /// Over all primitives; built by `load`/`from_toml`.
-    pub bvh: Bvh,
+    pub(crate) bvh: Bvh,
     /// How rays find their hits; both paths follow it.
-    pub accel: Accel,
+    pub(crate) accel: Accel,
     /// The ray/triangle test both paths use.
-    pub intersect: Intersect,
+    pub(crate) intersect: Intersect,
     /// What loading read but ignored or could not find (each names its
     /// file); the CLI prints them.
-    pub warnings: Vec<String>,
+    pub(crate) warnings: Vec<String>,
     /// Every file loading read or looked for: the scene file, its models,
     /// their MTL files, glTF buffers and textures. No output may replace
     /// one (`check_output`).
-    pub inputs: Vec<PathBuf>,
+    pub(crate) inputs: Vec<PathBuf>,
     /// World position (f64) of the origin of the f32 geometry, lights and
     /// camera the kernels see: the centre of a scene far from the origin,
     /// else zero (`placement::centring_offset`).
-    pub offset: DVec3,
+    pub(crate) offset: DVec3,
 }
 
 /// `--intersect`: the ray/triangle test. See docs/accuracy.md for what each

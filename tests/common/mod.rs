@@ -13,10 +13,13 @@ use lambert::progress::Progress;
 mod bin;
 pub mod cli;
 pub mod formats;
+mod settings;
 pub mod stress;
 // Each test file uses some of these; unused ones are no warning.
 #[allow(unused_imports)]
 pub use bin::*;
+#[allow(unused_imports)]
+pub use settings::*;
 
 pub fn asset(path: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -60,17 +63,17 @@ pub fn open_gpu() -> Gpu {
 pub fn render_gpu(scene: &Scene) -> Rendered {
     let mut renderer = GpuRenderer::new(open_gpu(), scene).expect("scene uploads");
     renderer
-        .render(&scene.view, &Progress::hidden())
+        .render(scene.view(), &Progress::hidden())
         .expect("GPU render")
         .0
 }
 
 pub fn render_cpu(scene: &Scene) -> Rendered {
-    cpu::render(scene, &scene.view, Precision::F32, &Progress::hidden())
+    cpu::render(scene, scene.view(), Precision::F32, &Progress::hidden())
 }
 
 pub fn render_oracle(scene: &Scene) -> Rendered {
-    cpu::render(scene, &scene.view, Precision::F64, &Progress::hidden())
+    cpu::render(scene, scene.view(), Precision::F64, &Progress::hidden())
 }
 
 /// An image's values as bits, for bit-for-bit comparisons.
@@ -96,7 +99,7 @@ pub fn trace_gpu(
 ) -> Vec<lambert::layout::Hit> {
     let mut renderer = GpuRenderer::new(open_gpu(), scene).expect("scene uploads");
     renderer
-        .trace_rays(rays, any_hit, scene.intersect)
+        .trace_rays(rays, any_hit, scene.default_settings().intersect)
         .expect("GPU trace")
 }
 
@@ -113,12 +116,12 @@ pub fn scene_of(triangles: Vec<Triangle>, spheres: Vec<Sphere>) -> Scene {
     let mut s = scene(
         "[camera]\neye = [0.0, 0.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\nvfov = 40.0\nwidth = 8\nheight = 8\n[[sphere]]\ncenter = [0.0, 0.0, 0.0]\nradius = 1.0\n",
     );
-    let material = s.spheres[0].material;
-    s.triangles = triangles
+    let material = s.spheres()[0].material;
+    *s.triangles_mut() = triangles
         .into_iter()
         .map(|t| Triangle { material, ..t })
         .collect();
-    s.spheres = spheres
+    *s.spheres_mut() = spheres
         .into_iter()
         .map(|sp| Sphere { material, ..sp })
         .collect();

@@ -15,9 +15,11 @@ pub fn triangle(v: [Vec3; 3]) -> Triangle {
 }
 
 pub fn with_intersect(scene: &Scene, intersect: Intersect) -> Scene {
-    let mut s = scene.clone();
-    s.intersect = intersect;
-    s
+    let settings = lambert::scene::RenderSettings {
+        intersect,
+        ..scene.default_settings()
+    };
+    scene.clone().with_settings(&settings)
 }
 
 pub fn ray(origin: Vec3, dir: Vec3) -> Ray {

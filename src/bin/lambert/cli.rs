@@ -171,7 +171,7 @@ fn render_part(args: &RenderArgs, tile_text: &str, quiet: bool) -> Result<ExitCo
         )));
     }
     check_output_path(&args.output, &[&args.scene])?;
-    let scene = args.options.load(&args.scene)?;
+    let (scene, settings) = args.options.load(&args.scene)?;
     scene.check_output(&args.output)?;
     print_warnings(&scene, quiet);
     let job = TileJob {
@@ -180,7 +180,7 @@ fn render_part(args: &RenderArgs, tile_text: &str, quiet: bool) -> Result<ExitCo
         device: args.device.into(),
         adapter: &args.adapter.request(),
     };
-    let report = jobs::render_tile(scene, &job, progress_bar::unless_quiet(quiet))?;
+    let report = jobs::render_tile(scene, &settings, &job, progress_bar::unless_quiet(quiet))?;
     if !quiet {
         eprintln!(
             "wrote {}: part {}/{} (rows {} to {} of {}×{}) on {} in {}",
@@ -368,7 +368,7 @@ pub fn run() -> Result<ExitCode> {
 /// Loading's warnings, each on its own line.
 fn print_warnings(scene: &Scene, quiet: bool) {
     if !quiet {
-        for warning in &scene.warnings {
+        for warning in scene.warnings() {
             eprintln!("warning: {warning}");
         }
     }
@@ -414,7 +414,7 @@ fn render(args: &RenderArgs, quiet: bool) -> Result<ExitCode> {
     // Fail on a bad output name before spending time on the render.
     check_output_path(&args.output, &[&args.scene])?;
     let start = Instant::now();
-    let scene = args.options.load(&args.scene)?;
+    let (scene, settings) = args.options.load(&args.scene)?;
     let load = start.elapsed();
     scene.check_output(&args.output)?;
     print_warnings(&scene, quiet);
@@ -432,7 +432,7 @@ fn render(args: &RenderArgs, quiet: bool) -> Result<ExitCode> {
         adapter: &args.adapter.request(),
         sampling,
     };
-    let report = jobs::render_image(scene, &job, progress_bar::unless_quiet(quiet))?;
+    let report = jobs::render_image(scene, &settings, &job, progress_bar::unless_quiet(quiet))?;
     if !quiet {
         print_image_report(&report, job.sampling, load);
     }
@@ -520,11 +520,12 @@ fn diff(args: &DiffArgs, quiet: bool) -> Result<ExitCode> {
     if let Some(path) = &args.heatmap {
         check_output_path(path, &[&args.scene])?;
     }
-    let scene = args.options.load(&args.scene)?;
+    let (scene, settings) = args.options.load(&args.scene)?;
     if let Some(path) = &args.heatmap {
         scene.check_output(path)?;
     }
     print_warnings(&scene, quiet || args.json);
+    let scene = scene.with_settings(&settings);
     let tolerance = Tolerance {
         abs: args.tol_abs,
         rel: args.tol_rel,
@@ -532,7 +533,7 @@ fn diff(args: &DiffArgs, quiet: bool) -> Result<ExitCode> {
         max_prim_mismatch_fraction: args.max_prim_mismatch,
     };
     let request = args.adapter.request();
-    let view = &scene.view;
+    let view = &settings.view;
     let cpu = || cpu::render(&scene, view, Precision::F32, &Progress::hidden());
     let oracle = || {
         let oracle = oracle_scene(&scene);
@@ -597,34 +598,36 @@ fn trace(args: &TraceArgs, quiet: bool) -> Result<ExitCode> {
     let start = Instant::now();
     let rays = rays::read_rays(&args.rays)?;
     let read_seconds = start.elapsed().as_secs_f64();
-    let mut scene = match &args.scene {
+    let scene = match &args.scene {
         Some(path) => Scene::load(path)?,
         None => Scene::from_objs(&args.obj)?,
     };
     scene.check_output(&args.output)?;
-    args.options.apply(&mut scene)?;
+    let mut settings = scene.default_settings();
+    args.options.apply(&mut settings)?;
+    let intersect = settings.intersect;
     // Where a ray's f32 numbers limit its hits (docs/accuracy.md).
     if !quiet {
         for warning in scene.placement().ray_warnings(&rays) {
             eprintln!("warning: {warning}");
         }
     }
-    let scene = Arc::new(scene);
+    let scene = Arc::new(scene.with_settings(&settings));
     let device = args.device.into();
     let (mut renderer, note) = Renderer::open(Arc::clone(&scene), device, &args.adapter.request())?;
     if let Some(note) = note.filter(|_| !quiet) {
         eprintln!("{note}");
     }
-    renderer.prepare_trace(args.any_hit, scene.intersect)?;
+    renderer.prepare_trace(args.any_hit, intersect)?;
     let warmup_seconds = if args.warmup {
         let start = Instant::now();
-        renderer.trace(&rays, args.any_hit, scene.intersect)?;
+        renderer.trace(&rays, args.any_hit, intersect)?;
         Some(start.elapsed().as_secs_f64())
     } else {
         None
     };
     let start = Instant::now();
-    let hits = renderer.trace(&rays, args.any_hit, scene.intersect)?;
+    let hits = renderer.trace(&rays, args.any_hit, intersect)?;
     let elapsed = start.elapsed();
     let start = Instant::now();
     rays::write_hits(&args.output, &hits)?;
@@ -635,7 +638,7 @@ fn trace(args: &TraceArgs, quiet: bool) -> Result<ExitCode> {
     });
     let report = TraceReport {
         device: renderer.describe(),
-        intersect: scene.intersect.name(),
+        intersect: intersect.name(),
         any_hit: args.any_hit,
         rays: rays.len(),
         hits: hits.iter().filter(|h| h.prim != NO_HIT).count(),
@@ -679,9 +682,9 @@ fn trace(args: &TraceArgs, quiet: bool) -> Result<ExitCode> {
 
 fn camera_rays(args: &CameraRaysArgs, quiet: bool) -> Result<ExitCode> {
     lambert::output::prepare_output_for(&args.output, &[&args.scene])?;
-    let scene = args.view.load(&args.scene)?;
+    let (scene, settings) = args.view.load(&args.scene)?;
     scene.check_output(&args.output)?;
-    let rays = rays::camera_rays(&scene);
+    let rays = rays::camera_rays_for(&scene, &settings.view.camera);
     rays::write_rays(&args.output, &rays)?;
     if !quiet {
         eprintln!(

@@ -13,20 +13,20 @@ use lambert::scene::Scene;
 pub(super) fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> {
     let scene = Scene::load_with_camera(path, camera)?;
     println!("{}", path.display());
-    println!("  triangles: {}", scene.triangles.len());
-    if !scene.spheres.is_empty() {
-        println!("  spheres: {}", scene.spheres.len());
+    println!("  triangles: {}", scene.triangles().len());
+    if !scene.spheres().is_empty() {
+        println!("  spheres: {}", scene.spheres().len());
     }
-    if let Some(b) = scene.bvh.bounds() {
+    if let Some(b) = scene.bvh().bounds() {
         // The BVH's bounds are local (relative to the offset): world ones
         // are printed, and the centre the geometry is kept relative to.
-        let world = |p: glam::Vec3| lambert::limits::vector_text(p.as_dvec3() + scene.offset);
-        let centre = if scene.offset == glam::DVec3::ZERO {
+        let world = |p: glam::Vec3| lambert::limits::vector_text(p.as_dvec3() + scene.offset());
+        let centre = if scene.offset() == glam::DVec3::ZERO {
             String::new()
         } else {
             format!(
                 " (kept in f32 relative to the centre {})",
-                lambert::limits::vector_text(scene.offset)
+                lambert::limits::vector_text(scene.offset())
             )
         };
         println!("  bounds: {} to {}{centre}", world(b.min), world(b.max));
@@ -35,14 +35,14 @@ pub(super) fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> 
     // reported rather than printed as statistics.
     let invalid = |e: lambert::bvh::Invalid| Error::scene(path, format!("{e} (a bug in lambert)"));
     let bvh = scene
-        .bvh
-        .validate(&scene.triangles, &scene.spheres)
+        .bvh()
+        .validate(scene.triangles(), scene.spheres())
         .map_err(invalid)?;
     println!("  BVH (CPU): {bvh}");
-    let compressed = lambert::cwbvh::compress(&scene.bvh);
-    let compressed = lambert::cwbvh::validate(&compressed, &scene.bvh).map_err(invalid)?;
+    let compressed = lambert::cwbvh::compress(scene.bvh());
+    let compressed = lambert::cwbvh::validate(&compressed, scene.bvh()).map_err(invalid)?;
     println!("  compressed BVH (GPU): {compressed}");
-    let smooth = !scene.normals.is_empty();
+    let smooth = !scene.normals().is_empty();
     println!(
         "  normals: {}",
         if smooth {
@@ -53,13 +53,13 @@ pub(super) fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> 
     );
     println!(
         "  vertex colours: {}",
-        match scene.colored_triangles {
+        match scene.colored_triangles() {
             0 => "none".to_string(),
-            n => format!("yes, on {n} of {} triangles", scene.triangles.len()),
+            n => format!("yes, on {n} of {} triangles", scene.triangles().len()),
         }
     );
-    println!("  materials: {}", scene.materials.len());
-    for (i, m) in scene.materials.iter().enumerate().take(32) {
+    println!("  materials: {}", scene.materials().len());
+    for (i, m) in scene.materials().iter().enumerate().take(32) {
         let [r, g, b, a] = m.base_color;
         let mut line = format!("    {i}: base colour [{r}, {g}, {b}], alpha {a}");
         if m.alpha_mode == lambert::layout::ALPHA_MASK {
@@ -73,12 +73,12 @@ pub(super) fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> 
         }
         println!("{line}");
     }
-    let textures = scene.textures.images();
+    let textures = scene.textures().images();
     println!("  textures: {}", textures.len());
     for (t, image) in textures.iter().enumerate() {
         // Which materials read it, and as what.
         let users: Vec<String> = scene
-            .materials
+            .materials()
             .iter()
             .enumerate()
             .flat_map(|(i, m)| {
@@ -90,7 +90,7 @@ pub(super) fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> 
                 .into_iter()
                 .filter(|&(slot, _)| {
                     slot != lambert::layout::NO_TEXTURE
-                        && scene.textures.image_of_slot(slot) == Some(t)
+                        && scene.textures().image_of_slot(slot) == Some(t)
                 })
                 .map(move |(_, role)| format!("{i} ({role})"))
             })
@@ -107,12 +107,12 @@ pub(super) fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> 
         );
     }
     let emissive = scene
-        .materials
+        .materials()
         .iter()
         .filter(|m| m.emission != [0.0; 3])
         .count();
     println!("  emissive materials: {emissive}");
-    let c = &scene.view.camera;
+    let c = &scene.view().camera;
     let v = |a: [f64; 3]| lambert::limits::vector_text(glam::DVec3::from(a));
     println!(
         "  camera: eye {}, look_at {}, up {}, vfov {:.4}°, {}×{}",
@@ -123,8 +123,8 @@ pub(super) fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> 
         c.width,
         c.height
     );
-    println!("  lights: {}", scene.lights.len());
-    for light in &scene.lights {
+    println!("  lights: {}", scene.lights().len());
+    for light in scene.lights() {
         let vector = lambert::limits::vector_text(glam::Vec3::from(light.vector).as_dvec3());
         let color = lambert::limits::vector_text(glam::Vec3::from(light.color).as_dvec3());
         if light.kind == lambert::layout::LIGHT_POINT {
@@ -134,8 +134,8 @@ pub(super) fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> 
         }
     }
     // f32 values, printed as f32 (0.1, not 0.10000000149011612).
-    println!("  ambient: {:?}", scene.ambient);
-    for warning in &scene.warnings {
+    println!("  ambient: {:?}", scene.ambient());
+    for warning in scene.warnings() {
         println!("  warning: {warning}");
     }
     Ok(ExitCode::SUCCESS)

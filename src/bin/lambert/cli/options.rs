@@ -11,7 +11,7 @@ use lambert::error::{Error, Result};
 use lambert::gpu::AdapterRequest;
 use lambert::limits::validate_spp;
 use lambert::render::DeviceChoice;
-use lambert::scene::{Accel, Intersect, Scene};
+use lambert::scene::{Accel, Intersect, RenderSettings, Scene};
 
 /// `--device` of render, diff and trace: `DeviceChoice`.
 #[derive(Clone, Copy, Default, ValueEnum)]
@@ -150,15 +150,23 @@ pub(super) struct ViewOptions {
     camera: Option<String>,
 }
 
+/// The scene at `path` (with the glTF camera `camera`), and its default
+/// settings for the options to override.
+fn load_scene(path: &Path, camera: Option<&str>) -> Result<(Scene, RenderSettings)> {
+    let scene = Scene::load_with_camera(path, camera)?;
+    let settings = scene.default_settings();
+    Ok((scene, settings))
+}
+
 impl ViewOptions {
-    pub(super) fn load(&self, path: &Path) -> Result<Scene> {
-        let mut scene = Scene::load_with_camera(path, self.camera.as_deref())?;
-        self.apply(&mut scene)?;
-        Ok(scene)
+    pub(super) fn load(&self, path: &Path) -> Result<(Scene, RenderSettings)> {
+        let (scene, mut settings) = load_scene(path, self.camera.as_deref())?;
+        self.apply(&mut settings)?;
+        Ok((scene, settings))
     }
 
-    pub(super) fn apply(&self, scene: &mut Scene) -> Result<()> {
-        scene.view.camera = scene
+    pub(super) fn apply(&self, settings: &mut RenderSettings) -> Result<()> {
+        settings.view.camera = settings
             .view
             .camera
             .resized(self.width, self.height)
@@ -168,25 +176,25 @@ impl ViewOptions {
 }
 
 impl SceneOptions {
-    pub(super) fn load(&self, path: &Path) -> Result<Scene> {
-        let mut scene = Scene::load_with_camera(path, self.view.camera.as_deref())?;
-        self.apply(&mut scene)?;
-        Ok(scene)
+    pub(super) fn load(&self, path: &Path) -> Result<(Scene, RenderSettings)> {
+        let (scene, mut settings) = load_scene(path, self.view.camera.as_deref())?;
+        self.apply(&mut settings)?;
+        Ok((scene, settings))
     }
 
-    pub(super) fn apply(&self, scene: &mut Scene) -> Result<()> {
-        scene.accel = self.accel.into();
+    pub(super) fn apply(&self, settings: &mut RenderSettings) -> Result<()> {
+        settings.accel = self.accel.into();
         if let Some(intersect) = self.intersect {
-            scene.intersect = intersect.into();
+            settings.intersect = intersect.into();
         }
         if let Some(spp) = self.spp {
             validate_spp(spp).map_err(|e| Error::Usage(format!("--{e}")))?;
-            scene.view.spp = spp;
+            settings.view.spp = spp;
         }
         if let Some(seed) = self.seed {
-            scene.view.seed = seed;
+            settings.view.seed = seed;
         }
-        self.view.apply(scene)
+        self.view.apply(settings)
     }
 }
 
@@ -208,12 +216,12 @@ impl RenderOptions {
         self.scene.spp
     }
 
-    pub(super) fn load(&self, path: &Path) -> Result<Scene> {
-        let mut scene = self.scene.load(path)?;
+    pub(super) fn load(&self, path: &Path) -> Result<(Scene, RenderSettings)> {
+        let (scene, mut settings) = self.scene.load(path)?;
         if let Some(ambient) = self.ambient {
-            scene.ambient = ambient;
+            settings.ambient = ambient;
         }
-        Ok(scene)
+        Ok((scene, settings))
     }
 }
 

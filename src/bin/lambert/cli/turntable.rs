@@ -40,7 +40,7 @@ pub(super) fn turntable(args: &RenderArgs, frames: u32, quiet: bool) -> Result<E
         lambert::output::refuse_input(path, &[&args.scene])?;
     }
     check_output_path(&paths[0], &[&args.scene])?;
-    let scene = args.options.load(&args.scene)?;
+    let (scene, settings) = args.options.load(&args.scene)?;
     for path in &paths {
         scene.check_output(path)?;
     }
@@ -52,7 +52,7 @@ pub(super) fn turntable(args: &RenderArgs, frames: u32, quiet: bool) -> Result<E
         device: args.device.into(),
         adapter: &args.adapter.request(),
     };
-    let report = render_turntable(scene, &job, progress_bar::unless_quiet(quiet))?;
+    let report = render_turntable(scene, &settings, &job, progress_bar::unless_quiet(quiet))?;
     if !quiet {
         eprintln!(
             "{} of {} frames, {} per frame on average (render and readback; the scene was uploaded once)",

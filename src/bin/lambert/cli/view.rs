@@ -49,7 +49,7 @@ pub(super) fn run(args: ViewArgs, quiet: bool) -> Result<ExitCode> {
     if let Some(frames) = args.frames {
         validate_spp(frames).map_err(|e| Error::Usage(format!("--frames: {e}")))?;
     }
-    let scene = args.options.load(&args.scene)?;
+    let (scene, settings) = args.options.load(&args.scene)?;
     if let Some(path) = &args.screenshot {
         scene.check_output(path)?;
     }
@@ -57,11 +57,12 @@ pub(super) fn run(args: ViewArgs, quiet: bool) -> Result<ExitCode> {
     let spp = args
         .frames
         .or(args.options.spp())
-        .or(scene.spp_given.then_some(scene.view.spp))
+        .or(scene.spp_given().then_some(scene.view().spp))
         .unwrap_or(INTERACTIVE_SPP);
     view(Settings {
         path: args.scene,
-        scene,
+        // The viewer renders the scene as the options set it.
+        scene: scene.with_settings(&settings),
         device: args.device.into(),
         request: args.adapter.request(),
         spp,

@@ -113,7 +113,7 @@ impl App {
         // Raw wheel buttons tell a click's release apart (`device_event`),
         // focused or not.
         event_loop.listen_device_events(winit::event_loop::DeviceEvents::Always);
-        let camera = &settings.scene.view.camera;
+        let camera = &settings.scene.view().camera;
         let attributes = Window::default_attributes()
             .with_title("lambert view")
             .with_inner_size(PhysicalSize::new(camera.width, camera.height));
@@ -150,8 +150,8 @@ impl App {
         }
         // The GPU that renders shows its frames; the CPU path's are shown
         // by any adapter that can present (lavapipe too), else by the CPU.
-        let shown_by = match (&renderer, &presenting) {
-            (Renderer::Gpu(r), Some(_)) => Ok(r.gpu().clone()),
+        let shown_by = match (renderer.gpu(), &presenting) {
+            (Some(gpu), Some(_)) => Ok(gpu.clone()),
             (_, Some(p)) => Gpu::open_presenting(&settings.request, false, p),
             (_, None) => Err(Error::Gpu(format!(
                 "no surface for the window: {}",
@@ -171,10 +171,7 @@ impl App {
                 "rendering on the CPU path (slower, still progressive); {shown}"
             ));
         }
-        let gpu = match &renderer {
-            Renderer::Gpu(r) => Some(r.gpu().clone()),
-            Renderer::Cpu(_) => None,
-        };
+        let gpu = renderer.gpu().cloned();
         self.about = renderer.describe();
         self.presenter = Some(match (shown_by, surface) {
             (Ok(shown_by), Ok(surface)) => {
@@ -184,13 +181,14 @@ impl App {
         });
         let view = View {
             spp: settings.spp,
-            ..scene.view.clone()
+            ..scene.view().clone()
         };
         let worker = Worker {
             path: settings.path.clone(),
             reach: Reach::of(&scene),
+            shadows: scene.default_settings().shadows,
             scene,
-            renderer: Some(renderer),
+            renderer,
             cancel: Arc::clone(&self.cancel),
             gpu,
             progressive: Progressive::new(view),

@@ -36,12 +36,12 @@ impl Reach {
     /// `scene`'s: its offset, and the size of its geometry (of the view's
     /// distance where it has none).
     pub fn of(scene: &Scene) -> Reach {
-        let camera = &scene.view.camera;
-        let size = scene.bvh.bounds().map_or_else(
+        let camera = &scene.view().camera;
+        let size = scene.bvh().bounds().map_or_else(
             || (DVec3::from(camera.eye) - DVec3::from(camera.look_at)).length(),
             |b| (b.max - b.min).as_dvec3().length(),
         );
-        Reach::new(scene.offset, size)
+        Reach::new(scene.offset(), size)
     }
 
     /// About `offset`, for a scene `size` across.

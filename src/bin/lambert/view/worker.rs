@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 
 use lambert::camera::{Camera, View};
 use lambert::error::{Error, Result};
-use lambert::gpu::{Gpu, GpuRenderer};
+use lambert::gpu::Gpu;
 use lambert::output::Image;
 use lambert::render::{Progressive, Renderer};
 use lambert::scene::Scene;
@@ -84,13 +84,13 @@ pub struct Frame {
 
 /// The render thread's state.
 pub struct Worker {
-    /// The host's copy, for a rebuild (shadows), for framing and for its
-    /// camera as loaded (`R`).
+    /// The host's copy, for framing and for its camera as loaded (`R`).
     pub scene: Arc<Scene>,
     /// The file the scene came from (its glTF cameras, `1`–`9`).
     pub path: PathBuf,
-    /// None only while a rebuild replaces it (the old one goes first).
-    pub renderer: Option<Renderer>,
+    pub renderer: Renderer,
+    /// Whether the renderer traces shadows (`l` toggles it).
+    pub shadows: bool,
     /// Where the camera may go in this scene.
     pub reach: Reach,
     /// Set by the window to stop the frame in flight (it is quitting).
@@ -158,15 +158,15 @@ impl Worker {
                     });
                 }
             }
-            Command::Frame => match self.scene.bvh.bounds() {
+            Command::Frame => match self.scene.bvh().bounds() {
                 Some(b) => {
-                    let offset = self.scene.offset;
+                    let offset = self.scene.offset();
                     let bounds = (b.min.as_dvec3() + offset, b.max.as_dvec3() + offset);
                     // Spheres are never flat; triangles alone may be.
                     let scene = &self.scene;
-                    let flat = scene.spheres.is_empty().then(|| {
+                    let flat = scene.spheres().is_empty().then(|| {
                         lambert::camera::flat_normal(|| {
-                            scene.triangles.iter().flat_map(|t| {
+                            scene.triangles().iter().flat_map(|t| {
                                 [t.v0, t.v1, t.v2].map(|v| glam::Vec3::from(v).as_dvec3())
                             })
                         })
@@ -184,31 +184,41 @@ impl Worker {
                 }
             },
             Command::ToggleShadows => {
-                // The renderer (on a GPU, its copy of the scene) goes
-                // first, so that the scene is ours alone and changes in
-                // place: never two copies at once.
-                self.drop_renderer();
-                let scene = Arc::make_mut(&mut self.scene);
-                scene.shadows = !scene.shadows;
-                let on = scene.shadows;
+                // On a GPU, its pipelines specialised again; the scene
+                // stays uploaded.
+                let on = !self.shadows;
+                // The CPU path shares our scene: ours goes first, so that
+                // the renderer changes it in place (never two copies at
+                // once), and comes back changed.
+                let empty = Arc::new(Scene::from_triangles(Vec::new()));
+                let ours = std::mem::replace(&mut self.scene, empty);
+                let kept = self.renderer.shared_scene().is_none().then_some(ours);
+                let changed = self.renderer.set_shadows(on);
+                match (self.renderer.shared_scene(), kept) {
+                    (Some(scene), _) => self.scene = Arc::clone(scene),
+                    (None, Some(ours)) => self.scene = ours,
+                    (None, None) => {}
+                }
+                changed?;
+                self.shadows = on;
                 report(Report::Say(format!(
                     "shadows {}",
                     if on { "on" } else { "off" }
                 )));
-                let renderer = self.renderer_for(&self.scene)?;
-                self.show(Arc::clone(&self.scene), renderer, camera);
+                self.restart(camera);
             }
             Command::Load(path) => match Scene::load(&path) {
                 Ok(scene) => {
-                    for warning in &scene.warnings {
+                    for warning in scene.warnings() {
                         report(Report::Say(format!("warning: {warning}")));
                     }
-                    let camera = sized(scene.view.camera.clone());
+                    let camera = sized(scene.view().camera.clone());
                     // Another scene: the one shown stays until this one
                     // is on the device, and where it does not go there.
                     let scene = Arc::new(scene);
                     match self.renderer_for(&scene) {
                         Ok(renderer) => {
+                            self.shadows = scene.default_settings().shadows;
                             self.show(scene, renderer, camera);
                             report(Report::Say(format!("loaded {}", path.display())));
                             self.path = path;
@@ -246,7 +256,7 @@ impl Worker {
     /// its glTF camera `index`.
     fn file_camera(&self, index: Option<usize>) -> Result<Camera> {
         let Some(index) = index else {
-            return Ok(self.scene.view.camera.clone());
+            return Ok(self.scene.view().camera.clone());
         };
         let is_gltf = lambert::loading::Format::of(&self.path).is_ok_and(|f| f.is_gltf());
         if !is_gltf {
@@ -278,33 +288,20 @@ impl Worker {
             }
         };
         Ok(Scene::load_with_camera(&self.path, name.as_deref())?
-            .view
-            .camera)
-    }
-
-    /// Lets the renderer go, and on a GPU its buffers at once: wgpu frees
-    /// a dropped buffer only when the device is next polled.
-    fn drop_renderer(&mut self) {
-        self.renderer = None;
-        if let Some(gpu) = &self.gpu {
-            // Nothing is in flight between frames: a failure here would
-            // be the next upload's to report.
-            let _ = gpu.device.poll(wgpu::PollType::wait_indefinitely());
-        }
+            .view()
+            .camera
+            .clone())
     }
 
     /// A renderer of `scene` on the device the renderer was on (or the
     /// CPU path, sharing the host's copy).
     fn renderer_for(&self, scene: &Arc<Scene>) -> Result<Renderer> {
-        Ok(match &self.gpu {
-            Some(gpu) => Renderer::Gpu(Box::new(GpuRenderer::new(gpu.clone(), scene)?)),
-            None => Renderer::Cpu(Arc::clone(scene)),
-        })
+        Renderer::open_on(Arc::clone(scene), self.gpu.as_ref())
     }
 
     /// `scene`, rendered by `renderer`, seen from `camera`.
     fn show(&mut self, scene: Arc<Scene>, renderer: Renderer, camera: Camera) {
-        self.renderer = Some(renderer);
+        self.renderer = renderer;
         self.reach = Reach::of(&scene);
         self.scene = scene;
         self.restart(camera);
@@ -324,8 +321,10 @@ impl Worker {
     /// is quitting) reports nothing.
     fn add_frame(&mut self, report: &impl Fn(Report) -> bool) -> Result<()> {
         let start = Instant::now();
-        let renderer = self.renderer.as_mut().expect("a renderer between rebuilds");
-        if !renderer.add_samples_or_cancel(&mut self.progressive, 1, &self.cancel)? {
+        if !self
+            .renderer
+            .add_samples_or_cancel(&mut self.progressive, 1, &self.cancel)?
+        {
             return Ok(());
         }
         let frame_time = start.elapsed();
@@ -340,7 +339,7 @@ impl Worker {
             spp: view.spp,
             frame_time,
             mrays_per_s: rays / frame_time.as_secs_f64().max(1e-9) / 1e6,
-            triangles: self.scene.triangles.len(),
+            triangles: self.scene.triangles().len(),
         };
         report(Report::Frame(Arc::new(frame)));
         if self.progressive.is_finished()
