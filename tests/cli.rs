@@ -2,6 +2,7 @@
 
 mod common;
 
+use common::args::{trace_args, turntable_args};
 use common::cli::*;
 use common::{lambert, s};
 
@@ -394,20 +395,13 @@ fn trace_writes_hits_in_the_documented_format() {
     .unwrap();
     for device in ["cpu", "gpu"] {
         let hits_path = case.path(&format!("hits_{device}.bin"));
-        let out = lambert(&[
-            "trace",
-            "--obj",
-            obj.to_str().unwrap(),
-            "--rays",
-            rays_path.to_str().unwrap(),
-            "-o",
-            hits_path.to_str().unwrap(),
-            "--device",
-            device,
-            "--oracle",
-            "--warmup",
-            "--json",
-        ]);
+        let out = lambert(
+            &[
+                &trace_args(&obj, &rays_path, &hits_path)[..],
+                &["--device", device, "--oracle", "--warmup", "--json"],
+            ]
+            .concat(),
+        );
         assert!(
             out.status.success(),
             "{}",
@@ -446,17 +440,8 @@ fn trace_rejects_bad_ray_files() {
         (&short, "10 bytes is not a whole number of rays"),
         (&nan_path, "ray 0 (byte offset 0): dx is NaN"),
     ] {
-        let out = lambert(&[
-            "trace",
-            "--obj",
-            obj.to_str().unwrap(),
-            "--rays",
-            rays.to_str().unwrap(),
-            "-o",
-            case.path("hits.bin").to_str().unwrap(),
-            "--device",
-            "cpu",
-        ]);
+        let hits = case.path("hits.bin");
+        let out = lambert(&[&trace_args(&obj, rays, &hits)[..], &["--device", "cpu"]].concat());
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(1), "{stderr}");
         assert!(
@@ -472,16 +457,7 @@ fn turntable_writes_numbered_frames() {
     let case = Case::new();
     let scene = case.file("scene.toml", &format!("{CAMERA}{SPHERE}{LIGHT}"));
     let pattern = case.path("frames/frame_{:04}.png");
-    let out = lambert(&[
-        "render",
-        scene.to_str().unwrap(),
-        "--turntable",
-        "3",
-        "-o",
-        pattern.to_str().unwrap(),
-        "--device",
-        "cpu",
-    ]);
+    let out = lambert(&turntable_args(&scene, "3", &pattern));
     assert!(
         out.status.success(),
         "{}",

@@ -6,6 +6,8 @@ use std::os::unix::fs::FileTypeExt;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use common::args::trace_args;
+use common::signals::interrupt;
 use common::*;
 use lambert::layout::{NO_HIT, Ray, Triangle};
 
@@ -265,7 +267,7 @@ fn signals_leave_no_temporary_file_and_the_previous_output() {
         .iter()
         .enumerate()
     {
-        let mut child = lambert_command()
+        let child = lambert_command()
             .args([
                 "render",
                 s(&scene),
@@ -277,20 +279,8 @@ fn signals_leave_no_temporary_file_and_the_previous_output() {
             ])
             .spawn()
             .unwrap();
-        std::thread::sleep(std::time::Duration::from_millis(*delay_ms));
-        let signal = if round % 2 == 0 { "-INT" } else { "-TERM" };
-        Command::new("kill")
-            .args([signal, &child.id().to_string()])
-            .status()
-            .unwrap();
-        let status = child.wait().unwrap();
-        assert!(
-            temporaries(d).is_empty(),
-            "after {delay_ms} ms: {:?}",
-            temporaries(d)
-        );
-        let bytes = std::fs::read(&output).unwrap();
-        if previous_or_whole(status.success(), &bytes, 18 + 2048 * 2048 * 12, *delay_ms) {
+        let (success, bytes) = interrupt(child, round, *delay_ms, d, &output);
+        if previous_or_whole(success, &bytes, 18 + 2048 * 2048 * 12, *delay_ms) {
             interrupted += 1;
         } else {
             std::fs::write(&output, "previous").unwrap();
@@ -412,15 +402,7 @@ fn quiet_is_quiet() {
     )
     .unwrap();
     let out = lambert_command()
-        .args([
-            "trace",
-            "--obj",
-            s(&obj),
-            "--rays",
-            s(&rays),
-            "-o",
-            s(&dir.path().join("h.bin")),
-        ])
+        .args(trace_args(&obj, &rays, &dir.path().join("h.bin")))
         .env("WGPU_ADAPTER_NAME", "no such adapter")
         .output()
         .unwrap();

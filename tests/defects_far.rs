@@ -2,6 +2,7 @@
 
 mod common;
 
+use common::args::trace_args;
 use common::*;
 use lambert::layout::{NO_HIT, Ray};
 
@@ -224,17 +225,13 @@ fn rays_from_far_away_hit_and_imprecise_ones_are_named() {
     lambert::rays::write_rays(&rays_path, &rays).unwrap();
     for device in ["cpu", "gpu"] {
         let hits_path = dir.path().join(format!("hits-{device}.bin"));
-        let out = lambert(&[
-            "trace",
-            "--obj",
-            s(&obj_path),
-            "--rays",
-            s(&rays_path),
-            "-o",
-            s(&hits_path),
-            "--device",
-            device,
-        ]);
+        let out = lambert(
+            &[
+                &trace_args(&obj_path, &rays_path, &hits_path)[..],
+                &["--device", device],
+            ]
+            .concat(),
+        );
         assert!(out.status.success(), "{device}: {}", stderr(&out));
         let hits = lambert::rays::read_hits(&hits_path).unwrap();
         // 1e19 − 1 in f32 is 1e19: the sphere's near side.

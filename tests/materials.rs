@@ -6,31 +6,12 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
+use common::data::glb;
 use common::*;
 use lambert::Scene;
 use lambert::layout::NO_HIT;
 use lambert::loading::{AlphaMode, NormalMode, load_mesh};
 use lambert::output::Rendered;
-
-/// A binary glTF of `json` (its one buffer: `bin`).
-fn glb(mut json: serde_json::Value, bin: &[u8]) -> Vec<u8> {
-    json["buffers"] = serde_json::json!([{"byteLength": bin.len()}]);
-    let mut text = serde_json::to_vec(&json).unwrap();
-    text.resize(text.len().div_ceil(4) * 4, b' ');
-    let mut bin = bin.to_vec();
-    bin.resize(bin.len().div_ceil(4) * 4, 0);
-    let mut out = Vec::new();
-    out.extend(b"glTF");
-    out.extend(2u32.to_le_bytes());
-    out.extend(((12 + 8 + text.len() + 8 + bin.len()) as u32).to_le_bytes());
-    out.extend((text.len() as u32).to_le_bytes());
-    out.extend(b"JSON");
-    out.extend(text);
-    out.extend((bin.len() as u32).to_le_bytes());
-    out.extend(b"BIN\0");
-    out.extend(bin);
-    out
-}
 
 /// One vertex attribute of a quad: its bytes (four elements), and its
 /// accessor's componentType, type and whether it is normalised.

@@ -7,6 +7,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
+use common::args::{CHEAPEST_BENCH, turntable_args};
 use common::{lambert, s, stderr, write};
 use lambert::Scene;
 use lambert::output::Image;
@@ -114,21 +115,7 @@ fn no_output_replaces_a_mesh_an_mtl_or_a_texture_the_scene_reads() {
         (vec!["camera-rays", s(&scene), "-o", s(&quad)], &quad),
         (vec!["camera-rays", s(&scene), "-o", s(&mtl)], &mtl),
         (
-            vec![
-                "bench",
-                "--time-vs-error",
-                "--device",
-                "cpu",
-                "--spp-list",
-                "1",
-                "--reference-spp",
-                "1",
-                "--runs",
-                "1",
-                "--json",
-                s(&mtl),
-                s(&scene),
-            ],
+            [&CHEAPEST_BENCH[..], &["--json", s(&mtl), s(&scene)]].concat(),
             &mtl,
         ),
         (
@@ -180,16 +167,7 @@ fn turntable_and_part_outputs_are_refused_over_a_texture() {
     let pattern = dir.path().join("meshes/tex/{}.png");
     // Frame 0 of 2 would be …/tex/0.png; make it the texture through a link.
     std::os::unix::fs::symlink(&texture, dir.path().join("meshes/tex/0.png")).unwrap();
-    let output = lambert(&[
-        "render",
-        s(&scene),
-        "--turntable",
-        "2",
-        "-o",
-        s(&pattern),
-        "--device",
-        "cpu",
-    ]);
+    let output = lambert(&turntable_args(&scene, "2", &pattern));
     refused_as_input(&output, &texture, &before);
     let exr = dir.path().join("meshes/tex/grid.exr");
     write(
@@ -389,16 +367,7 @@ fn a_camera_degenerate_in_f32_is_an_error_naming_eye_and_look_at() {
 fn turntable_frames_that_name_one_file_are_refused_before_rendering() {
     let (dir, scene) = room();
     let pattern = dir.path().join("d{}/../same.png");
-    let output = lambert(&[
-        "render",
-        s(&scene),
-        "--turntable",
-        "3",
-        "-o",
-        s(&pattern),
-        "--device",
-        "cpu",
-    ]);
+    let output = lambert(&turntable_args(&scene, "3", &pattern));
     let text = stderr(&output);
     assert!(!output.status.success(), "{text}");
     assert!(text.contains("frames 0 and 1"), "{text}");
@@ -576,20 +545,8 @@ fn sigterm_exits_143_and_sigint_130() {
 /// `lambert bench --time-vs-error` of `scenes` at its cheapest, with
 /// `--plot plot`.
 fn bench_plot(scenes: &[&Path], plot: &Path) -> Output {
-    let mut args = vec![
-        "bench",
-        "--time-vs-error",
-        "--device",
-        "cpu",
-        "--spp-list",
-        "1",
-        "--reference-spp",
-        "1",
-        "--runs",
-        "1",
-        "--plot",
-        s(plot),
-    ];
+    let mut args = CHEAPEST_BENCH.to_vec();
+    args.extend(["--plot", s(plot)]);
     args.extend(scenes.iter().map(|p| s(p)));
     lambert(&args)
 }

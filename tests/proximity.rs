@@ -10,24 +10,7 @@ use lambert::scene::Scene;
 
 mod common;
 
-/// A small deterministic generator (no dependency on a seed's crate).
-struct Lcg(u64);
-
-impl Lcg {
-    fn next(&mut self) -> f32 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((self.0 >> 40) as f32) / ((1u64 << 24) as f32)
-    }
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.next()
-    }
-    fn point(&mut self, lo: f32, hi: f32) -> [f32; 3] {
-        [self.range(lo, hi), self.range(lo, hi), self.range(lo, hi)]
-    }
-}
+use common::data::{Lcg, d3, winding_f64};
 
 fn tri(v0: [f32; 3], v1: [f32; 3], v2: [f32; 3]) -> Triangle {
     Triangle {
@@ -77,10 +60,6 @@ fn sphere_mesh(c: [f32; 3], r: f32, rings: usize, segments: usize) -> Vec<Triang
 
 fn cpu(triangles: Vec<Triangle>) -> Renderer {
     Renderer::Cpu(Arc::new(Scene::from_triangles(triangles)))
-}
-
-fn d3(v: [f32; 3]) -> DVec3 {
-    DVec3::from(v.map(f64::from))
 }
 
 /// The exact (f64) nearest point of a triangle: the projection where it
@@ -271,20 +250,6 @@ fn max_distance_cuts_off_and_an_empty_scene_finds_nothing() {
             .unwrap(),
         vec![0]
     );
-}
-
-/// The winding number in f64, every triangle's solid angle.
-fn winding_f64(q: DVec3, triangles: &[Triangle]) -> f64 {
-    triangles
-        .iter()
-        .map(|t| {
-            let (a, b, c) = (d3(t.v0) - q, d3(t.v1) - q, d3(t.v2) - q);
-            let (la, lb, lc) = (a.length(), b.length(), c.length());
-            let det = a.dot(b.cross(c));
-            let den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
-            2.0 * det.atan2(den) / (4.0 * std::f64::consts::PI)
-        })
-        .sum()
 }
 
 #[test]
