@@ -52,8 +52,7 @@ fn the_cpu_kernel_variable_reaches_the_cli() {
 /// XDG_RUNTIME_DIR), and `info` names the CPU kernel in use.
 #[test]
 fn successful_commands_print_no_error_lines() {
-    let case = Case::new();
-    let scene = case.file("scene.toml", &format!("{CAMERA}{SPHERE}{LIGHT}"));
+    let (case, scene) = Case::lit_sphere();
     let out = case.path("out.png");
     let runs = [
         vec!["info"],
@@ -302,8 +301,7 @@ fn no_output_is_written_over_an_input() {
 /// included) but not results or errors.
 #[test]
 fn quiet_is_accepted_everywhere_and_silences_notes() {
-    let case = Case::new();
-    let scene = case.file("scene.toml", &format!("{CAMERA}{SPHERE}{LIGHT}"));
+    let (case, scene) = Case::lit_sphere();
     let obj = case.file("tri.obj", TRIANGLE_OBJ);
     let rays = case.path("rays.bin");
     let hits = case.path("hits.bin");
@@ -355,8 +353,7 @@ fn quiet_is_accepted_everywhere_and_silences_notes() {
 /// Issue 28 item 16: every placeholder of a turntable pattern is filled.
 #[test]
 fn turntable_fills_every_placeholder() {
-    let case = Case::new();
-    let scene = case.file("scene.toml", &format!("{CAMERA}{SPHERE}{LIGHT}"));
+    let (case, scene) = Case::lit_sphere();
     let pattern = case.path("f{}/frame_{:03}.png");
     let out = lambert(&[&turntable_args(&scene, "2", &pattern)[..], &["-q"]].concat());
     assert!(out.status.success(), "{out:?}");
@@ -373,8 +370,7 @@ fn turntable_fills_every_placeholder() {
 /// does, and its help says so.
 #[test]
 fn diff_heatmap_writes_png_exr_and_pfm() {
-    let case = Case::new();
-    let scene = case.file("scene.toml", &format!("{CAMERA}{SPHERE}{LIGHT}"));
+    let (case, scene) = Case::lit_sphere();
     for ext in ["png", "exr", "pfm"] {
         let heatmap = case.path(&format!("heat.{ext}"));
         let out = lambert(&[

@@ -6,7 +6,8 @@ use std::os::unix::fs::FileTypeExt;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use common::args::trace_args;
+use common::args::{render_args, trace_args};
+use common::formats::assert_has;
 use common::signals::interrupt;
 use common::*;
 use lambert::layout::{NO_HIT, Ray, Triangle};
@@ -268,15 +269,8 @@ fn signals_leave_no_temporary_file_and_the_previous_output() {
         .enumerate()
     {
         let child = lambert_command()
-            .args([
-                "render",
-                s(&scene),
-                "-o",
-                s(&output),
-                "--device",
-                "cpu",
-                "-q",
-            ])
+            .args(render_args(&scene, &output, "cpu"))
+            .arg("-q")
             .spawn()
             .unwrap();
         let (success, bytes) = interrupt(child, round, *delay_ms, d, &output);
@@ -444,10 +438,7 @@ fn obj_byte_order_marks_and_messages() {
     )
     .unwrap();
     let err = lambert::Scene::load(&scene).unwrap_err().to_string();
-    assert!(
-        err.contains("mesh[0] (plain.obj): vertex 2 at [1, 0, 0]"),
-        "{err}"
-    );
+    assert_has(&err, &["mesh[0] (plain.obj): vertex 2 at [1, 0, 0]"]);
     assert!(!err.contains("DVec3"), "{err}");
 }
 

@@ -7,19 +7,12 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
-use common::args::{CHEAPEST_BENCH, turntable_args};
+use common::args::{CHEAPEST_BENCH, render_args, turntable_args};
 use common::{lambert, s, stderr, write};
 use lambert::Scene;
 use lambert::output::Image;
 
-const CAMERA: &str = r#"
-[camera]
-eye = [0.5, 0.5, 3.0]
-look_at = [0.5, 0.5, 0.0]
-vfov = 40.0
-width = 16
-height = 12
-"#;
+const CAMERA: &str = "\n[camera]\neye = [0.5, 0.5, 3.0]\nlook_at = [0.5, 0.5, 0.0]\nvfov = 40.0\nwidth = 16\nheight = 12\n";
 
 const LIGHT: &str = "[[point_light]]\nposition = [0.0, 2.0, 3.0]\nintensity = 10.0\n";
 
@@ -378,18 +371,13 @@ fn turntable_frames_that_name_one_file_are_refused_before_rendering() {
 fn a_range_of_frames_says_how_many_of_how_many() {
     let (dir, scene) = room();
     let pattern = dir.path().join("f{}.png");
-    let output = lambert(&[
-        "render",
-        s(&scene),
-        "--turntable",
-        "4",
-        "--frames",
-        "0-2",
-        "-o",
-        s(&pattern),
-        "--device",
-        "cpu",
-    ]);
+    let output = lambert(
+        &[
+            &turntable_args(&scene, "4", &pattern)[..],
+            &["--frames", "0-2"],
+        ]
+        .concat(),
+    );
     let text = stderr(&output);
     assert!(output.status.success(), "{text}");
     assert!(text.contains("rendering 3 of 4 frames"), "{text}");
@@ -400,16 +388,7 @@ fn an_adapter_with_too_few_bindings_is_refused_in_words_and_auto_falls_back() {
     let (dir, scene) = room();
     let out = dir.path().join("out.png");
     // GL (Mesa's llvmpipe through EGL) allows 16 storage buffers a stage.
-    let gpu = lambert(&[
-        "render",
-        s(&scene),
-        "-o",
-        s(&out),
-        "--backend",
-        "gl",
-        "--device",
-        "gpu",
-    ]);
+    let gpu = lambert(&[&render_args(&scene, &out, "gpu")[..], &["--backend", "gl"]].concat());
     let text = stderr(&gpu);
     assert!(!gpu.status.success(), "{text}");
     assert!(!text.contains("Too many bindings"), "{text}");

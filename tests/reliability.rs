@@ -5,6 +5,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+use common::args::render_args;
 use common::{lambert_command, s, temporaries};
 use lambert::inputs::Input;
 
@@ -250,15 +251,8 @@ fn concurrent_renders_to_one_output_leave_one_whole_image() {
             .iter()
             .map(|scene| {
                 lambert()
-                    .args([
-                        "render",
-                        s(scene),
-                        "-o",
-                        s(&output),
-                        "--device",
-                        "cpu",
-                        "-q",
-                    ])
+                    .args(render_args(scene, &output, "cpu"))
+                    .arg("-q")
                     .spawn()
                     .unwrap()
             })

@@ -4,6 +4,11 @@ use std::path::Path;
 
 use super::s;
 
+/// `lambert render` of `scene` to `out` on `device`.
+pub fn render_args<'a>(scene: &'a Path, out: &'a Path, device: &'a str) -> Vec<&'a str> {
+    vec!["render", s(scene), "-o", s(out), "--device", device]
+}
+
 /// `lambert trace` of the model `obj` and the ray file `rays` to `hits`.
 pub fn trace_args<'a>(obj: &'a Path, rays: &'a Path, hits: &'a Path) -> Vec<&'a str> {
     vec!["trace", "--obj", s(obj), "--rays", s(rays), "-o", s(hits)]
