@@ -27,6 +27,16 @@ const OVERSIZED_RUST: &[(&str, usize)] = &[];
 /// Shaders allowed past MAX_SHADER_LINES: none since the split by stage.
 const OVERSIZED_SHADERS: &[(&str, usize)] = &[];
 
+/// Fails listing `problems` under `what`, if there are any.
+fn assert_none(problems: &[String], what: &str) {
+    assert!(problems.is_empty(), "{what}:\n{}", problems.join("\n"));
+}
+
+/// A made-up file for the checks' own tests: its path and text.
+fn file(path: &str, text: &str) -> (PathBuf, String) {
+    (PathBuf::from(path), text.to_string())
+}
+
 /// Files over `limit` lines that are not in `allowed`, or grown past the
 /// count they are listed with.
 fn oversized(paths: &[PathBuf], limit: usize, allowed: &[(&str, usize)]) -> Vec<String> {
@@ -58,7 +68,7 @@ fn no_file_is_over_its_size_limit_but_the_listed_ones() {
     assert!(!shaders.is_empty(), "found no shader");
     let mut problems = oversized(&rust, MAX_RUST_LINES, OVERSIZED_RUST);
     problems.extend(oversized(&shaders, MAX_SHADER_LINES, OVERSIZED_SHADERS));
-    assert!(problems.is_empty(), "{}", problems.join("\n"));
+    assert_none(&problems, "files over their size limit");
 }
 
 /// The size check fails on what it is for.
@@ -85,8 +95,10 @@ fn oversized_tests(limit: usize) -> Vec<String> {
 /// No test file is over MAX_TEST_LINES lines: split one by subject.
 #[test]
 fn no_test_file_is_over_its_size_limit() {
-    let problems = oversized_tests(MAX_TEST_LINES);
-    assert!(problems.is_empty(), "{}", problems.join("\n"));
+    assert_none(
+        &oversized_tests(MAX_TEST_LINES),
+        "test files over their size limit",
+    );
 }
 
 /// The test files' check names the longest file when the limit is one
@@ -204,11 +216,7 @@ fn the_module_graph_has_no_cycle() {
     }
     let found = cycles(&graph);
     let text: Vec<String> = found.iter().map(|c| c.join(" <-> ")).collect();
-    assert!(
-        found.is_empty(),
-        "modules that reach each other:\n{}",
-        text.join("\n")
-    );
+    assert_none(&text, "modules that reach each other");
 }
 
 // ---- the file graph ---------------------------------------------------------
@@ -257,11 +265,7 @@ fn the_file_graph_has_no_cycle() {
         })
         .map(|c| c.join(" <-> "))
         .collect();
-    assert!(
-        found.is_empty(),
-        "files that reach each other:\n{}",
-        found.join("\n")
-    );
+    assert_none(&found, "files that reach each other");
 }
 
 /// The file graph follows each kind of path (crate, super, super::super,
@@ -271,7 +275,6 @@ fn the_file_graph_has_no_cycle() {
 /// file, an extern crate's or a std path, a comment close none.
 #[test]
 fn file_cycles_are_found_through_every_kind_of_path() {
-    let file = |path: &str, text: &str| (PathBuf::from(path), text.to_string());
     let graph = file_graph::file_graph(&[
         file(
             "src/lib.rs",
@@ -424,11 +427,9 @@ fn source_files() -> Vec<(PathBuf, String)> {
 fn every_import_keeps_to_the_layers() {
     let files = source_files();
     assert!(files.len() > 20, "found only {} files", files.len());
-    let problems = layer_violations(&files);
-    assert!(
-        problems.is_empty(),
-        "imports against the layers (docs/architecture.md):\n{}",
-        problems.join("\n")
+    assert_none(
+        &layer_violations(&files),
+        "imports against the layers (docs/architecture.md)",
     );
 }
 
@@ -437,7 +438,6 @@ fn every_import_keeps_to_the_layers() {
 /// and passes what the table allows.
 #[test]
 fn the_layer_check_catches_imports_against_the_table() {
-    let file = |path: &str, text: &str| (PathBuf::from(path), text.to_string());
     let problems = layer_violations(&[
         file(
             "src/cwbvh.rs",
@@ -506,11 +506,9 @@ fn environment_reads(files: &[(PathBuf, String)]) -> Vec<String> {
 #[test]
 fn the_library_reads_no_environment_variable() {
     let files = source_files();
-    let reads = environment_reads(&files);
-    assert!(
-        reads.is_empty(),
-        "environment variables read in the library (read them in the front ends and pass them in):\n{}",
-        reads.join("\n")
+    assert_none(
+        &environment_reads(&files),
+        "environment variables read in the library (read them in the front ends and pass them in)",
     );
 }
 
@@ -518,7 +516,6 @@ fn the_library_reads_no_environment_variable() {
 /// or the binary's code.
 #[test]
 fn the_environment_check_finds_reads() {
-    let file = |path: &str, text: &str| (PathBuf::from(path), text.to_string());
     let reads = environment_reads(&[
         file(
             "src/cpu/simd.rs",
@@ -609,11 +606,10 @@ fn the_docs_counts_are_the_codes() {
         .filter(|(a, b)| a != b)
         .map(|(a, b)| format!("the doc:  {a}\nthe code: {b}"))
         .collect();
-    assert!(
-        drifted.is_empty(),
+    assert_none(
+        &drifted,
         "docs/architecture.md's counts drifted from the code; run\n  \
-         cargo test --release --test architecture -- --ignored regenerate_the_docs_counts\n{}",
-        drifted.join("\n")
+         cargo test --release --test architecture -- --ignored regenerate",
     );
 }
 

@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use common::args::{render_args, trace_args};
+use common::data::ray;
 use common::formats::assert_has;
 use common::signals::interrupt;
 use common::*;
@@ -109,12 +110,6 @@ fn tiny_directions_hit_through_the_bvh() {
         ..Default::default()
     };
     let scene = scene_of(vec![triangle], vec![sphere]);
-    let ray = |origin: [f32; 3], dir: [f32; 3]| Ray {
-        origin,
-        tmin: 0.0,
-        dir,
-        tmax: f32::INFINITY,
-    };
     let rays = [
         ray([0.0, 0.0, 5.0], [0.0, 0.0, -1e-18]),
         ray([0.0, 0.0, 5.0], [1e-19, 0.0, -1e-18]),
@@ -155,14 +150,7 @@ fn outputs_follow_links_and_write_into_fifos() {
 
     std::fs::write(d.join("real.pfm"), "old").unwrap();
     std::os::unix::fs::symlink("real.pfm", d.join("link.pfm")).unwrap();
-    let out = lambert(&[
-        "render",
-        s(&scene),
-        "-o",
-        s(&d.join("link.pfm")),
-        "--device",
-        "cpu",
-    ]);
+    let out = lambert(&render_args(&scene, &d.join("link.pfm"), "cpu"));
     assert!(out.status.success(), "{}", stderr(&out));
     assert!(
         std::fs::symlink_metadata(d.join("link.pfm"))
@@ -178,14 +166,7 @@ fn outputs_follow_links_and_write_into_fifos() {
 
     std::os::unix::fs::symlink("sub/target.png", d.join("dangling.png")).unwrap();
     std::fs::create_dir(d.join("sub")).unwrap();
-    let out = lambert(&[
-        "render",
-        s(&scene),
-        "-o",
-        s(&d.join("dangling.png")),
-        "--device",
-        "cpu",
-    ]);
+    let out = lambert(&render_args(&scene, &d.join("dangling.png"), "cpu"));
     assert!(out.status.success(), "{}", stderr(&out));
     assert!(
         std::fs::symlink_metadata(d.join("dangling.png"))
@@ -471,11 +452,7 @@ fn info_filters_and_backend_names() {
         .output()
         .unwrap();
     assert_eq!(out.status.code(), Some(1));
-    assert!(
-        stderr(&out).contains("unknown backend 'bogus' in WGPU_BACKEND"),
-        "{}",
-        stderr(&out)
-    );
+    assert_has(&stderr(&out), &["unknown backend 'bogus' in WGPU_BACKEND"]);
 }
 
 /// The up vector's threshold is stated, and just past it renders as the

@@ -3,6 +3,7 @@
 mod common;
 
 use common::args::trace_args;
+use common::data::ray;
 use common::*;
 use lambert::layout::{NO_HIT, Ray};
 
@@ -167,12 +168,6 @@ fn meshes_far_from_the_origin_trace_as_at_the_origin() {
 fn rays_from_far_away_hit_and_imprecise_ones_are_named() {
     use glam::DVec3;
     let (scene, triangles) = far_icosphere(DVec3::ZERO);
-    let ray = |origin: [f32; 3], dir: [f32; 3]| Ray {
-        origin,
-        tmin: 0.0,
-        dir,
-        tmax: f32::INFINITY,
-    };
     let rays = [
         ray([0.1, 0.2, 1e19], [0.0, 0.0, -1.0]),
         ray([-1e19, 0.3, -0.2], [1.0, 0.0, 0.0]),

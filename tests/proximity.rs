@@ -10,7 +10,7 @@ use lambert::scene::Scene;
 
 mod common;
 
-use common::data::{Lcg, d3, winding_f64};
+use common::data::{Lcg, d3, ray, winding_f64};
 
 fn tri(v0: [f32; 3], v1: [f32; 3], v2: [f32; 3]) -> Triangle {
     Triangle {
@@ -303,15 +303,6 @@ fn a_mesh_with_a_hole_still_has_a_sensible_inside() {
         .enumerate()
     {
         assert!((w[i] as f64 - winding_f64(d3(*p), &triangles)).abs() < 5e-3);
-    }
-}
-
-fn ray(origin: [f32; 3], dir: [f32; 3]) -> Ray {
-    Ray {
-        origin,
-        tmin: 0.0,
-        dir,
-        tmax: f32::INFINITY,
     }
 }
 

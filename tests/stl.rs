@@ -4,6 +4,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
+use common::formats::{assert_has, assert_load_errors};
 use common::*;
 use glam::DVec3;
 use lambert::Scene;
@@ -349,28 +350,14 @@ fn malformed_stl_files_are_clear_errors() {
         ("big.stl", good.replacen("vertex 1 1 0", "vertex 1 1e16 0", 1).into_bytes(), "big.stl:6: facet 0, vertex 2: coordinate 1e16 must be finite with magnitude at most 1e15"),
         ("empty.stl", b"solid Empty\nendsolid Empty\n".to_vec(), "empty.stl: no triangles (0 points, 0 lines skipped)"),
     ];
-    for (name, bytes, expected) in cases {
-        let path = write(dir.path(), name, bytes);
-        let start = std::time::Instant::now();
-        let message = error_of(&path);
-        assert!(
-            message.contains(expected),
-            "{name}: expected '{expected}' in: {message}"
-        );
-        assert!(
-            start.elapsed().as_secs() < 1,
-            "{name} took {:?}",
-            start.elapsed()
-        );
-    }
+    assert_load_errors(dir.path(), cases, 1);
     // From the command line: exit status 1, the message on stderr.
     let path = dir.path().join("quad.stl");
     let output = lambert(&["info", s(&path)]);
     assert_eq!(output.status.code(), Some(1));
-    assert!(
-        stderr(&output).contains("quad.stl:7: facet 0: expected 'endloop'"),
-        "{}",
-        stderr(&output)
+    assert_has(
+        &stderr(&output),
+        &["quad.stl:7: facet 0: expected 'endloop'"],
     );
 }
 

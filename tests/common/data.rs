@@ -1,8 +1,8 @@
-//! Test inputs made in code (a deterministic generator, binary glTF) and
-//! an f64 reference (the winding number).
+//! Test inputs made in code (a deterministic generator, rays, binary
+//! glTF) and an f64 reference (the winding number).
 
 use glam::DVec3;
-use lambert::layout::Triangle;
+use lambert::layout::{Ray, Triangle};
 
 /// A small deterministic generator (no dependency on a seed's crate).
 pub struct Lcg(pub u64);
@@ -58,6 +58,16 @@ pub fn glb(mut json: serde_json::Value, bin: &[u8]) -> Vec<u8> {
     out.extend(b"BIN\0");
     out.extend(bin);
     out
+}
+
+/// A ray from `origin` along `dir`, from t = 0 on.
+pub fn ray(origin: [f32; 3], dir: [f32; 3]) -> Ray {
+    Ray {
+        origin,
+        tmin: 0.0,
+        dir,
+        tmax: f32::INFINITY,
+    }
 }
 
 /// A vertex in f64.
