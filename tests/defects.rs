@@ -138,6 +138,19 @@ fn tiny_directions_hit_through_the_bvh() {
     assert!(brute_hits.iter().all(|h| h.prim != NO_HIT));
 }
 
+/// Renders `scene` to `link`, a symlink, on the CPU: it succeeds and the
+/// link stays a link.
+fn render_through_link(scene: &Path, link: &Path) {
+    let out = lambert(&render_args(scene, link, "cpu"));
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        std::fs::symlink_metadata(link)
+            .unwrap()
+            .file_type()
+            .is_symlink()
+    );
+}
+
 /// Outputs that are not regular files: a symlink keeps pointing where it
 /// did and its target gets the image, a dangling one creates its target,
 /// a FIFO is written into, not replaced; and a device that fails the
@@ -150,14 +163,7 @@ fn outputs_follow_links_and_write_into_fifos() {
 
     std::fs::write(d.join("real.pfm"), "old").unwrap();
     std::os::unix::fs::symlink("real.pfm", d.join("link.pfm")).unwrap();
-    let out = lambert(&render_args(&scene, &d.join("link.pfm"), "cpu"));
-    assert!(out.status.success(), "{}", stderr(&out));
-    assert!(
-        std::fs::symlink_metadata(d.join("link.pfm"))
-            .unwrap()
-            .file_type()
-            .is_symlink()
-    );
+    render_through_link(&scene, &d.join("link.pfm"));
     assert!(
         std::fs::read(d.join("real.pfm"))
             .unwrap()
@@ -166,14 +172,7 @@ fn outputs_follow_links_and_write_into_fifos() {
 
     std::os::unix::fs::symlink("sub/target.png", d.join("dangling.png")).unwrap();
     std::fs::create_dir(d.join("sub")).unwrap();
-    let out = lambert(&render_args(&scene, &d.join("dangling.png"), "cpu"));
-    assert!(out.status.success(), "{}", stderr(&out));
-    assert!(
-        std::fs::symlink_metadata(d.join("dangling.png"))
-            .unwrap()
-            .file_type()
-            .is_symlink()
-    );
+    render_through_link(&scene, &d.join("dangling.png"));
     image::open(d.join("sub/target.png")).unwrap();
 
     let fifo = d.join("fifo.pfm");
