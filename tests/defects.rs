@@ -138,6 +138,11 @@ fn tiny_directions_hit_through_the_bvh() {
     assert!(brute_hits.iter().all(|h| h.prim != NO_HIT));
 }
 
+/// What `path` is, not following a link.
+fn file_type(path: &Path) -> std::fs::FileType {
+    std::fs::symlink_metadata(path).unwrap().file_type()
+}
+
 /// Renders `scene` to `link`, a symlink, on the CPU: it succeeds and the
 /// link stays a link.
 fn render_through_link(scene: &Path, link: &Path) {
@@ -191,12 +196,7 @@ fn outputs_follow_links_and_write_into_fifos() {
     assert!(out.status.success(), "{}", stderr(&out));
     let bytes = reader.join().unwrap();
     assert!(bytes.starts_with(b"PF\n16 12\n"), "{} bytes", bytes.len());
-    assert!(
-        std::fs::symlink_metadata(&fifo)
-            .unwrap()
-            .file_type()
-            .is_fifo()
-    );
+    assert!(file_type(&fifo).is_fifo());
     assert!(temporaries(d).is_empty(), "{:?}", temporaries(d));
 
     // A device that fails the write, as /dev/full does (a copy of it here:
@@ -219,12 +219,7 @@ fn outputs_follow_links_and_write_into_fifos() {
     let out = lambert(&["render", s(&scene), "-o", s(&full), "--device", "cpu"]);
     assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
     assert!(stderr(&out).contains("full.pfm"), "{}", stderr(&out));
-    assert!(
-        std::fs::symlink_metadata(&full)
-            .unwrap()
-            .file_type()
-            .is_char_device()
-    );
+    assert!(file_type(&full).is_char_device());
     assert!(temporaries(d).is_empty(), "{:?}", temporaries(d));
 }
 

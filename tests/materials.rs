@@ -23,6 +23,19 @@ struct Attribute {
     normalized: bool,
 }
 
+impl Attribute {
+    /// An attribute of 32-bit floats.
+    fn floats(name: &'static str, values: &[f32], kind: &'static str) -> Attribute {
+        Attribute {
+            name,
+            bytes: floats(values),
+            component: 5126,
+            kind,
+            normalized: false,
+        }
+    }
+}
+
 fn floats(values: &[f32]) -> Vec<u8> {
     values.iter().flat_map(|f| f.to_le_bytes()).collect()
 }
@@ -295,13 +308,7 @@ fn texture_coordinates_of_every_format_are_read() {
         ),
     ] {
         // TEXCOORD_0 is a decoy: the texture reads set 1.
-        let decoy = Attribute {
-            name: "TEXCOORD_0",
-            bytes: floats(&[9.0; 8]),
-            component: 5126,
-            kind: "VEC2",
-            normalized: false,
-        };
+        let decoy = Attribute::floats("TEXCOORD_0", &[9.0; 8], "VEC2");
         let set = Attribute {
             name: "TEXCOORD_1",
             bytes,
@@ -404,15 +411,13 @@ fn emission_renders_in_the_dark() {
 /// whose alpha is 1 on its right corners and 0 on its left (COLOR_0), a
 /// light above it; the camera at (0, 0, `eye_z`).
 fn masked_scene(d: &Path, alpha_mode: &str, eye_z: f64) -> Scene {
-    let colour = Attribute {
-        name: "COLOR_0",
-        bytes: floats(&[
+    let colour = Attribute::floats(
+        "COLOR_0",
+        &[
             1.0, 1.0, 1.0, 0.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0,
-        ]),
-        component: 5126,
-        kind: "VEC4",
-        normalized: false,
-    };
+        ],
+        "VEC4",
+    );
     let material = serde_json::json!({"name": "leaf", "alphaMode": alpha_mode, "alphaCutoff": 0.5,
         "pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.9, 0.2, 1.0]}});
     let model: PathBuf = write(
@@ -598,13 +603,7 @@ fn info_lists_colours_alpha_modes_and_emission() {
     let d = dir.path();
     let scene = masked_scene(d, "MASK", 6.0);
     assert_eq!(scene.colored_triangles, 2);
-    let colour = Attribute {
-        name: "COLOR_0",
-        bytes: floats(&[1.0; 12]),
-        component: 5126,
-        kind: "VEC3",
-        normalized: false,
-    };
+    let colour = Attribute::floats("COLOR_0", &[1.0; 12], "VEC3");
     let material = serde_json::json!({"emissiveFactor": [0.5, 0.25, 1.0]});
     let path = write(d, "lamp.glb", quad_glb(1.0, 0.0, &[colour], material));
     let info = lambert(&["info", s(&path)]);
