@@ -235,14 +235,7 @@ fn wait_for_title(viewer: &Viewer, what: &str, wanted: impl Fn(&str) -> bool) ->
 
 /// Waits (PATIENCE at most) for the viewer to exit: its status.
 fn exit_of(viewer: &mut Viewer, what: &str) -> std::process::ExitStatus {
-    let deadline = Instant::now() + PATIENCE;
-    loop {
-        if let Some(status) = viewer.process.0.try_wait().unwrap() {
-            return status;
-        }
-        assert!(Instant::now() < deadline, "{what} did not end the viewer");
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    viewer.exit_status(&format!("{what} did not end the viewer"))
 }
 
 #[test]
