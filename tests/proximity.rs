@@ -188,18 +188,19 @@ fn closest_points_match_brute_force_on_random_soups() {
     }
 }
 
+/// Four triangles about `c` in its plane z = c.z, out to c ± x and c ± y,
+/// counter-clockwise from +x.
+fn fan(c: [f32; 3]) -> Vec<Triangle> {
+    let ring =
+        [[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]].map(|[x, y]| [c[0] + x, c[1] + y, c[2]]);
+    (0..4).map(|k| tri(c, ring[k], ring[(k + 1) % 4])).collect()
+}
+
 #[test]
 fn a_point_on_a_shared_vertex_goes_to_the_lowest_triangle() {
     // A fan of four triangles about the origin, listed so that the lowest id
     // is not the first the traversal would meet.
-    let c = [0.0, 0.0, 0.0];
-    let ring = [
-        [1.0, 0.0, 0.0],
-        [0.0, 1.0, 0.0],
-        [-1.0, 0.0, 0.0],
-        [0.0, -1.0, 0.0],
-    ];
-    let mut triangles: Vec<Triangle> = (0..4).map(|k| tri(c, ring[k], ring[(k + 1) % 4])).collect();
+    let mut triangles = fan([0.0, 0.0, 0.0]);
     triangles.extend(soup(9, 40).into_iter().map(|t| Triangle {
         v0: t.v0.map(|x| x + 5.0),
         v1: t.v1.map(|x| x + 5.0),
@@ -362,18 +363,11 @@ fn counts_through_a_closed_mesh_are_even_from_outside_and_odd_from_inside() {
 fn an_edge_or_a_vertex_crossed_counts_once() {
     // A square of two triangles (diagonal from (0,0) to (1,1)), and a fan
     // of four about (3, 0.5).
-    let c = [3.0, 0.5, 0.0];
-    let ring = [
-        [4.0, 0.5, 0.0],
-        [3.0, 1.5, 0.0],
-        [2.0, 0.5, 0.0],
-        [3.0, -0.5, 0.0],
-    ];
     let mut triangles = vec![
         tri([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0]),
         tri([0.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]),
     ];
-    triangles.extend((0..4).map(|k| tri(c, ring[k], ring[(k + 1) % 4])));
+    triangles.extend(fan([3.0, 0.5, 0.0]));
     let mut renderer = cpu(triangles);
     let rays = [
         ray([0.5, 0.5, 1.0], [0.0, 0.0, -1.0]), // the diagonal's midpoint
