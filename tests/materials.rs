@@ -7,6 +7,7 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use common::data::glb;
+use common::formats::load_written;
 use common::*;
 use lambert::Scene;
 use lambert::layout::NO_HIT;
@@ -496,15 +497,10 @@ fn alpha_masks_cut_out_for_camera_and_shadow_rays() {
 /// trimesh's models/fuze.obj.mtl has it); `Ke` is emission.
 #[test]
 fn mtl_alpha_and_emission() {
-    let dir = tempfile::tempdir().unwrap();
-    let d = dir.path();
-    write(
-        d,
-        "m.mtl",
-        "newmtl glass\nKd 1 1 1\nd 0.25\nnewmtl meshlab\nTr 1.000000\nnewmtl lamp\nKe 1 0.5 0\n",
-    );
+    let mtl =
+        "newmtl glass\nKd 1 1 1\nd 0.25\nnewmtl meshlab\nTr 1.000000\nnewmtl lamp\nKe 1 0.5 0\n";
     let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl glass\nf 1 2 3\nusemtl meshlab\nf 1 2 3\nusemtl lamp\nf 1 2 3\n";
-    let mesh = load_mesh(&write(d, "m.obj", obj), NormalMode::Face).unwrap();
+    let (_dir, mesh) = load_written(&[("m.mtl", mtl), ("m.obj", obj)]);
     let m = &mesh.materials;
     assert_eq!(
         (m[0].base_color[3], m[0].alpha_mode),

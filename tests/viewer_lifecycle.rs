@@ -129,8 +129,7 @@ fn hundreds_of_notches_each_way_keep_the_camera_in_the_scene_formats_range() {
 #[test]
 fn flying_panning_and_orbiting_far_out_stay_in_range() {
     for centre in CENTRES {
-        let (file, reach) = start(centre);
-        let mut camera = file.clone();
+        let (mut camera, reach) = start(centre);
         for _ in 0..400 {
             camera = navigate::dolly(&camera, -1.0, &reach);
         }

@@ -3,6 +3,8 @@
 
 use std::path::{Path, PathBuf};
 
+use lambert::loading::{Mesh, NormalMode, load_mesh};
+
 use super::{asset, error_of, write};
 
 pub fn meshes(name: &str) -> PathBuf {
@@ -53,4 +55,16 @@ pub fn assert_load_errors<'a>(
             start.elapsed()
         );
     }
+}
+
+/// A folder holding `files` (name, text), and the mesh of the last (an
+/// OBJ, say, after its MTL) loaded with face normals.
+pub fn load_written(files: &[(&str, &str)]) -> (tempfile::TempDir, Mesh) {
+    let dir = tempfile::tempdir().unwrap();
+    let paths: Vec<PathBuf> = files
+        .iter()
+        .map(|(name, text)| write(dir.path(), name, text))
+        .collect();
+    let mesh = load_mesh(paths.last().unwrap(), NormalMode::Face).unwrap();
+    (dir, mesh)
 }
