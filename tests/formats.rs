@@ -376,10 +376,9 @@ fn a_model_file_alone_renders() {
 /// reads as one, and errors after it still name the right line.
 #[test]
 fn obj_line_continuation() {
-    let dir = tempfile::tempdir().unwrap();
-    let d = dir.path();
     let text = "v 0 0 \\\n0\nv 1 0 0\r\nv 0 1 0\nv 1 1 0\nf 1 \\\r\n 2 \\ \n3\nf 2 4 3\n";
-    let mesh = load_mesh(&write(d, "c.obj", text), NormalMode::Face).unwrap();
+    let (dir, mesh) = load_written(&[("c.obj", text)]);
+    let d = dir.path();
     assert_eq!(mesh.positions[0], DVec3::ZERO);
     assert_eq!(mesh.positions.len(), 4);
     assert_eq!(mesh.triangles, vec![[0, 1, 2], [1, 3, 2]]);

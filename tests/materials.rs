@@ -271,10 +271,9 @@ fn colours_of_every_format_and_type_are_read() {
 /// set the base colour texture names) as float and unorm.
 #[test]
 fn texture_coordinates_of_every_format_are_read() {
-    let dir = tempfile::tempdir().unwrap();
-    let d = dir.path();
     let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0.25 0.125\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n";
-    let mesh = load_mesh(&write(d, "t.obj", obj), NormalMode::Face).unwrap();
+    let (dir, mesh) = load_written(&[("t.obj", obj)]);
+    let d = dir.path();
     let expected = [[0.25, 0.875], [1.0, 1.0], [0.0, 0.0]];
     assert_eq!(mesh.uvs, Some(vec![expected]), "OBJ vt");
     let vertices = "0 0 0 0.25 0.125\n1 0 0 1 0\n0 1 0 0 1\n";
