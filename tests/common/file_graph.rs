@@ -234,7 +234,7 @@ fn module_paths(
     };
     let mut anchors: Vec<String> = ["crate", "super", "self"].map(String::from).to_vec();
     // A child module's name starts a relative path (`device::Gpu`).
-    for ((k, m), _) in modules {
+    for (k, m) in modules.keys() {
         if k == krate && m.len() == module.len() + 1 && m.starts_with(module) {
             anchors.push(m[module.len()].clone());
         }

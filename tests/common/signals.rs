@@ -17,7 +17,11 @@ pub fn interrupt(
     output: &Path,
 ) -> (bool, Vec<u8>) {
     std::thread::sleep(Duration::from_millis(delay_ms));
-    let signal = if round % 2 == 0 { "-INT" } else { "-TERM" };
+    let signal = if round.is_multiple_of(2) {
+        "-INT"
+    } else {
+        "-TERM"
+    };
     Command::new("kill")
         .args([signal, &child.id().to_string()])
         .status()
