@@ -10,7 +10,7 @@ use glam::{DVec3, Vec3};
 use lambert::camera::Camera;
 use lambert::diff::{Tolerance, compare};
 use lambert::gpu::{AdapterRequest, Gpu, GpuRenderer};
-use lambert::layout::{LIGHT_DIRECTIONAL, Light, Triangle};
+use lambert::layout::{LIGHT_DIRECTIONAL, Light};
 use lambert::progress::Progress;
 use lambert::{Scene, cpu, probe};
 
@@ -25,15 +25,7 @@ fn main() -> lambert::Result<()> {
     let bumpy =
         |v: DVec3| v * (1.0 + 0.03 * (25.0 * v.x).sin() * (25.0 * v.y).cos() * (25.0 * v.z).sin());
     let vertices: Vec<Vec3> = vertices.into_iter().map(|v| bumpy(v).as_vec3()).collect();
-    let triangles: Vec<Triangle> = faces
-        .iter()
-        .map(|f| Triangle {
-            v0: vertices[f[0] as usize].to_array(),
-            v1: vertices[f[1] as usize].to_array(),
-            v2: vertices[f[2] as usize].to_array(),
-            ..Default::default()
-        })
-        .collect();
+    let triangles = probe::triangles(&vertices, &faces);
     drop((vertices, faces));
     let generated = start.elapsed();
     let mut scene = Scene::from_triangles(triangles);

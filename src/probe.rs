@@ -150,17 +150,21 @@ pub fn leak_probe() -> Vec<(Vec<Triangle>, Vec<Ray>)> {
         .iter()
         .map(|&offset| {
             let v32: Vec<Vec3> = vertices.iter().map(|&v| (v + offset).as_vec3()).collect();
-            let triangles = faces
-                .iter()
-                .map(|f| Triangle {
-                    v0: v32[f[0] as usize].to_array(),
-                    v1: v32[f[1] as usize].to_array(),
-                    v2: v32[f[2] as usize].to_array(),
-                    ..Default::default()
-                })
-                .collect();
             let rays = edge_aimed_rays(&v32, &faces, &mut rng);
-            (triangles, rays)
+            (triangles(&v32, &faces), rays)
+        })
+        .collect()
+}
+
+/// The triangles `faces` make of `vertices`, with the default material.
+pub fn triangles(vertices: &[Vec3], faces: &[[u32; 3]]) -> Vec<Triangle> {
+    faces
+        .iter()
+        .map(|f| Triangle {
+            v0: vertices[f[0] as usize].to_array(),
+            v1: vertices[f[1] as usize].to_array(),
+            v2: vertices[f[2] as usize].to_array(),
+            ..Default::default()
         })
         .collect()
 }

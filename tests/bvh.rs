@@ -606,11 +606,10 @@ fn every_cpu_kernel_equals_the_portable_one() {
 /// visit each in turn; every ray must get exactly the hit it gets alone.
 #[test]
 fn interleaved_ray_queries_equal_single_ray_traces() {
-    let soup = soup();
     for (name, scene) in [
         ("bunny", load("bunny")),
         ("spheres", load("spheres")),
-        ("soup", soup),
+        ("soup", soup()),
     ] {
         let kernel = Kernel::new(&scene);
         // An odd count over several chunks, so that lanes run dry unevenly.

@@ -2,13 +2,13 @@
 
 mod common;
 
+use common::args::{render_args, trace_args, turntable_args};
 use common::cli::*;
 use common::{lambert, s};
 
 #[test]
 fn renders_png_exr_and_pfm() {
-    let case = Case::new();
-    let scene = case.file("scene.toml", &format!("{CAMERA}{SPHERE}{LIGHT}"));
+    let (case, scene) = Case::lit_sphere();
     for ext in ["png", "exr", "pfm"] {
         let out = case.path(&format!("out.{ext}"));
         let output = lambert(&["render", s(&scene), "-o", s(&out), "--device", "cpu"]);
@@ -275,37 +275,30 @@ fn bad_output_names_and_options() {
     );
     let out = case.path("out.png");
     expect_failure(
-        &lambert(&[
-            "render",
-            s(&scene),
-            "-o",
-            s(&out),
-            "--device",
-            "gpu",
-            "--backend",
-            "glide",
-        ]),
+        &lambert(
+            &[
+                &render_args(&scene, &out, "gpu")[..],
+                &["--backend", "glide"],
+            ]
+            .concat(),
+        ),
         &["unknown backend 'glide'"],
     );
     expect_failure(
-        &lambert(&[
-            "render",
-            s(&scene),
-            "-o",
-            s(&out),
-            "--device",
-            "gpu",
-            "--adapter",
-            "no-such-adapter",
-        ]),
+        &lambert(
+            &[
+                &render_args(&scene, &out, "gpu")[..],
+                &["--adapter", "no-such-adapter"],
+            ]
+            .concat(),
+        ),
         &["no adapter whose name contains 'no-such-adapter'"],
     );
 }
 
 #[test]
 fn diff_reports_statistics_and_json() {
-    let case = Case::new();
-    let scene = case.file("scene.toml", &format!("{CAMERA}{SPHERE}{LIGHT}"));
+    let (case, scene) = Case::lit_sphere();
     let heatmap = case.path("heat.png");
     let output = lambert(&["diff", s(&scene), "--json", "--heatmap", s(&heatmap)]);
     assert!(
@@ -394,20 +387,13 @@ fn trace_writes_hits_in_the_documented_format() {
     .unwrap();
     for device in ["cpu", "gpu"] {
         let hits_path = case.path(&format!("hits_{device}.bin"));
-        let out = lambert(&[
-            "trace",
-            "--obj",
-            obj.to_str().unwrap(),
-            "--rays",
-            rays_path.to_str().unwrap(),
-            "-o",
-            hits_path.to_str().unwrap(),
-            "--device",
-            device,
-            "--oracle",
-            "--warmup",
-            "--json",
-        ]);
+        let out = lambert(
+            &[
+                &trace_args(&obj, &rays_path, &hits_path)[..],
+                &["--device", device, "--oracle", "--warmup", "--json"],
+            ]
+            .concat(),
+        );
         assert!(
             out.status.success(),
             "{}",
@@ -446,17 +432,8 @@ fn trace_rejects_bad_ray_files() {
         (&short, "10 bytes is not a whole number of rays"),
         (&nan_path, "ray 0 (byte offset 0): dx is NaN"),
     ] {
-        let out = lambert(&[
-            "trace",
-            "--obj",
-            obj.to_str().unwrap(),
-            "--rays",
-            rays.to_str().unwrap(),
-            "-o",
-            case.path("hits.bin").to_str().unwrap(),
-            "--device",
-            "cpu",
-        ]);
+        let hits = case.path("hits.bin");
+        let out = lambert(&[&trace_args(&obj, rays, &hits)[..], &["--device", "cpu"]].concat());
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(1), "{stderr}");
         assert!(
@@ -469,19 +446,9 @@ fn trace_rejects_bad_ray_files() {
 
 #[test]
 fn turntable_writes_numbered_frames() {
-    let case = Case::new();
-    let scene = case.file("scene.toml", &format!("{CAMERA}{SPHERE}{LIGHT}"));
+    let (case, scene) = Case::lit_sphere();
     let pattern = case.path("frames/frame_{:04}.png");
-    let out = lambert(&[
-        "render",
-        scene.to_str().unwrap(),
-        "--turntable",
-        "3",
-        "-o",
-        pattern.to_str().unwrap(),
-        "--device",
-        "cpu",
-    ]);
+    let out = lambert(&turntable_args(&scene, "3", &pattern));
     assert!(
         out.status.success(),
         "{}",
@@ -575,8 +542,7 @@ fn bench_time_vs_error_runs_end_to_end() {
 
 #[test]
 fn time_budget_and_target_error_render_and_report() {
-    let case = Case::new();
-    let scene = case.file("scene.toml", &format!("{CAMERA}{SPHERE}{LIGHT}"));
+    let (case, scene) = Case::lit_sphere();
     let out_png = case.path("out.png");
     let render = |option: &str, value: &str| {
         let out = lambert(&[

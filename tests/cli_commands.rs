@@ -4,6 +4,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
+use common::args::{CHEAPEST_BENCH, trace_args, turntable_args};
 use common::cli::*;
 use common::{lambert, lambert_command, s};
 
@@ -51,8 +52,7 @@ fn the_cpu_kernel_variable_reaches_the_cli() {
 /// XDG_RUNTIME_DIR), and `info` names the CPU kernel in use.
 #[test]
 fn successful_commands_print_no_error_lines() {
-    let case = Case::new();
-    let scene = case.file("scene.toml", &format!("{CAMERA}{SPHERE}{LIGHT}"));
+    let (case, scene) = Case::lit_sphere();
     let out = case.path("out.png");
     let runs = [
         vec!["info"],
@@ -263,34 +263,8 @@ fn no_output_is_written_over_an_input() {
             ],
             &scene_png,
         ),
-        (
-            [
-                &[
-                    "trace",
-                    "--obj",
-                    s(&obj),
-                    "--rays",
-                    s(&rays),
-                    "-o",
-                    s(&rays),
-                ][..],
-                &cpu,
-            ]
-            .concat(),
-            &rays,
-        ),
-        (
-            vec![
-                "trace",
-                "--obj",
-                s(&obj),
-                "--rays",
-                s(&rays),
-                "-o",
-                s(&obj_bin),
-            ],
-            &obj_bin,
-        ),
+        ([&trace_args(&obj, &rays, &rays)[..], &cpu].concat(), &rays),
+        (trace_args(&obj, &rays, &obj_bin), &obj_bin),
         (vec!["camera-rays", s(&scene), "-o", s(&scene)], &scene),
     ];
     for (args, output) in runs {
@@ -311,16 +285,7 @@ fn no_output_is_written_over_an_input() {
     let frames = case.path("scene.{}.png");
     let frame1 = case.path("scene.1.png");
     std::os::unix::fs::symlink(&scene, &frame1).unwrap();
-    let out = lambert(&[
-        "render",
-        s(&scene),
-        "--turntable",
-        "2",
-        "-o",
-        s(&frames),
-        "--device",
-        "cpu",
-    ]);
+    let out = lambert(&turntable_args(&scene, "2", &frames));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{stderr}");
     assert!(
@@ -336,23 +301,14 @@ fn no_output_is_written_over_an_input() {
 /// included) but not results or errors.
 #[test]
 fn quiet_is_accepted_everywhere_and_silences_notes() {
-    let case = Case::new();
-    let scene = case.file("scene.toml", &format!("{CAMERA}{SPHERE}{LIGHT}"));
+    let (case, scene) = Case::lit_sphere();
     let obj = case.file("tri.obj", TRIANGLE_OBJ);
     let rays = case.path("rays.bin");
     let hits = case.path("hits.bin");
     let (part0, part1) = (case.path("part0.exr"), case.path("part1.exr"));
     let merged = case.path("merged.png");
     let camera_rays = ["camera-rays", s(&scene), "-o", s(&rays)];
-    let trace = [
-        "trace",
-        "--obj",
-        s(&obj),
-        "--rays",
-        s(&rays),
-        "-o",
-        s(&hits),
-    ];
+    let trace = trace_args(&obj, &rays, &hits);
     let parts = [
         ["render", s(&scene), "--tile", "0/2", "-o", s(&part0)],
         ["render", s(&scene), "--tile", "1/2", "-o", s(&part1)],
@@ -397,20 +353,9 @@ fn quiet_is_accepted_everywhere_and_silences_notes() {
 /// Issue 28 item 16: every placeholder of a turntable pattern is filled.
 #[test]
 fn turntable_fills_every_placeholder() {
-    let case = Case::new();
-    let scene = case.file("scene.toml", &format!("{CAMERA}{SPHERE}{LIGHT}"));
+    let (case, scene) = Case::lit_sphere();
     let pattern = case.path("f{}/frame_{:03}.png");
-    let out = lambert(&[
-        "render",
-        s(&scene),
-        "--turntable",
-        "2",
-        "-o",
-        s(&pattern),
-        "--device",
-        "cpu",
-        "-q",
-    ]);
+    let out = lambert(&[&turntable_args(&scene, "2", &pattern)[..], &["-q"]].concat());
     assert!(out.status.success(), "{out:?}");
     for frame in 0..2 {
         let path = case.path(&format!("f{frame}/frame_{frame:03}.png"));
@@ -425,8 +370,7 @@ fn turntable_fills_every_placeholder() {
 /// does, and its help says so.
 #[test]
 fn diff_heatmap_writes_png_exr_and_pfm() {
-    let case = Case::new();
-    let scene = case.file("scene.toml", &format!("{CAMERA}{SPHERE}{LIGHT}"));
+    let (case, scene) = Case::lit_sphere();
     for ext in ["png", "exr", "pfm"] {
         let heatmap = case.path(&format!("heat.{ext}"));
         let out = lambert(&[
@@ -461,15 +405,8 @@ fn bench_finds_the_bundled_scenes_from_any_folder() {
     let json = case.path("points.json");
     let out = lambert_command()
         .current_dir(case.dir.path())
-        .args([
-            "bench",
-            "--time-vs-error",
-            "--device",
-            "cpu",
-            "--spp-list",
-            "1",
-        ])
-        .args(["--runs", "1", "-q", "--json", s(&json)])
+        .args(CHEAPEST_BENCH)
+        .args(["-q", "--json", s(&json)])
         .output()
         .unwrap();
     assert!(out.status.success(), "{out:?}");

@@ -6,6 +6,10 @@ use std::os::unix::fs::FileTypeExt;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use common::args::{render_args, trace_args};
+use common::data::ray;
+use common::formats::assert_has;
+use common::signals::interrupt;
 use common::*;
 use lambert::layout::{NO_HIT, Ray, Triangle};
 
@@ -106,12 +110,6 @@ fn tiny_directions_hit_through_the_bvh() {
         ..Default::default()
     };
     let scene = scene_of(vec![triangle], vec![sphere]);
-    let ray = |origin: [f32; 3], dir: [f32; 3]| Ray {
-        origin,
-        tmin: 0.0,
-        dir,
-        tmax: f32::INFINITY,
-    };
     let rays = [
         ray([0.0, 0.0, 5.0], [0.0, 0.0, -1e-18]),
         ray([0.0, 0.0, 5.0], [1e-19, 0.0, -1e-18]),
@@ -139,6 +137,24 @@ fn tiny_directions_hit_through_the_bvh() {
     assert!(brute_hits.iter().all(|h| h.prim != NO_HIT));
 }
 
+/// What `path` is, not following a link.
+fn file_type(path: &Path) -> std::fs::FileType {
+    std::fs::symlink_metadata(path).unwrap().file_type()
+}
+
+/// Renders `scene` to `link`, a symlink, on the CPU: it succeeds and the
+/// link stays a link.
+fn render_through_link(scene: &Path, link: &Path) {
+    let out = lambert(&render_args(scene, link, "cpu"));
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        std::fs::symlink_metadata(link)
+            .unwrap()
+            .file_type()
+            .is_symlink()
+    );
+}
+
 /// Outputs that are not regular files: a symlink keeps pointing where it
 /// did and its target gets the image, a dangling one creates its target,
 /// a FIFO is written into, not replaced; and a device that fails the
@@ -151,21 +167,7 @@ fn outputs_follow_links_and_write_into_fifos() {
 
     std::fs::write(d.join("real.pfm"), "old").unwrap();
     std::os::unix::fs::symlink("real.pfm", d.join("link.pfm")).unwrap();
-    let out = lambert(&[
-        "render",
-        s(&scene),
-        "-o",
-        s(&d.join("link.pfm")),
-        "--device",
-        "cpu",
-    ]);
-    assert!(out.status.success(), "{}", stderr(&out));
-    assert!(
-        std::fs::symlink_metadata(d.join("link.pfm"))
-            .unwrap()
-            .file_type()
-            .is_symlink()
-    );
+    render_through_link(&scene, &d.join("link.pfm"));
     assert!(
         std::fs::read(d.join("real.pfm"))
             .unwrap()
@@ -174,21 +176,7 @@ fn outputs_follow_links_and_write_into_fifos() {
 
     std::os::unix::fs::symlink("sub/target.png", d.join("dangling.png")).unwrap();
     std::fs::create_dir(d.join("sub")).unwrap();
-    let out = lambert(&[
-        "render",
-        s(&scene),
-        "-o",
-        s(&d.join("dangling.png")),
-        "--device",
-        "cpu",
-    ]);
-    assert!(out.status.success(), "{}", stderr(&out));
-    assert!(
-        std::fs::symlink_metadata(d.join("dangling.png"))
-            .unwrap()
-            .file_type()
-            .is_symlink()
-    );
+    render_through_link(&scene, &d.join("dangling.png"));
     image::open(d.join("sub/target.png")).unwrap();
 
     let fifo = d.join("fifo.pfm");
@@ -207,12 +195,7 @@ fn outputs_follow_links_and_write_into_fifos() {
     assert!(out.status.success(), "{}", stderr(&out));
     let bytes = reader.join().unwrap();
     assert!(bytes.starts_with(b"PF\n16 12\n"), "{} bytes", bytes.len());
-    assert!(
-        std::fs::symlink_metadata(&fifo)
-            .unwrap()
-            .file_type()
-            .is_fifo()
-    );
+    assert!(file_type(&fifo).is_fifo());
     assert!(temporaries(d).is_empty(), "{:?}", temporaries(d));
 
     // A device that fails the write, as /dev/full does (a copy of it here:
@@ -235,12 +218,7 @@ fn outputs_follow_links_and_write_into_fifos() {
     let out = lambert(&["render", s(&scene), "-o", s(&full), "--device", "cpu"]);
     assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
     assert!(stderr(&out).contains("full.pfm"), "{}", stderr(&out));
-    assert!(
-        std::fs::symlink_metadata(&full)
-            .unwrap()
-            .file_type()
-            .is_char_device()
-    );
+    assert!(file_type(&full).is_char_device());
     assert!(temporaries(d).is_empty(), "{:?}", temporaries(d));
 }
 
@@ -264,32 +242,13 @@ fn signals_leave_no_temporary_file_and_the_previous_output() {
         .iter()
         .enumerate()
     {
-        let mut child = lambert_command()
-            .args([
-                "render",
-                s(&scene),
-                "-o",
-                s(&output),
-                "--device",
-                "cpu",
-                "-q",
-            ])
+        let child = lambert_command()
+            .args(render_args(&scene, &output, "cpu"))
+            .arg("-q")
             .spawn()
             .unwrap();
-        std::thread::sleep(std::time::Duration::from_millis(*delay_ms));
-        let signal = if round % 2 == 0 { "-INT" } else { "-TERM" };
-        Command::new("kill")
-            .args([signal, &child.id().to_string()])
-            .status()
-            .unwrap();
-        let status = child.wait().unwrap();
-        assert!(
-            temporaries(d).is_empty(),
-            "after {delay_ms} ms: {:?}",
-            temporaries(d)
-        );
-        let bytes = std::fs::read(&output).unwrap();
-        if previous_or_whole(status.success(), &bytes, 18 + 2048 * 2048 * 12, *delay_ms) {
+        let (success, bytes) = interrupt(child, round, *delay_ms, d, &output);
+        if previous_or_whole(success, &bytes, 18 + 2048 * 2048 * 12, *delay_ms) {
             interrupted += 1;
         } else {
             std::fs::write(&output, "previous").unwrap();
@@ -411,15 +370,7 @@ fn quiet_is_quiet() {
     )
     .unwrap();
     let out = lambert_command()
-        .args([
-            "trace",
-            "--obj",
-            s(&obj),
-            "--rays",
-            s(&rays),
-            "-o",
-            s(&dir.path().join("h.bin")),
-        ])
+        .args(trace_args(&obj, &rays, &dir.path().join("h.bin")))
         .env("WGPU_ADAPTER_NAME", "no such adapter")
         .output()
         .unwrap();
@@ -461,10 +412,7 @@ fn obj_byte_order_marks_and_messages() {
     )
     .unwrap();
     let err = lambert::Scene::load(&scene).unwrap_err().to_string();
-    assert!(
-        err.contains("mesh[0] (plain.obj): vertex 2 at [1, 0, 0]"),
-        "{err}"
-    );
+    assert_has(&err, &["mesh[0] (plain.obj): vertex 2 at [1, 0, 0]"]);
     assert!(!err.contains("DVec3"), "{err}");
 }
 
@@ -497,11 +445,7 @@ fn info_filters_and_backend_names() {
         .output()
         .unwrap();
     assert_eq!(out.status.code(), Some(1));
-    assert!(
-        stderr(&out).contains("unknown backend 'bogus' in WGPU_BACKEND"),
-        "{}",
-        stderr(&out)
-    );
+    assert_has(&stderr(&out), &["unknown backend 'bogus' in WGPU_BACKEND"]);
 }
 
 /// The up vector's threshold is stated, and just past it renders as the

@@ -2,6 +2,8 @@
 
 mod common;
 
+use common::args::trace_args;
+use common::data::ray;
 use common::*;
 use lambert::layout::{NO_HIT, Ray};
 
@@ -167,12 +169,6 @@ fn meshes_far_from_the_origin_trace_as_at_the_origin() {
 fn rays_from_far_away_hit_and_imprecise_ones_are_named() {
     use glam::DVec3;
     let (scene, triangles) = far_icosphere(DVec3::ZERO);
-    let ray = |origin: [f32; 3], dir: [f32; 3]| Ray {
-        origin,
-        tmin: 0.0,
-        dir,
-        tmax: f32::INFINITY,
-    };
     let rays = [
         ray([0.1, 0.2, 1e19], [0.0, 0.0, -1.0]),
         ray([-1e19, 0.3, -0.2], [1.0, 0.0, 0.0]),
@@ -225,17 +221,13 @@ fn rays_from_far_away_hit_and_imprecise_ones_are_named() {
     lambert::rays::write_rays(&rays_path, &rays).unwrap();
     for device in ["cpu", "gpu"] {
         let hits_path = dir.path().join(format!("hits-{device}.bin"));
-        let out = lambert(&[
-            "trace",
-            "--obj",
-            s(&obj_path),
-            "--rays",
-            s(&rays_path),
-            "-o",
-            s(&hits_path),
-            "--device",
-            device,
-        ]);
+        let out = lambert(
+            &[
+                &trace_args(&obj_path, &rays_path, &hits_path)[..],
+                &["--device", device],
+            ]
+            .concat(),
+        );
         assert!(out.status.success(), "{device}: {}", stderr(&out));
         let hits = lambert::rays::read_hits(&hits_path).unwrap();
         // 1e19 − 1 in f32 is 1e19: the sphere's near side.

@@ -60,6 +60,15 @@ fn sphere(centre: DVec3, levels: u32) -> (Vec<DVec3>, Vec<[usize; 3]>) {
     (vertices, indices)
 }
 
+/// The sphere of `sphere(…, 3)` about `place`: its centre, its triangles
+/// in f64 (the references') and its scene.
+fn far_sphere(place: [f64; 3]) -> (DVec3, Vec<[DVec3; 3]>, Arc<Scene>) {
+    let centre = DVec3::from(place);
+    let (vertices, faces) = sphere(centre, 3);
+    let triangles = faces.iter().map(|f| f.map(|i| vertices[i])).collect();
+    (centre, triangles, scene_of(&vertices, &faces))
+}
+
 fn scene_of(vertices: &[DVec3], faces: &[[usize; 3]]) -> Arc<Scene> {
     let v: Vec<[f64; 3]> = vertices.iter().map(|v| v.to_array()).collect();
     let f: Vec<[i64; 3]> = faces.iter().map(|f| f.map(|i| i as i64)).collect();
@@ -144,10 +153,7 @@ fn renderers(scene: &Arc<Scene>) -> Vec<Renderer> {
 #[test]
 fn f64_points_keep_their_precision_far_from_the_origin() {
     for place in PLACES {
-        let centre = DVec3::from(place);
-        let (vertices, faces) = sphere(centre, 3);
-        let triangles: Vec<[DVec3; 3]> = faces.iter().map(|f| f.map(|i| vertices[i])).collect();
-        let scene = scene_of(&vertices, &faces);
+        let (centre, triangles, scene) = far_sphere(place);
         let points: Vec<[f64; 3]> = offsets().iter().map(|&o| (centre + o).to_array()).collect();
         let truth: Vec<f64> = points
             .iter()
@@ -213,10 +219,7 @@ fn f64_points_keep_their_precision_far_from_the_origin() {
 #[test]
 fn f64_rays_cross_far_meshes_where_f64_says() {
     for place in PLACES {
-        let centre = DVec3::from(place);
-        let (vertices, faces) = sphere(centre, 3);
-        let triangles: Vec<[DVec3; 3]> = faces.iter().map(|f| f.map(|i| vertices[i])).collect();
-        let scene = scene_of(&vertices, &faces);
+        let (centre, triangles, scene) = far_sphere(place);
         let placement = scene.placement();
         // The ray, and rays from 5 units out aimed within 0.9 of
         // the centre (none grazes).

@@ -8,6 +8,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use common::args::trace_args;
 use common::{lambert_with_deadline as lambert, s, write};
 
 /// Runs lambert, expecting a failure whose message holds `expected`.
@@ -121,15 +122,7 @@ fn every_input_must_be_a_regular_file() {
     let rays = fifo(d, "rays.bin");
     let obj = write(d, "t.obj", TRIANGLE);
     fails(
-        &[
-            "trace",
-            "--obj",
-            s(&obj),
-            "--rays",
-            s(&rays),
-            "-o",
-            s(&d.join("hits.bin")),
-        ],
+        &trace_args(&obj, &rays, &d.join("hits.bin")),
         "rays.bin: not a regular file (a FIFO)",
     );
     let part = fifo(d, "part.exr");

@@ -76,12 +76,8 @@ fn mesh_of_11k_triangles() {
 fn cpu_reference_agrees_with_f64_oracle() {
     for name in ["cornell", "spheres", "edge_cases", "triangle_oblique"] {
         let scene = load(name);
-        let stats = compare(
-            &render_cpu(&scene),
-            &render_oracle(&scene),
-            &Tolerance::default(),
-        )
-        .unwrap();
+        let (cpu, oracle) = (render_cpu(&scene), render_oracle(&scene));
+        let stats = compare(&cpu, &oracle, &Tolerance::default()).unwrap();
         println!("{name}: CPU f32 vs f64 oracle\n{stats}");
         assert!(
             stats.passed,

@@ -8,6 +8,7 @@ mod common;
 
 use std::path::Path;
 
+use common::data::glb;
 use common::*;
 use lambert::Scene;
 use lambert::layout::NO_HIT;
@@ -70,19 +71,7 @@ fn quad_glb(material: serde_json::Value, image: serde_json::Value) -> Vec<u8> {
         ],
         "buffers": [{"byteLength": bin.len()}]
     });
-    let mut text = serde_json::to_vec(&json).unwrap();
-    text.resize(text.len().div_ceil(4) * 4, b' ');
-    let mut out = Vec::new();
-    out.extend(b"glTF");
-    out.extend(2u32.to_le_bytes());
-    out.extend(((12 + 8 + text.len() + 8 + bin.len()) as u32).to_le_bytes());
-    out.extend((text.len() as u32).to_le_bytes());
-    out.extend(b"JSON");
-    out.extend(text);
-    out.extend((bin.len() as u32).to_le_bytes());
-    out.extend(b"BIN\0");
-    out.extend(bin);
-    out
+    glb(json, &bin)
 }
 
 fn embedded() -> serde_json::Value {

@@ -6,31 +6,13 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
+use common::data::glb;
+use common::formats::load_written;
 use common::*;
 use lambert::Scene;
 use lambert::layout::NO_HIT;
 use lambert::loading::{AlphaMode, NormalMode, load_mesh};
 use lambert::output::Rendered;
-
-/// A binary glTF of `json` (its one buffer: `bin`).
-fn glb(mut json: serde_json::Value, bin: &[u8]) -> Vec<u8> {
-    json["buffers"] = serde_json::json!([{"byteLength": bin.len()}]);
-    let mut text = serde_json::to_vec(&json).unwrap();
-    text.resize(text.len().div_ceil(4) * 4, b' ');
-    let mut bin = bin.to_vec();
-    bin.resize(bin.len().div_ceil(4) * 4, 0);
-    let mut out = Vec::new();
-    out.extend(b"glTF");
-    out.extend(2u32.to_le_bytes());
-    out.extend(((12 + 8 + text.len() + 8 + bin.len()) as u32).to_le_bytes());
-    out.extend((text.len() as u32).to_le_bytes());
-    out.extend(b"JSON");
-    out.extend(text);
-    out.extend((bin.len() as u32).to_le_bytes());
-    out.extend(b"BIN\0");
-    out.extend(bin);
-    out
-}
 
 /// One vertex attribute of a quad: its bytes (four elements), and its
 /// accessor's componentType, type and whether it is normalised.
@@ -40,6 +22,19 @@ struct Attribute {
     component: u32,
     kind: &'static str,
     normalized: bool,
+}
+
+impl Attribute {
+    /// An attribute of 32-bit floats.
+    fn floats(name: &'static str, values: &[f32], kind: &'static str) -> Attribute {
+        Attribute {
+            name,
+            bytes: floats(values),
+            component: 5126,
+            kind,
+            normalized: false,
+        }
+    }
 }
 
 fn floats(values: &[f32]) -> Vec<u8> {
@@ -276,10 +271,9 @@ fn colours_of_every_format_and_type_are_read() {
 /// set the base colour texture names) as float and unorm.
 #[test]
 fn texture_coordinates_of_every_format_are_read() {
-    let dir = tempfile::tempdir().unwrap();
-    let d = dir.path();
     let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0.25 0.125\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n";
-    let mesh = load_mesh(&write(d, "t.obj", obj), NormalMode::Face).unwrap();
+    let (dir, mesh) = load_written(&[("t.obj", obj)]);
+    let d = dir.path();
     let expected = [[0.25, 0.875], [1.0, 1.0], [0.0, 0.0]];
     assert_eq!(mesh.uvs, Some(vec![expected]), "OBJ vt");
     let vertices = "0 0 0 0.25 0.125\n1 0 0 1 0\n0 1 0 0 1\n";
@@ -314,13 +308,7 @@ fn texture_coordinates_of_every_format_are_read() {
         ),
     ] {
         // TEXCOORD_0 is a decoy: the texture reads set 1.
-        let decoy = Attribute {
-            name: "TEXCOORD_0",
-            bytes: floats(&[9.0; 8]),
-            component: 5126,
-            kind: "VEC2",
-            normalized: false,
-        };
+        let decoy = Attribute::floats("TEXCOORD_0", &[9.0; 8], "VEC2");
         let set = Attribute {
             name: "TEXCOORD_1",
             bytes,
@@ -423,15 +411,13 @@ fn emission_renders_in_the_dark() {
 /// whose alpha is 1 on its right corners and 0 on its left (COLOR_0), a
 /// light above it; the camera at (0, 0, `eye_z`).
 fn masked_scene(d: &Path, alpha_mode: &str, eye_z: f64) -> Scene {
-    let colour = Attribute {
-        name: "COLOR_0",
-        bytes: floats(&[
+    let colour = Attribute::floats(
+        "COLOR_0",
+        &[
             1.0, 1.0, 1.0, 0.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.0,
-        ]),
-        component: 5126,
-        kind: "VEC4",
-        normalized: false,
-    };
+        ],
+        "VEC4",
+    );
     let material = serde_json::json!({"name": "leaf", "alphaMode": alpha_mode, "alphaCutoff": 0.5,
         "pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.9, 0.2, 1.0]}});
     let model: PathBuf = write(
@@ -510,15 +496,10 @@ fn alpha_masks_cut_out_for_camera_and_shadow_rays() {
 /// trimesh's models/fuze.obj.mtl has it); `Ke` is emission.
 #[test]
 fn mtl_alpha_and_emission() {
-    let dir = tempfile::tempdir().unwrap();
-    let d = dir.path();
-    write(
-        d,
-        "m.mtl",
-        "newmtl glass\nKd 1 1 1\nd 0.25\nnewmtl meshlab\nTr 1.000000\nnewmtl lamp\nKe 1 0.5 0\n",
-    );
+    let mtl =
+        "newmtl glass\nKd 1 1 1\nd 0.25\nnewmtl meshlab\nTr 1.000000\nnewmtl lamp\nKe 1 0.5 0\n";
     let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl glass\nf 1 2 3\nusemtl meshlab\nf 1 2 3\nusemtl lamp\nf 1 2 3\n";
-    let mesh = load_mesh(&write(d, "m.obj", obj), NormalMode::Face).unwrap();
+    let (_dir, mesh) = load_written(&[("m.mtl", mtl), ("m.obj", obj)]);
     let m = &mesh.materials;
     assert_eq!(
         (m[0].base_color[3], m[0].alpha_mode),
@@ -617,13 +598,7 @@ fn info_lists_colours_alpha_modes_and_emission() {
     let d = dir.path();
     let scene = masked_scene(d, "MASK", 6.0);
     assert_eq!(scene.colored_triangles(), 2);
-    let colour = Attribute {
-        name: "COLOR_0",
-        bytes: floats(&[1.0; 12]),
-        component: 5126,
-        kind: "VEC3",
-        normalized: false,
-    };
+    let colour = Attribute::floats("COLOR_0", &[1.0; 12], "VEC3");
     let material = serde_json::json!({"emissiveFactor": [0.5, 0.25, 1.0]});
     let path = write(d, "lamp.glb", quad_glb(1.0, 0.0, &[colour], material));
     let info = lambert(&["info", s(&path)]);

@@ -7,18 +7,12 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
+use common::args::{CHEAPEST_BENCH, render_args, turntable_args};
 use common::{lambert, s, stderr, write};
 use lambert::Scene;
 use lambert::output::Image;
 
-const CAMERA: &str = r#"
-[camera]
-eye = [0.5, 0.5, 3.0]
-look_at = [0.5, 0.5, 0.0]
-vfov = 40.0
-width = 16
-height = 12
-"#;
+const CAMERA: &str = "\n[camera]\neye = [0.5, 0.5, 3.0]\nlook_at = [0.5, 0.5, 0.0]\nvfov = 40.0\nwidth = 16\nheight = 12\n";
 
 const LIGHT: &str = "[[point_light]]\nposition = [0.0, 2.0, 3.0]\nintensity = 10.0\n";
 
@@ -114,21 +108,7 @@ fn no_output_replaces_a_mesh_an_mtl_or_a_texture_the_scene_reads() {
         (vec!["camera-rays", s(&scene), "-o", s(&quad)], &quad),
         (vec!["camera-rays", s(&scene), "-o", s(&mtl)], &mtl),
         (
-            vec![
-                "bench",
-                "--time-vs-error",
-                "--device",
-                "cpu",
-                "--spp-list",
-                "1",
-                "--reference-spp",
-                "1",
-                "--runs",
-                "1",
-                "--json",
-                s(&mtl),
-                s(&scene),
-            ],
+            [&CHEAPEST_BENCH[..], &["--json", s(&mtl), s(&scene)]].concat(),
             &mtl,
         ),
         (
@@ -180,16 +160,7 @@ fn turntable_and_part_outputs_are_refused_over_a_texture() {
     let pattern = dir.path().join("meshes/tex/{}.png");
     // Frame 0 of 2 would be …/tex/0.png; make it the texture through a link.
     std::os::unix::fs::symlink(&texture, dir.path().join("meshes/tex/0.png")).unwrap();
-    let output = lambert(&[
-        "render",
-        s(&scene),
-        "--turntable",
-        "2",
-        "-o",
-        s(&pattern),
-        "--device",
-        "cpu",
-    ]);
+    let output = lambert(&turntable_args(&scene, "2", &pattern));
     refused_as_input(&output, &texture, &before);
     let exr = dir.path().join("meshes/tex/grid.exr");
     write(
@@ -389,16 +360,7 @@ fn a_camera_degenerate_in_f32_is_an_error_naming_eye_and_look_at() {
 fn turntable_frames_that_name_one_file_are_refused_before_rendering() {
     let (dir, scene) = room();
     let pattern = dir.path().join("d{}/../same.png");
-    let output = lambert(&[
-        "render",
-        s(&scene),
-        "--turntable",
-        "3",
-        "-o",
-        s(&pattern),
-        "--device",
-        "cpu",
-    ]);
+    let output = lambert(&turntable_args(&scene, "3", &pattern));
     let text = stderr(&output);
     assert!(!output.status.success(), "{text}");
     assert!(text.contains("frames 0 and 1"), "{text}");
@@ -409,18 +371,13 @@ fn turntable_frames_that_name_one_file_are_refused_before_rendering() {
 fn a_range_of_frames_says_how_many_of_how_many() {
     let (dir, scene) = room();
     let pattern = dir.path().join("f{}.png");
-    let output = lambert(&[
-        "render",
-        s(&scene),
-        "--turntable",
-        "4",
-        "--frames",
-        "0-2",
-        "-o",
-        s(&pattern),
-        "--device",
-        "cpu",
-    ]);
+    let output = lambert(
+        &[
+            &turntable_args(&scene, "4", &pattern)[..],
+            &["--frames", "0-2"],
+        ]
+        .concat(),
+    );
     let text = stderr(&output);
     assert!(output.status.success(), "{text}");
     assert!(text.contains("rendering 3 of 4 frames"), "{text}");
@@ -431,16 +388,7 @@ fn an_adapter_with_too_few_bindings_is_refused_in_words_and_auto_falls_back() {
     let (dir, scene) = room();
     let out = dir.path().join("out.png");
     // GL (Mesa's llvmpipe through EGL) allows 16 storage buffers a stage.
-    let gpu = lambert(&[
-        "render",
-        s(&scene),
-        "-o",
-        s(&out),
-        "--backend",
-        "gl",
-        "--device",
-        "gpu",
-    ]);
+    let gpu = lambert(&[&render_args(&scene, &out, "gpu")[..], &["--backend", "gl"]].concat());
     let text = stderr(&gpu);
     assert!(!gpu.status.success(), "{text}");
     assert!(!text.contains("Too many bindings"), "{text}");
@@ -576,20 +524,8 @@ fn sigterm_exits_143_and_sigint_130() {
 /// `lambert bench --time-vs-error` of `scenes` at its cheapest, with
 /// `--plot plot`.
 fn bench_plot(scenes: &[&Path], plot: &Path) -> Output {
-    let mut args = vec![
-        "bench",
-        "--time-vs-error",
-        "--device",
-        "cpu",
-        "--spp-list",
-        "1",
-        "--reference-spp",
-        "1",
-        "--runs",
-        "1",
-        "--plot",
-        s(plot),
-    ];
+    let mut args = CHEAPEST_BENCH.to_vec();
+    args.extend(["--plot", s(plot)]);
     args.extend(scenes.iter().map(|p| s(p)));
     lambert(&args)
 }

@@ -10,24 +10,7 @@ use lambert::scene::Scene;
 
 mod common;
 
-/// A small deterministic generator (no dependency on a seed's crate).
-struct Lcg(u64);
-
-impl Lcg {
-    fn next(&mut self) -> f32 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((self.0 >> 40) as f32) / ((1u64 << 24) as f32)
-    }
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.next()
-    }
-    fn point(&mut self, lo: f32, hi: f32) -> [f32; 3] {
-        [self.range(lo, hi), self.range(lo, hi), self.range(lo, hi)]
-    }
-}
+use common::data::{Lcg, d3, ray, winding_f64};
 
 fn tri(v0: [f32; 3], v1: [f32; 3], v2: [f32; 3]) -> Triangle {
     Triangle {
@@ -77,10 +60,6 @@ fn sphere_mesh(c: [f32; 3], r: f32, rings: usize, segments: usize) -> Vec<Triang
 
 fn cpu(triangles: Vec<Triangle>) -> Renderer {
     Renderer::Cpu(Arc::new(Scene::from_triangles(triangles)))
-}
-
-fn d3(v: [f32; 3]) -> DVec3 {
-    DVec3::from(v.map(f64::from))
 }
 
 /// The exact (f64) nearest point of a triangle: the projection where it
@@ -209,18 +188,19 @@ fn closest_points_match_brute_force_on_random_soups() {
     }
 }
 
+/// Four triangles about `c` in its plane z = c.z, out to c ± x and c ± y,
+/// counter-clockwise from +x.
+fn fan(c: [f32; 3]) -> Vec<Triangle> {
+    let ring =
+        [[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]].map(|[x, y]| [c[0] + x, c[1] + y, c[2]]);
+    (0..4).map(|k| tri(c, ring[k], ring[(k + 1) % 4])).collect()
+}
+
 #[test]
 fn a_point_on_a_shared_vertex_goes_to_the_lowest_triangle() {
     // A fan of four triangles about the origin, listed so that the lowest id
     // is not the first the traversal would meet.
-    let c = [0.0, 0.0, 0.0];
-    let ring = [
-        [1.0, 0.0, 0.0],
-        [0.0, 1.0, 0.0],
-        [-1.0, 0.0, 0.0],
-        [0.0, -1.0, 0.0],
-    ];
-    let mut triangles: Vec<Triangle> = (0..4).map(|k| tri(c, ring[k], ring[(k + 1) % 4])).collect();
+    let mut triangles = fan([0.0, 0.0, 0.0]);
     triangles.extend(soup(9, 40).into_iter().map(|t| Triangle {
         v0: t.v0.map(|x| x + 5.0),
         v1: t.v1.map(|x| x + 5.0),
@@ -271,20 +251,6 @@ fn max_distance_cuts_off_and_an_empty_scene_finds_nothing() {
             .unwrap(),
         vec![0]
     );
-}
-
-/// The winding number in f64, every triangle's solid angle.
-fn winding_f64(q: DVec3, triangles: &[Triangle]) -> f64 {
-    triangles
-        .iter()
-        .map(|t| {
-            let (a, b, c) = (d3(t.v0) - q, d3(t.v1) - q, d3(t.v2) - q);
-            let (la, lb, lc) = (a.length(), b.length(), c.length());
-            let det = a.dot(b.cross(c));
-            let den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
-            2.0 * det.atan2(den) / (4.0 * std::f64::consts::PI)
-        })
-        .sum()
 }
 
 #[test]
@@ -338,15 +304,6 @@ fn a_mesh_with_a_hole_still_has_a_sensible_inside() {
         .enumerate()
     {
         assert!((w[i] as f64 - winding_f64(d3(*p), &triangles)).abs() < 5e-3);
-    }
-}
-
-fn ray(origin: [f32; 3], dir: [f32; 3]) -> Ray {
-    Ray {
-        origin,
-        tmin: 0.0,
-        dir,
-        tmax: f32::INFINITY,
     }
 }
 
@@ -406,18 +363,11 @@ fn counts_through_a_closed_mesh_are_even_from_outside_and_odd_from_inside() {
 fn an_edge_or_a_vertex_crossed_counts_once() {
     // A square of two triangles (diagonal from (0,0) to (1,1)), and a fan
     // of four about (3, 0.5).
-    let c = [3.0, 0.5, 0.0];
-    let ring = [
-        [4.0, 0.5, 0.0],
-        [3.0, 1.5, 0.0],
-        [2.0, 0.5, 0.0],
-        [3.0, -0.5, 0.0],
-    ];
     let mut triangles = vec![
         tri([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0]),
         tri([0.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]),
     ];
-    triangles.extend((0..4).map(|k| tri(c, ring[k], ring[(k + 1) % 4])));
+    triangles.extend(fan([3.0, 0.5, 0.0]));
     let mut renderer = cpu(triangles);
     let rays = [
         ray([0.5, 0.5, 1.0], [0.0, 0.0, -1.0]), // the diagonal's midpoint

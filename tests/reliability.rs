@@ -5,6 +5,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+use common::args::render_args;
 use common::{lambert_command, s, temporaries};
 use lambert::inputs::Input;
 
@@ -204,26 +205,13 @@ fn signals_during_merge_leave_the_previous_output() {
     let mut interrupted = 0;
     for (round, delay_ms) in [5u64, 20, 40, 80, 120, 160, 220, 300].iter().enumerate() {
         std::fs::write(&output, "previous").unwrap();
-        let mut child = lambert()
+        let child = lambert()
             .args(["merge", s(&parts[0]), s(&parts[1]), "-o", s(&output)])
             .stderr(std::process::Stdio::null())
             .spawn()
             .unwrap();
-        std::thread::sleep(Duration::from_millis(*delay_ms));
-        let signal = if round % 2 == 0 { "-INT" } else { "-TERM" };
-        std::process::Command::new("kill")
-            .args([signal, &child.id().to_string()])
-            .status()
-            .unwrap();
-        let status = child.wait().unwrap();
-        assert!(
-            temporaries(d).is_empty(),
-            "after {delay_ms} ms: {:?}",
-            temporaries(d)
-        );
-        let bytes = std::fs::read(&output).unwrap();
-        interrupted +=
-            common::previous_or_whole(status.success(), &bytes, whole, *delay_ms) as usize;
+        let (success, bytes) = common::signals::interrupt(child, round, *delay_ms, d, &output);
+        interrupted += common::previous_or_whole(success, &bytes, whole, *delay_ms) as usize;
     }
     assert!(
         interrupted > 0,
@@ -263,15 +251,8 @@ fn concurrent_renders_to_one_output_leave_one_whole_image() {
             .iter()
             .map(|scene| {
                 lambert()
-                    .args([
-                        "render",
-                        s(scene),
-                        "-o",
-                        s(&output),
-                        "--device",
-                        "cpu",
-                        "-q",
-                    ])
+                    .args(render_args(scene, &output, "cpu"))
+                    .arg("-q")
                     .spawn()
                     .unwrap()
             })

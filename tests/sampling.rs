@@ -7,6 +7,7 @@ use lambert::Scene;
 use lambert::camera::strata_columns;
 use lambert::cpu;
 use lambert::diff::{Tolerance, compare};
+use lambert::output::Rendered;
 use lambert::progress::Progress;
 use lambert::render::{DeviceChoice, Renderer};
 use lambert::scene::Intersect;
@@ -76,19 +77,24 @@ fn samples_stay_in_their_pixel_and_cover_its_cells() {
     );
 }
 
+/// The f64 oracle's image of `scene` at 256 spp, with `seed` and
+/// `intersect`: the reference the sampling tests measure error against.
+fn reference_of(scene: &Scene, seed: u32, intersect: Intersect) -> Rendered {
+    let mut reference = at_spp(scene, 256);
+    reference.view_mut().seed = seed;
+    let settings = lambert::scene::RenderSettings {
+        intersect,
+        ..reference.default_settings()
+    };
+    render_oracle(&reference.with_settings(&settings))
+}
+
 #[test]
 fn error_falls_as_spp_rises_on_hard_edges() {
     // edge_cases and spheres: silhouettes and shadow edges everywhere.
     for name in ["edge_cases", "spheres"] {
         let scene = load(name);
-        let mut reference = at_spp(&scene, 256);
-        reference.view_mut().seed = 12345;
-        let settings = lambert::scene::RenderSettings {
-            intersect: Intersect::Watertight,
-            ..reference.default_settings()
-        };
-        let reference = reference.with_settings(&settings);
-        let reference = render_oracle(&reference);
+        let reference = reference_of(&scene, 12345, Intersect::Watertight);
         let mut last = f64::INFINITY;
         for spp in [1, 4, 16, 64] {
             let image = render_cpu(&at_spp(&scene, spp));
@@ -109,12 +115,8 @@ fn error_falls_as_spp_rises_on_hard_edges() {
 fn gpu_and_cpu_agree_at_4_spp() {
     for name in ["edge_cases", "spheres", "bunny", "cornell"] {
         let scene = at_spp(&load(name), 4);
-        let stats = compare(
-            &render_gpu(&scene),
-            &render_cpu(&scene),
-            &Tolerance::default(),
-        )
-        .unwrap();
+        let (gpu, cpu) = (render_gpu(&scene), render_cpu(&scene));
+        let stats = compare(&gpu, &cpu, &Tolerance::default()).unwrap();
         println!("{name} at 4 spp, GPU vs CPU:\n{stats}");
         assert!(stats.passed, "{name}:\n{stats}");
     }
@@ -141,9 +143,7 @@ fn adaptive_sampling_beats_uniform_at_the_same_sample_count() {
     use lambert::adaptive::AdaptiveSettings;
     for name in ["edge_cases", "spheres"] {
         let scene = load(name);
-        let mut reference = at_spp(&scene, 256);
-        reference.view_mut().seed = 777;
-        let reference = render_oracle(&reference);
+        let reference = reference_of(&scene, 777, scene.default_settings().intersect);
         let settings = AdaptiveSettings {
             target_error: 0.01,
             base_spp: 4,

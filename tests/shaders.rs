@@ -214,33 +214,23 @@ fn shader_constants_match_host() {
             .unwrap_or_else(|| panic!("WGSL has no const {name}"));
         format!("{:?}", m.global_expressions[c.init])
     };
-    assert_eq!(constant("NO_HIT"), format!("Literal(U32({NO_HIT}))"));
-    assert_eq!(
-        constant("LIGHT_POINT"),
-        format!("Literal(U32({LIGHT_POINT}))")
-    );
-    assert_eq!(
-        constant("LIGHT_DIRECTIONAL"),
-        format!("Literal(U32({LIGHT_DIRECTIONAL}))")
-    );
-    assert_eq!(
-        constant("FLAG_SMOOTH"),
-        format!("Literal(U32({FLAG_SMOOTH}))")
-    );
+    let u32s = [
+        ("NO_HIT", NO_HIT),
+        ("LIGHT_POINT", LIGHT_POINT),
+        ("LIGHT_DIRECTIONAL", LIGHT_DIRECTIONAL),
+        ("FLAG_SMOOTH", FLAG_SMOOTH),
+        ("MAX_DEPTH", lambert::bvh::MAX_DEPTH as u32),
+        ("META_INTERIOR", META_INTERIOR),
+        ("META_LEAF", META_LEAF),
+        (
+            "WORKGROUP_INVOCATIONS",
+            lambert::layout::WORKGROUP_INVOCATIONS,
+        ),
+    ];
+    for (name, value) in u32s {
+        assert_eq!(constant(name), format!("Literal(U32({value}))"), "{name}");
+    }
     assert_eq!(constant("FAR"), format!("Literal(F32({FAR:?}))"));
-    assert_eq!(
-        constant("MAX_DEPTH"),
-        format!("Literal(U32({}))", lambert::bvh::MAX_DEPTH)
-    );
-    assert_eq!(
-        constant("META_INTERIOR"),
-        format!("Literal(U32({META_INTERIOR}))")
-    );
-    assert_eq!(constant("META_LEAF"), format!("Literal(U32({META_LEAF}))"));
-    assert_eq!(
-        constant("WORKGROUP_INVOCATIONS"),
-        format!("Literal(U32({}))", lambert::layout::WORKGROUP_INVOCATIONS)
-    );
 }
 
 #[test]

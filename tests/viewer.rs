@@ -62,28 +62,39 @@ fn frames_then_screenshot_is_render_spp_n_bit_for_bit() {
     }
 }
 
+/// `lambert view` of `scene` at `width`×`height`, `spp` and `device`.
+fn view_args<'a>(
+    scene: &'a Path,
+    width: &'a str,
+    height: &'a str,
+    spp: &'a str,
+    device: &'a str,
+) -> Vec<&'a str> {
+    vec![
+        s(scene),
+        "--width",
+        width,
+        "--height",
+        height,
+        "--spp",
+        spp,
+        "--device",
+        device,
+    ]
+}
+
 #[test]
 fn a_drag_orbits_and_the_camera_printed_renders_what_the_window_shows() {
     let Some(x) = xvfb() else { return };
     let dir = tempfile::tempdir().unwrap();
     let shot = dir.path().join("shot.png");
     let (width, height, spp) = (120, 90, 2);
-    let viewer = Viewer::start(
-        x,
-        &[
-            s(&cornell()),
-            "--width",
-            "120",
-            "--height",
-            "90",
-            "--spp",
-            "2",
-            "--device",
-            "gpu",
-            "--screenshot",
-            s(&shot),
-        ],
-    );
+    let cornell = cornell();
+    let args = [
+        view_args(&cornell, "120", "90", "2", "gpu"),
+        vec!["--screenshot", s(&shot)],
+    ];
+    let viewer = Viewer::start(x, &args.concat());
     let before = viewer.camera();
     // 30 pixels to the right: a third of the height, a sixth of a turn.
     viewer.drag("1", (40, 45), (30, 0));
@@ -129,20 +140,8 @@ fn a_drag_orbits_and_the_camera_printed_renders_what_the_window_shows() {
 #[test]
 fn keys_and_wheel_move_the_camera_as_listed() {
     let Some(x) = xvfb() else { return };
-    let viewer = Viewer::start(
-        x,
-        &[
-            s(&cornell()),
-            "--width",
-            "80",
-            "--height",
-            "60",
-            "--spp",
-            "1",
-            "--device",
-            "cpu",
-        ],
-    );
+    let cornell = cornell();
+    let viewer = Viewer::start(x, &view_args(&cornell, "80", "60", "1", "cpu"));
     let file = viewer.camera();
     let distance = |c: &toml::Table| (vector(c, "eye") - vector(c, "look_at")).length();
     // A notch of the wheel towards the scene: 10% closer. (winit 0.30 on

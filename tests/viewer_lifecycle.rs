@@ -129,8 +129,7 @@ fn hundreds_of_notches_each_way_keep_the_camera_in_the_scene_formats_range() {
 #[test]
 fn flying_panning_and_orbiting_far_out_stay_in_range() {
     for centre in CENTRES {
-        let (file, reach) = start(centre);
-        let mut camera = file.clone();
+        let (mut camera, reach) = start(centre);
         for _ in 0..400 {
             camera = navigate::dolly(&camera, -1.0, &reach);
         }
@@ -235,14 +234,7 @@ fn wait_for_title(viewer: &Viewer, what: &str, wanted: impl Fn(&str) -> bool) ->
 
 /// Waits (PATIENCE at most) for the viewer to exit: its status.
 fn exit_of(viewer: &mut Viewer, what: &str) -> std::process::ExitStatus {
-    let deadline = Instant::now() + PATIENCE;
-    loop {
-        if let Some(status) = viewer.process.0.try_wait().unwrap() {
-            return status;
-        }
-        assert!(Instant::now() < deadline, "{what} did not end the viewer");
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    viewer.exit_status(&format!("{what} did not end the viewer"))
 }
 
 #[test]

@@ -3,30 +3,16 @@
 //! docs/ray-query.md), on a bumpy closed mesh and on stacked coincident
 //! layers, and the inside rule on closed meshes of either orientation.
 
+mod common;
+
 use std::sync::Arc;
 
+use common::data::{Lcg, d3, winding_f64};
 use glam::DVec3;
 use lambert::jobs::{Sign, inside, signed_distances};
 use lambert::layout::Triangle;
 use lambert::render::Renderer;
 use lambert::scene::Scene;
-
-/// A small deterministic generator (no dependency on a seed's crate).
-struct Lcg(u64);
-
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((self.0 >> 11) as f64) / ((1u64 << 53) as f64)
-    }
-
-    fn point(&mut self, lo: f64, hi: f64) -> [f32; 3] {
-        [0; 3].map(|_| (lo + (hi - lo) * self.next()) as f32)
-    }
-}
 
 fn tri(v0: DVec3, v1: DVec3, v2: DVec3) -> Triangle {
     Triangle {
@@ -35,10 +21,6 @@ fn tri(v0: DVec3, v1: DVec3, v2: DVec3) -> Triangle {
         v2: v2.as_vec3().to_array(),
         ..Default::default()
     }
-}
-
-fn d3(v: [f32; 3]) -> DVec3 {
-    DVec3::from(v.map(f64::from))
 }
 
 /// The first point where `a` and `b` disagree, if any.
@@ -59,20 +41,6 @@ fn reversed(triangles: &[Triangle]) -> Vec<Triangle> {
         .collect()
 }
 
-/// The winding number in f64, every triangle's solid angle.
-fn winding_f64(q: DVec3, triangles: &[Triangle]) -> f64 {
-    triangles
-        .iter()
-        .map(|t| {
-            let (a, b, c) = (d3(t.v0) - q, d3(t.v1) - q, d3(t.v2) - q);
-            let (la, lb, lc) = (a.length(), b.length(), c.length());
-            let det = a.dot(b.cross(c));
-            let den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
-            det.atan2(den) / (2.0 * std::f64::consts::PI)
-        })
-        .sum()
-}
-
 /// A closed, outward-facing sphere about `centre` (radius about `r`), its
 /// radius waved by `amplitude` (k bumps a half turn) and jittered by
 /// `noise`: a surface curved at many scales, as a scanned model is.
@@ -86,7 +54,7 @@ fn bumpy_sphere(centre: DVec3, r: f64, amplitude: f64, k: f64, noise: f64) -> Ve
                 .map(|j| {
                     let phi = std::f64::consts::TAU * j as f64 / segments as f64;
                     let wave = amplitude * (k * theta).sin() * ((k + 2.0) * phi).cos();
-                    let radius = r * (1.0 + wave + noise * (rng.next() - 0.5));
+                    let radius = r * (1.0 + wave + noise * (rng.next_f64() - 0.5));
                     centre
                         + radius
                             * DVec3::new(
@@ -133,7 +101,7 @@ fn worst_error(triangles: &[Triangle], lo: f64, hi: f64, count: usize) -> (f64, 
     let near = 0.01 * (max - min).length();
     let mut renderer = cpu(triangles.to_vec());
     let mut rng = Lcg(5);
-    let points: Vec<[f32; 3]> = (0..count).map(|_| rng.point(lo, hi)).collect();
+    let points: Vec<[f32; 3]> = (0..count).map(|_| rng.point_f64(lo, hi)).collect();
     let closest = renderer.closest_points(&points, f32::INFINITY).unwrap();
     let points: Vec<[f32; 3]> = points
         .into_iter()
@@ -186,7 +154,7 @@ fn stacked_coincident_layers_do_not_add_up_their_errors() {
 /// enough for rounding to pick its side).
 fn random_points(count: usize) -> Vec<[f32; 3]> {
     let mut rng = Lcg(9);
-    (0..count).map(|_| rng.point(-2.0, 2.0)).collect()
+    (0..count).map(|_| rng.point_f64(-2.0, 2.0)).collect()
 }
 
 #[test]

@@ -103,4 +103,17 @@ def reference_module(name, needed_by=None):
         pytest.skip(f"{name}{why} is not installed (scripts/test-python installs it)")
 
 
+def open3d_scenes(vertices, faces):
+    """Open3D's RaycastingScene of the mesh and lambert's drop-in one (CPU),
+    for the comparisons: (theirs, ours)."""
+    import lambert
+
+    o3d = reference_module("open3d")
+    theirs = o3d.t.geometry.RaycastingScene()
+    theirs.add_triangles(o3d.core.Tensor(vertices), o3d.core.Tensor(faces))
+    ours = lambert.open3d.RaycastingScene(device="cpu")
+    ours.add_triangles(vertices, faces)
+    return theirs, ours
+
+
 QUERY_DEVICES = ["cpu", "gpu"]

@@ -13,7 +13,7 @@ import pytest
 
 import lambert
 import reference as ref
-from conftest import MESHES, QUERY_DEVICES, SHARED_MODELS, read_obj, reference_module
+from conftest import MESHES, QUERY_DEVICES, SHARED_MODELS, open3d_scenes, read_obj, reference_module
 
 INVALID = lambert.open3d.INVALID_ID
 
@@ -41,15 +41,6 @@ def model(request):
     return v, f, points, rays, float(np.linalg.norm(hi - lo))
 
 
-def scenes(v, f):
-    o3d = reference_module("open3d")
-    theirs = o3d.t.geometry.RaycastingScene()
-    theirs.add_triangles(o3d.core.Tensor(v), o3d.core.Tensor(f))
-    ours = lambert.open3d.RaycastingScene(device="cpu")
-    ours.add_triangles(v, f)
-    return theirs, ours
-
-
 def numpy(result):
     return {k: x.numpy() for k, x in result.items()} if isinstance(result, dict) else result.numpy()
 
@@ -63,7 +54,7 @@ def same_keys_and_dtypes(mine, theirs):
 
 def test_closest_points_agree_with_open3d(model):
     v, f, points, _, size = model
-    theirs, ours = scenes(v, f)
+    theirs, ours = open3d_scenes(v, f)
     expected = numpy(theirs.compute_closest_points(points))
     got = ours.compute_closest_points(points)
     same_keys_and_dtypes(got, expected)
@@ -89,7 +80,7 @@ def test_closest_points_agree_with_open3d(model):
 def test_signed_distance_and_occupancy_agree_with_open3d_on_closed_meshes(model):
     trimesh = reference_module("trimesh")
     v, f, points, _, size = model
-    theirs, ours = scenes(v, f)
+    theirs, ours = open3d_scenes(v, f)
     expected = numpy(theirs.compute_signed_distance(points))
     got = ours.compute_signed_distance(points)
     assert got.dtype == expected.dtype == np.float32
@@ -133,7 +124,7 @@ def test_winding_numbers_and_signed_distances_agree_with_libigl(model, device):
 
 def test_rays_agree_with_open3d(model):
     v, f, _, rays, size = model
-    theirs, ours = scenes(v, f)
+    theirs, ours = open3d_scenes(v, f)
     expected = numpy(theirs.cast_rays(rays))
     got = ours.cast_rays(rays)
     same_keys_and_dtypes(got, expected)

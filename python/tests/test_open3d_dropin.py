@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import lambert
-from conftest import LAMBERT, reference_module
+from conftest import LAMBERT, open3d_scenes
 
 
 def sphere(centre=(0.0, 0.0, 0.0), radius=1.0, rings=24, segments=32):
@@ -37,15 +37,6 @@ def reversed_faces(faces):
     return np.ascontiguousarray(faces[:, ::-1])
 
 
-def both_scenes(vertices, faces):
-    o3d = reference_module("open3d")
-    theirs = o3d.t.geometry.RaycastingScene()
-    theirs.add_triangles(o3d.core.Tensor(vertices), o3d.core.Tensor(faces))
-    ours = lambert.open3d.RaycastingScene(device="cpu")
-    ours.add_triangles(vertices, faces)
-    return theirs, ours
-
-
 def points_off(vertices, faces, n, seed, clearance=0.02):
     """Random points over the mesh's box and beyond, none within
     `clearance` of its surface (where rounding may pick either side)."""
@@ -61,7 +52,7 @@ def test_inside_of_a_closed_sphere_is_open3ds_facing_either_way(facing):
     vertices, faces = sphere()
     if facing == "in":
         faces = reversed_faces(faces)
-    theirs, ours = both_scenes(vertices, faces)
+    theirs, ours = open3d_scenes(vertices, faces)
     points = points_off(vertices, faces, 3000, seed=1)
     expected = theirs.compute_signed_distance(points).numpy()
     assert (expected < 0).sum() > 300
@@ -80,7 +71,7 @@ def test_two_bodies_one_facing_in_are_inside_as_open3d_says():
     right_v, right_f = sphere(centre=(1.2, 0.0, 0.0), radius=0.8)
     vertices = np.concatenate([left_v, right_v])
     faces = np.concatenate([left_f, reversed_faces(right_f) + len(left_v)])
-    theirs, ours = both_scenes(vertices, faces)
+    theirs, ours = open3d_scenes(vertices, faces)
     points = points_off(vertices, faces, 4000, seed=2)
     expected = theirs.compute_occupancy(points).numpy()
     assert expected[points[:, 0] > 0].sum() > 50, "points inside the body facing in"

@@ -56,6 +56,15 @@ fn statements(text: &str) -> impl Iterator<Item = (usize, Cow<'_, str>)> {
     })
 }
 
+/// The error at `line` of `path`, saying `message`.
+fn line_error(path: &Path, line: usize) -> impl Fn(String) -> Error + Copy + '_ {
+    move |message| Error::Line {
+        path: path.to_path_buf(),
+        line,
+        message,
+    }
+}
+
 /// Reads `mtl` (relative to the OBJ's folder) into `materials`: `newmtl
 /// NAME` and its colours, alpha and images (`parse_mtl`); everything else
 /// is ignored. A file that cannot be read (missing, not a regular file, too
@@ -89,11 +98,7 @@ pub fn parse_mtl(text: &str, mtl: &Path, materials: &mut Materials) -> Result<()
     let mut current: Option<u32> = None;
     let first = materials.materials.len();
     for (line_number, line) in statements(text) {
-        let fail = |message: String| Error::Line {
-            path: mtl.to_path_buf(),
-            line: line_number,
-            message,
-        };
+        let fail = line_error(mtl, line_number);
         let line = line.split('#').next().unwrap_or("");
         let mut tokens = line.split_whitespace();
         match tokens.next() {
@@ -463,11 +468,7 @@ pub fn parse_obj(text: &str, path: &Path, mode: NormalMode) -> Result<Mesh> {
     let mut unknown_normals = Skipped::default();
     let mut unknown_uvs = Skipped::default();
     for (line_number, line) in statements(text) {
-        let fail = |message: String| Error::Line {
-            path: path.to_path_buf(),
-            line: line_number,
-            message,
-        };
+        let fail = line_error(path, line_number);
         let line = line.split('#').next().unwrap_or("");
         let mut tokens = line.split_whitespace();
         match tokens.next() {

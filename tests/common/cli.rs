@@ -5,14 +5,7 @@ use std::process::Output;
 
 use super::{lambert, s};
 
-pub const CAMERA: &str = r#"
-[camera]
-eye = [0.0, 0.0, 3.0]
-look_at = [0.0, 0.0, 0.0]
-vfov = 40.0
-width = 16
-height = 12
-"#;
+pub const CAMERA: &str = "\n[camera]\neye = [0.0, 0.0, 3.0]\nlook_at = [0.0, 0.0, 0.0]\nvfov = 40.0\nwidth = 16\nheight = 12\n";
 
 pub const SPHERE: &str = "[[sphere]]\ncenter = [0.0, 0.0, 0.0]\nradius = 1.0\n";
 pub const LIGHT: &str = "[[point_light]]\nposition = [0.0, 2.0, 3.0]\nintensity = 10.0\n";
@@ -27,6 +20,13 @@ impl Case {
         Case {
             dir: tempfile::tempdir().unwrap(),
         }
+    }
+
+    /// A case whose scene.toml (returned) is a lit sphere in view.
+    pub fn lit_sphere() -> (Case, PathBuf) {
+        let case = Case::new();
+        let scene = case.file("scene.toml", &format!("{CAMERA}{SPHERE}{LIGHT}"));
+        (case, scene)
     }
 
     pub fn file(&self, name: &str, text: &str) -> PathBuf {

@@ -10,10 +10,13 @@ use lambert::layout::{Sphere, Triangle};
 use lambert::output::Rendered;
 use lambert::progress::Progress;
 
+pub mod args;
 mod bin;
 pub mod cli;
+pub mod data;
 pub mod formats;
 mod settings;
+pub mod signals;
 pub mod stress;
 // Each test file uses some of these; unused ones are no warning.
 #[allow(unused_imports)]

@@ -306,13 +306,19 @@ impl Viewer {
     /// `key` (Escape or q), and the exit status.
     pub fn quit_with(mut self, key: &str) -> std::process::ExitStatus {
         self.key(key);
+        self.exit_status(&format!("{key} did not close the viewer"))
+    }
+
+    /// Waits (PATIENCE at most, else fails saying `late`) for the viewer
+    /// to exit: its status.
+    pub fn exit_status(&mut self, late: &str) -> std::process::ExitStatus {
         let deadline = Instant::now() + PATIENCE;
         loop {
             if let Some(status) = self.process.0.try_wait().unwrap() {
                 return status;
             }
-            assert!(Instant::now() < deadline, "{key} did not close the viewer");
-            std::thread::sleep(Duration::from_millis(50));
+            assert!(Instant::now() < deadline, "{late}");
+            std::thread::sleep(Duration::from_millis(20));
         }
     }
 }

@@ -374,18 +374,26 @@ fn print_warnings(scene: &Scene, quiet: bool) {
     }
 }
 
+/// `flag`'s `value`, which must be a positive `what` and cannot be
+/// combined with a turntable.
+fn check_positive_alone(value: f64, flag: &str, what: &str, turntable: bool) -> Result<()> {
+    if !(value.is_finite() && value > 0.0) {
+        return Err(Error::Usage(format!(
+            "{flag} {value} must be a positive {what}"
+        )));
+    }
+    if turntable {
+        return Err(Error::Usage(format!(
+            "{flag} and --turntable cannot be combined"
+        )));
+    }
+    Ok(())
+}
+
 fn render(args: &RenderArgs, quiet: bool) -> Result<ExitCode> {
+    let turntable = args.turntable.is_some();
     if let Some(target) = args.target_error {
-        if !(target.is_finite() && target > 0.0) {
-            return Err(Error::Usage(format!(
-                "--target-error {target} must be a positive number"
-            )));
-        }
-        if args.turntable.is_some() {
-            return Err(Error::Usage(
-                "--target-error and --turntable cannot be combined".into(),
-            ));
-        }
+        check_positive_alone(target, "--target-error", "number", turntable)?;
         if !(2..=MAX_SPP).contains(&args.max_spp) {
             return Err(Error::Usage(format!(
                 "--max-spp {} must be between 2 and {MAX_SPP}",
@@ -394,16 +402,7 @@ fn render(args: &RenderArgs, quiet: bool) -> Result<ExitCode> {
         }
     }
     if let Some(budget) = args.time_budget {
-        if !(budget.is_finite() && budget > 0.0) {
-            return Err(Error::Usage(format!(
-                "--time-budget {budget} must be a positive number of seconds"
-            )));
-        }
-        if args.turntable.is_some() {
-            return Err(Error::Usage(
-                "--time-budget and --turntable cannot be combined".into(),
-            ));
-        }
+        check_positive_alone(budget, "--time-budget", "number of seconds", turntable)?;
     }
     if let Some(tile) = &args.tile {
         return render_part(args, tile, quiet);

@@ -9,11 +9,26 @@ use lambert::error::{Error, Result};
 use lambert::gpu::Gpu;
 use lambert::limits::{MAX_SPP, validate_spp};
 
+/// The inputs `args` names, or else `defaults`'s, checked against the
+/// outputs.
+fn inputs_or(
+    args: &BenchArgs,
+    defaults: impl FnOnce() -> Result<Vec<PathBuf>>,
+) -> Result<Vec<PathBuf>> {
+    let inputs = if args.inputs.is_empty() {
+        defaults()?
+    } else {
+        args.inputs.clone()
+    };
+    check_inputs_and_outputs(&inputs, args)?;
+    Ok(inputs)
+}
+
 pub(super) fn bench(args: &BenchArgs, quiet: bool) -> Result<ExitCode> {
     if args.time_vs_error {
         return bench_time_vs_error(args, quiet);
     }
-    let inputs = if args.inputs.is_empty() {
+    let inputs = inputs_or(args, || {
         let ladder = bench::default_inputs();
         if ladder.is_empty() {
             return Err(Error::Usage(
@@ -24,11 +39,8 @@ pub(super) fn bench(args: &BenchArgs, quiet: bool) -> Result<ExitCode> {
                     .into(),
             ));
         }
-        ladder
-    } else {
-        args.inputs.clone()
-    };
-    check_inputs_and_outputs(&inputs, args)?;
+        Ok(ladder)
+    })?;
     let request = args.adapter.request();
     let mut rows = Vec::new();
     println!(
@@ -157,7 +169,7 @@ fn bench_time_vs_error(args: &BenchArgs, quiet: bool) -> Result<ExitCode> {
         .reference_spp
         .unwrap_or((4 * args.spp_list.iter().max().copied().unwrap_or(1)).min(MAX_SPP));
     validate_spp(reference_spp).map_err(|e| Error::Usage(format!("--reference-{e}")))?;
-    let inputs: Vec<PathBuf> = if args.inputs.is_empty() {
+    let inputs = inputs_or(args, || {
         let tree = bench::source_tree().unwrap_or_default();
         let defaults: Vec<PathBuf> = ["edge_cases", "spheres", "triangle_oblique"]
             .iter()
@@ -171,11 +183,8 @@ fn bench_time_vs_error(args: &BenchArgs, quiet: bool) -> Result<ExitCode> {
                     .into(),
             ));
         }
-        defaults
-    } else {
-        args.inputs.clone()
-    };
-    check_inputs_and_outputs(&inputs, args)?;
+        Ok(defaults)
+    })?;
     let request = args.adapter.request();
     let devices = BenchDevices::from(args.device);
     let gpu = match devices {

@@ -1,0 +1,146 @@
+//! Rules of the code's shape that the refactors of issue 45 set: no `.rs`
+//! file pasted into another, `Scene`'s fields the crate's, and no front
+//! end naming the renderer's variants (tests/architecture.rs has the
+//! layers, sizes and cycles).
+
+use std::path::{Path, PathBuf};
+
+// Only some of its helpers are used here.
+#[allow(dead_code)]
+#[path = "common/source.rs"]
+mod source;
+
+use source::*;
+
+// ---- no source fragments ----------------------------------------------------
+
+/// No file of src/ pastes a `.rs` file into another with `include!`: every
+/// Rust file is a module of its own, which tools (rust-analyzer, this
+/// file's checks) can place; code written once for both precisions is a
+/// macro that each precision's module expands (src/cpu/kernel.rs). The
+/// check itself finds such an include in code, not in a comment or a
+/// string, nor an `include_str!` of a shader.
+#[test]
+fn no_rust_file_is_included_into_another() {
+    let includes = |files: &[(PathBuf, String)]| {
+        let mut found = Vec::new();
+        for (path, text) in files {
+            let lines: Vec<&str> = text.lines().collect();
+            for (i, line) in code_only(text).lines().enumerate() {
+                let pasted = line.match_indices("include!(").any(|(at, _)| {
+                    !line[..at].ends_with(|c: char| is_ident(c)) && lines[i].contains(".rs\"")
+                });
+                if pasted {
+                    found.push(format!("{}:{}", path.display(), i + 1));
+                }
+            }
+        }
+        found
+    };
+    let file = |path: &str, text: &str| (PathBuf::from(path), text.to_string());
+    let planted = includes(&[file(
+        "src/cpu/f32.rs",
+        "// include!(\"kernel.rs\");\nconst S: &str = include_str!(\"../../shaders/a.wgsl\");\nlet s = \"include!(\\\"x.rs\\\")\";\ninclude!(\"kernel.rs\");",
+    )]);
+    assert_eq!(planted, ["src/cpu/f32.rs:4"]);
+    let found = includes(&source_files());
+    assert!(
+        found.is_empty(),
+        "`.rs` files pasted in with include! (make them modules, docs/architecture.md):\n{}",
+        found.join("\n")
+    );
+}
+
+// ---- settings in their place -------------------------------------------------
+
+/// The `pub` fields of `struct Scene` in `text` (src/scene/mod.rs's code):
+/// its fields are the crate's, read through methods; what a render may
+/// change is a `RenderSettings`.
+fn public_scene_fields(text: &str) -> Vec<String> {
+    let code = code_only(text);
+    let Some(start) = code.find("pub struct Scene {") else {
+        return vec!["no `pub struct Scene {` found".into()];
+    };
+    let body = &code[start..];
+    let body = &body[..body.find("\n}").unwrap_or(body.len())];
+    body.lines()
+        .skip(1)
+        .map(str::trim)
+        .filter(|line| line.starts_with("pub ") || line.starts_with("pub(super)"))
+        .map(|line| line.trim_end_matches(',').to_string())
+        .collect()
+}
+
+#[test]
+fn the_scene_has_no_public_field() {
+    let text = std::fs::read_to_string(Path::new(ROOT).join("src/scene/mod.rs")).unwrap();
+    let public = public_scene_fields(&text);
+    assert!(
+        public.is_empty(),
+        "src/scene/mod.rs: `Scene` has public fields (make them pub(crate) and add a method):\n{}",
+        public.join("\n")
+    );
+}
+
+#[test]
+fn the_field_check_finds_public_fields() {
+    let text = "/// pub view: View\npub struct Scene {\n    /// pub x\n    pub view: View,\n    \
+                pub(crate) spp: u32,\n    pub shadows: bool,\n}\npub struct Other {\n    pub a: u8,\n}\n";
+    assert_eq!(
+        public_scene_fields(text),
+        ["pub view: View", "pub shadows: bool"]
+    );
+}
+
+/// `file:line` of each `Renderer::Gpu` or `Renderer::Cpu` in the code of
+/// the front ends' files (the binary's, the Python extension's): they ask
+/// a `Renderer` through its methods.
+fn renderer_variants_named(files: &[(PathBuf, String)]) -> Vec<String> {
+    let mut found = Vec::new();
+    for (path, text) in files {
+        for (i, line) in code_only(text).lines().enumerate() {
+            if line.contains("Renderer::Gpu") || line.contains("Renderer::Cpu") {
+                found.push(format!("{}:{}", path.display(), i + 1));
+            }
+        }
+    }
+    found
+}
+
+#[test]
+fn no_front_end_names_the_renderers_variants() {
+    let front_ends: Vec<(PathBuf, String)> = files("src/bin", ".rs")
+        .into_iter()
+        .chain(files("python/src", ".rs"))
+        .map(|path| {
+            let text = std::fs::read_to_string(Path::new(ROOT).join(&path)).unwrap();
+            (path, text)
+        })
+        .collect();
+    assert!(front_ends.len() > 10, "front ends not found");
+    let named = renderer_variants_named(&front_ends);
+    assert!(
+        named.is_empty(),
+        "front ends match on Renderer's variants (use its methods):\n{}",
+        named.join("\n")
+    );
+}
+
+#[test]
+fn the_variant_check_finds_them_in_code_only() {
+    let file = |path: &str, text: &str| (PathBuf::from(path), text.to_string());
+    let named = renderer_variants_named(&[
+        file(
+            "python/src/lib.rs",
+            "// Renderer::Cpu\nlet s = \"Renderer::Gpu\";\nlet r = Renderer::Cpu(scene);",
+        ),
+        file(
+            "src/bin/lambert/view/app.rs",
+            "match r {\n    Renderer::Gpu(g) => g,\n}",
+        ),
+    ]);
+    assert_eq!(
+        named,
+        ["python/src/lib.rs:3", "src/bin/lambert/view/app.rs:2"]
+    );
+}

@@ -1,0 +1,90 @@
+//! Test inputs made in code (a deterministic generator, rays, binary
+//! glTF) and an f64 reference (the winding number).
+
+use glam::DVec3;
+use lambert::layout::{Ray, Triangle};
+
+/// A small deterministic generator (no dependency on a seed's crate).
+pub struct Lcg(pub u64);
+
+impl Lcg {
+    fn step(&mut self) -> u64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        self.0
+    }
+
+    /// In [0, 1), from the step's top 24 bits.
+    pub fn next(&mut self) -> f32 {
+        ((self.step() >> 40) as f32) / ((1u64 << 24) as f32)
+    }
+
+    /// In [0, 1), from the step's top 53 bits.
+    pub fn next_f64(&mut self) -> f64 {
+        ((self.step() >> 11) as f64) / ((1u64 << 53) as f64)
+    }
+
+    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.next()
+    }
+
+    pub fn point(&mut self, lo: f32, hi: f32) -> [f32; 3] {
+        [self.range(lo, hi), self.range(lo, hi), self.range(lo, hi)]
+    }
+
+    /// A point drawn in f64, rounded to f32.
+    pub fn point_f64(&mut self, lo: f64, hi: f64) -> [f32; 3] {
+        [0; 3].map(|_| (lo + (hi - lo) * self.next_f64()) as f32)
+    }
+}
+
+/// A binary glTF of `json` (its one buffer: `bin`).
+pub fn glb(mut json: serde_json::Value, bin: &[u8]) -> Vec<u8> {
+    json["buffers"] = serde_json::json!([{"byteLength": bin.len()}]);
+    let mut text = serde_json::to_vec(&json).unwrap();
+    text.resize(text.len().div_ceil(4) * 4, b' ');
+    let mut bin = bin.to_vec();
+    bin.resize(bin.len().div_ceil(4) * 4, 0);
+    let mut out = Vec::new();
+    out.extend(b"glTF");
+    out.extend(2u32.to_le_bytes());
+    out.extend(((12 + 8 + text.len() + 8 + bin.len()) as u32).to_le_bytes());
+    out.extend((text.len() as u32).to_le_bytes());
+    out.extend(b"JSON");
+    out.extend(text);
+    out.extend((bin.len() as u32).to_le_bytes());
+    out.extend(b"BIN\0");
+    out.extend(bin);
+    out
+}
+
+/// A ray from `origin` along `dir`, from t = 0 on.
+pub fn ray(origin: [f32; 3], dir: [f32; 3]) -> Ray {
+    Ray {
+        origin,
+        tmin: 0.0,
+        dir,
+        tmax: f32::INFINITY,
+    }
+}
+
+/// A vertex in f64.
+pub fn d3(v: [f32; 3]) -> DVec3 {
+    DVec3::from(v.map(f64::from))
+}
+
+/// The winding number in f64, every triangle's solid angle.
+pub fn winding_f64(q: DVec3, triangles: &[Triangle]) -> f64 {
+    triangles
+        .iter()
+        .map(|t| {
+            let (a, b, c) = (d3(t.v0) - q, d3(t.v1) - q, d3(t.v2) - q);
+            let (la, lb, lc) = (a.length(), b.length(), c.length());
+            let det = a.dot(b.cross(c));
+            let den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
+            det.atan2(den) / (2.0 * std::f64::consts::PI)
+        })
+        .sum()
+}
