@@ -221,27 +221,6 @@ fn the_module_graph_has_no_cycle() {
 
 // ---- the file graph ---------------------------------------------------------
 
-/// Cycles among files allowed for now, each as `cycles` gives it: one,
-/// inside src/cpu, where the precisions' modules (f32.rs, f64.rs) expand
-/// the stages' macros, which name helpers those modules define (SIMD
-/// variants, `greater_of`), and the drivers (query.rs, render.rs) call
-/// both. Breaking it (the helpers into a module of their own that the
-/// stages import) is issue 45's work still open; the list must only
-/// shrink.
-const ALLOWED_FILE_CYCLES: &[&[&str]] = &[&[
-    "src/cpu/closest.rs",
-    "src/cpu/f32.rs",
-    "src/cpu/f64.rs",
-    "src/cpu/fetch.rs",
-    "src/cpu/kernel.rs",
-    "src/cpu/prefetch.rs",
-    "src/cpu/query.rs",
-    "src/cpu/render.rs",
-    "src/cpu/simd.rs",
-    "src/cpu/texture.rs",
-    "src/cpu/winding.rs",
-]];
-
 /// No two files of src/ reach each other through their imports, within a
 /// module's folder too (tests/common/file_graph.rs says what an edge is);
 /// `--nocapture` prints the graph.
@@ -257,9 +236,6 @@ fn the_file_graph_has_no_cycle() {
     }
     let found: Vec<String> = cycles(&graph)
         .into_iter()
-        .filter(|c| {
-            !ALLOWED_FILE_CYCLES.contains(&&c.iter().map(String::as_str).collect::<Vec<_>>()[..])
-        })
         .map(|c| c.join(" <-> "))
         .collect();
     assert_none(&found, "files that reach each other");

@@ -201,3 +201,83 @@ fn high_half(x: Real) -> Real {
 }
 
 pub use crate::camera::f32::CameraBasis;
+
+#[cfg(test)]
+mod tests {
+    use super::{new_stack, push_sorted, push_sorted_zmm};
+    use crate::layout::{BVH_WIDTH, LEAF_BIT};
+
+    /// `push_sorted_zmm` pushes exactly what the insertion pushes, in the
+    /// same order, and visits the same child, for every set of entered
+    /// children (with one or two, the insertion does what `visit`'s own
+    /// cases do: visit the one; push the farther, visit the nearer, the
+    /// second on a tie), with ties, ±0, negative and huge distances, above
+    /// entries already pushed.
+    #[test]
+    fn vector_child_ordering_equals_the_insertion() {
+        if let Some(missing) = crate::cpu::CpuKernel::Avx512.missing() {
+            // Straight to stderr: the harness would hide eprintln! of a
+            // passing test.
+            use std::io::Write;
+            let _ = writeln!(
+                std::io::stderr(),
+                "skipped: push_sorted_zmm needs {missing}, which this CPU lacks"
+            );
+            return;
+        }
+        // Few distinct values, so that ties are common.
+        let values = [-1.0, -0.0, 0.0, 0.5, 1.0, 2.5, 1e30, f32::MAX];
+        let children: [u32; BVH_WIDTH] = std::array::from_fn(|slot| {
+            if slot % 3 == 0 {
+                LEAF_BIT | slot as u32
+            } else {
+                40 + slot as u32
+            }
+        });
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let mut checked = 0;
+        for entered in 0..1u32 << BVH_WIDTH {
+            if entered == 0 {
+                continue;
+            }
+            for _ in 0..64 {
+                let t: [f32; BVH_WIDTH] =
+                    std::array::from_fn(|_| values[next() as usize % values.len()]);
+                let below = (next() % 5) as usize;
+                let (mut scalar, mut vector) = (new_stack(), new_stack());
+                for i in 0..below {
+                    scalar[i].write((i as u32, i as f32));
+                    vector[i].write((i as u32, i as f32));
+                }
+                let (mut sp_scalar, mut sp_vector) = (below, below);
+                let nearest = push_sorted(&mut scalar, &mut sp_scalar, &t, &children, entered);
+                // SAFETY: the CPU has AVX-512.
+                let nearest_vector =
+                    unsafe { push_sorted_zmm(&mut vector, &mut sp_vector, &t, &children, entered) };
+                assert_eq!(
+                    (nearest_vector, sp_vector),
+                    (nearest, sp_scalar),
+                    "{t:?} {entered:#b}"
+                );
+                // Every entry up to the popped one, bit for bit.
+                for i in 0..=sp_scalar {
+                    // SAFETY: written by both (pushed, or the popped nearest).
+                    let (a, b) = unsafe { (scalar[i].assume_init(), vector[i].assume_init()) };
+                    assert_eq!(
+                        (a.0, a.1.to_bits()),
+                        (b.0, b.1.to_bits()),
+                        "entry {i}: {t:?} {entered:#b}"
+                    );
+                }
+                checked += 1;
+            }
+        }
+        assert_eq!(checked, 255 * 64);
+    }
+}

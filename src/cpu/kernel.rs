@@ -33,9 +33,9 @@ macro_rules! kernel {
         crate::cpu::all_hits::all_hits!();
         crate::cpu::shade::shade!();
         crate::cpu::sample::sample!();
-        crate::cpu::texture::texture!();
-        crate::cpu::closest::closest!();
-        crate::cpu::winding::winding!();
+        crate::cpu::texture::stage::texture!();
+        crate::cpu::closest::stage::closest!();
+        crate::cpu::winding::stage::winding!();
     };
 }
 pub(crate) use kernel;

@@ -1,8 +1,6 @@
 //! How a ray query keeps memory loads in flight: how many rays a thread
 //! traces in turn, and whether to prefetch, from the BVH's size and the
-//! rays' coherence.
-
-use super::QueryRays;
+//! rays' coherence (query.rs's `coherent` judges it).
 
 /// Starts loading the cache lines of the `T` at `p` (which may be out of
 /// bounds: a prefetch never faults).
@@ -45,24 +43,3 @@ pub(super) const INTERLEAVED_INCOHERENT_RAYS: usize = 8;
 /// dragon_res4's 0.6 MiB lost 8%, dragon_res2's 11 MiB gained 6–13%, the
 /// dragon's 47 MiB 44%.
 pub const LARGE_BVH_BYTES: usize = 3 << 20;
-
-/// Whether most neighbouring rays leave from nearby points (closer than
-/// `nearby`) in nearly the same direction (within about 8°), as camera rays
-/// and the shadow rays of their hits do: their traversals then share the
-/// nodes they load. Looks at 256 pairs spread over the rays.
-pub(super) fn coherent(rays: &QueryRays, nearby: f32) -> bool {
-    const PAIRS: usize = 256;
-    let step = (rays.len() / PAIRS).max(1);
-    let (mut pairs, mut similar) = (0, 0);
-    for i in (0..rays.len().saturating_sub(1)).step_by(step) {
-        let (a, b) = (rays.ray(i), rays.ray(i + 1));
-        let (da, db) = (glam::Vec3::from(a.dir), glam::Vec3::from(b.dir));
-        let gap = glam::Vec3::from(a.origin) - glam::Vec3::from(b.origin);
-        let cos = da.dot(db);
-        // cos > 0.99·|da||db|, without the square roots.
-        let aligned = cos > 0.0 && cos * cos > 0.9801 * da.length_squared() * db.length_squared();
-        pairs += 1;
-        similar += (aligned && gap.length_squared() <= nearby * nearby) as usize;
-    }
-    2 * similar >= pairs
-}

@@ -4,7 +4,7 @@
 
 use rayon::prelude::*;
 
-use super::prefetch::{INTERLEAVED_INCOHERENT_RAYS, INTERLEAVED_RAYS, LARGE_BVH_BYTES, coherent};
+use super::prefetch::{INTERLEAVED_INCOHERENT_RAYS, INTERLEAVED_RAYS, LARGE_BVH_BYTES};
 use super::render::twin_stack_entries;
 use super::simd::{check_runs, with_simd};
 use super::{CpuKernel, f32, f64};
@@ -454,4 +454,25 @@ pub fn trace_rays_f64(scene: &Scene, rays: &[layout::Ray], any_hit: bool) -> Vec
             }
         })
         .collect()
+}
+
+/// Whether most neighbouring rays leave from nearby points (closer than
+/// `nearby`) in nearly the same direction (within about 8°), as camera rays
+/// and the shadow rays of their hits do: their traversals then share the
+/// nodes they load. Looks at 256 pairs spread over the rays.
+fn coherent(rays: &QueryRays, nearby: f32) -> bool {
+    const PAIRS: usize = 256;
+    let step = (rays.len() / PAIRS).max(1);
+    let (mut pairs, mut similar) = (0, 0);
+    for i in (0..rays.len().saturating_sub(1)).step_by(step) {
+        let (a, b) = (rays.ray(i), rays.ray(i + 1));
+        let (da, db) = (glam::Vec3::from(a.dir), glam::Vec3::from(b.dir));
+        let gap = glam::Vec3::from(a.origin) - glam::Vec3::from(b.origin);
+        let cos = da.dot(db);
+        // cos > 0.99·|da||db|, without the square roots.
+        let aligned = cos > 0.0 && cos * cos > 0.9801 * da.length_squared() * db.length_squared();
+        pairs += 1;
+        similar += (aligned && gap.length_squared() <= nearby * nearby) as usize;
+    }
+    2 * similar >= pairs
 }

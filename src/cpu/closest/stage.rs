@@ -1,0 +1,326 @@
+//! The stage's items for `kernel!` (src/cpu/kernel.rs), apart from
+//! closest.rs's re-export of the single-precision ones, so that the
+//! precisions' modules, which expand them, import nothing that imports them.
+
+/// The stage's items, expanded into the module that invokes it (`kernel!`).
+macro_rules! closest {
+    () => {
+        use crate::bvh::Bvh;
+
+        /// The nearest point found for a query point: its squared distance, the
+        /// triangle, (u, v) on it, and the point itself (all in the scene's local
+        /// frame).
+        #[derive(Clone, Copy, Debug, PartialEq)]
+        pub struct Nearest {
+            pub d2: Real,
+            pub prim: u32,
+            pub u: Real,
+            pub v: Real,
+            pub point: Vec3,
+        }
+
+        /// a · b, summed left to right (WGSL's `dot` leaves its order open).
+        #[inline(always)]
+        pub fn dot3(a: Vec3, b: Vec3) -> Real {
+            a.x * b.x + a.y * b.y + a.z * b.z
+        }
+
+        /// The point of segment s0 + t·e (t in [0, 1]) nearest `p`: the point,
+        /// its squared distance and t (0 on a segment of zero length).
+        #[inline(always)]
+        pub fn closest_on_segment(p: Vec3, s0: Vec3, e: Vec3) -> (Vec3, Real, Real) {
+            let ee = dot3(e, e);
+            let mut t = 0.0;
+            if ee > 0.0 {
+                t = (dot3(p - s0, e) / ee).clamp(0.0, 1.0);
+            }
+            let q = s0 + e * t;
+            let d = p - q;
+            (q, dot3(d, d), t)
+        }
+
+        /// The point of triangle (a, b, c) nearest `p`: the point, its squared
+        /// distance and (u, v), the weights of b and c. Inside the triangle's
+        /// prism (Ericson's region test: every barycentric area positive) the
+        /// projection; else the nearest of the edges ab, ac, bc in that order,
+        /// the first kept on equal distances. A degenerate triangle (zero area)
+        /// takes its edges too, so nothing divides by zero.
+        #[inline(always)]
+        pub fn closest_point_triangle(
+            p: Vec3,
+            a: Vec3,
+            b: Vec3,
+            c: Vec3,
+        ) -> (Vec3, Real, Real, Real) {
+            let ab = b - a;
+            let ac = c - a;
+            let ap = p - a;
+            let bp = p - b;
+            let cp = p - c;
+            let d1 = dot3(ab, ap);
+            let d2 = dot3(ac, ap);
+            let d3 = dot3(ab, bp);
+            let d4 = dot3(ac, bp);
+            let d5 = dot3(ab, cp);
+            let d6 = dot3(ac, cp);
+            let va = d3 * d6 - d5 * d4;
+            let vb = d5 * d2 - d1 * d6;
+            let vc = d1 * d4 - d3 * d2;
+            let sum = va + vb + vc;
+            if va > 0.0 && vb > 0.0 && vc > 0.0 && sum > 0.0 {
+                let v = vb / sum;
+                let w = vc / sum;
+                let q = a + ab * v + ac * w;
+                let d = p - q;
+                return (q, dot3(d, d), v, w);
+            }
+            let (mut q, mut best, t) = closest_on_segment(p, a, ab);
+            let (mut u, mut v) = (t, 0.0);
+            let (q2, d2_ac, t2) = closest_on_segment(p, a, ac);
+            if d2_ac < best {
+                (q, best, u, v) = (q2, d2_ac, 0.0, t2);
+            }
+            let (q3, d2_bc, t3) = closest_on_segment(p, b, c - b);
+            if d2_bc < best {
+                (q, best, u, v) = (q3, d2_bc, 1.0 - t3, t3);
+            }
+            (q, best, u, v)
+        }
+
+        /// The squared distance from `p` to the box (lo, hi): 0 inside.
+        #[inline(always)]
+        pub fn box_distance2(p: Vec3, lo: Vec3, hi: Vec3) -> Real {
+            let d = (lo - p).max(p - hi).max(Vec3::ZERO);
+            dot3(d, d)
+        }
+
+        /// Whether a candidate at squared distance `d2` on triangle `prim` beats
+        /// the best so far: nearer, or as near with a lower id (so that shared
+        /// edges and vertices go to the same triangle whatever the order of
+        /// visits).
+        #[inline(always)]
+        pub fn better(d2: Real, prim: u32, best_d2: Real, best_prim: u32) -> bool {
+            d2 < best_d2 || (d2 == best_d2 && prim < best_prim)
+        }
+
+        /// The squared distance beyond which a box can hold no candidate as good
+        /// as one at squared distance `d2`: (√d2 + margin)², where `margin`
+        /// bounds the rounding of a candidate's distance and of a box's (see
+        /// `query_margin`).
+        #[inline(always)]
+        pub fn cull_bound(d2: Real, margin: Real) -> Real {
+            let d = d2.sqrt() + margin;
+            d * d
+        }
+
+        /// How far a computed distance may be from the exact one for a point of
+        /// largest coordinate `point_extent` in a scene of radius `scene_radius`
+        /// (local frame): a few hundred units in the last place of the largest
+        /// coordinate involved, far more than the few that the arithmetic loses.
+        pub fn query_margin(point_extent: Real, scene_radius: Real) -> Real {
+            1e-5 * point_extent.max(scene_radius)
+        }
+
+        /// `closest_point_triangle` on a leaf block's four lanes at once: the same
+        /// operations in the same order in each lane (SSE's are IEEE's, so the
+        /// same bits as the scalar function and the shader), the interior and the
+        /// three edges all computed and the answer selected as the scalar
+        /// function's branches choose it. Returns (d², u, v) per lane and the
+        /// points' coordinates per axis.
+        #[inline(always)]
+        pub fn closest_point_block(p: Vec3, block: &PrimBlock) -> (Vec4, Vec4, Vec4, [Vec4; 3]) {
+            let v = |k: usize| block.v[k].map(vec4);
+            let [a, b, c] = [v(0), v(1), v(2)];
+            let p = [Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z)];
+            let sub = |x: [Vec4; 3], y: [Vec4; 3]| [x[0] - y[0], x[1] - y[1], x[2] - y[2]];
+            let dot = |x: [Vec4; 3], y: [Vec4; 3]| x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
+            let ab = sub(b, a);
+            let ac = sub(c, a);
+            let ap = sub(p, a);
+            let bp = sub(p, b);
+            let cp = sub(p, c);
+            let d1 = dot(ab, ap);
+            let d2 = dot(ac, ap);
+            let d3 = dot(ab, bp);
+            let d4 = dot(ac, bp);
+            let d5 = dot(ab, cp);
+            let d6 = dot(ac, cp);
+            let va = d3 * d6 - d5 * d4;
+            let vb = d5 * d2 - d1 * d6;
+            let vc = d1 * d4 - d3 * d2;
+            let sum = va + vb + vc;
+            let zero = Vec4::ZERO;
+            let interior = va.cmpgt(zero) & vb.cmpgt(zero) & vc.cmpgt(zero) & sum.cmpgt(zero);
+            let iv = vb / sum;
+            let iw = vc / sum;
+            let iq: [Vec4; 3] = std::array::from_fn(|k| a[k] + ab[k] * iv + ac[k] * iw);
+            let id = sub(p, iq);
+            let id2 = dot(id, id);
+            let segment = |s0: [Vec4; 3], e: [Vec4; 3]| {
+                let ee = dot(e, e);
+                let t = Vec4::select(
+                    ee.cmpgt(zero),
+                    (dot(sub(p, s0), e) / ee).max(zero).min(Vec4::ONE),
+                    zero,
+                );
+                let q: [Vec4; 3] = std::array::from_fn(|k| s0[k] + e[k] * t);
+                let d = sub(p, q);
+                (q, dot(d, d), t)
+            };
+            let (mut q, mut best, t1) = segment(a, ab);
+            let (mut u, mut w) = (t1, zero);
+            let (q2, d2_ac, t2) = segment(a, ac);
+            let nearer = d2_ac.cmplt(best);
+            q = std::array::from_fn(|k| Vec4::select(nearer, q2[k], q[k]));
+            best = Vec4::select(nearer, d2_ac, best);
+            u = Vec4::select(nearer, zero, u);
+            w = Vec4::select(nearer, t2, w);
+            let (q3, d2_bc, t3) = segment(b, sub(c, b));
+            let nearer = d2_bc.cmplt(best);
+            q = std::array::from_fn(|k| Vec4::select(nearer, q3[k], q[k]));
+            best = Vec4::select(nearer, d2_bc, best);
+            u = Vec4::select(nearer, Vec4::ONE - t3, u);
+            w = Vec4::select(nearer, t3, w);
+            (
+                Vec4::select(interior, id2, best),
+                Vec4::select(interior, iv, u),
+                Vec4::select(interior, iw, w),
+                std::array::from_fn(|k| Vec4::select(interior, iq[k], q[k])),
+            )
+        }
+
+        /// A best-first queue of boxes (node or leaf references) by squared
+        /// distance: a binary min-heap, kept by the caller between queries so that
+        /// a query allocates nothing.
+        pub type BoxQueue = Vec<(Real, u32)>;
+
+        fn queue_push(queue: &mut BoxQueue, entry: (Real, u32)) {
+            queue.push(entry);
+            let mut i = queue.len() - 1;
+            while i > 0 {
+                let parent = (i - 1) / 2;
+                if queue[parent].0 <= queue[i].0 {
+                    break;
+                }
+                queue.swap(parent, i);
+                i = parent;
+            }
+        }
+
+        fn queue_pop(queue: &mut BoxQueue) -> Option<(Real, u32)> {
+            let last = queue.pop()?;
+            if queue.is_empty() {
+                return Some(last);
+            }
+            let top = std::mem::replace(&mut queue[0], last);
+            let mut i = 0;
+            loop {
+                let (l, r) = (2 * i + 1, 2 * i + 2);
+                let mut m = i;
+                if l < queue.len() && queue[l].0 < queue[m].0 {
+                    m = l;
+                }
+                if r < queue.len() && queue[r].0 < queue[m].0 {
+                    m = r;
+                }
+                if m == i {
+                    return Some(top);
+                }
+                queue.swap(i, m);
+                i = m;
+            }
+        }
+
+        /// The nearest point of the BVH's triangles (ids below `triangle_count`)
+        /// to `p` within squared distance `max_d2` (None when none is): boxes
+        /// nearest first from a queue (`queue`, emptied first), each leaf's blocks
+        /// four triangles at a time, boxes beyond `cull_bound` of the best so far
+        /// skipped. `hint`, a triangle (id and vertices) likely near `p` (a
+        /// neighbouring query's answer), is the first candidate: its bound prunes
+        /// from the start, and as `better` orders candidates totally the answer
+        /// is the same with or without it.
+        pub fn closest_point(
+            bvh: &Bvh,
+            triangle_count: usize,
+            p: Vec3,
+            max_d2: Real,
+            margin: Real,
+            hint: Option<(u32, [Vec3; 3])>,
+            queue: &mut BoxQueue,
+        ) -> Option<Nearest> {
+            let mut best = Nearest {
+                d2: max_d2,
+                prim: NO_HIT,
+                u: 0.0,
+                v: 0.0,
+                point: Vec3::ZERO,
+            };
+            if let Some((prim, [a, b, c])) = hint {
+                let (point, d2, u, v) = closest_point_triangle(p, a, b, c);
+                if better(d2, prim, best.d2, best.prim) {
+                    best = Nearest {
+                        d2,
+                        prim,
+                        u,
+                        v,
+                        point,
+                    };
+                }
+            }
+            let mut bound = cull_bound(best.d2, margin);
+            queue.clear();
+            let mut current = 0u32;
+            loop {
+                if current & LEAF_BIT == 0 {
+                    let node = &bvh.nodes[current as usize];
+                    for half in 0..2 {
+                        let row = |r: usize| {
+                            let b = &node.bounds[r][4 * half..4 * half + 4];
+                            Vec4::new(b[0] as Real, b[1] as Real, b[2] as Real, b[3] as Real)
+                        };
+                        let axis = |k: usize, x: Real| {
+                            (row(2 * k) - Vec4::splat(x))
+                                .max(Vec4::splat(x) - row(2 * k + 1))
+                                .max(Vec4::ZERO)
+                        };
+                        let (dx, dy, dz) = (axis(0, p.x), axis(1, p.y), axis(2, p.z));
+                        let d2 = (dx * dx + dy * dy + dz * dz).to_array();
+                        for lane in 0..4 {
+                            let slot = 4 * half + lane;
+                            if node.occupied >> slot & 1 == 1 && d2[lane] <= bound {
+                                queue_push(queue, (d2[lane], node.children[slot]));
+                            }
+                        }
+                    }
+                } else {
+                    let (first, count) = leaf_range(current);
+                    for block in &bvh.blocks[first as usize..(first + count) as usize] {
+                        let (d2, u, v, q) = closest_point_block(p, block);
+                        let (d2, u, v) = (d2.to_array(), u.to_array(), v.to_array());
+                        for lane in 0..4 {
+                            let prim = block.prims[lane];
+                            if (prim as usize) < triangle_count
+                                && better(d2[lane], prim, best.d2, best.prim)
+                            {
+                                best = Nearest {
+                                    d2: d2[lane],
+                                    prim,
+                                    u: u[lane],
+                                    v: v[lane],
+                                    point: Vec3::new(q[0][lane], q[1][lane], q[2][lane]),
+                                };
+                                bound = cull_bound(d2[lane], margin);
+                            }
+                        }
+                    }
+                }
+                // The nearest box left, if it is within the bound.
+                match queue_pop(queue) {
+                    Some((d2, child)) if d2 <= bound => current = child,
+                    _ => return (best.prim != NO_HIT).then_some(best),
+                }
+            }
+        }
+    };
+}
+pub(crate) use closest;
