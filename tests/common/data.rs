@@ -70,6 +70,16 @@ pub fn ray(origin: [f32; 3], dir: [f32; 3]) -> Ray {
     }
 }
 
+/// A triangle with the default attributes.
+pub fn tri(v0: [f32; 3], v1: [f32; 3], v2: [f32; 3]) -> Triangle {
+    Triangle {
+        v0,
+        v1,
+        v2,
+        ..Default::default()
+    }
+}
+
 /// A vertex in f64.
 pub fn d3(v: [f32; 3]) -> DVec3 {
     DVec3::from(v.map(f64::from))
