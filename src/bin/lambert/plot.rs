@@ -47,6 +47,9 @@ fn png_and_svg(
     write_atomically(&stem.with_extension("png"), &image)
 }
 
+/// A chart whose two axes are logarithmic.
+type LogLogChart<'a, DB> = ChartContext<'a, DB, Cartesian2d<LogCoord<f64>, LogCoord<f64>>>;
+
 /// An axis: its range, its name and how its ticks are labelled.
 type Axis<'f> = (std::ops::Range<f64>, &'f str, &'f dyn Fn(&f64) -> String);
 
@@ -57,7 +60,7 @@ fn log_log_chart<'a, DB: DrawingBackend + 'a>(
     caption: &str,
     (x, x_desc, x_label): Axis,
     (y, y_desc, y_label): Axis,
-) -> Result<ChartContext<'a, DB, Cartesian2d<LogCoord<f64>, LogCoord<f64>>>> {
+) -> Result<LogLogChart<'a, DB>> {
     area.fill(&WHITE).map_err(plot_error)?;
     let mut chart = ChartBuilder::on(area)
         .caption(caption, ("sans-serif", 24))
@@ -80,7 +83,7 @@ fn log_log_chart<'a, DB: DrawingBackend + 'a>(
 /// `series` as markers, labelled in the legend with the same marker;
 /// nothing where it is empty.
 fn draw_points<'a, DB: DrawingBackend + 'a, E, L>(
-    chart: &mut ChartContext<'a, DB, Cartesian2d<LogCoord<f64>, LogCoord<f64>>>,
+    chart: &mut LogLogChart<'a, DB>,
     series: &[(f64, f64)],
     label: String,
     marker: impl Fn((f64, f64)) -> E,
