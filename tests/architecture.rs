@@ -27,11 +27,6 @@ const OVERSIZED_RUST: &[(&str, usize)] = &[];
 /// Shaders allowed past MAX_SHADER_LINES: none since the split by stage.
 const OVERSIZED_SHADERS: &[(&str, usize)] = &[];
 
-/// Fails listing `problems` under `what`, if there are any.
-fn assert_none(problems: &[String], what: &str) {
-    assert!(problems.is_empty(), "{what}:\n{}", problems.join("\n"));
-}
-
 /// A made-up file for the checks' own tests: its path and text.
 fn file(path: &str, text: &str) -> (PathBuf, String) {
     (PathBuf::from(path), text.to_string())

@@ -8,7 +8,7 @@ mod common;
 
 use std::path::Path;
 
-use common::data::glb;
+use common::data::one_mesh_glb;
 use common::*;
 use lambert::Scene;
 use lambert::layout::NO_HIT;
@@ -43,12 +43,7 @@ fn quad_glb(material: serde_json::Value, image: serde_json::Value) -> Vec<u8> {
     let png_len = png.len();
     bin.extend(png);
     bin.resize(bin.len().div_ceil(4) * 4, 0);
-    let json = serde_json::json!({
-        "asset": {"version": "2.0"},
-        "extensionsUsed": ["KHR_texture_transform"],
-        "scene": 0,
-        "scenes": [{"nodes": [0]}],
-        "nodes": [{"mesh": 0}],
+    let rest = serde_json::json!({
         "meshes": [{"primitives": [{
             "attributes": {"POSITION": 0, "TEXCOORD_0": 2},
             "indices": 1,
@@ -71,7 +66,7 @@ fn quad_glb(material: serde_json::Value, image: serde_json::Value) -> Vec<u8> {
         ],
         "buffers": [{"byteLength": bin.len()}]
     });
-    glb(json, &bin)
+    one_mesh_glb("KHR_texture_transform", rest, &bin)
 }
 
 fn embedded() -> serde_json::Value {
@@ -294,10 +289,9 @@ fn mtl_image_paths_and_clamp_as_exporters_write_them() {
     let obj = "mtllib b.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl b\nf 1 2 3\n";
     let mesh = load_mesh(&write(d, "b.obj", obj), NormalMode::Face).unwrap();
     let warnings = mesh.warnings.join("\n");
-    assert!(
-        warnings.contains("image 'maps\\none.png' is not found")
-            && warnings.contains("maps/none.png"),
-        "{warnings}"
+    assert_contains_all(
+        &warnings,
+        &["image 'maps\\none.png' is not found", "maps/none.png"],
     );
 }
 

@@ -6,7 +6,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::data::glb;
+use common::data::{glb, one_mesh_glb};
 use common::formats::load_written;
 use common::*;
 use lambert::Scene;
@@ -72,18 +72,13 @@ fn quad_glb(h: f32, z: f32, attributes: &[Attribute], material: serde_json::Valu
             "count": 4, "type": a.kind, "normalized": a.normalized}),
         );
     }
-    let json = serde_json::json!({
-        "asset": {"version": "2.0"},
-        "extensionsUsed": ["KHR_materials_emissive_strength"],
-        "scene": 0,
-        "scenes": [{"nodes": [0]}],
-        "nodes": [{"mesh": 0}],
+    let rest = serde_json::json!({
         "meshes": [{"primitives": [{"attributes": names, "indices": 1, "material": 0}]}],
         "materials": [material],
         "bufferViews": views,
         "accessors": accessors,
     });
-    glb(json, &bin)
+    one_mesh_glb("KHR_materials_emissive_strength", rest, &bin)
 }
 
 /// The scene `body` (meshes, lights) under a camera at (0, 0, `eye_z`)

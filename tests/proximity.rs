@@ -10,16 +10,7 @@ use lambert::scene::Scene;
 
 mod common;
 
-use common::data::{Lcg, d3, ray, winding_f64};
-
-fn tri(v0: [f32; 3], v1: [f32; 3], v2: [f32; 3]) -> Triangle {
-    Triangle {
-        v0,
-        v1,
-        v2,
-        ..Default::default()
-    }
-}
+use common::data::{Lcg, d3, ray, tri, winding_f64};
 
 /// A closed, outward-facing latitude-longitude sphere of radius r about c.
 fn sphere_mesh(c: [f32; 3], r: f32, rings: usize, segments: usize) -> Vec<Triangle> {

@@ -12,14 +12,7 @@ use lambert::layout::{FLAG_ATTRIBUTES, Triangle, TriangleAttributes};
 use lambert::loading::material::{Filter, IDENTITY_UV_TRANSFORM, Sampler, TextureUse, Wrap};
 use lambert::texture::{DecodedImage, TextureStore};
 
-fn triangle(v0: [f32; 3], v1: [f32; 3], v2: [f32; 3]) -> Triangle {
-    Triangle {
-        v0,
-        v1,
-        v2,
-        ..Default::default()
-    }
-}
+use common::data::tri;
 
 /// A query point a millimetre above a unit triangle 10 km from the origin,
 /// off its corners by less than f32 resolves there (a millimetre): the
@@ -27,7 +20,7 @@ fn triangle(v0: [f32; 3], v1: [f32; 3], v2: [f32; 3]) -> Triangle {
 #[test]
 fn the_oracles_closest_points_are_f64() {
     let scene = common::scene_of(
-        vec![triangle(
+        vec![tri(
             [10000.0, 10000.0, 0.0],
             [10001.0, 10000.0, 0.0],
             [10000.0, 10001.0, 0.0],
@@ -71,10 +64,10 @@ fn the_oracles_winding_numbers_are_f64() {
     ];
     let scene = common::scene_of(
         vec![
-            triangle(a, c, b),
-            triangle(a, b, d),
-            triangle(a, d, c),
-            triangle(b, c, d),
+            tri(a, c, b),
+            tri(a, b, d),
+            tri(a, d, c),
+            tri(b, c, d),
         ],
         vec![],
     );
@@ -102,7 +95,7 @@ fn the_oracles_texture_coordinates_are_f64() {
     let mut scene = common::scene_of(
         vec![Triangle {
             flags: FLAG_ATTRIBUTES,
-            ..triangle([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
+            ..tri([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
         }],
         vec![],
     );

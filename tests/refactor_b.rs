@@ -9,7 +9,7 @@ mod common;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
-use common::{open_gpu, scene};
+use common::{assert_contains_all, open_gpu, scene};
 use lambert::camera::View;
 use lambert::gpu::{AdapterRequest, Gpu, GpuOptions, GpuRenderer, ShadowDispatch};
 use lambert::output::Rendered;
@@ -202,10 +202,12 @@ fn the_shadow_dispatch_variable_names_the_wavefront() {
         panic!("LAMBERT_SHADOW_DISPATCH=apart was taken");
     };
     let error = error.to_string();
-    assert!(
-        error.contains("LAMBERT_SHADOW_DISPATCH=\"apart\"")
-            && error.contains("\"megakernel\" or \"wavefront\""),
-        "{error}"
+    assert_contains_all(
+        &error,
+        &[
+            "LAMBERT_SHADOW_DISPATCH=\"apart\"",
+            "\"megakernel\" or \"wavefront\"",
+        ],
     );
 }
 

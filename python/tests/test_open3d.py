@@ -52,12 +52,19 @@ def same_keys_and_dtypes(mine, theirs):
         assert mine[key].shape == theirs[key].shape, key
 
 
+def dict_answers(v, f, method, queries):
+    """open3d's scene of (v, f) and ours, and their answers to `method(queries)`,
+    whose keys, dtypes and shapes are checked to agree."""
+    theirs, ours = open3d_scenes(v, f)
+    expected = numpy(getattr(theirs, method)(queries))
+    got = getattr(ours, method)(queries)
+    same_keys_and_dtypes(got, expected)
+    return theirs, ours, got, expected
+
+
 def test_closest_points_agree_with_open3d(model):
     v, f, points, _, size = model
-    theirs, ours = open3d_scenes(v, f)
-    expected = numpy(theirs.compute_closest_points(points))
-    got = ours.compute_closest_points(points)
-    same_keys_and_dtypes(got, expected)
+    theirs, ours, got, expected = dict_answers(v, f, "compute_closest_points", points)
     d_mine = np.linalg.norm(got["points"] - points, axis=1)
     d_theirs = np.linalg.norm(expected["points"] - points, axis=1)
     np.testing.assert_allclose(d_mine, d_theirs, rtol=1e-5, atol=1e-6 * size)
@@ -124,10 +131,7 @@ def test_winding_numbers_and_signed_distances_agree_with_libigl(model, device):
 
 def test_rays_agree_with_open3d(model):
     v, f, _, rays, size = model
-    theirs, ours = open3d_scenes(v, f)
-    expected = numpy(theirs.cast_rays(rays))
-    got = ours.cast_rays(rays)
-    same_keys_and_dtypes(got, expected)
+    theirs, ours, got, expected = dict_answers(v, f, "cast_rays", rays)
     np.testing.assert_array_equal(np.isinf(got["t_hit"]), np.isinf(expected["t_hit"]))
     hit = np.isfinite(expected["t_hit"])
     assert hit.sum() > 100

@@ -3,10 +3,9 @@
 //! written to a file, with a report of where the time went.
 
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use super::{open, say};
+use super::{open_with, say};
 use crate::adaptive::{AdaptiveReport, AdaptiveSettings, render_adaptive};
 use crate::bvh::Bvh;
 use crate::camera::View;
@@ -216,13 +215,7 @@ pub fn render_image(
     let primitives = scene.primitive_count();
     let bvh = BvhSummary::of(&scene.bvh);
     let view = settings.view.clone();
-    let (mut renderer, upload) = open(
-        Arc::new(scene.with_settings(settings)),
-        job.device,
-        job.adapter,
-        sink,
-    )?;
-    let device = renderer.describe();
+    let (mut renderer, upload, device) = open_with(scene, settings, job.device, job.adapter, sink)?;
     say(sink, &format!("rendering on {device}"));
     let sampled = render_view(&mut renderer, &view, job.sampling, sink)?;
     let start = Instant::now();

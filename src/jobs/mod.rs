@@ -16,7 +16,7 @@ use crate::gpu::AdapterRequest;
 use crate::output::Rendered;
 use crate::progress::{Progress, ProgressSink};
 use crate::render::{DeviceChoice, Renderer, open_gpu};
-use crate::scene::{Intersect, Scene};
+use crate::scene::{Intersect, RenderSettings, Scene};
 
 mod image;
 mod query;
@@ -82,4 +82,23 @@ fn open(
         say(sink, &note);
     }
     Ok((renderer, upload))
+}
+
+/// `open` for `scene` rendered with `settings`, and the renderer's
+/// description for the user.
+fn open_with(
+    scene: Scene,
+    settings: &RenderSettings,
+    choice: DeviceChoice,
+    request: &AdapterRequest,
+    sink: Option<&dyn ProgressSink>,
+) -> Result<(Renderer, Duration, String)> {
+    let (renderer, upload) = open(
+        Arc::new(scene.with_settings(settings)),
+        choice,
+        request,
+        sink,
+    )?;
+    let device = renderer.describe();
+    Ok((renderer, upload, device))
 }

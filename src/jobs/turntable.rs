@@ -5,10 +5,9 @@
 use std::collections::HashMap;
 use std::ops::RangeInclusive;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use super::{open, say, seconds};
+use super::{open_with, say, seconds};
 use crate::camera::orbit;
 use crate::error::{Error, Result};
 use crate::gpu::AdapterRequest;
@@ -63,13 +62,7 @@ pub fn render_turntable(
 ) -> Result<TurntableReport> {
     let paths = frame_paths(job.pattern, job.range.clone())?;
     let mut view = settings.view.clone();
-    let (mut renderer, _) = open(
-        Arc::new(scene.with_settings(settings)),
-        job.device,
-        job.adapter,
-        sink,
-    )?;
-    let device = renderer.describe();
+    let (mut renderer, _, device) = open_with(scene, settings, job.device, job.adapter, sink)?;
     let count = paths.len();
     let of = if count as u32 == job.frames {
         String::new()

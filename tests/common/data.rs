@@ -60,6 +60,23 @@ pub fn glb(mut json: serde_json::Value, bin: &[u8]) -> Vec<u8> {
     out
 }
 
+/// A glb whose scene is one node of mesh 0, using `extension`; `rest`
+/// (an object) gives the other keys of its JSON: meshes, accessors...
+pub fn one_mesh_glb(extension: &str, rest: serde_json::Value, bin: &[u8]) -> Vec<u8> {
+    let mut json = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "extensionsUsed": [extension],
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+    });
+    let serde_json::Value::Object(rest) = rest else {
+        panic!("the rest of a glTF's JSON is an object")
+    };
+    json.as_object_mut().unwrap().extend(rest);
+    glb(json, bin)
+}
+
 /// A ray from `origin` along `dir`, from t = 0 on.
 pub fn ray(origin: [f32; 3], dir: [f32; 3]) -> Ray {
     Ray {
@@ -67,6 +84,16 @@ pub fn ray(origin: [f32; 3], dir: [f32; 3]) -> Ray {
         tmin: 0.0,
         dir,
         tmax: f32::INFINITY,
+    }
+}
+
+/// A triangle with the default attributes.
+pub fn tri(v0: [f32; 3], v1: [f32; 3], v2: [f32; 3]) -> Triangle {
+    Triangle {
+        v0,
+        v1,
+        v2,
+        ..Default::default()
     }
 }
 

@@ -94,6 +94,11 @@ pub fn assert_close(actual: [f32; 3], expected: [f64; 3], rel: f64, what: &str) 
     }
 }
 
+/// Fails showing `text` unless it holds each of `parts`.
+pub fn assert_contains_all(text: &str, parts: &[&str]) {
+    assert!(parts.iter().all(|p| text.contains(p)), "{text}");
+}
+
 /// Traces a ray query on the GPU (any adapter, lavapipe included).
 pub fn trace_gpu(
     scene: &Scene,

@@ -296,3 +296,8 @@ pub fn source_files() -> Vec<(PathBuf, String)> {
         })
         .collect()
 }
+
+/// Fails listing `problems` under `what`, if there are any.
+pub fn assert_none(problems: &[String], what: &str) {
+    assert!(problems.is_empty(), "{what}:\n{}", problems.join("\n"));
+}

@@ -6,6 +6,7 @@ use std::path::Path;
 use std::sync::Once;
 
 use plotters::coord::Shift;
+use plotters::element::{Drawable, IntoDynElement, PointCollection};
 use plotters::prelude::*;
 
 use lambert::bench::{LadderRow, Path32, Point};
@@ -44,6 +45,64 @@ fn png_and_svg(
     draw_png(BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area())?;
     let image = lambert::output::encode_png_rgb8(SIZE.0, SIZE.1, &rgb)?;
     write_atomically(&stem.with_extension("png"), &image)
+}
+
+/// A chart whose two axes are logarithmic.
+type LogLogChart<'a, DB> = ChartContext<'a, DB, Cartesian2d<LogCoord<f64>, LogCoord<f64>>>;
+
+/// An axis: its range, its name and how its ticks are labelled.
+type Axis<'f> = (std::ops::Range<f64>, &'f str, &'f dyn Fn(&f64) -> String);
+
+/// A white area with a chart whose two axes are logarithmic, captioned,
+/// its mesh drawn.
+fn log_log_chart<'a, DB: DrawingBackend + 'a>(
+    area: &'a DrawingArea<DB, Shift>,
+    caption: &str,
+    (x, x_desc, x_label): Axis,
+    (y, y_desc, y_label): Axis,
+) -> Result<LogLogChart<'a, DB>> {
+    area.fill(&WHITE).map_err(plot_error)?;
+    let mut chart = ChartBuilder::on(area)
+        .caption(caption, ("sans-serif", 24))
+        .margin(15)
+        .x_label_area_size(45)
+        .y_label_area_size(70)
+        .build_cartesian_2d(x.log_scale(), y.log_scale())
+        .map_err(plot_error)?;
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .x_label_formatter(x_label)
+        .y_label_formatter(y_label)
+        .y_desc(y_desc)
+        .draw()
+        .map_err(plot_error)?;
+    Ok(chart)
+}
+
+/// `series` as markers, labelled in the legend with the same marker;
+/// nothing where it is empty.
+fn draw_points<'a, DB: DrawingBackend + 'a, E, L>(
+    chart: &mut LogLogChart<'a, DB>,
+    series: &[(f64, f64)],
+    label: String,
+    marker: impl Fn((f64, f64)) -> E,
+    legend: impl Fn((i32, i32)) -> L + 'a,
+) -> Result<()>
+where
+    for<'b> &'b E: PointCollection<'b, (f64, f64)>,
+    E: Drawable<DB>,
+    L: IntoDynElement<'a, DB, (i32, i32)>,
+{
+    if series.is_empty() {
+        return Ok(());
+    }
+    chart
+        .draw_series(series.iter().map(|&c| marker(c)))
+        .map_err(plot_error)?
+        .label(label)
+        .legend(legend);
+    Ok(())
 }
 
 /// The legend, then the picture handed to its backend.
@@ -97,22 +156,16 @@ pub fn time_vs_error(points: &[Point], stem: &Path) -> Result<()> {
     macro_rules! draw {
         ($area:expr) => {{
             let area = $area;
-            area.fill(&WHITE).map_err(plot_error)?;
-            let mut chart = ChartBuilder::on(&area)
-                .caption(&title, ("sans-serif", 24))
-                .margin(15)
-                .x_label_area_size(45)
-                .y_label_area_size(70)
-                .build_cartesian_2d((t_lo..t_hi).log_scale(), (e_lo..e_hi).log_scale())
-                .map_err(plot_error)?;
-            chart
-                .configure_mesh()
-                .x_desc("render time (s, median)")
-                .x_label_formatter(&|v| format!("{v:.3}"))
-                .y_label_formatter(&|v| format!("{v:.0e}"))
-                .y_desc("RMSE against the converged reference")
-                .draw()
-                .map_err(plot_error)?;
+            let mut chart = log_log_chart(
+                &area,
+                &title,
+                (t_lo..t_hi, "render time (s, median)", &|v| {
+                    format!("{v:.3}")
+                }),
+                (e_lo..e_hi, "RMSE against the converged reference", &|v| {
+                    format!("{v:.0e}")
+                }),
+            )?;
             for path in [Path32::GpuF32, Path32::CpuF32, Path32::CpuF64] {
                 for intersect in Intersect::ALL {
                     let colour = series_colour(path, intersect);
@@ -123,18 +176,13 @@ pub fn time_vs_error(points: &[Point], stem: &Path) -> Result<()> {
                         })
                         .map(|p| (p.seconds.max(1e-6), p.rmse.max(floor)))
                         .collect();
-                    if series.is_empty() {
-                        continue;
-                    }
-                    chart
-                        .draw_series(
-                            series
-                                .iter()
-                                .map(|&(x, y)| Circle::new((x, y), 4, colour.filled())),
-                        )
-                        .map_err(plot_error)?
-                        .label(format!("{path:?} {}", intersect.name()))
-                        .legend(move |(x, y)| Circle::new((x, y), 4, colour.filled()));
+                    draw_points(
+                        &mut chart,
+                        &series,
+                        format!("{path:?} {}", intersect.name()),
+                        |c| Circle::new(c, 4, colour.filled()),
+                        move |c| Circle::new(c, 4, colour.filled()),
+                    )?;
                 }
             }
             for path in [Path32::GpuF32, Path32::CpuF32] {
@@ -144,18 +192,13 @@ pub fn time_vs_error(points: &[Point], stem: &Path) -> Result<()> {
                     .filter(|p| p.path == path && p.sampling == "adaptive")
                     .map(|p| (p.seconds.max(1e-6), p.rmse.max(floor)))
                     .collect();
-                if series.is_empty() {
-                    continue;
-                }
-                chart
-                    .draw_series(
-                        series
-                            .iter()
-                            .map(|&(x, y)| TriangleMarker::new((x, y), 7, colour.filled())),
-                    )
-                    .map_err(plot_error)?
-                    .label(format!("{path:?} adaptive"))
-                    .legend(move |(x, y)| TriangleMarker::new((x, y), 7, colour.filled()));
+                draw_points(
+                    &mut chart,
+                    &series,
+                    format!("{path:?} adaptive"),
+                    |c| TriangleMarker::new(c, 7, colour.filled()),
+                    move |c| TriangleMarker::new(c, 7, colour.filled()),
+                )?;
             }
             chart
                 .draw_series(LineSeries::new(
@@ -224,22 +267,12 @@ pub fn ladder(rows: &[LadderRow], stem: &Path) -> Result<()> {
     macro_rules! draw {
         ($area:expr) => {{
             let area = $area;
-            area.fill(&WHITE).map_err(plot_error)?;
-            let mut chart = ChartBuilder::on(&area)
-                .caption("Time per ray against scene size", ("sans-serif", 24))
-                .margin(15)
-                .x_label_area_size(45)
-                .y_label_area_size(70)
-                .build_cartesian_2d((x_lo..x_hi).log_scale(), (y_lo..y_hi).log_scale())
-                .map_err(plot_error)?;
-            chart
-                .configure_mesh()
-                .x_desc("triangles")
-                .x_label_formatter(&|v| format!("{v:.0}"))
-                .y_label_formatter(&|v| format!("{v:.0}"))
-                .y_desc("ns per ray (median)")
-                .draw()
-                .map_err(plot_error)?;
+            let mut chart = log_log_chart(
+                &area,
+                "Time per ray against scene size",
+                (x_lo..x_hi, "triangles", &|v| format!("{v:.0}")),
+                (y_lo..y_hi, "ns per ray (median)", &|v| format!("{v:.0}")),
+            )?;
             for (i, device) in devices.iter().enumerate() {
                 let colour = palette[i % palette.len()];
                 for (kind, dashed) in [("primary", false), ("shadow", true)] {
