@@ -44,7 +44,10 @@ fn no_rust_file_is_included_into_another() {
     )]);
     assert_eq!(planted, ["src/cpu/f32.rs:4"]);
     let found = includes(&source_files());
-    assert_none(&found, "`.rs` files pasted in with include! (make them modules, docs/architecture.md)");
+    assert_none(
+        &found,
+        "`.rs` files pasted in with include! (make them modules, docs/architecture.md)",
+    );
 }
 
 // ---- settings in their place -------------------------------------------------
@@ -71,7 +74,10 @@ fn public_scene_fields(text: &str) -> Vec<String> {
 fn the_scene_has_no_public_field() {
     let text = std::fs::read_to_string(Path::new(ROOT).join("src/scene/mod.rs")).unwrap();
     let public = public_scene_fields(&text);
-    assert_none(&public, "src/scene/mod.rs: `Scene` has public fields (make them pub(crate) and add a method)");
+    assert_none(
+        &public,
+        "src/scene/mod.rs: `Scene` has public fields (make them pub(crate) and add a method)",
+    );
 }
 
 #[test]
@@ -111,7 +117,10 @@ fn no_front_end_names_the_renderers_variants() {
         .collect();
     assert!(front_ends.len() > 10, "front ends not found");
     let named = renderer_variants_named(&front_ends);
-    assert_none(&named, "front ends match on Renderer's variants (use its methods)");
+    assert_none(
+        &named,
+        "front ends match on Renderer's variants (use its methods)",
+    );
 }
 
 #[test]

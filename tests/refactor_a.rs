@@ -63,12 +63,7 @@ fn the_oracles_winding_numbers_are_f64() {
         [0.0, 0.0, 1.0],
     ];
     let scene = common::scene_of(
-        vec![
-            tri(a, c, b),
-            tri(a, b, d),
-            tri(a, d, c),
-            tri(b, c, d),
-        ],
+        vec![tri(a, c, b), tri(a, b, d), tri(a, d, c), tri(b, c, d)],
         vec![],
     );
     let tree = WindingTree::build(scene.bvh(), scene.triangles().len());

@@ -289,7 +289,9 @@ fn each_render_call_renders_the_view_it_is_given() {
         let alone_first = fresh().render(&first, &hidden).unwrap().0;
         let alone_second = fresh().render(&second, &hidden).unwrap().0;
         let alone_list = fresh().render_pixel_list(&second, &pixels).unwrap();
-        let alone_hits = fresh().trace_rays(&rays, false, scene.default_settings().intersect).unwrap();
+        let alone_hits = fresh()
+            .trace_rays(&rays, false, scene.default_settings().intersect)
+            .unwrap();
 
         let mut shared = fresh();
         let label = format!("{dispatch:?}");
@@ -330,7 +332,9 @@ fn each_render_call_renders_the_view_it_is_given() {
             bits(&alone_second).0,
             "{label}: the batches end as one render"
         );
-        let hits = shared.trace_rays(&rays, false, scene.default_settings().intersect).unwrap();
+        let hits = shared
+            .trace_rays(&rays, false, scene.default_settings().intersect)
+            .unwrap();
         let hit_bits = |hits: &[lambert::layout::Hit]| -> Vec<[u32; 2]> {
             hits.iter().map(|h| [h.t.to_bits(), h.prim]).collect()
         };

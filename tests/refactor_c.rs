@@ -26,7 +26,12 @@ fn small(scene: &Scene, shadows: bool) -> RenderSettings {
 }
 
 fn gpu_render(renderer: &mut GpuRenderer, view: &View) -> Vec<u32> {
-    common::bits(&renderer.render(view, &Progress::hidden()).expect("GPU render").0)
+    common::bits(
+        &renderer
+            .render(view, &Progress::hidden())
+            .expect("GPU render")
+            .0,
+    )
 }
 
 /// A GPU renderer's shadows turned off and on again render, bit for bit,

@@ -201,7 +201,10 @@ fn high_spp_renders_agree_on_both_paths_at_every_size() {
             let mut scene = at_spp(&bunny, spp);
             scene.view_mut().camera.width = width;
             scene.view_mut().camera.height = height;
-            let gpu_image = renderer.render(scene.view(), &Progress::hidden()).unwrap().0;
+            let gpu_image = renderer
+                .render(scene.view(), &Progress::hidden())
+                .unwrap()
+                .0;
             let cpu_image = render_cpu(&scene);
             let stats = compare(&gpu_image, &cpu_image, &Tolerance::default()).unwrap();
             assert!(
