@@ -25,6 +25,9 @@ override HAS_ATTRIBUTES: bool = true;
 // Some triangle has shading normals (FLAG_SMOOTH). False: their reads and
 // interpolation are compiled out, likewise.
 override HAS_SMOOTH: bool = true;
+// Samples are path traced (Integrator::Path): `radiance` calls
+// `path_radiance`. False: the direct integrator's `shade` alone.
+override PATH_TRACE: bool = true;
 // false: test every primitive (the reference that tests the BVH).
 override USE_BVH: bool = true;
 // Ray/triangle test: INTERSECT_SEED, INTERSECT_MOLLER_TRUMBORE or
@@ -168,7 +171,9 @@ struct Params {
     zero: u32,
     // The tile's width and height in pixels (at most TILE).
     tile_size: vec2<u32>,
-    _pad: vec2<u32>,
+    // Under PATH_TRACE, the most surfaces a path hits.
+    max_depth: u32,
+    _pad: u32,
 }
 
 struct Triangle {

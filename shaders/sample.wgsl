@@ -91,7 +91,7 @@ fn add_samples(pixel: vec2<u32>, sums: vec4<f32>) -> SampleSums {
         if sample == params.sample_begin {
             result.prim = hit.prim;
         }
-        result.sums = add_sample(result.sums, shade(ray, hit));
+        result.sums = add_sample(result.sums, radiance(ray, hit, pixel, sample));
     }
     return result;
 }

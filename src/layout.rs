@@ -76,7 +76,10 @@ pub struct Params {
     pub zero: u32,
     /// The current tile's width and height in pixels (at most gpu::TILE).
     pub tile_size: [u32; 2],
-    pub _pad: [u32; 2],
+    /// Under the shader's PATH_TRACE, the most surfaces a path hits
+    /// (`RenderSettings::max_depth`).
+    pub max_depth: u32,
+    pub _pad: u32,
 }
 
 #[repr(C)]

@@ -28,6 +28,21 @@ pub const MAX_PIXELS: u64 = 1 << 28;
 /// Most samples per pixel a render may ask for.
 pub const MAX_SPP: u32 = 4096;
 
+/// The most surfaces a path may hit (`--max-depth`): a path's loop runs
+/// within one GPU invocation, whose time a driver may bound.
+pub const MAX_MAX_DEPTH: u32 = 64;
+
+/// `max_depth` from 1 (direct light alone) to `MAX_MAX_DEPTH`.
+pub fn validate_max_depth(max_depth: u32) -> Result<(), String> {
+    if (1..=MAX_MAX_DEPTH).contains(&max_depth) {
+        Ok(())
+    } else {
+        Err(format!(
+            "max_depth {max_depth} is outside 1 to {MAX_MAX_DEPTH}"
+        ))
+    }
+}
+
 /// Checks a sample count.
 pub fn validate_spp(spp: u32) -> Result<(), String> {
     if spp == 0 || spp > MAX_SPP {

@@ -12,7 +12,7 @@ use crate::gpu::{AdapterRequest, Gpu, GpuRenderer, Presenting};
 use crate::layout::{Hit, Ray};
 use crate::output::{Image, Rendered};
 use crate::progress::{Progress, ProgressSink};
-use crate::scene::{Intersect, Scene};
+use crate::scene::{Integrator, Intersect, Scene};
 
 /// Where to render (`--device`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -293,6 +293,22 @@ impl Renderer {
             Renderer::Cpu(scene) => {
                 if scene.shadows != on {
                     Arc::make_mut(scene).shadows = on;
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// Switches the integrator (and a path's depth) for the renders that
+    /// follow, as `set_shadows` switches shadows.
+    pub fn set_integrator(&mut self, integrator: Integrator, max_depth: u32) -> Result<()> {
+        match self {
+            Renderer::Gpu(renderer) => renderer.set_integrator(integrator, max_depth),
+            Renderer::Cpu(scene) => {
+                if scene.integrator != integrator || scene.max_depth != max_depth {
+                    let scene = Arc::make_mut(scene);
+                    scene.integrator = integrator;
+                    scene.max_depth = max_depth;
                 }
                 Ok(())
             }

@@ -106,6 +106,7 @@ fn host_structs_match_wgsl_layout() {
             cone_spread,
             zero,
             tile_size,
+            max_depth,
             _pad,
         }
     );

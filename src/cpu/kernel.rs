@@ -36,6 +36,10 @@ macro_rules! kernel {
         crate::cpu::texture::stage::texture!();
         crate::cpu::closest::stage::closest!();
         crate::cpu::winding::stage::winding!();
+        crate::cpu::bsdf::bsdf!();
+        crate::cpu::material::material!();
+        crate::cpu::lights::lights!();
+        crate::cpu::integrator::integrator!();
     };
 }
 pub(crate) use kernel;

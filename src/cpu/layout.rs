@@ -124,6 +124,10 @@ macro_rules! layout {
             /// The GPU's short stack: entries `trace_compressed` keeps before the
             /// oldest spill (`cwbvh::short_stack`; `MAX_DEPTH`, none spill).
             pub stack_entries: usize,
+            /// Whether samples are path traced (`Integrator::Path`; the
+            /// shader's PATH_TRACE), and the most surfaces a path hits.
+            path: bool,
+            max_depth: u32,
         }
 
         impl<'a> Kernel<'a> {
@@ -164,6 +168,8 @@ macro_rules! layout {
                     ),
                     compressed: None,
                     stack_entries: MAX_DEPTH,
+                    path: scene.integrator == crate::scene::Integrator::Path,
+                    max_depth: scene.max_depth,
                 }
             }
         }

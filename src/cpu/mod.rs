@@ -19,6 +19,11 @@ mod proximity;
 mod query;
 mod render;
 mod sample;
+mod bsdf;
+mod integrator;
+mod lights;
+mod material;
+
 mod shade;
 mod simd;
 pub mod texture;

@@ -69,7 +69,7 @@ macro_rules! sample {
                     if sample == first {
                         first_prim = hit.prim;
                     }
-                    sums = self.add_sample(sums, self.shade(&ray, &hit));
+                    sums = self.add_sample(sums, self.radiance(&ray, &hit, x, y, sample));
                 }
                 (sums, first_prim)
             }

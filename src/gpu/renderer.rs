@@ -11,7 +11,7 @@ use crate::error::{Error, Result};
 use crate::layout::{ClosestPoint, Hit, ListedHit, Params, Ray};
 use crate::output::{Image, Rendered};
 use crate::progress::Progress;
-use crate::scene::{Intersect, Scene};
+use crate::scene::{Integrator, Intersect, Scene};
 
 use super::device::Gpu;
 use super::pipelines::{Layouts, Pipelines, resident_constants};
@@ -383,19 +383,46 @@ impl GpuRenderer {
             return Ok(());
         }
         let lights = params.num_lights;
-        self.shadow_dispatch = ShadowDispatch::for_lights(
-            on,
-            lights,
-            self.gpu.options.shadow_dispatch.as_deref(),
-            self.gpu.limits.max_storage_buffer_binding_size,
-        )?;
         self.resident.set_shadows(on);
+        self.set_constant("HAS_SHADOWS", on && lights > 0);
+        self.choose_shadow_dispatch()
+    }
+
+    /// Switches the integrator (the viewer's key) and a path's depth: the
+    /// PATH_TRACE override and the shadow dispatch, the pipelines built
+    /// on them rebuilt on next use; the scene's buffers stay.
+    pub fn set_integrator(&mut self, integrator: Integrator, max_depth: u32) -> Result<()> {
+        self.resident.set_max_depth(max_depth);
+        self.set_constant("PATH_TRACE", integrator == Integrator::Path);
+        self.choose_shadow_dispatch()
+    }
+
+    /// Whether samples are path traced (the PATH_TRACE override).
+    fn path_traced(&self) -> bool {
+        let constants = &self.pipelines.constants;
+        constants.iter().any(|&(n, v)| n == "PATH_TRACE" && v != 0.0)
+    }
+
+    /// Sets a boolean override, and drops the pipelines built on the old.
+    fn set_constant(&mut self, name: &str, on: bool) {
         let constants = &mut self.pipelines.constants;
-        if let Some((_, flag)) = constants.iter_mut().find(|(n, _)| *n == "HAS_SHADOWS") {
-            *flag = (on && lights > 0) as u32 as f64;
+        if let Some((_, flag)) = constants.iter_mut().find(|(n, _)| *n == name) {
+            *flag = on as u32 as f64;
         }
         self.tiles.forget_pipelines();
         self.lists.forget_pipelines();
+    }
+
+    /// The shadow dispatch for the uniform's shadows and lights and the
+    /// integrator (the wavefront shades as the direct one does).
+    fn choose_shadow_dispatch(&mut self) -> Result<()> {
+        let params = self.resident.scene_params();
+        self.shadow_dispatch = ShadowDispatch::for_lights(
+            params.shadows != 0 && !self.path_traced(),
+            params.num_lights,
+            self.gpu.options.shadow_dispatch.as_deref(),
+            self.gpu.limits.max_storage_buffer_binding_size,
+        )?;
         Ok(())
     }
 }

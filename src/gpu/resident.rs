@@ -122,6 +122,11 @@ impl Resident {
     pub fn set_shadows(&mut self, on: bool) {
         self.scene_params.shadows = on as u32;
     }
+
+    /// A path's most surfaces in the uniform's scene part.
+    pub fn set_max_depth(&mut self, max_depth: u32) {
+        self.scene_params.max_depth = max_depth;
+    }
 }
 
 /// The uniform's part that `scene` sets.
@@ -134,6 +139,7 @@ fn scene_params(scene: &Scene) -> Params {
         num_lights: scene.lights.len() as u32,
         shadows: scene.shadows as u32,
         canary_loops: 2,
+        max_depth: scene.max_depth,
         ..bytemuck::Zeroable::zeroed()
     }
 }

@@ -2,7 +2,7 @@
 //! the host reads `shaders/` from.
 
 use crate::layout::{LIGHT_DIRECTIONAL, LIGHT_POINT};
-use crate::scene::{Accel, Scene};
+use crate::scene::{Accel, Integrator, Scene};
 
 /// The kernel's source, validated by naga in tests/shaders.rs.
 pub const SHADER_SOURCE: &str = crate::shader_source::SOURCE;
@@ -26,6 +26,9 @@ pub fn specialisation(scene: &Scene) -> Vec<(&'static str, f64)> {
         // Normals are kept for every triangle once one mesh is smooth.
         ("HAS_SMOOTH", flag(!scene.normals.is_empty())),
         ("USE_BVH", flag(scene.accel == Accel::Bvh)),
+        ("PATH_TRACE", flag(scene.integrator == Integrator::Path)),
+        ("HAS_ENVIRONMENT", 0.0),
+        ("HAS_EMITTERS", 0.0),
         ("INTERSECT", scene.intersect.shader_value() as f64),
     ]
 }

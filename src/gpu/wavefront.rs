@@ -44,7 +44,10 @@ impl ShadowDispatch {
         max_binding: u64,
     ) -> Result<ShadowDispatch> {
         let lights = scene.lights.len().min(u32::MAX as usize) as u32;
-        ShadowDispatch::for_lights(scene.shadows, lights, chosen, max_binding)
+        // The wavefront's passes shade as the direct integrator does; a
+        // path traced sample runs whole in one invocation.
+        let shadows = scene.shadows && scene.integrator == crate::scene::Integrator::Direct;
+        ShadowDispatch::for_lights(shadows, lights, chosen, max_binding)
     }
 
     /// `for_scene` from the uniform's shadows and light count (what

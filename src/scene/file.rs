@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use glam::{DMat3, DVec3};
 use serde::Deserialize;
 
-use super::{Intersect, Rgb, Scene, Transform, colour, directional_light, point, point_light};
+use super::{DEFAULT_MAX_DEPTH, Integrator, Intersect, Rgb, Scene, Transform, colour, directional_light, point, point_light};
 use crate::camera::{Camera, View, validate_camera};
 use crate::error::{Error, Result};
 use crate::layout::Sphere;
@@ -41,6 +41,8 @@ pub struct RenderTable {
     pub spp: Option<u32>,
     pub seed: u32,
     pub intersect: Intersect,
+    pub integrator: Integrator,
+    pub max_depth: u32,
 }
 
 impl Default for RenderTable {
@@ -52,6 +54,8 @@ impl Default for RenderTable {
             spp: None,
             seed: 0,
             intersect: Intersect::default(),
+            integrator: Integrator::default(),
+            max_depth: DEFAULT_MAX_DEPTH,
         }
     }
 }
@@ -123,6 +127,8 @@ impl Scene {
         let ambient = colour("render.ambient", file.render.ambient).map_err(fail)?;
         let spp = file.render.spp.unwrap_or(1);
         validate_spp(spp).map_err(|e| fail(format!("render.{e}")))?;
+        crate::limits::validate_max_depth(file.render.max_depth)
+            .map_err(|e| fail(format!("render.{e}")))?;
 
         let mut scene = Scene {
             view: View {
@@ -135,6 +141,8 @@ impl Scene {
             shadows: file.render.shadows,
             spp_given: file.render.spp.is_some(),
             intersect: file.render.intersect,
+            integrator: file.render.integrator,
+            max_depth: file.render.max_depth,
             inputs: vec![path.to_path_buf()],
             ..Scene::bare()
         };

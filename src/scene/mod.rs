@@ -24,7 +24,7 @@ mod file;
 mod model;
 mod settings;
 
-pub use settings::RenderSettings;
+pub use settings::{DEFAULT_MAX_DEPTH, Integrator, RenderSettings};
 
 /// A loaded, validated scene, flattened into the buffers the GPU receives:
 /// geometry, materials, lights and its default view, read through its
@@ -64,6 +64,9 @@ pub struct Scene {
     pub(crate) accel: Accel,
     /// The ray/triangle test both paths use.
     pub(crate) intersect: Intersect,
+    pub(crate) integrator: Integrator,
+    /// Under `Integrator::Path`, the most surfaces a path hits.
+    pub(crate) max_depth: u32,
     /// What loading read but ignored or could not find (each names its
     /// file); the CLI prints them.
     pub(crate) warnings: Vec<String>,
@@ -223,6 +226,8 @@ impl Scene {
             bvh: Bvh::default(),
             accel: Accel::default(),
             intersect: Intersect::default(),
+            integrator: Integrator::default(),
+            max_depth: DEFAULT_MAX_DEPTH,
             warnings: Vec::new(),
             inputs: Vec::new(),
             offset: DVec3::ZERO,

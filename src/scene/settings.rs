@@ -1,11 +1,46 @@
 //! What a render may set apart from the scene it renders: its view (size,
-//! camera, spp, seed), shadows, ambient light, the acceleration and the
-//! ray/triangle test. A scene file's `[camera]` and `[render]` tables are
+//! camera, spp, seed), shadows, ambient light, the acceleration, the
+//! ray/triangle test and the integrator. A scene file's `[camera]` and `[render]` tables are
 //! the scene's defaults (`Scene::default_settings`); the front ends
 //! override fields of a copy and hand it to the jobs.
 
+use serde::{Deserialize, Serialize};
+
 use super::{Accel, Intersect, Scene};
 use crate::camera::View;
+
+/// `--integrator`: how light reaches the camera (docs/rendering.md). The
+/// default everywhere, model files included, is `Direct`: today's pictures
+/// and speed stay what they were, and `Path` is asked for.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Deserialize, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Integrator {
+    /// The lecture's: ambient·k + Σ k·I·(n·l) over the point, directional
+    /// and spot lights, with shadow rays; emission is seen, lighting
+    /// nothing.
+    #[default]
+    Direct,
+    /// Unidirectional path tracing: next-event estimation with multiple
+    /// importance sampling (power heuristic), physically based materials,
+    /// emissive triangles as area lights and the environment.
+    Path,
+}
+
+impl Integrator {
+    pub const ALL: [Integrator; 2] = [Integrator::Direct, Integrator::Path];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Integrator::Direct => "direct",
+            Integrator::Path => "path",
+        }
+    }
+}
+
+/// Bounces a path takes at most unless `--max-depth` says otherwise: the
+/// camera ray's hit and 7 more (pbrt-v4's and Mitsuba 3's scenes commonly
+/// use 5 to 8).
+pub const DEFAULT_MAX_DEPTH: u32 = 8;
 
 /// A render's settings (see the module's comment).
 #[derive(Clone, Debug, PartialEq)]
@@ -18,6 +53,10 @@ pub struct RenderSettings {
     pub accel: Accel,
     /// The ray/triangle test both paths use.
     pub intersect: Intersect,
+    pub integrator: Integrator,
+    /// Under `Integrator::Path`: the most surfaces a path hits (1: direct
+    /// light alone).
+    pub max_depth: u32,
 }
 
 impl Scene {
@@ -30,6 +69,8 @@ impl Scene {
             ambient: self.ambient,
             accel: self.accel,
             intersect: self.intersect,
+            integrator: self.integrator,
+            max_depth: self.max_depth,
         }
     }
 
@@ -42,6 +83,8 @@ impl Scene {
         self.ambient = settings.ambient;
         self.accel = settings.accel;
         self.intersect = settings.intersect;
+        self.integrator = settings.integrator;
+        self.max_depth = settings.max_depth;
         self
     }
 }

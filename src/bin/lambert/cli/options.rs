@@ -9,9 +9,9 @@ use clap::{Args, ValueEnum};
 use lambert::bench::BenchDevices;
 use lambert::error::{Error, Result};
 use lambert::gpu::AdapterRequest;
-use lambert::limits::validate_spp;
+use lambert::limits::{validate_max_depth, validate_spp};
 use lambert::render::DeviceChoice;
-use lambert::scene::{Accel, Intersect, RenderSettings, Scene};
+use lambert::scene::{Accel, Integrator, Intersect, RenderSettings, Scene};
 
 /// `--device` of render, diff and trace: `DeviceChoice`.
 #[derive(Clone, Copy, Default, ValueEnum)]
@@ -89,6 +89,25 @@ impl From<IntersectArg> for Intersect {
             IntersectArg::Seed => Intersect::Seed,
             IntersectArg::MollerTrumbore => Intersect::MollerTrumbore,
             IntersectArg::Watertight => Intersect::Watertight,
+        }
+    }
+}
+
+/// `--integrator`: `Integrator`.
+#[derive(Clone, Copy, ValueEnum)]
+enum IntegratorArg {
+    /// The lecture's light: ambient + Σ k·I·(n·l) with shadow rays.
+    Direct,
+    /// Path tracing: physically based materials, area lights, the
+    /// environment and bounced light.
+    Path,
+}
+
+impl From<IntegratorArg> for Integrator {
+    fn from(integrator: IntegratorArg) -> Integrator {
+        match integrator {
+            IntegratorArg::Direct => Integrator::Direct,
+            IntegratorArg::Path => Integrator::Path,
         }
     }
 }
@@ -206,6 +225,14 @@ pub(super) struct RenderOptions {
     /// own, else 0].
     #[arg(long, value_name = "R[,G,B]", value_parser = ambient)]
     ambient: Option<[f32; 3]>,
+    /// How light reaches the camera [default: the scene's
+    /// render.integrator, else direct].
+    #[arg(long, value_enum)]
+    integrator: Option<IntegratorArg>,
+    /// Under --integrator path, the most surfaces a path hits [default:
+    /// the scene's render.max_depth, else 8].
+    #[arg(long, value_name = "N")]
+    max_depth: Option<u32>,
     #[command(flatten)]
     scene: SceneOptions,
 }
@@ -220,6 +247,13 @@ impl RenderOptions {
         let (scene, mut settings) = self.scene.load(path)?;
         if let Some(ambient) = self.ambient {
             settings.ambient = ambient;
+        }
+        if let Some(integrator) = self.integrator {
+            settings.integrator = integrator.into();
+        }
+        if let Some(max_depth) = self.max_depth {
+            validate_max_depth(max_depth).map_err(|e| Error::Usage(format!("--{e}")))?;
+            settings.max_depth = max_depth;
         }
         Ok((scene, settings))
     }
