@@ -28,6 +28,9 @@ override HAS_SMOOTH: bool = true;
 // Samples are path traced (Integrator::Path): `radiance` calls
 // `path_radiance`. False: the direct integrator's `shade` alone.
 override PATH_TRACE: bool = true;
+// STAND-IN until the lights branch lands.
+override HAS_ENVIRONMENT: bool = true;
+override HAS_EMITTERS: bool = true;
 // false: test every primitive (the reference that tests the BVH).
 override USE_BVH: bool = true;
 // Ray/triangle test: INTERSECT_SEED, INTERSECT_MOLLER_TRUMBORE or

@@ -1,6 +1,4 @@
 // STAND-IN (the lead's scratch, replaced by the lights engineer's at merge).
-override HAS_ENVIRONMENT: bool = true;
-override HAS_EMITTERS: bool = true;
 struct EmitterSample { wi: vec3<f32>, distance: f32, radiance: vec3<f32>, pdf: f32, delta: bool }
 fn sample_emitter(position: vec3<f32>, normal: vec3<f32>, u_pick: f32, u: vec2<f32>) -> EmitterSample {
     return EmitterSample(vec3<f32>(0.0, 0.0, 1.0), FAR, vec3<f32>(0.0), 0.0, false);
