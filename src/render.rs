@@ -160,6 +160,24 @@ impl Renderers {
         }
     }
 
+    /// The integrator (and a path's depth) of the renders that follow, on
+    /// every renderer: the scene's copy changed once (the CPU path's), the
+    /// GPU's pipelines specialised again, its buffers kept.
+    pub fn set_integrator(&mut self, integrator: Integrator, max_depth: u32) -> Result<()> {
+        if self.scene.integrator == integrator && self.scene.max_depth == max_depth {
+            return Ok(());
+        }
+        self.cpu = Renderer::Cpu(Arc::clone(&self.scene));
+        self.cpu.set_integrator(integrator, max_depth)?;
+        if let Renderer::Cpu(scene) = &self.cpu {
+            self.scene = Arc::clone(scene);
+        }
+        if let Some(gpu) = &mut self.gpu {
+            gpu.set_integrator(integrator, max_depth)?;
+        }
+        Ok(())
+    }
+
     /// Runs `work` on the renderer `choice` asks for from `renderers`
     /// (opened if need be), holding its lock only while a GPU works: the
     /// CPU path runs on a renderer of its own sharing the scene, so that

@@ -263,10 +263,21 @@ class Scene:
         directions). Give one of width and height to keep the aspect ratio."""
         return self._native.camera_rays(_count("width", width), _count("height", height))
 
-    def render(self, width=None, height=None, spp=1, device="auto"):
-        """The image, (H, W, 3) float32 linear RGB: Lambert shading from the
-        scene's lights with shadows, ``spp`` stratified samples per pixel."""
-        return self._native.render(_count("width", width), _count("height", height), _count("spp", spp), device)
+    def render(self, width=None, height=None, spp=1, device="auto", integrator=None, max_depth=None):
+        """The image, (H, W, 3) float32 linear RGB, ``spp`` stratified
+        samples per pixel. ``integrator``: "direct" (Lambert shading from
+        the scene's lights with shadows) or "path" (path tracing: physically
+        based materials, area lights, the environment, bounced light, at
+        most ``max_depth`` surfaces a path); None: the scene's own
+        (render.integrator, else "direct")."""
+        return self._native.render(
+            _count("width", width),
+            _count("height", height),
+            _count("spp", spp),
+            device,
+            integrator,
+            _count("max_depth", max_depth),
+        )
 
     def device(self, device="auto"):
         """What ``device`` resolves to for this scene, e.g. "GPU: llvmpipe

@@ -20,7 +20,7 @@ use lambert::jobs::{self, Sampling};
 use lambert::layout::{Hit, NO_HIT, Ray};
 use lambert::output::Image;
 use lambert::render::{DeviceChoice, Renderer, Renderers};
-use lambert::scene::{Intersect, Scene, hit_normal, prefetch_hit_triangles};
+use lambert::scene::{Integrator, Intersect, Scene, hit_normal, prefetch_hit_triangles};
 use lambert::{Error, rays};
 use numpy::ndarray::{Array2, Array3};
 use numpy::{
@@ -573,7 +573,8 @@ impl NativeScene {
     }
 
     /// A linear-RGB render, (H, W, 3) float32.
-    #[pyo3(signature = (width, height, spp, device))]
+    #[pyo3(signature = (width, height, spp, device, integrator, max_depth))]
+    #[allow(clippy::too_many_arguments)]
     fn render<'py>(
         &self,
         py: Python<'py>,
@@ -581,10 +582,30 @@ impl NativeScene {
         height: Option<u32>,
         spp: Option<u32>,
         device: &str,
+        integrator: Option<&str>,
+        max_depth: Option<u32>,
     ) -> PyResult<Bound<'py, PyArray3<f32>>> {
         let device = device_choice(device)?;
         let scene = &self.scene;
+        let integrator = match integrator {
+            None => scene.default_settings().integrator,
+            Some(name) => Integrator::ALL
+                .into_iter()
+                .find(|i| i.name() == name)
+                .ok_or_else(|| {
+                    PyValueError::new_err(format!(
+                        "integrator: {name:?} is not \"direct\" or \"path\""
+                    ))
+                })?,
+        };
+        let max_depth = max_depth.unwrap_or(scene.default_settings().max_depth);
+        lambert::limits::validate_max_depth(max_depth)
+            .map_err(|e| PyValueError::new_err(e))?;
         let (image, note) = detached(py, || {
+            self.renderers
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .set_integrator(integrator, max_depth)?;
             let camera = scene
                 .view()
                 .camera

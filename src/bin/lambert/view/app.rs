@@ -39,6 +39,7 @@ lambert view: keys and mouse
   r                  the camera the file was loaded with
   1 .. 9             the file's cameras (glTF)
   l                  shadows on/off
+  p                  path tracing on/off (the direct integrator)
   s, Shift+S         save a screenshot (PNG of the image so far, full resolution)
   c                  print the camera as a [camera] table
   h                  this list
@@ -187,6 +188,7 @@ impl App {
             path: settings.path.clone(),
             reach: Reach::of(&scene),
             shadows: scene.default_settings().shadows,
+            integrator: scene.default_settings().integrator,
             scene,
             renderer,
             cancel: Arc::clone(&self.cancel),
@@ -277,6 +279,7 @@ impl App {
             'r' | 'R' => self.send(Command::FileCamera(None)),
             '1'..='9' => self.send(Command::FileCamera(Some(c as usize - '1' as usize))),
             'l' | 'L' => self.send(Command::ToggleShadows),
+            'p' | 'P' => self.send(Command::ToggleIntegrator),
             'c' | 'C' => self.send(Command::PrintCamera),
             'h' | 'H' => println!("{KEYS}"),
             _ => {}

@@ -15,7 +15,7 @@ use lambert::error::{Error, Result};
 use lambert::gpu::Gpu;
 use lambert::output::Image;
 use lambert::render::{Progressive, Renderer};
-use lambert::scene::Scene;
+use lambert::scene::{Integrator, Scene};
 
 use super::navigate::Reach;
 
@@ -45,6 +45,8 @@ pub enum Command {
     FileCamera(Option<usize>),
     /// Shadows on or off (`L`).
     ToggleShadows,
+    /// The direct integrator or path tracing (`P`).
+    ToggleIntegrator,
     /// Another scene or model file (dropped on the window).
     Load(PathBuf),
     /// Write the image so far (`S`).
@@ -91,6 +93,8 @@ pub struct Worker {
     pub renderer: Renderer,
     /// Whether the renderer traces shadows (`l` toggles it).
     pub shadows: bool,
+    /// The renderer's integrator (`p` toggles it).
+    pub integrator: Integrator,
     /// Where the camera may go in this scene.
     pub reach: Reach,
     /// Set by the window to stop the frame in flight (it is quitting).
@@ -184,27 +188,24 @@ impl Worker {
                 }
             },
             Command::ToggleShadows => {
-                // On a GPU, its pipelines specialised again; the scene
-                // stays uploaded.
                 let on = !self.shadows;
-                // The CPU path shares our scene: ours goes first, so that
-                // the renderer changes it in place (never two copies at
-                // once), and comes back changed.
-                let empty = Arc::new(Scene::from_triangles(Vec::new()));
-                let ours = std::mem::replace(&mut self.scene, empty);
-                let kept = self.renderer.shared_scene().is_none().then_some(ours);
-                let changed = self.renderer.set_shadows(on);
-                match (self.renderer.shared_scene(), kept) {
-                    (Some(scene), _) => self.scene = Arc::clone(scene),
-                    (None, Some(ours)) => self.scene = ours,
-                    (None, None) => {}
-                }
-                changed?;
+                self.respecialise(|renderer| renderer.set_shadows(on))?;
                 self.shadows = on;
                 report(Report::Say(format!(
                     "shadows {}",
                     if on { "on" } else { "off" }
                 )));
+                self.restart(camera);
+            }
+            Command::ToggleIntegrator => {
+                let integrator = match self.integrator {
+                    Integrator::Direct => Integrator::Path,
+                    Integrator::Path => Integrator::Direct,
+                };
+                let max_depth = self.scene.default_settings().max_depth;
+                self.respecialise(|renderer| renderer.set_integrator(integrator, max_depth))?;
+                self.integrator = integrator;
+                report(Report::Say(format!("integrator {}", integrator.name())));
                 self.restart(camera);
             }
             Command::Load(path) => match Scene::load(&path) {
@@ -219,6 +220,7 @@ impl Worker {
                     match self.renderer_for(&scene) {
                         Ok(renderer) => {
                             self.shadows = scene.default_settings().shadows;
+                            self.integrator = scene.default_settings().integrator;
                             self.show(scene, renderer, camera);
                             report(Report::Say(format!("loaded {}", path.display())));
                             self.path = path;
@@ -308,6 +310,24 @@ impl Worker {
     }
 
     /// Starts the view again from its first sample, from `camera`.
+    /// Changes a setting the renderer is specialised on (`change`): on a
+    /// GPU, its pipelines specialised again, the scene staying uploaded.
+    /// The CPU path shares our scene: ours goes first, so that the
+    /// renderer changes it in place (never two copies at once), and comes
+    /// back changed.
+    fn respecialise(&mut self, change: impl FnOnce(&mut Renderer) -> Result<()>) -> Result<()> {
+        let empty = Arc::new(Scene::from_triangles(Vec::new()));
+        let ours = std::mem::replace(&mut self.scene, empty);
+        let kept = self.renderer.shared_scene().is_none().then_some(ours);
+        let changed = change(&mut self.renderer);
+        match (self.renderer.shared_scene(), kept) {
+            (Some(scene), _) => self.scene = Arc::clone(scene),
+            (None, Some(ours)) => self.scene = ours,
+            (None, None) => {}
+        }
+        changed
+    }
+
     fn restart(&mut self, camera: Camera) {
         let view = View {
             camera,
