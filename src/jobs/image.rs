@@ -9,6 +9,7 @@ use super::{open_with, say};
 use crate::adaptive::{AdaptiveReport, AdaptiveSettings, render_adaptive};
 use crate::bvh::Bvh;
 use crate::camera::View;
+use crate::cpu::aov::{Aov, render_aovs};
 use crate::error::Result;
 use crate::gpu::AdapterRequest;
 use crate::limits::MAX_SPP;
@@ -145,6 +146,8 @@ pub struct ImageJob<'a> {
     pub device: DeviceChoice,
     pub adapter: &'a AdapterRequest,
     pub sampling: Sampling,
+    /// First-hit outputs written beside the image (`Aov::path_beside`).
+    pub aovs: &'a [Aov],
 }
 
 /// The scene's BVH as the report gives it, taken before a GPU render lets
@@ -187,6 +190,9 @@ pub struct ImageReport {
     pub samples: f64,
     pub budget: Option<BudgetReport>,
     pub adaptive: Option<AdaptiveReport>,
+    /// The first-hit outputs written, and how long they took.
+    pub aovs: Vec<PathBuf>,
+    pub aov_time: Duration,
 }
 
 impl ImageReport {
@@ -215,11 +221,22 @@ pub fn render_image(
     let primitives = scene.primitive_count();
     let bvh = BvhSummary::of(&scene.bvh);
     let view = settings.view.clone();
+    // On the host's copy, before a GPU lets it go.
+    let start = Instant::now();
+    let scene = scene.with_settings(settings);
+    let aovs = render_aovs(&scene, &view, job.aovs);
+    let aov_time = start.elapsed();
     let (mut renderer, upload, device) = open_with(scene, settings, job.device, job.adapter, sink)?;
     say(sink, &format!("rendering on {device}"));
     let sampled = render_view(&mut renderer, &view, job.sampling, sink)?;
     let start = Instant::now();
     sampled.rendered.image.save(job.output)?;
+    let mut aov_paths = Vec::new();
+    for (aov, image) in job.aovs.iter().zip(&aovs) {
+        let path = aov.path_beside(job.output);
+        image.save(&path)?;
+        aov_paths.push(path);
+    }
     Ok(ImageReport {
         output: job.output.to_path_buf(),
         device,
@@ -233,5 +250,7 @@ pub fn render_image(
         samples: sampled.samples,
         budget: sampled.budget,
         adaptive: sampled.adaptive,
+        aovs: aov_paths,
+        aov_time,
     })
 }

@@ -20,6 +20,7 @@ use options::{
 };
 
 use crate::progress_bar;
+use lambert::cpu::aov::Aov;
 use lambert::cpu::{self, Precision};
 use lambert::diff::{self, Tolerance};
 use lambert::error::{Error, Result};
@@ -131,6 +132,11 @@ struct RenderArgs {
         conflicts_with_all = ["target_error", "spp"]
     )]
     time_budget: Option<f64>,
+    /// First-hit outputs for a denoiser, written beside the image as
+    /// NAME.albedo.exr, NAME.normal.exr, NAME.depth.exr (.pfm for a PFM
+    /// image): a comma-separated list of albedo, normal, depth.
+    #[arg(long, value_name = "LIST")]
+    aov: Option<String>,
     /// Render only part I (from 0) of N of the image, as an EXR part file
     /// for `lambert merge` (bands of rows; see docs/distributed.md).
     #[arg(long, value_name = "I/N")]
@@ -416,6 +422,15 @@ fn render(args: &RenderArgs, quiet: bool) -> Result<ExitCode> {
     let (scene, settings) = args.options.load(&args.scene)?;
     let load = start.elapsed();
     scene.check_output(&args.output)?;
+    let aovs = match &args.aov {
+        Some(list) => Aov::parse_list(list).map_err(|e| Error::Usage(format!("--aov: {e}")))?,
+        None => Vec::new(),
+    };
+    for aov in &aovs {
+        let path = aov.path_beside(&args.output);
+        check_output_path(&path, &[&args.scene, &args.output])?;
+        scene.check_output(&path)?;
+    }
     print_warnings(&scene, quiet);
     let sampling = match (args.time_budget, args.target_error) {
         (Some(budget), _) => Sampling::Budget(budget),
@@ -430,6 +445,7 @@ fn render(args: &RenderArgs, quiet: bool) -> Result<ExitCode> {
         device: args.device.into(),
         adapter: &args.adapter.request(),
         sampling,
+        aovs: &aovs,
     };
     let report = jobs::render_image(scene, &settings, &job, progress_bar::unless_quiet(quiet))?;
     if !quiet {
@@ -496,6 +512,14 @@ fn print_image_report(report: &ImageReport, sampling: Sampling, load: Duration) 
         eprintln!(
             "GPU time (timestamp queries): {}, {rate:.2} Mrays/s",
             seconds(device)
+        );
+    }
+    if !report.aovs.is_empty() {
+        let paths: Vec<String> = report.aovs.iter().map(|p| p.display().to_string()).collect();
+        eprintln!(
+            "first-hit outputs ({} on the CPU path): {}",
+            seconds(report.aov_time),
+            paths.join(", ")
         );
     }
 }
