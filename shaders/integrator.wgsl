@@ -14,7 +14,6 @@ const ROULETTE_CONTINUE: f32 = 0.95;
 // A shadow ray towards a point on an area light stops this fraction of the
 // way short of it, so that it cannot hit the light itself.
 const SHADOW_SHORTENING: f32 = 1.0 / 4096.0;
-const PI: f32 = 3.14159265358979;
 
 fn path_seed(x: u32, y: u32, sample: u32, seed: u32) -> u32 {
     return pcg_hash(x ^ pcg_hash(y ^ pcg_hash(sample ^ pcg_hash(seed ^ PATH_SEED))));

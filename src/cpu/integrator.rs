@@ -94,7 +94,7 @@ macro_rules! integrator {
                     if f == Vec3::ZERO || (self.scene.shadows && self.trace_any(sample.shadow_ray)) {
                         continue;
                     }
-                    sum += f * sample.irradiance * std::f64::consts::PI as Real;
+                    sum += f * sample.irradiance * PI;
                 }
                 sum
             }
