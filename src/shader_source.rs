@@ -10,6 +10,8 @@ pub const SOURCE: &str = concat!(
     "\n",
     include_str!("../shaders/math.wgsl"),
     "\n",
+    include_str!("../shaders/bsdf.wgsl"),
+    "\n",
     include_str!("../shaders/fetch.wgsl"),
     "\n",
     include_str!("../shaders/intersect.wgsl"),

@@ -27,6 +27,7 @@ macro_rules! kernel {
         pub type Vec4 = $vec4;
         crate::cpu::layout::layout!();
         crate::cpu::math::math!();
+        crate::cpu::bsdf::bsdf!();
         crate::cpu::fetch::fetch!();
         crate::cpu::intersect::intersect!();
         crate::cpu::traverse::traverse!();
