@@ -186,9 +186,9 @@ fn sample_ggx_visible_normal(wo: vec3<f32>, alpha: f32, u: vec2<f32>) -> vec3<f3
     let q = safe_sqrt(1.0 - rounded(d1 * d1));
     let d2 = rounded((1.0 - s) * q) + rounded(s * t2_disc);
     // √(1 − d1² − d2²) cancels to noise at the disc's rim in f32. It is
-    // (q − d2)(q + d2) = s a · (2(1 − s) q + s b), a = q − t2, b = q + t2,
-    // a b = 1 − r² = 1 − u.x: the one of a and b that does not cancel
-    // directly, the other as 1 − u.x over it.
+    // (q − d2)(q + d2) = s a · (2(1 − s) q + s b), a = q − t2_disc,
+    // b = q + t2_disc, a b = 1 − r² = 1 − u.x: the one of a and b that
+    // does not cancel directly, the other as 1 − u.x over it.
     var a = q - t2_disc;
     var b = q + t2_disc;
     if t2_disc < 0.0 {

@@ -228,9 +228,10 @@ macro_rules! bsdf {
             let q = safe_sqrt(1.0 - d1 * d1);
             let d2 = (1.0 - s) * q + s * t2_disc;
             // √(1 − d1² − d2²) cancels to noise at the disc's rim in f32.
-            // It is (q − d2)(q + d2) = s a · (2(1 − s) q + s b), a = q − t2,
-            // b = q + t2, a b = 1 − r² = 1 − u.x: the one of a and b that
-            // does not cancel directly, the other as 1 − u.x over it.
+            // It is (q − d2)(q + d2) = s a · (2(1 − s) q + s b), a = q −
+            // t2_disc, b = q + t2_disc, a b = 1 − r² = 1 − u.x: the one of a
+            // and b that does not cancel directly, the other as 1 − u.x over
+            // it.
             let (a, b) = if t2_disc < 0.0 {
                 let a = q - t2_disc;
                 (a, (1.0 - u.x) / a)
