@@ -4,19 +4,7 @@
 //! The GPU computing the twin's bits is tests/bsdf_gpu.rs's.
 
 use lambert::cpu::{f32 as single, f64 as double};
-
-/// Deterministic uniform numbers in [0, 1) (SplitMix64).
-struct Numbers(u64);
-
-impl Numbers {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+use lambert::probe::Rng;
 
 /// The largest |approx(x) − exact(x)| over `inputs`, with the x where it is.
 fn max_error(
@@ -39,9 +27,9 @@ fn grid(a: f32, b: f32, n: u32) -> impl Iterator<Item = f32> {
 /// random angles to 3216, and no quarter turn is mislabelled.
 #[test]
 fn sin_cos_are_within_two_ulps_of_one() {
-    let mut rng = Numbers(1);
+    let mut rng = Rng(1);
     let random: Vec<f32> = (0..1_000_000)
-        .map(|_| ((rng.next() * 2.0 - 1.0) * 3216.0) as f32)
+        .map(|_| ((rng.unit() * 2.0 - 1.0) * 3216.0) as f32)
         .collect();
     for (name, inputs) in [
         ("[−2π, 2π]", grid(-6.3, 6.3, 4_000_000).collect::<Vec<_>>()),
@@ -87,11 +75,11 @@ fn acos_is_within_one_and_a_half_ulps_of_pi() {
 /// values on the axes.
 #[test]
 fn atan2_is_within_one_and_a_half_ulps_of_pi() {
-    let mut rng = Numbers(2);
+    let mut rng = Rng(2);
     let mut worst = (0.0f64, (0.0f32, 0.0f32));
     for _ in 0..2_000_000 {
-        let angle = (rng.next() * 2.0 - 1.0) * std::f64::consts::PI;
-        let length = 10f64.powf(rng.next() * 8.0 - 4.0);
+        let angle = (rng.unit() * 2.0 - 1.0) * std::f64::consts::PI;
+        let length = 10f64.powf(rng.unit() * 8.0 - 4.0);
         let (y, x) = ((length * angle.sin()) as f32, (length * angle.cos()) as f32);
         let error = (single::approx_atan2(y, x) as f64 - (y as f64).atan2(x as f64)).abs();
         if error > worst.0 {
@@ -124,11 +112,11 @@ fn pow5_and_safe_sqrt() {
 /// The f64 oracle's functions are the library's, exact to f64's precision.
 #[test]
 fn the_oracle_takes_the_library() {
-    let mut rng = Numbers(3);
+    let mut rng = Rng(3);
     for _ in 0..100_000 {
-        let x = (rng.next() * 2.0 - 1.0) * 100.0;
+        let x = (rng.unit() * 2.0 - 1.0) * 100.0;
         assert_eq!(double::approx_sin_cos(x), x.sin_cos());
-        let c = rng.next() * 2.0 - 1.0;
+        let c = rng.unit() * 2.0 - 1.0;
         assert_eq!(double::approx_acos(c), c.acos());
         assert!((double::approx_atan2(x, c) - x.atan2(c)).abs() <= 4e-16 * x.atan2(c).abs());
     }

@@ -84,13 +84,13 @@ macro_rules! integrator {
             /// alone light looks the same under both integrators), each
             /// emitting π times its lecture-convention colour (whose
             /// `k·I·(n·l)` is `albedo/π` lit by `π·I`).
-            fn punctual_light(&self, surface: &Surface, origin: Vec3, bsdf: &BsdfParams, frame: &Frame, wo: Vec3) -> Vec3 {
+            fn punctual_light(&self, surface: &Surface, origin: Vec3, bsdf: BsdfParams, frame: Frame, wo: Vec3) -> Vec3 {
                 let mut sum = Vec3::ZERO;
                 for light in &self.scene.lights {
                     let Some(sample) = light_sample(surface, origin, light) else {
                         continue;
                     };
-                    let f = bsdf_eval(bsdf, wo, frame.to_local(sample.shadow_ray.dir));
+                    let f = bsdf_eval(bsdf, wo, to_local(frame, sample.shadow_ray.dir));
                     if f == Vec3::ZERO || (self.scene.shadows && self.trace_any(sample.shadow_ray)) {
                         continue;
                     }
@@ -102,14 +102,14 @@ macro_rules! integrator {
             /// Direct light at a path's vertex from one emitter (an emissive
             /// triangle or the environment) drawn by power, weighted
             /// against BSDF sampling.
-            fn emitter_light(&self, surface: &Surface, origin: Vec3, bsdf: &BsdfParams, frame: &Frame, wo: Vec3, state: &mut u32) -> Vec3 {
+            fn emitter_light(&self, surface: &Surface, origin: Vec3, bsdf: BsdfParams, frame: Frame, wo: Vec3, state: &mut u32) -> Vec3 {
                 let u_pick = next_random(state);
                 let u = Vec2::new(next_random(state), next_random(state));
                 let sample = self.sample_emitter(surface.position, surface.geometric_normal, u_pick, u);
                 if !(sample.pdf > 0.0) || sample.radiance == Vec3::ZERO || sample.wi.dot(surface.geometric_normal) <= 0.0 {
                     return Vec3::ZERO;
                 }
-                let wi = frame.to_local(sample.wi);
+                let wi = to_local(frame, sample.wi);
                 let f = bsdf_eval(bsdf, wo, wi);
                 if f == Vec3::ZERO {
                     return Vec3::ZERO;
@@ -162,20 +162,20 @@ macro_rules! integrator {
                     let material = self.material_at(&ray, &hit, &surface);
                     let lit = Surface { shading_normal: material.shading_normal, ..surface };
                     let frame = frame_from_normal(material.shading_normal);
-                    let wo = frame.to_local(-ray.dir);
+                    let wo = to_local(frame, -ray.dir);
                     let origin = offset_ray_origin(surface.position, surface.error, surface.geometric_normal);
-                    radiance += throughput * self.punctual_light(&lit, origin, &material.bsdf, &frame, wo);
+                    radiance += throughput * self.punctual_light(&lit, origin, material.bsdf, frame, wo);
                     if self.has_emitters() {
-                        radiance += throughput * self.emitter_light(&lit, origin, &material.bsdf, &frame, wo, &mut state);
+                        radiance += throughput * self.emitter_light(&lit, origin, material.bsdf, frame, wo, &mut state);
                     }
 
                     let u_lobe = next_random(&mut state);
                     let u = Vec2::new(next_random(&mut state), next_random(&mut state));
-                    let sample = bsdf_sample(&material.bsdf, wo, u, u_lobe);
+                    let sample = bsdf_sample(material.bsdf, wo, u, u_lobe);
                     if !sample.ok {
                         break;
                     }
-                    let wi = frame.to_world(sample.wi);
+                    let wi = to_world(frame, sample.wi);
                     // Below the geometric surface (a shading normal's
                     // artefact): the path would leak through it.
                     if wi.dot(surface.geometric_normal) <= 0.0 {

@@ -27,6 +27,7 @@ macro_rules! kernel {
         pub type Vec4 = $vec4;
         crate::cpu::layout::layout!();
         crate::cpu::math::math!();
+        crate::cpu::bsdf::bsdf!();
         crate::cpu::fetch::fetch!();
         crate::cpu::intersect::intersect!();
         crate::cpu::traverse::traverse!();
@@ -37,7 +38,6 @@ macro_rules! kernel {
         crate::cpu::texture::stage::texture!();
         crate::cpu::closest::stage::closest!();
         crate::cpu::winding::stage::winding!();
-        crate::cpu::bsdf::bsdf!();
         crate::cpu::material::material!();
         crate::cpu::lights::lights!();
         crate::cpu::integrator::integrator!();

@@ -4,6 +4,7 @@
 
 mod all_hits;
 pub mod aov;
+mod bsdf;
 pub mod closest;
 /// Single precision, as on the GPU.
 #[allow(clippy::unnecessary_cast)]
@@ -21,11 +22,9 @@ mod proximity;
 mod query;
 mod render;
 mod sample;
-mod bsdf;
 mod integrator;
 mod lights;
 mod material;
-
 mod shade;
 mod simd;
 pub mod texture;
