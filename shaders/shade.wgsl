@@ -1,5 +1,5 @@
 // Stage: shading. The surface at a hit, the offset shadow-ray origin, the
-// lights (point, directional), shadows, and Lambert's sum. CPU twin:
+// lights (point, directional, spot), shadows, and Lambert's sum. CPU twin:
 // src/cpu/shade.rs.
 
 fn face_forward(n: vec3<f32>, dir: vec3<f32>) -> vec3<f32> {
@@ -91,6 +91,20 @@ fn offset_ray_origin(p: vec3<f32>, error: vec3<f32>, n: vec3<f32>) -> vec3<f32> 
     return po;
 }
 
+// KHR_lights_punctual's smooth falloff of a spot light towards unit
+// `to_light`: t² for t the angle's cosine taken from the outer cone's (0) to
+// the inner cone's (1), clamped. A difference over a difference, not the
+// spec's `cd · scale + offset`, and the dot product's terms rounded each,
+// so that no multiply-add fuses: the CPU twin's bits.
+fn spot_falloff(light: Light, to_light: vec3<f32>) -> f32 {
+    let d = light.direction;
+    let cos_angle = -rounded(rounded(rounded(d.x * to_light.x) + rounded(d.y * to_light.y))
+        + rounded(d.z * to_light.z));
+    let t = clamp(rounded(cos_angle - light.cos_outer)
+        / max(light.cos_inner - light.cos_outer, 1e-3), 0.0, 1.0);
+    return t * t;
+}
+
 // What light `light` gives a point (`surface`, shadow rays leaving from
 // `origin`) unless something blocks it; `lit` false when nothing.
 struct LightSample {
@@ -105,7 +119,8 @@ fn light_sample(surface: Surface, origin: vec3<f32>, light: Light) -> LightSampl
     out.lit = false;
     var to_light: vec3<f32>;
     // Specialisation drops the branch of a light kind the scene lacks.
-    if HAS_POINT_LIGHTS && (!HAS_DIRECTIONAL_LIGHTS || light.kind == LIGHT_POINT) {
+    if (HAS_POINT_LIGHTS || HAS_SPOT_LIGHTS)
+        && (!HAS_DIRECTIONAL_LIGHTS || light.kind != LIGHT_DIRECTIONAL) {
         let d = light.vector - surface.position;
         let distance_squared = dot(d, d);
         // A light on the shaded point: no light (see the CPU twin).
@@ -114,6 +129,9 @@ fn light_sample(surface: Surface, origin: vec3<f32>, light: Light) -> LightSampl
         }
         to_light = d / sqrt(distance_squared);
         out.irradiance = min(light.color / distance_squared, vec3<f32>(FAR));
+        if HAS_SPOT_LIGHTS && light.kind == LIGHT_SPOT {
+            out.irradiance *= spot_falloff(light, to_light);
+        }
         let s = light.vector - origin;
         let shadow_length = length(s);
         out.shadow_ray = Ray(origin, 0.0, s / shadow_length, shadow_length);

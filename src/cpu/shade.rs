@@ -30,7 +30,7 @@ macro_rules! shade {
             light: &crate::layout::Light,
         ) -> Option<LightSample> {
             let light_vector = vec3(light.vector);
-            let (to_light, irradiance, shadow_ray) = if light.kind == LIGHT_POINT {
+            let (to_light, irradiance, shadow_ray) = if light.kind != LIGHT_DIRECTIONAL {
                 let d = light_vector - surface.position;
                 let distance_squared = d.dot(d);
                 // A point light on the shaded point lies in its tangent plane:
@@ -41,9 +41,14 @@ macro_rules! shade {
                 }
                 let s = light_vector - origin;
                 let shadow_length = s.length();
+                let to_light = d / distance_squared.sqrt();
+                let mut irradiance = (vec3(light.color) / distance_squared).min(Vec3::splat(FAR));
+                if light.kind == LIGHT_SPOT {
+                    irradiance *= spot_falloff(light, to_light);
+                }
                 (
-                    d / distance_squared.sqrt(),
-                    (vec3(light.color) / distance_squared).min(Vec3::splat(FAR)),
+                    to_light,
+                    irradiance,
                     Ray {
                         origin,
                         tmin: 0.0,
@@ -74,6 +79,19 @@ macro_rules! shade {
                 cos_theta,
                 shadow_ray,
             })
+        }
+
+        /// The shader's `spot_falloff`: KHR_lights_punctual's smooth falloff
+        /// of a spot light towards unit `to_light`, t² for t the angle's cosine
+        /// taken from the outer cone's (0) to the inner cone's (1), clamped.
+        /// Written as a difference over a difference, not the spec's
+        /// `cd · scale + offset`, so that no multiply-add can fuse on the GPU.
+        #[inline(always)]
+        pub fn spot_falloff(light: &crate::layout::Light, to_light: Vec3) -> Real {
+            let cos_angle = -vec3(light.direction).dot(to_light);
+            let (cos_inner, cos_outer) = (light.cos_inner as Real, light.cos_outer as Real);
+            let t = ((cos_angle - cos_outer) / (cos_inner - cos_outer).max(1e-3)).clamp(0.0, 1.0);
+            t * t
         }
 
         impl<'a> Kernel<'a> {
