@@ -3,6 +3,7 @@
 //! same code in double precision, the oracle that measures both.
 
 mod all_hits;
+mod bsdf;
 pub mod closest;
 /// Single precision, as on the GPU.
 #[allow(clippy::unnecessary_cast)]
@@ -14,6 +15,7 @@ mod fetch;
 mod intersect;
 mod kernel;
 mod layout;
+mod material;
 mod math;
 mod prefetch;
 mod proximity;
