@@ -123,8 +123,16 @@ fn host_structs_match_wgsl_layout() {
     );
     check_layout!(m, TriangleNormals { n0, n1, n2 });
     check_layout!(m, TriangleTangents { t0, t1, t2 });
-    assert_eq!(size_of::<Material>(), 80, "Material: the shared design's 80 bytes");
-    assert_eq!(size_of::<Light>(), 48, "Light: the shared design's 48 bytes");
+    assert_eq!(
+        size_of::<Material>(),
+        80,
+        "Material: the shared design's 80 bytes"
+    );
+    assert_eq!(
+        size_of::<Light>(),
+        48,
+        "Light: the shared design's 48 bytes"
+    );
     check_layout!(
         m,
         Sphere {

@@ -36,9 +36,9 @@ macro_rules! kernel {
         crate::cpu::shade::shade!();
         crate::cpu::sample::sample!();
         crate::cpu::texture::stage::texture!();
+        crate::cpu::material::material!();
         crate::cpu::closest::stage::closest!();
         crate::cpu::winding::stage::winding!();
-        crate::cpu::material::material!();
         crate::cpu::lights::lights!();
         crate::cpu::integrator::integrator!();
     };
