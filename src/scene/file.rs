@@ -87,6 +87,9 @@ struct MeshEntry {
     metallic: Option<f64>,
     #[serde(default)]
     roughness: Option<f64>,
+    /// Replaces every material's emission (radiance): an area light.
+    #[serde(default)]
+    emission: Option<Rgb>,
     #[serde(default)]
     normals: NormalMode,
     #[serde(default)]
@@ -112,6 +115,8 @@ struct SphereEntry {
     metallic: Option<f64>,
     #[serde(default)]
     roughness: Option<f64>,
+    #[serde(default)]
+    emission: Option<Rgb>,
 }
 
 /// `metallic` and `roughness` of a `[[mesh]]` or `[[sphere]]`, checked
@@ -121,6 +126,8 @@ struct SphereEntry {
 struct Brdf {
     metallic: Option<f32>,
     roughness: Option<f32>,
+    /// `emission`, radiance in linear RGB: the materials' own, replaced.
+    emission: Option<[f32; 3]>,
 }
 
 impl Brdf {
@@ -134,12 +141,27 @@ impl Brdf {
         Ok(Brdf {
             metallic: factor("metallic", metallic)?,
             roughness: factor("roughness", roughness)?,
+            emission: None,
         })
+    }
+
+    /// With `emission` (`field`'s), which every material then emits: an
+    /// area light under the path integrator, seen alone under direct.
+    fn with_emission(self, field: &str, emission: Option<Rgb>) -> Result<Brdf, String> {
+        let emission = emission
+            .map(|e| colour(&format!("{field}.emission"), e))
+            .transpose()?;
+        Ok(Brdf { emission, ..self })
     }
 
     /// Applies the factors given to `materials`; one not given keeps the
     /// material's (a Lambert material's: metallic 0, roughness 1).
     fn apply(self, materials: &mut [Material]) {
+        if let Some(emission) = self.emission {
+            for material in materials.iter_mut() {
+                material.emission = emission;
+            }
+        }
         if self.metallic.is_none() && self.roughness.is_none() {
             return;
         }
@@ -232,7 +254,9 @@ impl Scene {
                 .transpose()
                 .map_err(fail)?;
             let transform = mesh_transform(&field, entry).map_err(fail)?;
-            let brdf = Brdf::checked(&field, entry.metallic, entry.roughness).map_err(fail)?;
+            let brdf = Brdf::checked(&field, entry.metallic, entry.roughness)
+                .and_then(|b| b.with_emission(&field, entry.emission))
+                .map_err(fail)?;
             let model = base.join(&entry.file);
             let mesh = loading::load_mesh(&model, entry.normals)?;
             for &p in &mesh.positions {
@@ -270,6 +294,7 @@ impl Scene {
             let albedo = colour(&format!("{field}.albedo"), entry.albedo).map_err(fail)?;
             let material = scene.add_material(albedo);
             Brdf::checked(&field, entry.metallic, entry.roughness)
+                .and_then(|b| b.with_emission(&field, entry.emission))
                 .map_err(fail)?
                 .apply(&mut scene.materials[material as usize..]);
             scene.spheres.push(Sphere {
