@@ -75,7 +75,7 @@ fn punctual_light(surface: Surface, origin: vec3<f32>, bsdf: BsdfParams, frame: 
         if HAS_SHADOWS && params.shadows != 0u && trace_any(sample.shadow_ray) {
             continue;
         }
-        sum += f * sample.irradiance * PI;
+        sum += rounded3(f * sample.irradiance * PI);
     }
     return sum;
 }
@@ -105,7 +105,7 @@ fn emitter_light(surface: Surface, origin: vec3<f32>, bsdf: BsdfParams, frame: m
         return vec3<f32>(0.0);
     }
     let weight = power_heuristic(sample.pdf, bsdf_pdf(bsdf, wo, wi));
-    return f * sample.radiance * (weight / sample.pdf);
+    return rounded3(f * sample.radiance * (weight / sample.pdf));
 }
 
 // Path tracing from the camera ray `ray` that hit `hit` (see the CPU twin).
@@ -120,7 +120,7 @@ fn path_radiance(camera_ray: Ray, camera_hit: Hit, seed: u32) -> vec3<f32> {
     var depth = 0u;
     loop {
         if hit.prim == NO_HIT {
-            radiance += throughput * escaped(ray, bsdf_pdf_before);
+            radiance += rounded3(throughput * escaped(ray, bsdf_pdf_before));
             break;
         }
         let surface = surface_at(ray, hit);
@@ -130,7 +130,7 @@ fn path_radiance(camera_ray: Ray, camera_hit: Hit, seed: u32) -> vec3<f32> {
                 let light_pdf = emitter_pdf(origin_before, hit.prim, ray.dir, hit.t);
                 weight = power_heuristic(bsdf_pdf_before, light_pdf);
             }
-            radiance += throughput * surface.emission * weight;
+            radiance += rounded3(throughput * surface.emission * weight);
         }
         depth += 1u;
         if depth > params.max_depth {
@@ -142,9 +142,9 @@ fn path_radiance(camera_ray: Ray, camera_hit: Hit, seed: u32) -> vec3<f32> {
         let frame = frame_from_normal(material.shading_normal);
         let wo = to_local(frame, -ray.dir);
         let origin = offset_ray_origin(surface.position, surface.error, surface.geometric_normal);
-        radiance += throughput * punctual_light(lit, origin, material.bsdf, frame, wo);
+        radiance += rounded3(throughput * punctual_light(lit, origin, material.bsdf, frame, wo));
         if HAS_EMITTERS {
-            radiance += throughput * emitter_light(lit, origin, material.bsdf, frame, wo, &state);
+            radiance += rounded3(throughput * emitter_light(lit, origin, material.bsdf, frame, wo, &state));
         }
 
         let u_lobe = next_random(&state);
