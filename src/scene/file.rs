@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use glam::{DMat3, DVec3};
 use serde::Deserialize;
 
+use super::lighting::EnvironmentEntry;
 use super::{Intersect, Rgb, Scene, Transform, colour, directional_light, point, point_light};
 use crate::camera::{Camera, View, validate_camera};
 use crate::error::{Error, Result};
@@ -28,6 +29,8 @@ struct SceneFile {
     point_light: Vec<PointLightEntry>,
     #[serde(default)]
     directional_light: Vec<DirectionalLightEntry>,
+    #[serde(default)]
+    environment: Option<EnvironmentEntry>,
 }
 
 /// The `[render]` table.
@@ -123,6 +126,12 @@ impl Scene {
         let ambient = colour("render.ambient", file.render.ambient).map_err(fail)?;
         let spp = file.render.spp.unwrap_or(1);
         validate_spp(spp).map_err(|e| fail(format!("render.{e}")))?;
+        let environment = file
+            .environment
+            .as_ref()
+            .map(|e| e.spec(base))
+            .transpose()
+            .map_err(fail)?;
 
         let mut scene = Scene {
             view: View {
@@ -213,6 +222,7 @@ impl Scene {
         }
         scene.check_camera_placement().map_err(fail)?;
         scene.check_primitive_count(path)?;
+        scene.set_environment(environment.as_ref())?;
         scene.rebuild_bvh();
         Ok(scene)
     }
