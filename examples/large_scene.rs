@@ -41,7 +41,7 @@ fn main() -> lambert::Result<()> {
         vector: Vec3::new(0.5, 0.7, 0.5).normalize().to_array(),
         kind: LIGHT_DIRECTIONAL,
         color: [2.5; 3],
-        _pad: 0,
+        ..Light::default()
     });
     let settings = lambert::scene::RenderSettings {
         ambient: [0.05; 3],

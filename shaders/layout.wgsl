@@ -12,6 +12,10 @@ override HAS_SPHERES: bool = true;
 override HAS_SHADOWS: bool = true;
 override HAS_POINT_LIGHTS: bool = true;
 override HAS_DIRECTIONAL_LIGHTS: bool = true;
+override HAS_SPOT_LIGHTS: bool = true;
+// Some material has a normal texture: `triangle_tangents` holds every
+// triangle's tangent frames. False: their reads are compiled out.
+override HAS_NORMAL_MAPS: bool = true;
 // Some triangle is alpha-masked (FLAG_MASKED): traversal tests alpha at
 // its hits. False: the test is compiled out.
 override HAS_ALPHA_MASK: bool = true;
@@ -104,6 +108,9 @@ const TEXEL_ROW_BITS: u32 = 12u;
 const FAR: f32 = 3.40282347e38;
 const LIGHT_POINT: u32 = 0u;
 const LIGHT_DIRECTIONAL: u32 = 1u;
+const LIGHT_SPOT: u32 = 2u;
+const MATERIAL_LAMBERT: u32 = 0u;
+const MATERIAL_METALLIC_ROUGHNESS: u32 = 1u;
 const FLAG_SMOOTH: u32 = 1u;
 const FLAG_ATTRIBUTES: u32 = 2u;
 const FLAG_MASKED: u32 = 4u;
@@ -187,6 +194,14 @@ struct TriangleNormals {
     n2: vec4<f32>,
 }
 
+// Per-corner tangents (xyz) and bitangent signs (w) for normal maps; only
+// read where the triangle's material has a normal texture.
+struct TriangleTangents {
+    t0: vec4<f32>,
+    t1: vec4<f32>,
+    t2: vec4<f32>,
+}
+
 struct Sphere {
     center: vec3<f32>,
     radius: f32,
@@ -205,7 +220,10 @@ struct TriangleAttributes {
 }
 
 // Base colour (linear RGBA), emission (linear RGB), alpha mode
-// (ALPHA_OPAQUE, ALPHA_MASK) and cut-off, texture slots (NO_TEXTURE: none).
+// (ALPHA_OPAQUE, ALPHA_MASK) and cut-off, texture slots (NO_TEXTURE: none),
+// the BRDF (MATERIAL_LAMBERT, MATERIAL_METALLIC_ROUGHNESS) with its
+// metallic and perceptual roughness factors (× the metallic-roughness
+// texture's B and G), the normal texture and its scale.
 struct Material {
     base_color: vec4<f32>,
     emission: vec3<f32>,
@@ -214,16 +232,27 @@ struct Material {
     base_color_texture: u32,
     emissive_texture: u32,
     alpha_texture: u32,
+    kind: u32,
+    metallic: f32,
+    roughness: f32,
+    metallic_roughness_texture: u32,
+    normal_texture: u32,
+    normal_scale: f32,
+    _pad: vec2<u32>,
 }
 
 // Point light: `vector` is its position and `color` its intensity I
 // (irradiance I / r² at distance r). Directional light: `vector` is the unit
-// direction towards the light and `color` its irradiance.
+// direction towards the light and `color` its irradiance. Spot light: a
+// point light times the falloff between its cones (cos_inner, cos_outer)
+// about `direction`, the unit direction it points along.
 struct Light {
     vector: vec3<f32>,
     kind: u32,
     color: vec3<f32>,
-    _pad: u32,
+    cos_outer: f32,
+    direction: vec3<f32>,
+    cos_inner: f32,
 }
 
 struct Ray {
@@ -319,6 +348,9 @@ struct Surface {
 // With BVH_TEXELS, the triangles too (the hits' surfaces, read once a hit
 // in shading): triangle i's words at texels 3i to 3i + 2.
 @group(0) @binding(18) var triangle_texels: texture_storage_2d<rgba32uint, read>;
+// Every triangle's tangent frames where HAS_NORMAL_MAPS, else one
+// placeholder element (never read).
+@group(0) @binding(19) var<storage, read> triangle_tangents: array<TriangleTangents>;
 // Group 1 holds what one entry point reads and writes: an image tile for
 // `render`, a batch of rays for `trace_rays`.
 // A render tile's pixels' first primitives, pixel (x, y) at y · TILE + x.

@@ -72,7 +72,7 @@ pub fn scene_for_obj(path: &Path, size: u32) -> Result<Scene> {
         vector: Vec3::new(0.4, 0.8, 0.45).normalize().to_array(),
         kind: LIGHT_DIRECTIONAL,
         color: [3.0; 3],
-        _pad: 0,
+        ..Light::default()
     });
     scene.ambient = [0.05; 3];
     scene.shadows = true;

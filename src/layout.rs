@@ -16,6 +16,15 @@ pub const WORKGROUP_INVOCATIONS: u32 = 64;
 pub const LIGHT_POINT: u32 = 0;
 /// `Light::kind` of a directional light.
 pub const LIGHT_DIRECTIONAL: u32 = 1;
+/// `Light::kind` of a spot light (glTF KHR_lights_punctual's, TOML
+/// `kind = "spot"`): a point light limited to a cone.
+pub const LIGHT_SPOT: u32 = 2;
+/// `Material::kind`: Lambert, f = albedo/π (TOML albedo, OBJ without
+/// specular terms, PLY, STL).
+pub const MATERIAL_LAMBERT: u32 = 0;
+/// `Material::kind`: glTF 2.0's metallic-roughness BRDF (its appendix B;
+/// OBJ/MTL with Ks/Ns/Pr/Pm mapped to it, docs/rendering.md).
+pub const MATERIAL_METALLIC_ROUGHNESS: u32 = 1;
 /// `Triangle::flags` bit: interpolate `TriangleNormals` for shading.
 pub const FLAG_SMOOTH: u32 = 1;
 /// `Triangle::flags` bit: the triangle has `TriangleAttributes` (corner
@@ -122,6 +131,18 @@ impl Default for TriangleAttributes {
     }
 }
 
+/// Tangent frames of one triangle's corners, for normal maps: xyz the
+/// tangent (the direction of increasing u), w the bitangent's sign (glTF
+/// TANGENT's convention: bitangent = w · normal × tangent). Stored only when
+/// some material has a normal texture (as `TriangleNormals`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TriangleTangents {
+    pub t0: [f32; 4],
+    pub t1: [f32; 4],
+    pub t2: [f32; 4],
+}
+
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Sphere {
@@ -134,9 +155,10 @@ pub struct Sphere {
 }
 
 /// How a surface looks (docs/scene-format.md, "How colour reaches a
-/// pixel"): base colour (RGB: the albedo; A: its alpha), emission added to
-/// the radiance it sends back, alpha mode and cut-off, and texture slots
-/// (`NO_TEXTURE` where none).
+/// pixel"; docs/rendering.md, "Materials"): base colour (RGB: the albedo;
+/// A: its alpha), emission added to the radiance it sends back, alpha mode
+/// and cut-off, the BRDF (`kind`) with its metallic and roughness factors,
+/// and texture slots (`NO_TEXTURE` where none). 80 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct Material {
@@ -150,10 +172,25 @@ pub struct Material {
     pub base_color_texture: u32,
     pub emissive_texture: u32,
     pub alpha_texture: u32,
+    /// MATERIAL_LAMBERT or MATERIAL_METALLIC_ROUGHNESS.
+    pub kind: u32,
+    /// Metalness factor, × the metallic-roughness texture's B.
+    pub metallic: f32,
+    /// Perceptual roughness (glTF's; the GGX α is its square), × the
+    /// metallic-roughness texture's G.
+    pub roughness: f32,
+    /// glTF metallicRoughnessTexture (linear: G roughness, B metallic).
+    pub metallic_roughness_texture: u32,
+    /// glTF normalTexture (linear, tangent space), read with the
+    /// triangle's `TriangleTangents`.
+    pub normal_texture: u32,
+    /// glTF normalTexture.scale: the map's X and Y are scaled by it.
+    pub normal_scale: f32,
+    pub _pad: [u32; 2],
 }
 
 impl Material {
-    /// An opaque, untextured, non-emissive material of this albedo.
+    /// An opaque, untextured, non-emissive Lambert material of this albedo.
     pub fn from_albedo(albedo: [f32; 3]) -> Material {
         let [r, g, b] = albedo;
         Material {
@@ -164,6 +201,13 @@ impl Material {
             base_color_texture: NO_TEXTURE,
             emissive_texture: NO_TEXTURE,
             alpha_texture: NO_TEXTURE,
+            kind: MATERIAL_LAMBERT,
+            metallic: 0.0,
+            roughness: 1.0,
+            metallic_roughness_texture: NO_TEXTURE,
+            normal_texture: NO_TEXTURE,
+            normal_scale: 1.0,
+            _pad: [0; 2],
         }
     }
 
@@ -179,15 +223,26 @@ impl Default for Material {
     }
 }
 
-/// Point light: `vector` = position, `color` = intensity.
-/// Directional light: `vector` = unit direction towards the light, `color` = irradiance.
+/// A light, in the lecture's units (docs/rendering.md, "Light units"): a
+/// point light adds albedo · color · cos θ / r² to the colour, a
+/// directional light albedo · color · cos θ. Point light: `vector` = position,
+/// `color` = intensity. Directional light: `vector` = unit direction towards
+/// the light, `color` = irradiance. Spot light: a point light times the
+/// falloff of KHR_lights_punctual between its cones about `direction`.
+/// 48 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Light {
     pub vector: [f32; 3],
+    /// LIGHT_POINT, LIGHT_DIRECTIONAL or LIGHT_SPOT.
     pub kind: u32,
     pub color: [f32; 3],
-    pub _pad: u32,
+    /// Spot: cos of the outer cone's half-angle (no light beyond it).
+    pub cos_outer: f32,
+    /// Spot: the unit direction it points along.
+    pub direction: [f32; 3],
+    /// Spot: cos of the inner cone's half-angle (full intensity within).
+    pub cos_inner: f32,
 }
 
 #[repr(C)]

@@ -121,6 +121,9 @@ fn host_structs_match_wgsl_layout() {
         }
     );
     check_layout!(m, TriangleNormals { n0, n1, n2 });
+    check_layout!(m, TriangleTangents { t0, t1, t2 });
+    assert_eq!(size_of::<Material>(), 80, "Material: the shared design's 80 bytes");
+    assert_eq!(size_of::<Light>(), 48, "Light: the shared design's 48 bytes");
     check_layout!(
         m,
         Sphere {
@@ -142,6 +145,13 @@ fn host_structs_match_wgsl_layout() {
             base_color_texture,
             emissive_texture,
             alpha_texture,
+            kind,
+            metallic,
+            roughness,
+            metallic_roughness_texture,
+            normal_texture,
+            normal_scale,
+            _pad,
         }
     );
     check_layout!(m, TriangleAttributes { colors, uvs, _pad });
@@ -151,7 +161,9 @@ fn host_structs_match_wgsl_layout() {
             vector,
             kind,
             color,
-            _pad
+            cos_outer,
+            direction,
+            cos_inner
         }
     );
     check_layout!(
@@ -218,6 +230,9 @@ fn shader_constants_match_host() {
         ("NO_HIT", NO_HIT),
         ("LIGHT_POINT", LIGHT_POINT),
         ("LIGHT_DIRECTIONAL", LIGHT_DIRECTIONAL),
+        ("LIGHT_SPOT", LIGHT_SPOT),
+        ("MATERIAL_LAMBERT", MATERIAL_LAMBERT),
+        ("MATERIAL_METALLIC_ROUGHNESS", MATERIAL_METALLIC_ROUGHNESS),
         ("FLAG_SMOOTH", FLAG_SMOOTH),
         ("MAX_DEPTH", lambert::bvh::MAX_DEPTH as u32),
         ("META_INTERIOR", META_INTERIOR),

@@ -272,7 +272,7 @@ pub fn directional_light(direction: DVec3, irradiance: [f32; 3]) -> Light {
         vector: (-direction.normalize()).as_vec3().to_array(),
         kind: LIGHT_DIRECTIONAL,
         color: irradiance,
-        _pad: 0,
+        ..Light::default()
     }
 }
 

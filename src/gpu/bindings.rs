@@ -76,6 +76,7 @@ pub const SCENE: BindingTable = BindingTable {
         bind("triangle_attributes_hi", 16, Storage),
         bind("textures", 17, Storage),
         bind("triangle_texels", 18, Texels),
+        bind("triangle_tangents", 19, Storage),
     ],
 };
 

@@ -279,6 +279,7 @@ fn scene_bind_group(
             ("triangle_attributes", buffers.attributes.low_binding()),
             ("triangle_attributes_hi", buffers.attributes.high_binding()),
             ("textures", buffers.textures.as_entire_binding()),
+            ("triangle_tangents", buffers.tangents.as_entire_binding()),
             (
                 "bvh_node_texels",
                 wgpu::BindingResource::TextureView(&node_view),

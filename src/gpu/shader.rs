@@ -1,7 +1,7 @@
 //! The shader's source and the overrides that specialise it: the one place
 //! the host reads `shaders/` from.
 
-use crate::layout::{LIGHT_DIRECTIONAL, LIGHT_POINT};
+use crate::layout::{LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_SPOT};
 use crate::scene::{Accel, Scene};
 
 /// The kernel's source, validated by naga in tests/shaders.rs.
@@ -20,9 +20,13 @@ pub fn specialisation(scene: &Scene) -> Vec<(&'static str, f64)> {
         ),
         ("HAS_POINT_LIGHTS", flag(has_light(LIGHT_POINT))),
         ("HAS_DIRECTIONAL_LIGHTS", flag(has_light(LIGHT_DIRECTIONAL))),
+        ("HAS_SPOT_LIGHTS", flag(has_light(LIGHT_SPOT))),
         ("HAS_ALPHA_MASK", flag(scene.has_alpha_mask())),
         ("HAS_TEXTURES", flag(scene.has_textures())),
         ("HAS_ATTRIBUTES", flag(!scene.attributes.is_empty())),
+        // Tangents are kept for every triangle once one material has a
+        // normal texture.
+        ("HAS_NORMAL_MAPS", flag(!scene.tangents.is_empty())),
         // Normals are kept for every triangle once one mesh is smooth.
         ("HAS_SMOOTH", flag(!scene.normals.is_empty())),
         ("USE_BVH", flag(scene.accel == Accel::Bvh)),

@@ -8,6 +8,7 @@ use wgpu::util::DeviceExt;
 use crate::error::{Error, Result};
 use crate::layout::{
     CompressedNode, PrimBlock, Sphere, Triangle, TriangleAttributes, TriangleNormals,
+    TriangleTangents,
 };
 use crate::scene::Scene;
 
@@ -71,6 +72,9 @@ pub(super) struct SceneBuffers {
     pub triangle_texture: wgpu::Texture,
     /// `texture::TextureStore::words`.
     pub textures: wgpu::Buffer,
+    /// `Scene::tangents` (a placeholder where no material has a normal
+    /// texture); one binding, as it is kept only for normal-mapped scenes.
+    pub tangents: wgpu::Buffer,
     /// Bytes of all of them.
     pub device_bytes: u64,
 }
@@ -128,6 +132,11 @@ impl SceneBuffers {
             bytemuck::cast_slice(scene.textures.words()),
             limit,
         )?;
+        let tangents = gpu.storage_buffer(
+            "triangle tangents",
+            &non_empty::<TriangleTangents>(&scene.tangents),
+            limit,
+        )?;
         let blocks = gpu.split_buffer(
             "BVH leaf blocks",
             &non_empty(buffer_blocks),
@@ -143,6 +152,7 @@ impl SceneBuffers {
             &materials,
             &lights,
             &textures,
+            &tangents,
             &blocks.buffer,
         ]
         .iter()
@@ -175,6 +185,7 @@ impl SceneBuffers {
             block_texture,
             triangle_texture,
             textures,
+            tangents,
             device_bytes,
         })
     }

@@ -10,7 +10,9 @@ use glam::DVec3;
 use super::Scene;
 use crate::bvh::Bvh;
 use crate::camera::View;
-use crate::layout::{Light, Material, Sphere, Triangle, TriangleAttributes, TriangleNormals};
+use crate::layout::{
+    Light, Material, Sphere, Triangle, TriangleAttributes, TriangleNormals, TriangleTangents,
+};
 use crate::texture::TextureStore;
 
 impl Scene {
@@ -119,6 +121,9 @@ impl Scene {
         }
         if !self.attributes.is_empty() {
             self.attributes.resize(n, TriangleAttributes::default());
+        }
+        if !self.tangents.is_empty() {
+            self.tangents.resize(n, TriangleTangents::default());
         }
     }
 

@@ -14,7 +14,7 @@ use crate::camera::{Camera, View, default_up};
 use crate::error::{Error, Result};
 use crate::layout::{
     ALPHA_MASK, ALPHA_OPAQUE, FLAG_ATTRIBUTES, FLAG_MASKED, FLAG_SMOOTH, Hit, LIGHT_POINT, Light,
-    Material, NO_HIT, Ray, Sphere, Triangle, TriangleAttributes, TriangleNormals,
+    Material, NO_HIT, Ray, Sphere, Triangle, TriangleAttributes, TriangleNormals, TriangleTangents,
 };
 use crate::lighting::{EmitterTable, Environment};
 use crate::limits::{MAX_COORDINATE, MAX_LOCAL_COORDINATE, checked_point, vector_text};
@@ -55,6 +55,9 @@ pub struct Scene {
     /// One entry per triangle when any mesh has vertex colours or texture
     /// coordinates, else empty.
     pub(crate) attributes: Vec<TriangleAttributes>,
+    /// One entry per triangle when any material has a normal texture, else
+    /// empty.
+    pub(crate) tangents: Vec<TriangleTangents>,
     /// Triangles whose file gave them vertex colours (for `lambert info`).
     pub(crate) colored_triangles: usize,
     pub(crate) spheres: Vec<Sphere>,
@@ -225,6 +228,7 @@ impl Scene {
             triangles: Vec::new(),
             normals: Vec::new(),
             attributes: Vec::new(),
+            tangents: Vec::new(),
             colored_triangles: 0,
             spheres: Vec::new(),
             materials: Vec::new(),
@@ -523,7 +527,7 @@ fn point_light(
         vector: point(&format!("{field}.position"), position, offset)?,
         kind: LIGHT_POINT,
         color: colour(&format!("{field}.intensity"), intensity)?,
-        _pad: 0,
+        ..Light::default()
     })
 }
 
