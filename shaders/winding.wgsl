@@ -1,9 +1,10 @@
 // Stage: winding numbers. The solid angle of a triangle (Van Oosterom and
-// Strackee) with an arctangent of plain arithmetic (solid_atan2: both paths
-// give the same bits, where a library's atan2 would not), the far field of
-// a winding-tree node (its dipole, first order) and the walk of the tree in
-// one fixed order, its rounding errors carried (winding_sum), so that the sum
-// is the CPU's bit for bit. CPU twin: src/cpu/winding.rs.
+// Strackee) with an arctangent of plain arithmetic (approx_atan2 in
+// math.wgsl: both paths give the same bits, where a library's atan2 would
+// not), the far field of a winding-tree node (its dipole, first order) and
+// the walk of the tree in one fixed order, its rounding errors carried
+// (winding_sum), so that the sum is the CPU's bit for bit. CPU twin:
+// src/cpu/winding.rs.
 
 // One node of the winding tree (src/layout.rs WindingNode).
 struct WindingNode {
@@ -19,23 +20,9 @@ struct WindingNode {
 
 const WINDING_BETA: f32 = 6.0;
 const WINDING_STACK: u32 = 7u * MAX_DEPTH + 1u;
-// The twin's f32 constants, bit for bit: suffixed literals, written as
-// Rust prints them (the shortest that reads back as the same f32).
-const WINDING_PI: f32 = 3.1415927f;
-const WINDING_HALF_PI: f32 = 1.5707964f;
-const INV_TWO_PI: f32 = 0.15915494f;
+// The twin's f32 constant, bit for bit: a suffixed literal, written as
+// Rust prints it (the shortest that reads back as the same f32).
 const INV_FOUR_PI: f32 = 0.07957747f;
-
-fn atan_unit(z: f32) -> f32 {
-    let z2 = z * z;
-    return z * (0.99999994f
-        + z2 * (-0.33332095f
-        + z2 * (0.19971374f
-        + z2 * (-0.14029412f
-        + z2 * (0.09942736f
-        + z2 * (-0.059904337f
-        + z2 * (0.02455682f + z2 * -0.00478036f)))))));
-}
 
 // x, as a value no compiler can see is x (params.canary_loops is 2, so the
 // mask is 0). Mesa factors a·c + b·c into (a + b)·c, the operations not
@@ -43,28 +30,6 @@ fn atan_unit(z: f32) -> f32 {
 // this copy of c shares no operand with the other.
 fn opaque_copy(x: f32) -> f32 {
     return bitcast<f32>(bitcast<u32>(x) | (params.canary_loops >> 8u));
-}
-
-fn solid_atan2(y: f32, x: f32) -> f32 {
-    let ax = abs(x);
-    let ay = abs(y);
-    let steep = ay > ax;
-    let hi = select(ax, ay, steep);
-    let lo = select(ay, ax, steep);
-    if hi == 0.0 {
-        return 0.0;
-    }
-    var r = atan_unit(lo / hi);
-    if steep {
-        r = WINDING_HALF_PI - r;
-    }
-    if x < 0.0 {
-        r = WINDING_PI - r;
-    }
-    if y < 0.0 {
-        r = -r;
-    }
-    return r;
 }
 
 fn triangle_winding(q: vec3<f32>, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> f32 {
@@ -81,7 +46,7 @@ fn triangle_winding(q: vec3<f32>, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> f
     );
     let det = dot3(qa, cross);
     let den = la * lb * lc + dot3(qa, qb) * opaque_copy(lc) + dot3(qa, qc) * lb + dot3(qb, qc) * la;
-    return solid_atan2(det, den) * INV_TWO_PI;
+    return approx_atan2(det, den) * INV_TWO_PI;
 }
 
 fn dipole_winding(q: vec3<f32>, centre: vec3<f32>, normal: vec3<f32>) -> f32 {

@@ -8,6 +8,8 @@
 pub const SOURCE: &str = concat!(
     include_str!("../shaders/layout.wgsl"),
     "\n",
+    include_str!("../shaders/math.wgsl"),
+    "\n",
     include_str!("../shaders/fetch.wgsl"),
     "\n",
     include_str!("../shaders/intersect.wgsl"),

@@ -26,6 +26,7 @@ macro_rules! kernel {
         pub type Vec3 = $vec3;
         pub type Vec4 = $vec4;
         crate::cpu::layout::layout!();
+        crate::cpu::math::math!();
         crate::cpu::fetch::fetch!();
         crate::cpu::intersect::intersect!();
         crate::cpu::traverse::traverse!();

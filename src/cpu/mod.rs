@@ -14,6 +14,7 @@ mod fetch;
 mod intersect;
 mod kernel;
 mod layout;
+mod math;
 mod prefetch;
 mod proximity;
 mod query;

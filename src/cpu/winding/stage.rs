@@ -19,55 +19,7 @@ macro_rules! winding {
         /// levels.
         pub const WINDING_STACK: usize = 7 * crate::bvh::MAX_DEPTH + 1;
 
-        // f64's π rounded to f32 is f32's own (`std::f32::consts::PI`).
-        const PI: Real = std::f64::consts::PI as Real;
-        const HALF_PI: Real = 0.5 * PI;
-        const INV_TWO_PI: Real = 0.5 / PI;
         const INV_FOUR_PI: Real = 0.25 / PI;
-
-        /// atan(z) for z in [0, 1]: an odd polynomial of degree 15, fitted for
-        /// relative error (below 3e-7 in f32): a far triangle's small solid angle
-        /// keeps its relative precision, which stacked layers of triangles, all
-        /// erring alike, multiply. The f64 oracle, which matches no shader's
-        /// bits, takes the library's atan, exact to f64's precision.
-        #[inline(always)]
-        pub fn atan_unit(z: Real) -> Real {
-            if Real::MANTISSA_DIGITS > f32::MANTISSA_DIGITS {
-                return z.atan();
-            }
-            let z2 = z * z;
-            z * (0.999_999_94
-                + z2 * (-0.333_320_95
-                    + z2 * (0.199_713_74
-                        + z2 * (-0.140_294_12
-                            + z2 * (0.099_427_36
-                                + z2 * (-0.059_904_337
-                                    + z2 * (0.024_556_82 + z2 * -0.004_780_36)))))))
-        }
-
-        /// atan2(y, x) in (−π, π] from `atan_unit`; 0 where both are 0.
-        #[inline(always)]
-        pub fn solid_atan2(y: Real, x: Real) -> Real {
-            let ax = x.abs();
-            let ay = y.abs();
-            let steep = ay > ax;
-            let hi = if steep { ay } else { ax };
-            let lo = if steep { ax } else { ay };
-            if hi == 0.0 {
-                return 0.0;
-            }
-            let mut r = atan_unit(lo / hi);
-            if steep {
-                r = HALF_PI - r;
-            }
-            if x < 0.0 {
-                r = PI - r;
-            }
-            if y < 0.0 {
-                r = -r;
-            }
-            r
-        }
 
         /// The solid angle of triangle (a, b, c) seen from `q`, over 4π: positive
         /// where q sees its front (the side its normal (b − a) × (c − a) points
@@ -87,7 +39,7 @@ macro_rules! winding {
             );
             let det = dot3(qa, cross);
             let den = la * lb * lc + dot3(qa, qb) * lc + dot3(qa, qc) * lb + dot3(qb, qc) * la;
-            solid_atan2(det, den) * INV_TWO_PI
+            approx_atan2(det, den) * INV_TWO_PI
         }
 
         /// The far field of a node's triangles at `q`: n · (centre − q) / (4π
