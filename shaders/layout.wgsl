@@ -426,13 +426,13 @@ const LIGHTING_ENVIRONMENT_IMAGE: u32 = 1u;
 // One entry of the emitters' table: the emitter (a triangle by primitive
 // id, a light by index, the environment), the probability of picking it,
 // and its bin of the alias table (keep it with probability q, else take
-// `alias`). Triangles first, by primitive id.
+// `alias_bin`). Triangles first, by primitive id.
 struct Emitter {
     kind: u32,
     index: u32,
     pmf: f32,
     q: f32,
-    alias: u32,
+    alias_bin: u32,
     _pad0: u32,
     _pad1: u32,
     _pad2: u32,

@@ -546,7 +546,7 @@ pub const LIGHTING_ENVIRONMENT_IMAGE: u32 = 1;
 /// emitter, the probability `pmf` that `sample_emitter` picks it (its share
 /// of the scene's power), and its bin of the alias table the pick reads
 /// (pbrt-v4's `AliasTable`: bin i keeps i with probability `q`, else
-/// gives `alias`). Triangles come first, ordered by primitive id, so that
+/// gives `alias_bin`). Triangles come first, ordered by primitive id, so that
 /// `emitter_pdf` finds a hit triangle's entry by binary search.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -556,7 +556,7 @@ pub struct Emitter {
     pub index: u32,
     pub pmf: f32,
     pub q: f32,
-    pub alias: u32,
+    pub alias_bin: u32,
     pub _pad0: u32,
     pub _pad1: u32,
     pub _pad2: u32,
@@ -584,4 +584,36 @@ pub struct Lighting {
     pub total_power: f32,
     /// `LIGHTING_ENVIRONMENT_IMAGE`.
     pub flags: u32,
+}
+
+/// One query of `probe_lights` (shaders/entry_lights.wgsl), the lights
+/// stage's functions run on the GPU for tests to compare with the CPU twin.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct LightQuery {
+    pub position: [f32; 3],
+    pub u_pick: f32,
+    pub normal: [f32; 3],
+    pub hit_prim: u32,
+    pub dir: [f32; 3],
+    pub distance: f32,
+    pub u: [f32; 2],
+    pub _pad: [u32; 2],
+}
+
+/// `probe_lights`' answer to a `LightQuery`: `sample_emitter`'s sample
+/// (`delta` 1 or 0), `environment_radiance` and `environment_pdf` of
+/// `dir`, and `emitter_pdf`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct LightAnswer {
+    pub wi: [f32; 3],
+    pub distance: f32,
+    pub radiance: [f32; 3],
+    pub pdf: f32,
+    pub environment: [f32; 3],
+    pub environment_pdf: f32,
+    pub emitter_pdf: f32,
+    pub delta: u32,
+    pub _pad: [u32; 2],
 }

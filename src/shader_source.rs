@@ -20,6 +20,8 @@ pub const SOURCE: &str = concat!(
     "\n",
     include_str!("../shaders/shade.wgsl"),
     "\n",
+    include_str!("../shaders/lights.wgsl"),
+    "\n",
     include_str!("../shaders/sample.wgsl"),
     "\n",
     include_str!("../shaders/closest.wgsl"),
@@ -35,4 +37,6 @@ pub const SOURCE: &str = concat!(
     include_str!("../shaders/entry_query.wgsl"),
     "\n",
     include_str!("../shaders/entry_proximity.wgsl"),
+    "\n",
+    include_str!("../shaders/entry_lights.wgsl"),
 );

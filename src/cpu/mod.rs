@@ -14,6 +14,7 @@ mod fetch;
 mod intersect;
 mod kernel;
 mod layout;
+mod lights;
 mod math;
 mod prefetch;
 mod proximity;

@@ -14,6 +14,7 @@ use crate::scene::Scene;
 
 use super::adapter::is_llvmpipe;
 use super::device::Gpu;
+use super::lighting::LightingBuffers;
 
 /// Where the shader reads the BVH's nodes and leaf blocks from
 /// (`BVH_TEXELS` in shaders/layout.wgsl).
@@ -75,6 +76,8 @@ pub(super) struct SceneBuffers {
     /// `Scene::tangents` (a placeholder where no material has a normal
     /// texture); one binding, as it is kept only for normal-mapped scenes.
     pub tangents: wgpu::Buffer,
+    /// The path integrator's lights (bindings 20 to 23).
+    pub lighting: LightingBuffers,
     /// Bytes of all of them.
     pub device_bytes: u64,
 }
@@ -143,21 +146,23 @@ impl SceneBuffers {
             std::mem::size_of::<PrimBlock>() as u64,
         )?;
         drop(compressed);
-        let device_bytes = [
-            &triangles.buffer,
-            &normals.buffer,
-            &attributes.buffer,
-            &nodes.buffer,
-            &spheres,
-            &materials,
-            &lights,
-            &textures,
-            &tangents,
-            &blocks.buffer,
-        ]
-        .iter()
-        .map(|b| b.size())
-        .sum::<u64>()
+        let lighting = LightingBuffers::upload(gpu, scene)?;
+        let device_bytes = lighting.device_bytes()
+            + [
+                &triangles.buffer,
+                &normals.buffer,
+                &attributes.buffer,
+                &nodes.buffer,
+                &spheres,
+                &materials,
+                &lights,
+                &textures,
+                &tangents,
+                &blocks.buffer,
+            ]
+            .iter()
+            .map(|b| b.size())
+            .sum::<u64>()
             + [&node_texture, &block_texture, &triangle_texture]
                 .iter()
                 .map(|t| 16 * t.width() as u64 * t.height() as u64)
@@ -186,6 +191,7 @@ impl SceneBuffers {
             triangle_texture,
             textures,
             tangents,
+            lighting,
             device_bytes,
         })
     }
@@ -208,7 +214,7 @@ impl SceneBuffers {
 
 /// At least one element: wgpu rejects empty storage bindings. Borrows the
 /// scene's own memory otherwise, so that upload makes no host copy.
-fn non_empty<T: bytemuck::Pod + Default>(items: &[T]) -> Cow<'_, [u8]> {
+pub(super) fn non_empty<T: bytemuck::Pod + Default>(items: &[T]) -> Cow<'_, [u8]> {
     if items.is_empty() {
         Cow::Owned(bytemuck::bytes_of(&T::default()).to_vec())
     } else {
@@ -249,7 +255,12 @@ impl SplitBuffer {
 
 impl Gpu {
     /// A storage buffer of `bytes`, which may be at most `max_bytes` long.
-    fn storage_buffer(&self, label: &str, bytes: &[u8], max_bytes: u64) -> Result<wgpu::Buffer> {
+    pub(super) fn storage_buffer(
+        &self,
+        label: &str,
+        bytes: &[u8],
+        max_bytes: u64,
+    ) -> Result<wgpu::Buffer> {
         if bytes.len() as u64 > max_bytes {
             return Err(Error::GpuLimit(format!(
                 "the scene's {label} take {} bytes, {} more than the {max_bytes} bytes {} can \

@@ -140,7 +140,8 @@ impl Environment {
                 (color, None, 4.0 * std::f64::consts::PI * mean(color))
             }
             EnvironmentSource::Image(path) => {
-                let (width, height, rgb) = decode(path, &read_capped(path, MAX_ENVIRONMENT_BYTES)?)?;
+                let (width, height, rgb) =
+                    decode(path, &read_capped(path, MAX_ENVIRONMENT_BYTES)?)?;
                 let (map, integral) = EnvironmentMap::new(width, height, &rgb, spec.strength);
                 ([0.0; 3], Some(map), integral)
             }
@@ -194,8 +195,8 @@ impl EnvironmentMap {
         let mut integral = 0.0;
         for i in 0..cells {
             // The band's solid angle over 2π/W: cos θᵢ − cos θᵢ₊₁.
-            let band = (pi * i as f64 / cells as f64).cos()
-                - (pi * (i + 1) as f64 / cells as f64).cos();
+            let band =
+                (pi * i as f64 / cells as f64).cos() - (pi * (i + 1) as f64 / cells as f64).cos();
             for j in 0..w {
                 weights.push(corners(i, j, luminance) * band);
                 integral += corners(i, j, mean) * band * 2.0 * pi / w as f64;

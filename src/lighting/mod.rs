@@ -140,7 +140,7 @@ pub fn emitter_table(scene: &SceneLights) -> EmitterTable {
             index: emitters[i].1,
             pmf: bin.p as f32,
             q: bin.q as f32,
-            alias: bin.alias,
+            alias_bin: bin.alias,
             ..Default::default()
         })
         .collect();

@@ -110,11 +110,7 @@ impl Scene {
 
 /// `--environment`'s spec: `R,G,B` (or one value, grey) is a colour,
 /// anything else a file, read from where the command runs.
-pub fn environment_option(
-    text: &str,
-    strength: f64,
-    rotation_deg: f64,
-) -> Result<EnvironmentSpec> {
+pub fn environment_option(text: &str, strength: f64, rotation_deg: f64) -> Result<EnvironmentSpec> {
     let values: Option<Vec<f64>> = text.split(',').map(|v| v.trim().parse().ok()).collect();
     let source = match values.as_deref() {
         Some(&[v]) => EnvironmentSource::Color([v as f32; 3]),
