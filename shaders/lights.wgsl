@@ -3,7 +3,10 @@
 // table by power (an alias table), a point on it or a direction from it,
 // and the pdfs that multiple importance sampling weighs by; the
 // environment's radiance and its sampling. CPU twin: src/cpu/lights.rs,
-// the same bits: every product that feeds a sum is `rounded`.
+// the same bits: every product that feeds a sum is `rounded`, every
+// square root too (Mesa rewrites sqrt(x)·sqrt(x) as x), and a product
+// that a constant multiplies is an `opaque_copy` (Mesa moves a constant
+// factor into a product of products, which rounds otherwise).
 
 // What `sample_emitter` gives: the direction to the light from the shaded
 // point, how far the light is (FAR: at infinity), the radiance arriving
@@ -85,7 +88,7 @@ fn triangle_solid_angle_pdf(n: vec3<f32>, wi: vec3<f32>, distance: f32) -> f32 {
     if cos_area == 0.0 {
         return 0.0;
     }
-    return rounded(2.0 * rounded(distance * distance)) / cos_area;
+    return rounded(rounded(2.0 * rounded(distance * distance)) / cos_area);
 }
 
 // A point on triangle `prim`, uniform by area (pbrt-v4's
@@ -97,10 +100,10 @@ fn sample_triangle(position: vec3<f32>, prim: u32, u: vec2<f32>) -> EmitterSampl
     var b0: f32;
     var b1: f32;
     if u.x < u.y {
-        b0 = 0.5 * u.x;
+        b0 = rounded(0.5 * u.x);
         b1 = u.y - b0;
     } else {
-        b1 = 0.5 * u.y;
+        b1 = rounded(0.5 * u.y);
         b0 = u.x - b1;
     }
     // As a hit's (u, v): the weights of v1 and v2.
@@ -114,7 +117,7 @@ fn sample_triangle(position: vec3<f32>, prim: u32, u: vec2<f32>) -> EmitterSampl
     if distance_squared == 0.0 {
         return out;
     }
-    out.distance = sqrt(distance_squared);
+    out.distance = rounded(sqrt(distance_squared));
     out.wi = d / out.distance;
     let n = cross_rounded(tri.v1 - tri.v0, tri.v2 - tri.v0);
     out.pdf = triangle_solid_angle_pdf(n, out.wi, out.distance);
@@ -147,11 +150,11 @@ fn sample_light(position: vec3<f32>, light: Light) -> EmitterSample {
         out.pdf = 0.0;
         return out;
     }
-    out.distance = sqrt(distance_squared);
+    out.distance = rounded(sqrt(distance_squared));
     out.wi = d / out.distance;
-    out.radiance = min(emitted / distance_squared, vec3<f32>(FAR));
+    out.radiance = min(rounded3(emitted / distance_squared), vec3<f32>(FAR));
     if HAS_SPOT_LIGHTS && light.kind == LIGHT_SPOT {
-        out.radiance *= spot_falloff(light, out.wi);
+        out.radiance *= rounded(spot_falloff(light, out.wi));
     }
     return out;
 }
@@ -318,10 +321,10 @@ fn sample_environment(u: vec2<f32>) -> EmitterSample {
     if !(dm > 0.0 && dc > 0.0) {
         return out;
     }
-    let t = rounded(f32(row) + rounded(u.y - m0) / dm) / f32(rows);
-    let s = rounded(f32(column) + rounded(u.x - c0) / dc) / f32(columns);
+    let t = rounded(rounded(f32(row) + rounded(rounded(u.y - m0) / dm)) / f32(rows));
+    let s = rounded(rounded(f32(column) + rounded(rounded(u.x - c0) / dc)) / f32(columns));
     // Cell j starts at texel j's centre.
-    var map_u = s + 0.5 / f32(columns);
+    var map_u = s + rounded(0.5 / f32(columns));
     if map_u >= 1.0 {
         map_u -= 1.0;
     }
@@ -334,7 +337,7 @@ fn sample_environment(u: vec2<f32>) -> EmitterSample {
     out.wi = environment_world(d);
     out.radiance = environment_lookup(vec2<f32>(map_u, t));
     let pdf_uv = rounded(rounded(dm * f32(rows)) * rounded(dc * f32(columns)));
-    out.pdf = rounded(pdf_uv * INV_TWO_PI_SQUARED) / theta.x;
+    out.pdf = rounded(rounded(opaque_copy(pdf_uv) * INV_TWO_PI_SQUARED) / theta.x);
     return out;
 }
 
@@ -353,7 +356,7 @@ fn environment_pdf(dir: vec3<f32>) -> f32 {
     let uv = environment_uv(d);
     let columns = lighting.environment_width;
     let rows = lighting.environment_height - 1u;
-    var s = uv.x - 0.5 / f32(columns);
+    var s = uv.x - rounded(0.5 / f32(columns));
     if s < 0.0 {
         s += 1.0;
     }
@@ -367,7 +370,7 @@ fn environment_pdf(dir: vec3<f32>) -> f32 {
         return 0.0;
     }
     let pdf_uv = rounded(rounded(dm * f32(rows)) * rounded(dc * f32(columns)));
-    return rounded(rounded(pdf_uv * INV_TWO_PI_SQUARED) / sin_theta * pmf);
+    return rounded(rounded(rounded(opaque_copy(pdf_uv) * INV_TWO_PI_SQUARED) / sin_theta) * pmf);
 }
 
 // TEMPORARY, until branch `mat` lands with it in shaders/shade.wgsl (the

@@ -4,8 +4,9 @@
 //! emitters' table, a point or direction on it, the pdfs multiple
 //! importance sampling weighs by, and the environment's radiance. The
 //! same bits as the shader in f32: every operation in its order (the
-//! shader's `rounded` keeps its compiler from fusing or reordering; its
-//! `dot_rounded` is `dot3` here). Written once for both precisions:
+//! shader's `rounded` and `opaque_copy` keep its compiler from fusing or
+//! reordering, and are the identity here; its `dot_rounded` is `dot3`,
+//! its `cross_rounded` glam's `cross`). Written once for both precisions:
 //! `kernel!` (kernel.rs) expands it into `cpu::f32` and `cpu::f64`.
 
 /// The stage's items, expanded into the module that invokes it (`kernel!`).

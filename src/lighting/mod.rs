@@ -19,8 +19,8 @@ use std::f64::consts::PI;
 
 use crate::layout::{
     EMITTER_ENVIRONMENT, EMITTER_LIGHT, EMITTER_TRIANGLE, Emitter, FLAG_ATTRIBUTES,
-    LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHTING_ENVIRONMENT_IMAGE, Light, Lighting, Material,
-    NO_TEXTURE, Triangle,
+    LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_SPOT, LIGHTING_ENVIRONMENT_IMAGE, Light, Lighting,
+    Material, NO_TEXTURE, Triangle,
 };
 use crate::texture::TextureStore;
 
@@ -59,12 +59,19 @@ fn wide(c: [f32; 3]) -> [f64; 3] {
 
 /// The power of `light`, treated as the path integrator treats punctual
 /// lights: emitting π·color (docs/rendering.md, "Lights"), the intensity
-/// of a point light (Φ = 4π·I), the irradiance of a directional one
-/// (Φ = π r²·E, pbrt's `DistantLight::Phi`).
+/// I of a point light (Φ = 4π·I) or a spot (Φ = 2π·I·((1 − cos inner) +
+/// (cos inner − cos outer)/3), its t² falloff integrated over the cone
+/// between, as pbrt's `SpotLight::Phi` integrates its own), the
+/// irradiance E of a directional one (Φ = π r²·E, pbrt's
+/// `DistantLight::Phi`).
 pub fn light_power(light: &Light, radius: f64) -> f64 {
     let emitted = PI * mean(wide(light.color));
     match light.kind {
         LIGHT_POINT => 4.0 * PI * emitted,
+        LIGHT_SPOT => {
+            let (inner, outer) = (light.cos_inner as f64, light.cos_outer as f64);
+            2.0 * PI * emitted * ((1.0 - inner) + (inner - outer).max(0.0) / 3.0)
+        }
         LIGHT_DIRECTIONAL => PI * radius * radius * emitted,
         _ => 0.0,
     }
