@@ -9,8 +9,7 @@ use crate::error::Result;
 use crate::layout::Emitter;
 use crate::scene::Scene;
 
-use super::device::Gpu;
-use super::upload::non_empty;
+use super::device::{Gpu, non_empty};
 
 /// Bindings 20 to 23 (`Scene::emitters`, `Scene::environment`).
 pub(super) struct LightingBuffers {

@@ -1,8 +1,6 @@
 //! The scene's arrays on the device: storage buffers (split over two
 //! bindings when large) and the BVH's texel textures.
 
-use std::borrow::Cow;
-
 use wgpu::util::DeviceExt;
 
 use crate::error::{Error, Result};
@@ -13,7 +11,7 @@ use crate::layout::{
 use crate::scene::Scene;
 
 use super::adapter::is_llvmpipe;
-use super::device::Gpu;
+use super::device::{Gpu, non_empty};
 use super::lighting::LightingBuffers;
 
 /// Where the shader reads the BVH's nodes and leaf blocks from
@@ -209,16 +207,6 @@ impl SceneBuffers {
         .filter(|(_, b)| b.per_binding != u32::MAX)
         .map(|(name, _)| *name)
         .collect()
-    }
-}
-
-/// At least one element: wgpu rejects empty storage bindings. Borrows the
-/// scene's own memory otherwise, so that upload makes no host copy.
-pub(super) fn non_empty<T: bytemuck::Pod + Default>(items: &[T]) -> Cow<'_, [u8]> {
-    if items.is_empty() {
-        Cow::Owned(bytemuck::bytes_of(&T::default()).to_vec())
-    } else {
-        Cow::Borrowed(bytemuck::cast_slice(items))
     }
 }
 
