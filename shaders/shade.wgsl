@@ -50,13 +50,7 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
         // The camera ray's cone where it hits (docs/textures.md).
         let cone_width = hit.t * params.cone_spread;
         let base = base_color_at(tri, hit.prim, hit.u, hit.v, ray.dir, cone_width);
-        var emission = materials[tri.material].emission;
-        let emissive_texture = materials[tri.material].emissive_texture;
-        if HAS_TEXTURES && emissive_texture != NO_TEXTURE
-            && (tri.flags & FLAG_ATTRIBUTES) != 0u {
-            emission *= texture_at(emissive_texture, tri, hit.prim, hit.u, hit.v, ray.dir,
-                cone_width).rgb;
-        }
+        let emission = emission_at(tri, hit.prim, hit.u, hit.v, ray.dir, cone_width);
         return Surface(position, error, geometric, shading, base.rgb, emission);
     }
     let sphere = spheres[hit.prim - params.num_triangles];

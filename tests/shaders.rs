@@ -224,6 +224,68 @@ fn host_structs_match_wgsl_layout() {
     );
 }
 
+/// The path integrator's lights' structs (shaders/layout.wgsl's lighting
+/// part, shaders/entry_lights.wgsl).
+#[test]
+fn lighting_structs_match_wgsl_layout() {
+    let m = &module();
+    check_layout!(
+        m,
+        Emitter {
+            kind,
+            index,
+            pmf,
+            q,
+            alias_bin,
+            _pad0,
+            _pad1,
+            _pad2
+        }
+    );
+    check_layout!(
+        m,
+        Lighting {
+            environment_color,
+            num_emitters,
+            environment_width,
+            environment_height,
+            rotation_cos,
+            rotation_sin,
+            num_triangle_emitters,
+            environment_pmf,
+            total_power,
+            flags
+        }
+    );
+    check_layout!(
+        m,
+        LightQuery {
+            position,
+            u_pick,
+            normal,
+            hit_prim,
+            dir,
+            distance,
+            u,
+            _pad
+        }
+    );
+    check_layout!(
+        m,
+        LightAnswer {
+            wi,
+            distance,
+            radiance,
+            pdf,
+            environment,
+            environment_pdf,
+            emitter_pdf,
+            delta,
+            _pad
+        }
+    );
+}
+
 #[test]
 fn shader_constants_match_host() {
     let m = module();

@@ -78,30 +78,12 @@ macro_rules! integrator {
                 radiance * power_heuristic(bsdf_pdf, self.environment_pdf(ray.dir))
             }
 
-            /// Direct light at a path's vertex from every point, spot and
-            /// directional light (each has one direction: all are taken,
-            /// as the direct integrator takes them, so that a scene they
-            /// alone light looks the same under both integrators), each
-            /// emitting π times its lecture-convention colour (whose
-            /// `k·I·(n·l)` is `albedo/π` lit by `π·I`).
-            fn punctual_light(&self, surface: &Surface, origin: Vec3, bsdf: BsdfParams, frame: Frame, wo: Vec3) -> Vec3 {
-                let mut sum = Vec3::ZERO;
-                for light in &self.scene.lights {
-                    let Some(sample) = light_sample(surface, origin, light) else {
-                        continue;
-                    };
-                    let f = bsdf_eval(bsdf, wo, to_local(frame, sample.shadow_ray.dir));
-                    if f == Vec3::ZERO || (self.scene.shadows && self.trace_any(sample.shadow_ray)) {
-                        continue;
-                    }
-                    sum += f * sample.irradiance * PI;
-                }
-                sum
-            }
-
-            /// Direct light at a path's vertex from one emitter (an emissive
-            /// triangle or the environment) drawn by power, weighted
-            /// against BSDF sampling.
+            /// Direct light at a path's vertex from one emitter drawn by
+            /// power (an emissive triangle, a point, spot or directional
+            /// light, the environment), its shadow ray traced where the
+            /// render has shadows; an emitter with area weighted against
+            /// BSDF sampling (a punctual light, which BSDF sampling never
+            /// finds, is not).
             fn emitter_light(&self, surface: &Surface, origin: Vec3, bsdf: BsdfParams, frame: Frame, wo: Vec3, state: &mut u32) -> Vec3 {
                 let u_pick = next_random(state);
                 let u = Vec2::new(next_random(state), next_random(state));
@@ -115,18 +97,21 @@ macro_rules! integrator {
                     return Vec3::ZERO;
                 }
                 let tmax = if sample.distance >= FAR { FAR } else { sample.distance * (1.0 - SHADOW_SHORTENING) };
-                if self.trace_any(Ray { origin, tmin: 0.0, dir: sample.wi, tmax }) {
+                if self.scene.shadows && self.trace_any(Ray { origin, tmin: 0.0, dir: sample.wi, tmax }) {
                     return Vec3::ZERO;
                 }
-                let weight = power_heuristic(sample.pdf, bsdf_pdf(bsdf, wo, wi));
+                let weight = if sample.delta {
+                    1.0
+                } else {
+                    power_heuristic(sample.pdf, bsdf_pdf(bsdf, wo, wi))
+                };
                 f * sample.radiance * (weight / sample.pdf)
             }
 
             /// Path tracing from the camera ray `ray` that hit `hit`:
             /// emission where a path hits it, direct light at each vertex
-            /// (every punctual light, and one emitter drawn by power, with
-            /// multiple importance sampling against the BSDF's own
-            /// direction), the next direction drawn from the BSDF, Russian
+            /// (one emitter drawn by power, with multiple importance
+            /// sampling against the BSDF's own direction), the next direction drawn from the BSDF, Russian
             /// roulette after `ROULETTE_DEPTH` bounces; at most
             /// `max_depth` surfaces (pbrt-v4's `maxdepth`; Mitsuba 3's
             /// `max_depth` is one more). Random numbers from `state`.
@@ -160,13 +145,11 @@ macro_rules! integrator {
                         break;
                     }
                     let material = self.material_at(&ray, &hit, &surface);
-                    let lit = Surface { shading_normal: material.shading_normal, ..surface };
                     let frame = frame_from_normal(material.shading_normal);
                     let wo = to_local(frame, -ray.dir);
                     let origin = offset_ray_origin(surface.position, surface.error, surface.geometric_normal);
-                    radiance += throughput * self.punctual_light(&lit, origin, material.bsdf, frame, wo);
                     if self.has_emitters() {
-                        radiance += throughput * self.emitter_light(&lit, origin, material.bsdf, frame, wo, &mut state);
+                        radiance += throughput * self.emitter_light(&surface, origin, material.bsdf, frame, wo, &mut state);
                     }
 
                     let u_lobe = next_random(&mut state);

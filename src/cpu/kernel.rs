@@ -34,12 +34,12 @@ macro_rules! kernel {
         crate::cpu::traverse_cpu::traverse_cpu!();
         crate::cpu::all_hits::all_hits!();
         crate::cpu::shade::shade!();
+        crate::cpu::lights::lights!();
         crate::cpu::sample::sample!();
         crate::cpu::texture::stage::texture!();
         crate::cpu::material::material!();
         crate::cpu::closest::stage::closest!();
         crate::cpu::winding::stage::winding!();
-        crate::cpu::lights::lights!();
         crate::cpu::integrator::integrator!();
     };
 }

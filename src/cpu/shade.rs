@@ -138,21 +138,8 @@ macro_rules! shade {
                     let geometric = face_forward(outward, ray.dir);
                     // The camera ray's cone where it hits (docs/textures.md).
                     let cone_width = hit.t * self.cone_spread as Real;
-                    let material = &scene.materials[tri.material as usize];
-                    let mut emission = vec3(material.emission);
-                    if material.emissive_texture != NO_TEXTURE && tri.flags & FLAG_ATTRIBUTES != 0 {
-                        emission *= self
-                            .texture_at(
-                                material.emissive_texture,
-                                tri,
-                                hit.prim,
-                                hit.u,
-                                hit.v,
-                                ray.dir,
-                                cone_width,
-                            )
-                            .truncate();
-                    }
+                    let emission =
+                        self.emission_at(tri, hit.prim, hit.u, hit.v, ray.dir, cone_width);
                     let shading = face_forward(
                         self.vertex_normal(tri, hit.prim, w, hit.u, hit.v, outward),
                         ray.dir,

@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 
 use crate::camera::View;
 use crate::error::{Error, Result};
-use crate::layout::{ClosestPoint, Hit, ListedHit, Params, Ray};
+use crate::layout::{ClosestPoint, Hit, LightAnswer, LightQuery, ListedHit, Params, Ray};
 use crate::output::{Image, Rendered};
 use crate::progress::Progress;
 use crate::scene::{Integrator, Intersect, Scene};
@@ -326,6 +326,15 @@ impl GpuRenderer {
             self.tiles
                 .fewer_samples_per_dispatch(&self.gpu, dispatch, params.spp)?;
         }
+    }
+
+    /// The path integrator's light functions (`sample_emitter`,
+    /// `emitter_pdf`, `environment_radiance`, `environment_pdf`) on each
+    /// of `queries`, in the scene's local frame: what tests compare with
+    /// the CPU twin's.
+    pub fn probe_lights(&mut self, queries: &[LightQuery]) -> Result<Vec<LightAnswer>> {
+        let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
+        self.lists.probe_lights(host, queries)
     }
 
     /// The geometric queries' part, and what it reads of the others.

@@ -11,7 +11,7 @@ pub const SHADER_SOURCE: &str = crate::shader_source::SOURCE;
 pub fn specialisation(scene: &Scene) -> Vec<(&'static str, f64)> {
     let flag = |b: bool| if b { 1.0 } else { 0.0 };
     let has_light = |kind| scene.lights.iter().any(|l| l.kind == kind);
-    vec![
+    let mut constants = vec![
         ("HAS_TRIANGLES", flag(!scene.triangles.is_empty())),
         ("HAS_SPHERES", flag(!scene.spheres.is_empty())),
         (
@@ -31,8 +31,8 @@ pub fn specialisation(scene: &Scene) -> Vec<(&'static str, f64)> {
         ("HAS_SMOOTH", flag(!scene.normals.is_empty())),
         ("USE_BVH", flag(scene.accel == Accel::Bvh)),
         ("PATH_TRACE", flag(scene.integrator == Integrator::Path)),
-        ("HAS_ENVIRONMENT", 0.0),
-        ("HAS_EMITTERS", 0.0),
         ("INTERSECT", scene.intersect.shader_value() as f64),
-    ]
+    ];
+    constants.extend(super::lighting::lighting_specialisation(scene));
+    constants
 }

@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use glam::{DMat3, DVec3};
 use serde::Deserialize;
 
+use super::lighting::EnvironmentEntry;
 use super::{
     DEFAULT_MAX_DEPTH, Integrator, Intersect, Rgb, Scene, Transform, colour, directional_light, point,
     point_light, spot_light,
@@ -33,6 +34,8 @@ struct SceneFile {
     directional_light: Vec<DirectionalLightEntry>,
     #[serde(default)]
     spot_light: Vec<SpotLightEntry>,
+    #[serde(default)]
+    environment: Option<EnvironmentEntry>,
 }
 
 /// The `[render]` table.
@@ -224,6 +227,12 @@ impl Scene {
         validate_spp(spp).map_err(|e| fail(format!("render.{e}")))?;
         crate::limits::validate_max_depth(file.render.max_depth)
             .map_err(|e| fail(format!("render.{e}")))?;
+        let environment = file
+            .environment
+            .as_ref()
+            .map(|e| e.spec(base))
+            .transpose()
+            .map_err(fail)?;
 
         let mut scene = Scene {
             view: View {
@@ -337,6 +346,7 @@ impl Scene {
         }
         scene.check_camera_placement().map_err(fail)?;
         scene.check_primitive_count(path)?;
+        scene.set_environment(environment.as_ref())?;
         scene.rebuild_bvh();
         Ok(scene)
     }

@@ -4,6 +4,7 @@
 //! (`model`).
 
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, OnceLock};
 
 use glam::{DMat3, DVec3};
 use serde::Deserialize;
@@ -16,15 +17,18 @@ use crate::layout::{
     LIGHT_SPOT, Light, MATERIAL_METALLIC_ROUGHNESS, Material, NO_HIT, Ray, Sphere, Triangle,
     TriangleAttributes, TriangleNormals, TriangleTangents,
 };
+use crate::lighting::{EmitterTable, Environment};
 use crate::limits::{MAX_COORDINATE, MAX_LOCAL_COORDINATE, checked_point, vector_text};
 use crate::loading;
 use crate::placement::{Placement, checked_local};
 
 mod access;
 mod file;
+mod lighting;
 mod model;
 mod settings;
 
+pub use lighting::environment_option;
 pub use settings::{DEFAULT_MAX_DEPTH, Integrator, RenderSettings};
 
 /// A loaded, validated scene, flattened into the buffers the GPU receives:
@@ -82,6 +86,12 @@ pub struct Scene {
     /// camera the kernels see: the centre of a scene far from the origin,
     /// else zero (`placement::centring_offset`).
     pub(crate) offset: DVec3,
+    /// Light from every direction at infinity (`lighting.rs`), shared by
+    /// the scene's copies: a map may be large.
+    pub(crate) environment: Option<Arc<Environment>>,
+    /// The emitters' table, built on first use (`Scene::emitters`) and
+    /// dropped by every edit of what it is built from.
+    pub(crate) emitters: OnceLock<EmitterTable>,
 }
 
 /// `--intersect`: the ray/triangle test. See docs/accuracy.md for what each
@@ -236,6 +246,8 @@ impl Scene {
             warnings: Vec::new(),
             inputs: Vec::new(),
             offset: DVec3::ZERO,
+            environment: None,
+            emitters: OnceLock::new(),
         }
     }
 
@@ -497,6 +509,7 @@ impl Scene {
     /// Rebuilds the BVH after the geometry changed.
     pub fn rebuild_bvh(&mut self) {
         self.bvh = Bvh::build(&self.triangles, &self.spheres);
+        self.forget_emitters();
     }
 
     pub fn primitive_count(&self) -> usize {

@@ -304,6 +304,23 @@ impl TextureStore {
         &self.images
     }
 
+    /// The mean linear RGB of the image the slot starting at word `slot`
+    /// reads: its coarsest mip level (1×1, averaged in linear light), the
+    /// emitters' table's estimate of a textured emitter's power.
+    pub fn mean_color(&self, slot: u32) -> [f64; 3] {
+        let word = |at: u32| self.words[at as usize];
+        let count = (word(slot + 8) >> 8) & 255;
+        let level = word(slot + 7) + 4 * (count - 1);
+        let (first, texels) = (word(level), word(level + 1) * word(level + 2));
+        let mut sum = [0.0; 3];
+        for t in first..first + texels {
+            for (c, s) in sum.iter_mut().enumerate() {
+                *s += word((word(t) >> (8 * c)) & 255) as f64 / LINEAR_ONE as f64;
+            }
+        }
+        sum.map(|s| s / texels as f64)
+    }
+
     /// The image (an index into `images`) the slot starting at word `slot`
     /// reads.
     pub fn image_of_slot(&self, slot: u32) -> Option<usize> {

@@ -371,10 +371,16 @@ pub fn run() -> Result<ExitCode> {
     }
 }
 
-/// Loading's warnings, each on its own line.
+/// Loading's warnings, each on its own line, and what the direct
+/// integrator (the only one yet) leaves out of the scene.
 fn print_warnings(scene: &Scene, quiet: bool) {
     if !quiet {
-        for warning in scene.warnings() {
+        for warning in scene
+            .warnings()
+            .iter()
+            .cloned()
+            .chain(scene.ignored_by_direct())
+        {
             eprintln!("warning: {warning}");
         }
     }
