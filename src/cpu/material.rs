@@ -90,8 +90,8 @@ macro_rules! material {
                 let n = self.vertex_normal(tri, hit.prim, w, hit.u, hit.v, outward);
                 let side: Real = if n.dot(dir) > 0.0 { -1.0 } else { 1.0 };
                 let frames = &self.scene.tangents[hit.prim as usize];
-                let interpolated = w * vec4(frames.t0)
-                    + (hit.u * vec4(frames.t1) + hit.v * vec4(frames.t2));
+                let interpolated =
+                    w * vec4(frames.t0) + (hit.u * vec4(frames.t1) + hit.v * vec4(frames.t2));
                 let along = interpolated.truncate();
                 let tangent = along - n * dot_rounded(n, along);
                 if !(dot_rounded(tangent, tangent) > 0.0) {
