@@ -75,8 +75,9 @@ impl Fingerprint {
 /// The hash a part records: everything that reaches a pixel. The scene's
 /// geometry and its offset (the geometry is stored relative to the
 /// scene's centre, so a far scene moved whole keeps its local numbers and
-/// differs only there), materials and tangent frames, texture texels (the store's words: an
-/// image's pixels changed at the same size change nothing else), lights,
+/// differs only there), materials and tangent frames, texture texels
+/// (the store's words: an image's pixels changed at the same size change
+/// nothing else), lights,
 /// background, ambient, shadows, intersection test and acceleration; the
 /// view's camera, image size, samples and seed; and which path renders
 /// (the GPU's pixels differ from the CPU's within tolerance, so parts of
