@@ -121,6 +121,12 @@ fn gltf_spot_lights_point_along_their_node() {
     assert_eq!(spot.cos_outer, (0.5f32 as f64).cos() as f32);
     let expected = glam::Vec3::new(2.0, 1.0, 0.5) / PI;
     assert!((glam::Vec3::from(spot.color) - expected).length() < 1e-6);
+    let info = lambert(&["info", s(&dir.path().join("spot.glb"))]);
+    let text = String::from_utf8_lossy(&info.stdout);
+    assert_contains_all(
+        &text,
+        &["spot at [0.5, 2, 0] pointing", "cones 11.46° to 28.65°"],
+    );
 }
 
 /// The spec's falloff: 1 within the inner cone, 0 beyond the outer, and
