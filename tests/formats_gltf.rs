@@ -291,7 +291,10 @@ fn gltf_data_uris_external_buffers_and_malformed_files() {
     let spot = scene.lights()[0];
     assert_eq!(spot.kind, lambert::layout::LIGHT_SPOT);
     assert_eq!(spot.direction, [0.0, 0.0, -1.0]);
-    assert_eq!((spot.cos_inner, spot.cos_outer), (1.0, 45f32.to_radians().cos()));
+    assert_eq!(
+        (spot.cos_inner, spot.cos_outer),
+        (1.0, 45f32.to_radians().cos())
+    );
     assert_eq!(scene.lights()[1].vector, [0.0, 0.0, 4.0]);
     assert_eq!(
         scene.lights()[1].color,

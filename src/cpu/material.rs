@@ -90,11 +90,16 @@ macro_rules! material {
                 let n = self.vertex_normal(tri, hit.prim, w, hit.u, hit.v, outward);
                 let side: Real = if n.dot(dir) > 0.0 { -1.0 } else { 1.0 };
                 let frames = &self.scene.tangents[hit.prim as usize];
-                let interpolated = w * vec4(frames.t0)
-                    + (hit.u * vec4(frames.t1) + hit.v * vec4(frames.t2));
+                let interpolated =
+                    w * vec4(frames.t0) + (hit.u * vec4(frames.t1) + hit.v * vec4(frames.t2));
                 let along = interpolated.truncate();
                 let tangent = along - n * dot_rounded(n, along);
-                if !(dot_rounded(tangent, tangent) > 0.0) {
+                // A zero or NaN vector has no direction (the shader's `!(x > 0)`).
+                let degenerate = |v: Vec3| {
+                    let squared = dot_rounded(v, v);
+                    squared.is_nan() || squared <= 0.0
+                };
+                if degenerate(tangent) {
                     return side * n;
                 }
                 let t = normalize3(tangent);
@@ -106,7 +111,7 @@ macro_rules! material {
                     2.0 * texel.z - 1.0,
                 );
                 let mapped = (m.x * t + m.y * b) + m.z * n;
-                if !(dot_rounded(mapped, mapped) > 0.0) {
+                if degenerate(mapped) {
                     return side * n;
                 }
                 side * normalize3(mapped)
