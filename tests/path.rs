@@ -180,3 +180,31 @@ fn the_integrator_and_depth_come_from_the_scene_file() {
         assert!(error.contains(what), "{bad}: {error}");
     }
 }
+
+#[test]
+fn a_model_lit_by_its_own_emission_loses_the_default_light_under_path() {
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, text: &str| std::fs::write(dir.path().join(name), text).unwrap();
+    write(
+        "lamp.mtl",
+        "newmtl glow\nKd 0 0 0\nKe 4 4 4\nnewmtl wall\nKd 0.8 0.8 0.8\n",
+    );
+    write(
+        "lamp.obj",
+        "mtllib lamp.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\n\
+         usemtl wall\nf 1 2 3 4\nusemtl glow\nf 1 5 6 2\n",
+    );
+    let model = Scene::load(&dir.path().join("lamp.obj")).unwrap();
+    // Under direct, the model is lit as any model with no light of its
+    // own: the default light and ambient.
+    assert_eq!(model.lights().len(), 1);
+    let direct = model.clone().with_settings(&model.default_settings());
+    assert_eq!(direct.lights().len(), 1);
+    // Under path, its emissive face is its light.
+    let path = path_traced(&model, 1, 4);
+    assert!(path.lights().is_empty(), "the default light stayed");
+    // A model with no light of its own keeps the default one.
+    write("plain.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n");
+    let plain = Scene::load(&dir.path().join("plain.obj")).unwrap();
+    assert_eq!(path_traced(&plain, 1, 4).lights().len(), 1);
+}

@@ -73,6 +73,10 @@ pub struct Scene {
     /// The ray/triangle test both paths use.
     pub(crate) intersect: Intersect,
     pub(crate) integrator: Integrator,
+    /// Whether `lights` is the one default light a model with none of its
+    /// own is given (`camera::default_light`), which the path integrator
+    /// drops where the model has light of its own (`with_settings`).
+    pub(crate) default_light: bool,
     /// Under `Integrator::Path`, the most surfaces a path hits.
     pub(crate) max_depth: u32,
     /// What loading read but ignored or could not find (each names its
@@ -242,6 +246,7 @@ impl Scene {
             accel: Accel::default(),
             intersect: Intersect::default(),
             integrator: Integrator::default(),
+            default_light: false,
             max_depth: DEFAULT_MAX_DEPTH,
             warnings: Vec::new(),
             inputs: Vec::new(),

@@ -127,6 +127,7 @@ impl Scene {
         // ambient belong only to a model with no light of its own.
         if scene.lights.is_empty() {
             scene.lights.push(default_light(&scene.view.camera));
+            scene.default_light = true;
         } else {
             scene.ambient = [0.0; 3];
         }
@@ -193,6 +194,7 @@ impl Scene {
             albedo,
         )?;
         scene.lights.push(default_light(&scene.view.camera));
+        scene.default_light = true;
         scene.rebuild_bvh();
         Ok(scene)
     }
