@@ -14,6 +14,7 @@ mod fetch;
 mod intersect;
 mod kernel;
 mod layout;
+mod precision;
 mod prefetch;
 mod proximity;
 mod query;
@@ -26,6 +27,7 @@ mod traverse;
 mod traverse_cpu;
 pub mod winding;
 
+pub use precision::Scalar;
 pub use prefetch::LARGE_BVH_BYTES;
 pub use proximity::{
     box_pad, closest_points, count_intersections, list_intersections, sort_hits, spatial_order,

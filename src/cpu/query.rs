@@ -297,7 +297,7 @@ fn trace_rays_each_in(
 /// `PREFETCH` and `VECTOR_SORT`).
 ///
 /// # Safety
-/// With `VECTOR_SORT`, the CPU must have AVX-512 (`f32::has_vector_sort`).
+/// With `VECTOR_SORT`, the CPU must have AVX-512 (f32's `Scalar::has_vector_sort`).
 #[inline(always)]
 unsafe fn trace_chunk<const LANES: usize, const PREFETCH: bool, const VECTOR_SORT: bool>(
     kernel: &f32::Kernel,
