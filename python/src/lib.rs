@@ -12,8 +12,7 @@ use std::sync::{Arc, Mutex};
 
 use lambert::camera::View;
 use lambert::cpu::{
-    CpuKernel, QueryOptions, QueryRays, SharedOut, TracedChunk, trace_local_rays_each,
-    trace_rays_each,
+    CpuKernel, QueryOptions, QueryRays, RayFrame, SharedOut, TracedChunk, trace_rays_each,
 };
 use lambert::gpu::AdapterRequest;
 use lambert::jobs::{self, Sampling};
@@ -255,7 +254,7 @@ impl NativeScene {
             match query {
                 Query::Records(r) => {
                     rays::validate_rays(r).map_err(|bad| Error::Usage(bad.to_string()))?;
-                    trace_rays_each(scene, QueryRays::Slice(r), options, sink);
+                    trace_rays_each(scene, QueryRays::Slice(r), options, RayFrame::World, sink);
                 }
                 Query::Arrays { n, .. } => {
                     let first_bad = FirstBad::new();
@@ -263,10 +262,11 @@ impl NativeScene {
                         query.fill(start, out, &first_bad)
                     };
                     let rays = QueryRays::Fill(n, &fill);
-                    match query.local() {
-                        Some(_) => trace_local_rays_each(scene, rays, options, sink),
-                        None => trace_rays_each(scene, rays, options, sink),
-                    }
+                    let frame = match query.local() {
+                        Some(_) => RayFrame::Local,
+                        None => RayFrame::World,
+                    };
+                    trace_rays_each(scene, rays, options, frame, sink);
                     first_bad.result(&query)?;
                 }
             }
