@@ -1,7 +1,7 @@
 //! Double precision, the oracle: the kernel (`kernel!`, kernel.rs) with
 //! `Real = f64`, and its `Scalar` (src/cpu/precision.rs), portable
-//! throughout: no SIMD variants (the trait's defaults, the portable
-//! originals, which `has_ymm_boxes` and `has_vector_sort` never ask for).
+//! throughout: no SIMD variants (the trait's defaults, which the stages
+//! never ask for: `has_ymm_boxes` and `has_vector_sort` are false).
 //! Nothing else is defined here (tests/architecture_rules.rs checks it).
 
 super::kernel::kernel!(f64);

@@ -19,7 +19,8 @@
 //! (`intersect_boxes` in one 8-lane register, and whether the CPU can run
 //! it) and `push_sorted_zmm` with `has_vector_sort` (the ordering of
 //! entered children in vector registers); the SIMD variants with the
-//! kernel's types they take (`KernelTypes`, which `kernel!` implements).
+//! kernel's types they take and the portable slab test (`KernelItems`,
+//! which `kernel!` implements).
 //! So a stage names nothing that the invoking module defines by hand
 //! (tests/architecture_rules.rs checks that the precisions' modules
 //! define nothing beside `kernel!` and their `Scalar`), and a precision
@@ -38,7 +39,7 @@ macro_rules! kernel {
         crate::cpu::kernel::kernel!(f64, glam::DVec2, glam::DVec3, glam::DVec4);
     };
     ($real:ident, $vec2:ty, $vec3:ty, $vec4:ty) => {
-        use crate::cpu::precision::{KernelTypes, Scalar};
+        use crate::cpu::precision::{KernelItems, Scalar};
         pub type Real = $real;
         pub type Vec2 = $vec2;
         pub type Vec3 = $vec3;
@@ -56,12 +57,17 @@ macro_rules! kernel {
         crate::cpu::closest::stage::closest!();
         crate::cpu::winding::stage::winding!();
 
-        impl KernelTypes for Real {
+        impl KernelItems for Real {
             type Vec4 = Vec4;
             type Ray = Ray;
             type Slabs = Slabs;
             type BoxHits = BoxHits;
             type Stack = TraversalStack;
+
+            #[inline(always)]
+            fn intersect_boxes(ray: &Ray, slabs: &Slabs, node: &BvhNode) -> BoxHits {
+                intersect_boxes(ray, slabs, node)
+            }
         }
     };
 }

@@ -7,15 +7,20 @@
 
 use crate::layout::{BVH_WIDTH, BvhNode};
 
-/// The kernel's own types in a precision that `Scalar`'s functions take
-/// and give: `kernel!` implements it for the `Real` it expands the stages
-/// in (its `Vec4`, `Ray`, `Slabs`, `BoxHits` and `TraversalStack`).
-pub trait KernelTypes: Copy {
+/// The kernel's own items in a precision that `Scalar` names: the types
+/// its functions take and give, and the portable slab test its SIMD
+/// variant defaults to. `kernel!` implements it for the `Real` it expands
+/// the stages in (its `Vec4`, `Ray`, `Slabs`, `BoxHits`, `TraversalStack`
+/// and `intersect_boxes`).
+pub trait KernelItems: Copy {
     type Vec4;
     type Ray;
     type Slabs;
     type BoxHits;
     type Stack;
+
+    /// The kernel's portable slab test of a node's eight child boxes.
+    fn intersect_boxes(ray: &Self::Ray, slabs: &Self::Slabs, node: &BvhNode) -> Self::BoxHits;
 }
 
 /// A precision the CPU kernel computes in, with what differs by it: f32,
@@ -26,12 +31,14 @@ pub trait KernelTypes: Copy {
 /// (tests/bvh.rs and src/cpu/f32.rs test them against each other). A
 /// precision with none (f64; f32 off x86) keeps the defaults: `has_…`
 /// false, so that the stages take the portable originals and never call
-/// the variant, which panics.
+/// the variants (the slab test's is the portable one; the ordering's
+/// panics).
 ///
 /// The implementations' functions are `#[inline(always)]` where the
-/// stages call them in hot code: a call through the trait compiles to
-/// what a call of a free function did.
-pub trait Scalar: KernelTypes {
+/// stages call them in hot code, and the defaults are not (as the free
+/// functions they replace were not): a call through the trait compiles
+/// to what a call of a free function did.
+pub trait Scalar: KernelItems {
     /// `a` where a > b, else `b` (a NaN in either yields `b`): the
     /// shader's `select(b, a, a > b)`, lane by lane.
     fn greater_of(a: Self::Vec4, b: Self::Vec4) -> Self::Vec4;
@@ -53,16 +60,16 @@ pub trait Scalar: KernelTypes {
 
     /// `intersect_boxes` with each row of eight planes in one 8-lane
     /// register: the same IEEE operations lane for lane, so the same
-    /// result.
+    /// result (by default, the portable `intersect_boxes` itself).
     ///
     /// # Safety
     /// `has_ymm_boxes()` must hold (the CPU has AVX2 and FMA).
     unsafe fn intersect_boxes_ymm(
-        _ray: &Self::Ray,
-        _slabs: &Self::Slabs,
-        _node: &BvhNode,
+        ray: &Self::Ray,
+        slabs: &Self::Slabs,
+        node: &BvhNode,
     ) -> Self::BoxHits {
-        unreachable!("no 8-lane slab test in this precision (has_ymm_boxes is false)")
+        Self::intersect_boxes(ray, slabs, node)
     }
 
     /// Whether this process runs `push_sorted_zmm`.
