@@ -491,7 +491,7 @@ impl Renderer {
                     normals: false,
                 };
                 let rays = cpu::QueryRays::Slice(rays);
-                cpu::trace_local_rays_each(scene, rays, options, &|chunk| {
+                cpu::trace_rays_each(scene, rays, options, cpu::RayFrame::Local, &|chunk| {
                     // SAFETY: chunks are disjoint and within `hits`.
                     unsafe {
                         std::ptr::copy_nonoverlapping(

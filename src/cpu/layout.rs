@@ -109,7 +109,7 @@ macro_rules! layout {
             strata_x: u32,
             /// The ray/triangle test: the scene's, unless a query asks for another.
             pub intersect: Intersect,
-            /// Whether node visits take `intersect_boxes_ymm` (the CPU has 8-lane
+            /// Whether node visits take `Scalar::intersect_boxes_ymm` (the CPU has 8-lane
             /// vector registers and fused multiply-adds).
             ymm_boxes: bool,
             /// The GPU's compressed nodes of the scene's BVH: with them, `trace`
@@ -134,10 +134,10 @@ macro_rules! layout {
         impl<'a> Kernel<'a> {
             /// `scene` seen from its default view (ray queries use no camera).
             pub fn new(scene: &'a Scene) -> Kernel<'a> {
-                Kernel::new_for(scene, has_ymm_boxes())
+                Kernel::new_for(scene, <Real as Scalar>::has_ymm_boxes())
             }
 
-            /// `new`, with node visits through `intersect_boxes_ymm` or not: the
+            /// `new`, with node visits through `Scalar::intersect_boxes_ymm` or not: the
             /// SIMD kernels' tests compare each against the portable one.
             pub fn new_for(scene: &'a Scene, ymm_boxes: bool) -> Kernel<'a> {
                 Kernel::with_view(scene, &scene.view, ymm_boxes)

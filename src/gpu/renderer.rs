@@ -161,11 +161,6 @@ impl GpuRenderer {
         self.proximity.set_winding_source(scene);
     }
 
-    /// What a pass reads of the renderer's other parts.
-    fn host(&self) -> Host<'_> {
-        Host::new(&self.gpu, &self.pipelines, &self.resident)
-    }
-
     /// Renders the scene as `view` sees it, tile by tile, reading each
     /// back before the next.
     pub fn render(&mut self, view: &View, progress: &Progress) -> Result<(Rendered, GpuTimings)> {
@@ -313,19 +308,11 @@ impl GpuRenderer {
         }
         let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
         self.lists.prepare_pixel_list(host)?;
-        loop {
-            let step = self.tiles.samples_per_dispatch(ShadowDispatch::Megakernel);
-            let step = step.min(params.spp);
-            let results = self
-                .lists
-                .render_pixel_list(self.host(), &params, pixels, step)?;
-            if !self.resident.loops_were_cut(&self.gpu)? {
-                return Ok(results);
-            }
-            let dispatch = ShadowDispatch::Megakernel;
-            self.tiles
-                .fewer_samples_per_dispatch(&self.gpu, dispatch, params.spp)?;
-        }
+        let (lists, dispatch) = (&self.lists, ShadowDispatch::Megakernel);
+        self.tiles.until_whole(host, dispatch, params.spp, |tiles| {
+            let step = tiles.samples_per_dispatch(dispatch).min(params.spp);
+            lists.render_pixel_list(host, &params, pixels, step)
+        })
     }
 
     /// The path integrator's light functions (`sample_emitter`,

@@ -41,8 +41,9 @@ pub struct Materials {
 
 /// The statements of OBJ or MTL text, each with the number of the line it
 /// starts on: a line ending in `\` continues on the next (the OBJ spec),
-/// joined as one line. A UTF-8 byte-order mark (some Windows exporters
-/// write one) is not part of the first statement.
+/// joined as one line; a comment, from `#` to the statement's end, is not
+/// part of it. A UTF-8 byte-order mark (some Windows exporters write one)
+/// is not part of the first statement.
 fn statements(text: &str) -> impl Iterator<Item = (usize, Cow<'_, str>)> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut lines = super::text_lines(text).enumerate();
@@ -57,6 +58,14 @@ fn statements(text: &str) -> impl Iterator<Item = (usize, Cow<'_, str>)> {
             };
             statement = Cow::Owned(format!("{head} {next}"));
         }
+        let end = statement.find('#').unwrap_or(statement.len());
+        let statement = match statement {
+            Cow::Borrowed(whole) => Cow::Borrowed(&whole[..end]),
+            Cow::Owned(mut whole) => {
+                whole.truncate(end);
+                Cow::Owned(whole)
+            }
+        };
         Some((index + 1, statement))
     })
 }
@@ -104,7 +113,6 @@ pub fn parse_mtl(text: &str, mtl: &Path, materials: &mut Materials) -> Result<()
     let first = materials.materials.len();
     for (line_number, line) in statements(text) {
         let fail = line_error(mtl, line_number);
-        let line = line.split('#').next().unwrap_or("");
         let mut tokens = line.split_whitespace();
         match tokens.next() {
             Some("newmtl") => {
@@ -165,7 +173,7 @@ pub fn parse_mtl(text: &str, mtl: &Path, materials: &mut Materials) -> Result<()
                 let at = format!("{}:{line_number}", mtl.display());
                 let rest: Vec<&str> = tokens.collect();
                 let texture = if keyword.starts_with("map_") {
-                    texture_use(&rest, after_words(line, 1), mtl, &at, materials)
+                    texture_use(&rest, after_words(&line, 1), mtl, &at, materials)
                 } else {
                     None
                 };
@@ -510,7 +518,6 @@ pub fn parse_obj(text: &str, path: &Path, mode: NormalMode) -> Result<Mesh> {
     let mut unknown_uvs = Skipped::default();
     for (line_number, line) in statements(text) {
         let fail = line_error(path, line_number);
-        let line = line.split('#').next().unwrap_or("");
         let mut tokens = line.split_whitespace();
         match tokens.next() {
             Some("v") => {

@@ -2,7 +2,7 @@
 //! view and a render's light, their value parsers, and the command line's
 //! names of the library's choices (the library knows nothing of clap).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use clap::{Args, ValueEnum};
 
@@ -133,6 +133,20 @@ impl AdapterArgs {
         }
         .with_environment(|name| std::env::var(name).ok())
     }
+}
+
+/// What a render reads and where it renders, as `render` and `view` take
+/// them.
+#[derive(Args)]
+pub(super) struct SceneArgs {
+    /// A scene (.toml) or model file.
+    pub scene: PathBuf,
+    #[arg(long, value_enum, default_value_t)]
+    pub device: Device,
+    #[command(flatten)]
+    pub options: RenderOptions,
+    #[command(flatten)]
+    pub adapter: AdapterArgs,
 }
 
 /// Settings that override the scene file's.
