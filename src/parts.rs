@@ -179,10 +179,6 @@ fn read_part(path: &Path) -> Result<Part> {
     parse_part(&bytes, path)
 }
 
-/// The most a ZIP (deflate) block expands, with a margin: deflate's limit
-/// is about 1032 to 1; RLE's is 64 to 1.
-const MAX_EXPANSION: u64 = 1100;
-
 /// Checks a part's header before its pixels are decoded: the decoder
 /// allocates what the header claims, so a few corrupt bytes could otherwise
 /// ask for gigabytes. Only the compressions lambert writes parts with (and
@@ -218,7 +214,7 @@ fn check_part_header(bytes: &[u8], fail: &dyn Fn(String) -> Error) -> Result<()>
         })
         .map_err(|e| fail(format!("its image: {e}")))?;
     let pixel_bytes = header.layer_size.area() as u64 * header.channels.bytes_per_pixel as u64;
-    if pixel_bytes > MAX_EXPANSION * bytes.len() as u64 {
+    if pixel_bytes > crate::files::MAX_EXPANSION * bytes.len() as u64 {
         return Err(fail(format!(
             "its header claims {pixel_bytes} bytes of pixels, more than its {} bytes can hold \
              (the file is truncated or corrupt)",

@@ -397,6 +397,11 @@ fn bad_maps_are_refused_naming_the_file() {
         &[[1.0; 3], [1.0, f32::NAN, 0.0], [1.0; 3], [1.0; 3]],
     );
     assert!(load("nan.exr").contains("pixel (1, 0) is [1.0, NaN, 0.0]"));
+    // A small file that claims a huge map is refused before its pixels
+    // are allocated.
+    let header = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 16384 +X 16384\n\x02\x02\x40\x00";
+    std::fs::write(dir.path().join("claims.hdr"), header).unwrap();
+    assert!(load("claims.hdr").contains("its header claims 16384 × 16384 pixels"));
     // A sparse file one byte over the cap takes no room on disk.
     let big = std::fs::File::create(dir.path().join("big.hdr")).unwrap();
     big.set_len(MAX_ENVIRONMENT_BYTES + 1).unwrap();
