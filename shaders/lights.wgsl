@@ -27,17 +27,6 @@ const ONE_MINUS_EPSILON: f32 = 0.99999994f;
 // the uniform sphere's pdf, is the winding stage's INV_FOUR_PI).
 const INV_TWO_PI_SQUARED: f32 = 0.05066059f;
 
-// a · b, each product and sum rounded, left to right.
-fn dot_rounded(a: vec3<f32>, b: vec3<f32>) -> f32 {
-    return rounded(rounded(rounded(a.x * b.x) + rounded(a.y * b.y)) + rounded(a.z * b.z));
-}
-
-// a × b, each component a difference of products rounded on its own.
-fn cross_rounded(a: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
-    return vec3<f32>(difference_of_products(a.y, b.z, a.z, b.y),
-        difference_of_products(a.z, b.x, a.x, b.z), difference_of_products(a.x, b.y, a.y, b.x));
-}
-
 // The emission at (u, v) of triangle `prim`: its material's, times its
 // emissive texture read as `texture_at` does (where the triangle has
 // texture coordinates). Shading and light sampling both read it.
@@ -371,15 +360,4 @@ fn environment_pdf(dir: vec3<f32>) -> f32 {
     }
     let pdf_uv = rounded(rounded(dm * f32(rows)) * rounded(dc * f32(columns)));
     return rounded(rounded(rounded(opaque_copy(pdf_uv) * INV_TWO_PI_SQUARED) / sin_theta) * pmf);
-}
-
-// TEMPORARY, until branch `mat` lands with it in shaders/shade.wgsl (the
-// same text): KHR_lights_punctual's smooth falloff of a spot light.
-fn spot_falloff(light: Light, to_light: vec3<f32>) -> f32 {
-    let d = light.direction;
-    let cos_angle = -rounded(rounded(rounded(d.x * to_light.x) + rounded(d.y * to_light.y))
-        + rounded(d.z * to_light.z));
-    let t = clamp(rounded(cos_angle - light.cos_outer)
-        / max(light.cos_inner - light.cos_outer, 1e-3), 0.0, 1.0);
-    return t * t;
 }

@@ -75,8 +75,9 @@ impl Fingerprint {
 /// The hash a part records: everything that reaches a pixel. The scene's
 /// geometry and its offset (the geometry is stored relative to the
 /// scene's centre, so a far scene moved whole keeps its local numbers and
-/// differs only there), materials, texture texels (the store's words: an
-/// image's pixels changed at the same size change nothing else), lights,
+/// differs only there), materials and tangent frames, texture texels
+/// (the store's words: an image's pixels changed at the same size change
+/// nothing else), lights,
 /// background, ambient, shadows, intersection test and acceleration; the
 /// view's camera, image size, samples and seed; and which path renders
 /// (the GPU's pixels differ from the CPU's within tolerance, so parts of
@@ -90,6 +91,8 @@ pub fn settings_hash(scene: &Scene, view: &View, device: &str) -> String {
     h.add(bytemuck::cast_slice(&scene.triangles));
     h.add(bytemuck::cast_slice(&scene.normals));
     h.add(bytemuck::cast_slice(&scene.attributes));
+    // Empty but for normal-mapped scenes: other scenes' hashes as before.
+    h.add(bytemuck::cast_slice(&scene.tangents));
     h.add(bytemuck::cast_slice(&scene.spheres));
     h.add(bytemuck::cast_slice(&scene.materials));
     h.add(bytemuck::cast_slice(&scene.lights));

@@ -36,6 +36,8 @@ macro_rules! kernel {
         crate::cpu::lights::lights!();
         crate::cpu::sample::sample!();
         crate::cpu::texture::stage::texture!();
+        crate::cpu::bsdf::bsdf!();
+        crate::cpu::material::material!();
         crate::cpu::closest::stage::closest!();
         crate::cpu::winding::stage::winding!();
     };

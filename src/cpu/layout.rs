@@ -11,7 +11,8 @@ macro_rules! layout {
         use crate::camera::View;
         use crate::layout::{
             BVH_WIDTH, BvhNode, CompressedNode, FLAG_ATTRIBUTES, FLAG_MASKED, FLAG_SMOOTH,
-            LEAF_BIT, LIGHT_POINT, META_LEAF, NO_HIT, NO_TEXTURE, PrimBlock, leaf_range,
+            LEAF_BIT, LIGHT_DIRECTIONAL, LIGHT_SPOT, META_LEAF, NO_HIT, NO_TEXTURE, PrimBlock,
+            leaf_range,
         };
         use crate::scene::{Accel, Intersect, Scene};
 

@@ -3,6 +3,7 @@
 //! same code in double precision, the oracle that measures both.
 
 mod all_hits;
+mod bsdf;
 pub mod closest;
 /// Single precision, as on the GPU.
 #[allow(clippy::unnecessary_cast)]
@@ -15,6 +16,7 @@ mod intersect;
 mod kernel;
 mod layout;
 mod lights;
+mod material;
 mod math;
 mod prefetch;
 mod proximity;

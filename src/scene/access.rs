@@ -58,6 +58,12 @@ impl Scene {
         &self.attributes
     }
 
+    /// One entry per triangle when any material has a normal texture, else
+    /// empty.
+    pub fn tangents(&self) -> &[TriangleTangents] {
+        &self.tangents
+    }
+
     /// Triangles whose file gave them vertex colours (for `lambert info`).
     pub fn colored_triangles(&self) -> usize {
         self.colored_triangles

@@ -7,10 +7,12 @@ use glam::{DMat3, DVec3};
 use serde::Deserialize;
 
 use super::lighting::EnvironmentEntry;
-use super::{Intersect, Rgb, Scene, Transform, colour, directional_light, point, point_light};
+use super::{
+    Intersect, Rgb, Scene, Transform, colour, directional_light, point, point_light, spot_light,
+};
 use crate::camera::{Camera, View, validate_camera};
 use crate::error::{Error, Result};
-use crate::layout::Sphere;
+use crate::layout::{MATERIAL_METALLIC_ROUGHNESS, Material, Sphere};
 use crate::limits::{MAX_SPHERE_RADIUS, checked_point, validate_spp, vector_text};
 use crate::loading::{self, NormalMode};
 use crate::placement::centring_offset;
@@ -29,6 +31,8 @@ struct SceneFile {
     point_light: Vec<PointLightEntry>,
     #[serde(default)]
     directional_light: Vec<DirectionalLightEntry>,
+    #[serde(default)]
+    spot_light: Vec<SpotLightEntry>,
     #[serde(default)]
     environment: Option<EnvironmentEntry>,
 }
@@ -76,6 +80,11 @@ struct MeshEntry {
     /// Overrides every material of the file when given.
     #[serde(default)]
     albedo: Option<Rgb>,
+    /// Make every material of the file metallic-roughness (`Brdf`).
+    #[serde(default)]
+    metallic: Option<f64>,
+    #[serde(default)]
+    roughness: Option<f64>,
     #[serde(default)]
     normals: NormalMode,
     #[serde(default)]
@@ -97,6 +106,47 @@ struct SphereEntry {
     radius: f64,
     #[serde(default = "default_albedo")]
     albedo: Rgb,
+    #[serde(default)]
+    metallic: Option<f64>,
+    #[serde(default)]
+    roughness: Option<f64>,
+}
+
+/// `metallic` and `roughness` of a `[[mesh]]` or `[[sphere]]`, checked
+/// (each in [0, 1]; `field` names them in errors): either makes its
+/// materials glTF's metallic-roughness BRDF (docs/scene-format.md).
+#[derive(Clone, Copy, Debug)]
+struct Brdf {
+    metallic: Option<f32>,
+    roughness: Option<f32>,
+}
+
+impl Brdf {
+    fn checked(field: &str, metallic: Option<f64>, roughness: Option<f64>) -> Result<Brdf, String> {
+        let factor = |key: &str, value: Option<f64>| match value {
+            Some(v) if !(0.0..=1.0).contains(&v) => {
+                Err(format!("{field}.{key} = {v} must be in [0, 1]"))
+            }
+            v => Ok(v.map(|v| v as f32)),
+        };
+        Ok(Brdf {
+            metallic: factor("metallic", metallic)?,
+            roughness: factor("roughness", roughness)?,
+        })
+    }
+
+    /// Applies the factors given to `materials`; one not given keeps the
+    /// material's (a Lambert material's: metallic 0, roughness 1).
+    fn apply(self, materials: &mut [Material]) {
+        if self.metallic.is_none() && self.roughness.is_none() {
+            return;
+        }
+        for material in materials {
+            material.kind = MATERIAL_METALLIC_ROUGHNESS;
+            material.metallic = self.metallic.unwrap_or(material.metallic);
+            material.roughness = self.roughness.unwrap_or(material.roughness);
+        }
+    }
 }
 
 #[derive(Debug, Deserialize)]
@@ -111,6 +161,28 @@ struct PointLightEntry {
 struct DirectionalLightEntry {
     direction: [f64; 3],
     irradiance: Rgb,
+}
+
+/// `[[spot_light]]`: a point light limited to a cone (KHR_lights_punctual's
+/// spot light, its falloff and defaults: inner 0°, outer 45°).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SpotLightEntry {
+    position: [f64; 3],
+    /// The way it points.
+    direction: [f64; 3],
+    /// On its axis, as a point light's.
+    intensity: Rgb,
+    /// Half-angle of the cone of full intensity, degrees.
+    #[serde(default)]
+    inner_angle_deg: f64,
+    /// Half-angle of the cone beyond which it gives no light, degrees.
+    #[serde(default = "default_outer_angle")]
+    outer_angle_deg: f64,
+}
+
+fn default_outer_angle() -> f64 {
+    45.0
 }
 
 impl Scene {
@@ -160,6 +232,7 @@ impl Scene {
                 .transpose()
                 .map_err(fail)?;
             let transform = mesh_transform(&field, entry).map_err(fail)?;
+            let brdf = Brdf::checked(&field, entry.metallic, entry.roughness).map_err(fail)?;
             let model = base.join(&entry.file);
             let mesh = loading::load_mesh(&model, entry.normals)?;
             for &p in &mesh.positions {
@@ -167,15 +240,17 @@ impl Scene {
                 bounds = (bounds.0.min(q), bounds.1.max(q));
             }
             let what = format!("{field} ({})", entry.file.display());
-            meshes.push((what, mesh, transform, albedo));
+            meshes.push((what, mesh, transform, albedo, brdf));
         }
         for entry in &file.sphere {
             let (center, radius) = (DVec3::from(entry.center), entry.radius.abs());
             bounds = (bounds.0.min(center - radius), bounds.1.max(center + radius));
         }
         scene.offset = centring_offset(bounds.0, bounds.1);
-        for (what, mesh, transform, albedo) in meshes {
+        for (what, mesh, transform, albedo, brdf) in meshes {
+            let first = scene.materials.len();
             scene.add_mesh(path, &what, mesh, &transform, albedo)?;
+            brdf.apply(&mut scene.materials[first..]);
         }
         for (i, entry) in file.sphere.iter().enumerate() {
             let field = format!("sphere[{i}]");
@@ -194,6 +269,9 @@ impl Scene {
             }
             let albedo = colour(&format!("{field}.albedo"), entry.albedo).map_err(fail)?;
             let material = scene.add_material(albedo);
+            Brdf::checked(&field, entry.metallic, entry.roughness)
+                .map_err(fail)?
+                .apply(&mut scene.materials[material as usize..]);
             scene.spheres.push(Sphere {
                 center,
                 radius: entry.radius as f32,
@@ -213,6 +291,18 @@ impl Scene {
             let field = format!("directional_light[{i}]");
             let direction = DVec3::from(entry.direction);
             let light = directional_light(&field, direction, entry.irradiance).map_err(fail)?;
+            scene.lights.push(light);
+        }
+        for (i, entry) in file.spot_light.iter().enumerate() {
+            let light = spot_light(
+                &format!("spot_light[{i}]"),
+                entry.position,
+                DVec3::from(entry.direction),
+                entry.intensity,
+                [entry.inner_angle_deg, entry.outer_angle_deg],
+                scene.offset,
+            )
+            .map_err(fail)?;
             scene.lights.push(light);
         }
         if scene.triangles.is_empty() && scene.spheres.is_empty() {
