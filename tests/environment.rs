@@ -317,12 +317,12 @@ fn the_environment_table() {
     let dir = tempfile::tempdir().unwrap();
     let sky = dir.path().join("sky.exr");
     write_exr(&sky, 4, 2, &[[1.0; 3]; 8]);
-    let scene_with = |table: &str| {
-        let text = format!(
+    let text = |table: &str| {
+        format!(
             "[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\nvfov = 40\nwidth = 8\nheight = 8\n\n[[sphere]]\ncenter = [0, 0, 0]\nradius = 1\n\n{table}"
-        );
-        Scene::from_toml(&text, &dir.path().join("scene.toml"))
+        )
     };
+    let scene_with = |table: &str| Scene::from_toml(&text(table), &dir.path().join("scene.toml"));
     let scene = scene_with("[environment]\nimage = \"sky.exr\"\nstrength = 2\nrotation_deg = 30\n")
         .unwrap();
     let environment = scene.environment().unwrap();
@@ -336,6 +336,16 @@ fn the_environment_table() {
     assert!(
         warning.contains("sky.exr") && warning.contains("direct integrator ignores"),
         "{warning}"
+    );
+    // `lambert info` says what the path integrator will see.
+    let path = dir.path().join("lit.toml");
+    std::fs::write(&path, text("[environment]\nimage = \"sky.exr\"\n")).unwrap();
+    let info = common::lambert(&["info", path.to_str().unwrap()]);
+    let stdout = String::from_utf8_lossy(&info.stdout);
+    assert!(
+        stdout.contains("sky.exr (4 × 2 texels), strength 1, turned 0° about +Y")
+            && stdout.contains("emitters (path integrator): 1 (0 emissive triangles)"),
+        "{stdout}"
     );
     let scene = scene_with("[environment]\ncolor = [0.1, 0.2, 0.3]\n").unwrap();
     assert_eq!(scene.environment().unwrap().color, [0.1, 0.2, 0.3]);
