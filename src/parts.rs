@@ -96,6 +96,15 @@ pub fn settings_hash(scene: &Scene, view: &View, device: &str) -> String {
     h.add(bytemuck::cast_slice(&scene.spheres));
     h.add(bytemuck::cast_slice(&scene.materials));
     h.add(bytemuck::cast_slice(&scene.lights));
+    // Only a scene with an environment adds to it: other scenes' hashes as
+    // before.
+    if let Some(e) = &scene.environment {
+        h.add(bytemuck::cast_slice(&e.color));
+        h.add(bytemuck::cast_slice(&e.rotation));
+        if let Some(map) = &e.map {
+            h.add(bytemuck::cast_slice(&map.pixels));
+        }
+    }
     let c = &view.camera;
     for v in c.eye.iter().chain(&c.look_at).chain(&c.up).chain([&c.vfov]) {
         h.add(&v.to_le_bytes());
