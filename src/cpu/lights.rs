@@ -222,7 +222,7 @@ macro_rules! lights {
                 }
                 let (sin_theta, cos_theta) = approx_sin_cos(PI * t);
                 let (sin_phi, cos_phi) = approx_sin_cos(TWO_PI * map_u);
-                if !(sin_theta > 0.0) {
+                if sin_theta.is_nan() || sin_theta <= 0.0 {
                     return out;
                 }
                 let d = Vec3::new(sin_phi * sin_theta, cos_theta, -(cos_phi * sin_theta));
@@ -254,7 +254,7 @@ macro_rules! lights {
                 let dm = cdf[row + 1] as Real - cdf[row] as Real;
                 let dc = cdf[start + column + 1] as Real - cdf[start + column] as Real;
                 let sin_theta = safe_sqrt(d.x * d.x + d.z * d.z);
-                if !(sin_theta > 0.0) {
+                if sin_theta.is_nan() || sin_theta <= 0.0 {
                     return 0.0;
                 }
                 let pdf_uv = (dm * rows as Real) * (dc * columns as Real);
@@ -368,7 +368,8 @@ macro_rules! lights {
                         .sample_environment(u),
                 };
                 out.pdf *= entry.pmf as Real;
-                if !(dot_rounded(out.wi, normal) > 0.0) {
+                let cos = dot_rounded(out.wi, normal);
+                if cos.is_nan() || cos <= 0.0 {
                     out.pdf = 0.0;
                 }
                 out

@@ -23,7 +23,7 @@ use crate::files::{MAX_EXPANSION, read_capped};
 /// The most lambert reads of an environment map file.
 pub const MAX_ENVIRONMENT_BYTES: u64 = 1 << 30;
 /// The widest and tallest map lambert decodes (as textures).
-pub const MAX_ENVIRONMENT_SIDE: u32 = 16384;
+const MAX_ENVIRONMENT_SIDE: u32 = 16384;
 
 /// What an environment is made of.
 #[derive(Clone, Debug, PartialEq)]
