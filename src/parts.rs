@@ -96,6 +96,15 @@ pub fn settings_hash(scene: &Scene, view: &View, device: &str) -> String {
     h.add(bytemuck::cast_slice(&scene.spheres));
     h.add(bytemuck::cast_slice(&scene.materials));
     h.add(bytemuck::cast_slice(&scene.lights));
+    // Only a scene with an environment adds to it: other scenes' hashes as
+    // before.
+    if let Some(e) = &scene.environment {
+        h.add(bytemuck::cast_slice(&e.color));
+        h.add(bytemuck::cast_slice(&e.rotation));
+        if let Some(map) = &e.map {
+            h.add(bytemuck::cast_slice(&map.pixels));
+        }
+    }
     let c = &view.camera;
     for v in c.eye.iter().chain(&c.look_at).chain(&c.up).chain([&c.vfov]) {
         h.add(&v.to_le_bytes());
@@ -182,10 +191,6 @@ fn read_part(path: &Path) -> Result<Part> {
     parse_part(&bytes, path)
 }
 
-/// The most a ZIP (deflate) block expands, with a margin: deflate's limit
-/// is about 1032 to 1; RLE's is 64 to 1.
-const MAX_EXPANSION: u64 = 1100;
-
 /// Checks a part's header before its pixels are decoded: the decoder
 /// allocates what the header claims, so a few corrupt bytes could otherwise
 /// ask for gigabytes. Only the compressions lambert writes parts with (and
@@ -221,7 +226,7 @@ fn check_part_header(bytes: &[u8], fail: &dyn Fn(String) -> Error) -> Result<()>
         })
         .map_err(|e| fail(format!("its image: {e}")))?;
     let pixel_bytes = header.layer_size.area() as u64 * header.channels.bytes_per_pixel as u64;
-    if pixel_bytes > MAX_EXPANSION * bytes.len() as u64 {
+    if pixel_bytes > crate::files::MAX_EXPANSION * bytes.len() as u64 {
         return Err(fail(format!(
             "its header claims {pixel_bytes} bytes of pixels, more than its {} bytes can hold \
              (the file is truncated or corrupt)",

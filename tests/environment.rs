@@ -317,12 +317,12 @@ fn the_environment_table() {
     let dir = tempfile::tempdir().unwrap();
     let sky = dir.path().join("sky.exr");
     write_exr(&sky, 4, 2, &[[1.0; 3]; 8]);
-    let scene_with = |table: &str| {
-        let text = format!(
+    let text = |table: &str| {
+        format!(
             "[camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\nvfov = 40\nwidth = 8\nheight = 8\n\n[[sphere]]\ncenter = [0, 0, 0]\nradius = 1\n\n{table}"
-        );
-        Scene::from_toml(&text, &dir.path().join("scene.toml"))
+        )
     };
+    let scene_with = |table: &str| Scene::from_toml(&text(table), &dir.path().join("scene.toml"));
     let scene = scene_with("[environment]\nimage = \"sky.exr\"\nstrength = 2\nrotation_deg = 30\n")
         .unwrap();
     let environment = scene.environment().unwrap();
@@ -336,6 +336,16 @@ fn the_environment_table() {
     assert!(
         warning.contains("sky.exr") && warning.contains("direct integrator ignores"),
         "{warning}"
+    );
+    // `lambert info` says what the path integrator will see.
+    let path = dir.path().join("lit.toml");
+    std::fs::write(&path, text("[environment]\nimage = \"sky.exr\"\n")).unwrap();
+    let info = common::lambert(&["info", path.to_str().unwrap()]);
+    let stdout = String::from_utf8_lossy(&info.stdout);
+    assert!(
+        stdout.contains("sky.exr (4 × 2 texels), strength 1, turned 0° about +Y")
+            && stdout.contains("emitters (path integrator): 1 (0 emissive triangles)"),
+        "{stdout}"
     );
     let scene = scene_with("[environment]\ncolor = [0.1, 0.2, 0.3]\n").unwrap();
     assert_eq!(scene.environment().unwrap().color, [0.1, 0.2, 0.3]);
@@ -397,6 +407,11 @@ fn bad_maps_are_refused_naming_the_file() {
         &[[1.0; 3], [1.0, f32::NAN, 0.0], [1.0; 3], [1.0; 3]],
     );
     assert!(load("nan.exr").contains("pixel (1, 0) is [1.0, NaN, 0.0]"));
+    // A small file that claims a huge map is refused before its pixels
+    // are allocated.
+    let header = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 16384 +X 16384\n\x02\x02\x40\x00";
+    std::fs::write(dir.path().join("claims.hdr"), header).unwrap();
+    assert!(load("claims.hdr").contains("its header claims 16384 × 16384 pixels"));
     // A sparse file one byte over the cap takes no room on disk.
     let big = std::fs::File::create(dir.path().join("big.hdr")).unwrap();
     big.set_len(MAX_ENVIRONMENT_BYTES + 1).unwrap();
@@ -474,4 +489,20 @@ fn the_environment_option() {
         &lit,
     );
     assert!(common::stderr(&output).contains("--environment-rotation = inf must be finite"));
+}
+
+/// A part's settings hash covers the environment: parts rendered under
+/// different skies do not merge.
+#[test]
+fn the_parts_hash_covers_the_environment() {
+    let hash = |scene: &Scene| lambert::parts::settings_hash(scene, scene.view(), "cpu");
+    let mut scene = floor();
+    let bare = hash(&scene);
+    scene.set_environment(Some(&color_spec([1.0; 3], 1.0))).unwrap();
+    let one = hash(&scene);
+    scene.set_environment(Some(&color_spec([1.0; 3], 2.0))).unwrap();
+    let two = hash(&scene);
+    assert!(bare != one && one != two && bare != two);
+    scene.set_environment(None).unwrap();
+    assert_eq!(hash(&scene), bare);
 }

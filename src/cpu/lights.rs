@@ -5,8 +5,7 @@
 //! importance sampling weighs by, and the environment's radiance. The
 //! same bits as the shader in f32: every operation in its order (the
 //! shader's `rounded` and `opaque_copy` keep its compiler from fusing or
-//! reordering, and are the identity here; its `dot_rounded` is `dot3`,
-//! its `cross_rounded` glam's `cross`). Written once for both precisions:
+//! reordering, and are the identity here). Written once for both precisions:
 //! `kernel!` (kernel.rs) expands it into `cpu::f32` and `cpu::f64`.
 
 /// The stage's items, expanded into the module that invokes it (`kernel!`).
@@ -48,7 +47,7 @@ macro_rules! lights {
         /// 2r²/|n·wi| for `n` the edges' cross product; 0 edge-on.
         #[inline(always)]
         fn triangle_solid_angle_pdf(n: Vec3, wi: Vec3, distance: Real) -> Real {
-            let cos_area = dot3(n, wi).abs();
+            let cos_area = dot_rounded(n, wi).abs();
             if cos_area == 0.0 {
                 return 0.0;
             }
@@ -72,7 +71,7 @@ macro_rules! lights {
                 return out;
             }
             let d = vec3(light.vector) - position;
-            let distance_squared = dot3(d, d);
+            let distance_squared = dot_rounded(d, d);
             if distance_squared == 0.0 {
                 out.pdf = 0.0;
                 return out;
@@ -223,7 +222,7 @@ macro_rules! lights {
                 }
                 let (sin_theta, cos_theta) = approx_sin_cos(PI * t);
                 let (sin_phi, cos_phi) = approx_sin_cos(TWO_PI * map_u);
-                if !(sin_theta > 0.0) {
+                if sin_theta.is_nan() || sin_theta <= 0.0 {
                     return out;
                 }
                 let d = Vec3::new(sin_phi * sin_theta, cos_theta, -(cos_phi * sin_theta));
@@ -255,7 +254,7 @@ macro_rules! lights {
                 let dm = cdf[row + 1] as Real - cdf[row] as Real;
                 let dc = cdf[start + column + 1] as Real - cdf[start + column] as Real;
                 let sin_theta = safe_sqrt(d.x * d.x + d.z * d.z);
-                if !(sin_theta > 0.0) {
+                if sin_theta.is_nan() || sin_theta <= 0.0 {
                     return 0.0;
                 }
                 let pdf_uv = (dm * rows as Real) * (dc * columns as Real);
@@ -326,13 +325,14 @@ macro_rules! lights {
                 let (v0, v1, v2) = (vec3(tri.v0), vec3(tri.v1), vec3(tri.v2));
                 let w = 1.0 - hu - hv;
                 let d = w * v0 + hu * v1 + hv * v2 - position;
-                let distance_squared = dot3(d, d);
+                let distance_squared = dot_rounded(d, d);
                 if distance_squared == 0.0 {
                     return out;
                 }
                 out.distance = distance_squared.sqrt();
                 out.wi = d / out.distance;
-                out.pdf = triangle_solid_angle_pdf((v1 - v0).cross(v2 - v0), out.wi, out.distance);
+                out.pdf =
+                    triangle_solid_angle_pdf(cross_rounded(v1 - v0, v2 - v0), out.wi, out.distance);
                 if !self.cut_out(prim, hu, hv) {
                     out.radiance = self.emission_at(tri, prim, hu, hv, out.wi, 0.0);
                 }
@@ -368,7 +368,8 @@ macro_rules! lights {
                         .sample_environment(u),
                 };
                 out.pdf *= entry.pmf as Real;
-                if !(dot3(out.wi, normal) > 0.0) {
+                let cos = dot_rounded(out.wi, normal);
+                if cos.is_nan() || cos <= 0.0 {
                     out.pdf = 0.0;
                 }
                 out
@@ -392,7 +393,7 @@ macro_rules! lights {
                 };
                 let tri = &self.scene.triangles[hit_prim as usize];
                 let (v0, v1, v2) = (vec3(tri.v0), vec3(tri.v1), vec3(tri.v2));
-                triangle_solid_angle_pdf((v1 - v0).cross(v2 - v0), wi, distance)
+                triangle_solid_angle_pdf(cross_rounded(v1 - v0, v2 - v0), wi, distance)
                     * triangles[entry].pmf as Real
             }
 

@@ -26,7 +26,9 @@ pub fn alias_table(weights: &[f64]) -> Vec<Bin> {
             alias: i as u32,
         })
         .collect();
-    let (mut under, mut over): (Vec<(usize, f64)>, Vec<(usize, f64)>) = bins
+    // Each bin's index and its probability times n (pbrt's p̂).
+    type Scaled = Vec<(usize, f64)>;
+    let (mut under, mut over): (Scaled, Scaled) = bins
         .iter()
         .enumerate()
         .map(|(i, b)| (i, b.p * n))

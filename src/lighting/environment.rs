@@ -18,12 +18,12 @@ use std::path::{Path, PathBuf};
 
 use super::distribution::cdf_2d;
 use crate::error::{Error, Result};
-use crate::files::read_capped;
+use crate::files::{MAX_EXPANSION, read_capped};
 
 /// The most lambert reads of an environment map file.
 pub const MAX_ENVIRONMENT_BYTES: u64 = 1 << 30;
 /// The widest and tallest map lambert decodes (as textures).
-pub const MAX_ENVIRONMENT_SIDE: u32 = 16384;
+const MAX_ENVIRONMENT_SIDE: u32 = 16384;
 
 /// What an environment is made of.
 #[derive(Clone, Debug, PartialEq)]
@@ -140,9 +140,8 @@ impl Environment {
                 (color, None, 4.0 * std::f64::consts::PI * mean(color))
             }
             EnvironmentSource::Image(path) => {
-                let (width, height, rgb) =
-                    decode(path, &read_capped(path, MAX_ENVIRONMENT_BYTES)?)?;
-                let (map, integral) = EnvironmentMap::new(width, height, &rgb, spec.strength);
+                let bytes = read_capped(path, MAX_ENVIRONMENT_BYTES)?;
+                let (map, integral) = EnvironmentMap::parse(&bytes, path, spec.strength)?;
                 ([0.0; 3], Some(map), integral)
             }
         };
@@ -165,6 +164,13 @@ impl Environment {
 }
 
 impl EnvironmentMap {
+    /// The map in `bytes` (a `.hdr` or `.exr` file's, which `path` names
+    /// in errors) × strength, and ∫ L dω of its channels' mean.
+    pub fn parse(bytes: &[u8], path: &Path, strength: f32) -> Result<(EnvironmentMap, f64)> {
+        let (width, height, rgb) = decode(path, bytes)?;
+        Ok(EnvironmentMap::new(width, height, &rgb, strength))
+    }
+
     /// The map of `rgb` (`width` × `height`, row 0 straight up) × strength,
     /// and ∫ L dω of its channels' mean.
     fn new(width: u32, height: u32, rgb: &[[f32; 3]], strength: f32) -> (EnvironmentMap, f64) {
@@ -228,17 +234,33 @@ fn decode(path: &Path, bytes: &[u8]) -> Result<(u32, u32, Vec<[f32; 3]>)> {
             ));
         }
     };
-    let mut reader = image::ImageReader::with_format(Cursor::new(bytes), format);
-    let mut limits = image::Limits::default();
-    limits.max_image_width = Some(MAX_ENVIRONMENT_SIDE);
-    limits.max_image_height = Some(MAX_ENVIRONMENT_SIDE);
-    limits.max_alloc = Some(4 << 30);
-    reader.limits(limits);
-    let image = reader
-        .decode()
-        .map_err(|e| fail(format!("not a readable {name} image: {e}")))?
-        .into_rgb32f();
-    let (width, height) = image.dimensions();
+    let unreadable = |e: image::ImageError| fail(format!("not a readable {name} image: {e}"));
+    let reader = || {
+        let mut reader = image::ImageReader::with_format(Cursor::new(bytes), format);
+        let mut limits = image::Limits::default();
+        limits.max_image_width = Some(MAX_ENVIRONMENT_SIDE);
+        limits.max_image_height = Some(MAX_ENVIRONMENT_SIDE);
+        limits.max_alloc = Some(4 << 30);
+        reader.limits(limits);
+        reader
+    };
+    // The header first: a small file may claim a huge image, whose pixels
+    // the decoder would allocate before reading one.
+    let (width, height) = reader().into_dimensions().map_err(unreadable)?;
+    let claimed = 12 * width as u64 * height as u64;
+    if width == 0 || height == 0 {
+        return Err(fail(format!(
+            "a {name} image of {width} × {height} pixels: none to light with"
+        )));
+    }
+    if claimed > MAX_EXPANSION * bytes.len() as u64 {
+        return Err(fail(format!(
+            "its header claims {width} × {height} pixels, {claimed} bytes, more than its {} \
+             bytes can hold",
+            bytes.len()
+        )));
+    }
+    let image = reader().decode().map_err(unreadable)?.into_rgb32f();
     let mut rgb = Vec::with_capacity((width * height) as usize);
     for (i, p) in image.pixels().enumerate() {
         if !p.0.iter().all(|v| v.is_finite()) {

@@ -12,7 +12,6 @@ mod environment;
 use alias::alias_table;
 pub use environment::{
     Environment, EnvironmentMap, EnvironmentSource, EnvironmentSpec, MAX_ENVIRONMENT_BYTES,
-    MAX_ENVIRONMENT_SIDE,
 };
 
 use std::f64::consts::PI;
@@ -64,7 +63,7 @@ fn wide(c: [f32; 3]) -> [f64; 3] {
 /// between, as pbrt's `SpotLight::Phi` integrates its own), the
 /// irradiance E of a directional one (Φ = π r²·E, pbrt's
 /// `DistantLight::Phi`).
-pub fn light_power(light: &Light, radius: f64) -> f64 {
+fn light_power(light: &Light, radius: f64) -> f64 {
     let emitted = PI * mean(wide(light.color));
     match light.kind {
         LIGHT_POINT => 4.0 * PI * emitted,
@@ -96,7 +95,7 @@ fn material_radiance(materials: &[Material], textures: &TextureStore) -> Vec<[f6
 }
 
 /// The area of `tri`, in f64 from its f32 corners.
-pub fn triangle_area(tri: &Triangle) -> f64 {
+fn triangle_area(tri: &Triangle) -> f64 {
     let [a, b, c] = [tri.v0, tri.v1, tri.v2].map(|v| glam::DVec3::from(wide(v)));
     0.5 * (b - a).cross(c - a).length()
 }

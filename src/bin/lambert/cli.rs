@@ -32,7 +32,7 @@ use lambert::limits::MAX_SPP;
 use lambert::progress::Progress;
 use lambert::rays;
 use lambert::render::Renderer;
-use lambert::scene::{RenderSettings, Scene};
+use lambert::scene::{Integrator, RenderSettings, Scene};
 
 #[derive(Parser)]
 #[command(
@@ -364,15 +364,14 @@ pub fn run() -> Result<ExitCode> {
 }
 
 /// Loading's warnings, each on its own line, and what the direct
-/// integrator (the only one yet) leaves out of the scene.
-fn print_warnings(scene: &Scene, quiet: bool) {
+/// integrator leaves out of the scene where it renders it (`rendered_by`;
+/// None for no render).
+fn print_warnings(scene: &Scene, rendered_by: Option<Integrator>, quiet: bool) {
     if !quiet {
-        for warning in scene
-            .warnings()
-            .iter()
-            .cloned()
-            .chain(scene.ignored_by_direct())
-        {
+        let ignored = (rendered_by == Some(Integrator::Direct))
+            .then(|| scene.ignored_by_direct())
+            .flatten();
+        for warning in scene.warnings().iter().cloned().chain(ignored) {
             eprintln!("warning: {warning}");
         }
     }
@@ -542,7 +541,7 @@ fn load_scene_for(
     for output in outputs {
         scene.check_output(output)?;
     }
-    print_warnings(&scene, quiet);
+    print_warnings(&scene, Some(settings.integrator), quiet);
     Ok((scene, settings))
 }
 

@@ -156,6 +156,24 @@ pub(super) fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> 
             println!("    directional towards {vector} (from the surface), irradiance {color}");
         }
     }
+    if let Some(e) = scene.environment() {
+        let what = match (&e.map, e.file()) {
+            (Some(map), Some(file)) => {
+                format!("{} ({} × {} texels)", file.display(), map.width, map.height)
+            }
+            _ => format!("colour {:?}", e.color),
+        };
+        println!(
+            "  environment (path integrator only): {what}, strength {}, turned {}° about +Y",
+            e.spec.strength, e.spec.rotation_deg
+        );
+    }
+    let table = scene.emitters();
+    println!(
+        "  emitters (path integrator): {} ({} emissive triangles)",
+        table.entries.len(),
+        table.uniform.num_triangle_emitters
+    );
     // f32 values, printed as f32 (0.1, not 0.10000000149011612).
     println!("  ambient: {:?}", scene.ambient());
     for warning in scene.warnings() {
