@@ -221,6 +221,76 @@ impl EnvironmentMap {
 /// A `.hdr` or `.exr` file's pixels as linear RGB, row 0 first, or why
 /// not, naming `path`. Negative values are read as 0; a value that is not
 /// finite is refused.
+/// An EXR's header and chunks checked before its pixels are decoded: one
+/// flat scanline part, its pixels within what its bytes can expand to,
+/// every chunk within the file.
+fn check_exr_layers(bytes: &[u8]) -> std::result::Result<(), String> {
+    let mut read = Cursor::new(bytes);
+    let meta = exr::meta::MetaData::read_from_buffered(&mut read, false)
+        .map_err(|e| format!("not a readable OpenEXR image: {e}"))?;
+    let [header] = meta.headers.as_slice() else {
+        return Err(format!("has {} parts; an environment map has one", meta.headers.len()));
+    };
+    if header.deep {
+        return Err("a deep image; an environment map is flat".into());
+    }
+    // A tiled image's tile buffers are sized by its header before a pixel
+    // is read (a 500-byte file claimed 64 × 16,056,384 tiles: 1.1 GB).
+    // HDRI maps are scanline images; tiled ones are refused, named.
+    if matches!(header.blocks, exr::meta::BlockDescription::Tiles(_)) {
+        return Err("a tiled OpenEXR image; lambert reads scanline EXR environment maps \
+                    (save it again as scanline)"
+            .into());
+    }
+    let pixel_bytes = header.layer_size.area() as u64 * header.channels.bytes_per_pixel as u64;
+    if pixel_bytes > MAX_EXPANSION * bytes.len() as u64 {
+        return Err(format!(
+            "its header claims {pixel_bytes} bytes of pixels, more than its {} bytes can hold \
+             (the file is truncated or corrupt)",
+            bytes.len()
+        ));
+    }
+    // Every chunk the offset table names must lie within the file: the
+    // exr crate allocates what a chunk's size field claims before it finds
+    // the bytes missing (a corrupt 500-byte RLE file asked for 1.1 GB).
+    let corrupt = |what: String| format!("{what} (the file is truncated or corrupt)");
+    let word = |at: usize, n: usize| bytes.get(at..at + n);
+    let table = read.position() as usize;
+    for chunk in 0..header.chunk_count {
+        let entry = word(table + 8 * chunk, 8)
+            .ok_or_else(|| corrupt(format!("its offset table ends before chunk {chunk}")))?;
+        let offset = u64::from_le_bytes(entry.try_into().expect("8 bytes")) as usize;
+        let size = word(offset.saturating_add(4), 4)
+            .map(|w| i32::from_le_bytes(w.try_into().expect("4 bytes")))
+            .ok_or_else(|| corrupt(format!("chunk {chunk} starts past its end")))?;
+        let end = (offset + 8).checked_add(usize::try_from(size).unwrap_or(usize::MAX));
+        if !end.is_some_and(|end| end <= bytes.len()) {
+            return Err(corrupt(format!("chunk {chunk} claims {size} bytes past its end")));
+        }
+    }
+    Ok(())
+}
+
+/// An EXR's first flat layer, at its largest resolution, as linear RGB
+/// (rows top to bottom), its data window's size.
+fn decode_exr(bytes: &[u8]) -> std::result::Result<Vec<[f32; 3]>, String> {
+    use exr::prelude::*;
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgb_channels(
+            |size, _| (size.width(), vec![[0.0f32; 3]; size.area()]),
+            |(width, pixels): &mut (usize, Vec<[f32; 3]>),
+             p: Vec2<usize>,
+             (r, g, b): (f32, f32, f32)| { pixels[p.y() * *width + p.x()] = [r, g, b] },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(Cursor::new(bytes))
+        .map_err(|e| format!("not a readable OpenEXR image: {e}"))?;
+    Ok(image.layer_data.channel_data.pixels.1)
+}
+
 fn decode(path: &Path, bytes: &[u8]) -> Result<(u32, u32, Vec<[f32; 3]>)> {
     let fail = |message: String| Error::scene(path, message);
     let (name, format) = match image::guess_format(bytes) {
@@ -246,6 +316,9 @@ fn decode(path: &Path, bytes: &[u8]) -> Result<(u32, u32, Vec<[f32; 3]>)> {
     };
     // The header first: a small file may claim a huge image, whose pixels
     // the decoder would allocate before reading one.
+    if format == image::ImageFormat::OpenExr {
+        check_exr_layers(bytes).map_err(fail)?;
+    }
     let (width, height) = reader().into_dimensions().map_err(unreadable)?;
     let claimed = 12 * width as u64 * height as u64;
     if width == 0 || height == 0 {
@@ -260,18 +333,24 @@ fn decode(path: &Path, bytes: &[u8]) -> Result<(u32, u32, Vec<[f32; 3]>)> {
             bytes.len()
         )));
     }
-    let image = reader().decode().map_err(unreadable)?.into_rgb32f();
+    // An EXR through the exr crate itself, as `parts` reads: the image
+    // crate's decoder let a corrupt 500-byte RLE file allocate 1.8 GB.
+    let pixels: Vec<[f32; 3]> = if format == image::ImageFormat::OpenExr {
+        decode_exr(bytes).map_err(fail)?
+    } else {
+        let image = reader().decode().map_err(unreadable)?.into_rgb32f();
+        image.pixels().map(|p| p.0).collect()
+    };
     let mut rgb = Vec::with_capacity((width * height) as usize);
-    for (i, p) in image.pixels().enumerate() {
-        if !p.0.iter().all(|v| v.is_finite()) {
+    for (i, p) in pixels.iter().enumerate() {
+        if !p.iter().all(|v| v.is_finite()) {
             return Err(fail(format!(
-                "pixel ({}, {}) is {:?}: an environment's radiance must be finite",
+                "pixel ({}, {}) is {p:?}: an environment's radiance must be finite",
                 i as u32 % width,
                 i as u32 / width,
-                p.0
             )));
         }
-        rgb.push(p.0.map(|v| v.max(0.0)));
+        rgb.push(p.map(|v| v.max(0.0)));
     }
     Ok((width, height, rgb))
 }
