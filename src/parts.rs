@@ -239,21 +239,9 @@ fn check_part_header(bytes: &[u8], fail: &dyn Fn(String) -> Error) -> Result<()>
 /// Decodes and checks a part file's bytes; `path` names it in errors.
 pub fn parse_part(bytes: &[u8], path: &Path) -> Result<Part> {
     use exr::meta::attribute::AttributeValue;
-    use exr::prelude::*;
     let fail = |m: String| crate::error::Error::Usage(format!("{}: {m}", path.display()));
     check_part_header(bytes, &fail)?;
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .rgb_channels(
-            |size, _| (size.width(), vec![[0.0f32; 3]; size.area()]),
-            |(width, pixels): &mut (usize, Vec<[f32; 3]>),
-             p: Vec2<usize>,
-             (r, g, b): (f32, f32, f32)| { pixels[p.y() * *width + p.x()] = [r, g, b] },
-        )
-        .first_valid_layer()
-        .all_attributes()
-        .from_buffered(std::io::Cursor::new(bytes))
+    let image = crate::output::decode_exr_rgb(bytes)
         .map_err(|e| fail(format!("not a readable EXR part: {e}")))?;
     // Read back from either level: a single-layer file has one header.
     let text = |name: &str| {

@@ -172,12 +172,25 @@ fn pdf_integral(kernel: &Kernel) -> f64 {
     sum * 4.0 * PI / (nz * nphi) as f64
 }
 
-#[test]
-fn the_pdf_integrates_to_one() {
+/// A floor lit by a `width` × `height` map bright at `texel` (`seed`'s
+/// dim noise elsewhere), turned by `rotation_deg`; the folder holding the
+/// map goes with it.
+fn sun_scene(
+    (width, height): (u32, u32),
+    texel: (u32, u32),
+    seed: u64,
+    rotation_deg: f64,
+) -> (tempfile::TempDir, Scene) {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("sun.exr");
-    bright_texel_map(&path, 16, 9, (11, 2), 3);
-    let scene = lit_by_map(&path, 1.0, 25.0);
+    bright_texel_map(&path, width, height, texel, seed);
+    let scene = lit_by_map(&path, 1.0, rotation_deg);
+    (dir, scene)
+}
+
+#[test]
+fn the_pdf_integrates_to_one() {
+    let (_dir, scene) = sun_scene((16, 9), (11, 2), 3, 25.0);
     let integral = pdf_integral(&Kernel::new(&scene));
     assert!((integral - 1.0).abs() < 5e-3, "{integral}");
 }
@@ -196,10 +209,7 @@ fn chi_square_z(statistic: f64, dof: f64) -> f64 {
 /// direction.
 #[test]
 fn samples_follow_the_pdf() {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("sun.exr");
-    bright_texel_map(&path, 24, 13, (5, 4), 11);
-    let scene = lit_by_map(&path, 1.0, 60.0);
+    let (_dir, scene) = sun_scene((24, 13), (5, 4), 11, 60.0);
     let kernel = Kernel::new(&scene);
     let (nz, nphi) = (12usize, 24usize);
     let bin = |d: Vec3| {

@@ -14,15 +14,10 @@ use lambert::output::Rendered;
 const L: f32 = 0.75;
 
 fn furnace(material: &str) -> Scene {
+    let camera = camera_on_z(4.0, 40.0, 32, 32);
     scene(&format!(
         r#"
-[camera]
-eye = [0.0, 0.0, 4.0]
-look_at = [0.0, 0.0, 0.0]
-vfov = 40.0
-width = 32
-height = 32
-
+{camera}
 [render]
 integrator = "path"
 max_depth = 16

@@ -39,6 +39,20 @@ fn small(name: &str) -> lambert::Scene {
     scene
 }
 
+/// An image job on the CPU path, writing `output`, no first-hit outputs.
+fn cpu_image_job(output: &std::path::Path, sampling: Sampling) -> ImageJob<'_> {
+    ImageJob {
+        output,
+        device: DeviceChoice::Cpu,
+        adapter: &DEFAULT_ADAPTER,
+        sampling,
+        aovs: &[],
+    }
+}
+
+static DEFAULT_ADAPTER: std::sync::LazyLock<lambert::gpu::AdapterRequest> =
+    std::sync::LazyLock::new(Default::default);
+
 #[test]
 fn a_turntable_job_writes_its_frames_and_says_each() {
     let dir = tempfile::tempdir().unwrap();
@@ -76,13 +90,7 @@ fn an_image_job_reports_what_its_sampling_chose() {
     let dir = tempfile::tempdir().unwrap();
     let output = dir.path().join("image.pfm");
     let budget = 0.2;
-    let job = ImageJob {
-        output: &output,
-        device: DeviceChoice::Cpu,
-        adapter: &Default::default(),
-        sampling: Sampling::Budget(budget),
-        aovs: &[],
-    };
+    let job = cpu_image_job(&output, Sampling::Budget(budget));
     let lines = Lines::default();
     let scene = small("spheres");
     let settings = scene.default_settings();
@@ -140,11 +148,8 @@ fn an_image_job_writes_the_first_hits_outputs_beside_its_image() {
     let dir = tempfile::tempdir().unwrap();
     let output = dir.path().join("image.png");
     let job = ImageJob {
-        output: &output,
-        device: DeviceChoice::Cpu,
-        adapter: &Default::default(),
-        sampling: Sampling::Fixed,
         aovs: &Aov::ALL,
+        ..cpu_image_job(&output, Sampling::Fixed)
     };
     let scene = small("spheres");
     let settings = scene.default_settings();

@@ -32,16 +32,12 @@ fn worst_relative(a: &Rendered, b: &Rendered, floor: f32) -> f32 {
         .fold(0.0, f32::max)
 }
 
-/// Two spheres on each other's far sides from the camera, apart, no
-/// ambient: what the lights give one sphere cannot reach the other.
-const ONE_LIGHT: &str = r#"
-[camera]
-eye = [0.0, 0.0, 8.0]
-look_at = [0.0, 0.0, 0.0]
-vfov = 40.0
-width = 48
-height = 32
+/// One sphere lit by one point light, no ambient.
+fn one_light() -> String {
+    camera_on_z(8.0, 40.0, 48, 32) + ONE_LIGHT
+}
 
+const ONE_LIGHT: &str = r#"
 [render]
 background = [0.1, 0.2, 0.3]
 
@@ -56,9 +52,9 @@ intensity = [30.0, 30.0, 30.0]
 
 "#;
 
-/// `ONE_LIGHT` and a directional light.
+/// `one_light()` and a directional light.
 fn convex() -> String {
-    format!("{ONE_LIGHT}{DIRECTIONAL}")
+    one_light() + DIRECTIONAL
 }
 
 const DIRECTIONAL: &str = r#"
@@ -73,7 +69,7 @@ fn path_tracing_changes_the_light_transport_not_the_exposure() {
     // nothing (no environment), so path tracing sees what the direct
     // integrator sees. Lit by one point light (picked with probability 1,
     // emitting π times its colour into albedo/π), the same image.
-    let one_light = scene(ONE_LIGHT);
+    let one_light = scene(&one_light());
     let direct = render_cpu(&one_light);
     for max_depth in [1, 4] {
         let path = render_cpu(&path_traced(&one_light, 1, max_depth));

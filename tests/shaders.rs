@@ -1,5 +1,7 @@
 //! Every WGSL file validates with naga and every host struct matches its WGSL layout (no GPU needed).
 
+mod common;
+
 use std::mem::{offset_of, size_of};
 
 use lambert::layout::*;
@@ -289,14 +291,7 @@ fn lighting_structs_match_wgsl_layout() {
 #[test]
 fn shader_constants_match_host() {
     let m = module();
-    let constant = |name: &str| -> String {
-        let (_, c) = m
-            .constants
-            .iter()
-            .find(|(_, c)| c.name.as_deref() == Some(name))
-            .unwrap_or_else(|| panic!("WGSL has no const {name}"));
-        format!("{:?}", m.global_expressions[c.init])
-    };
+    let constant = |name: &str| -> String { format!("{:?}", common::wgsl_constant(&m, name)) };
     let u32s = [
         ("NO_HIT", NO_HIT),
         ("LIGHT_POINT", LIGHT_POINT),

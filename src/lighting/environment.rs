@@ -222,7 +222,7 @@ impl EnvironmentMap {
 /// not, naming `path`. Negative values are read as 0; a value that is not
 /// finite is refused.
 /// An EXR's header and chunks checked before its pixels are decoded: one
-/// flat scanline part, its pixels within what its bytes can expand to,
+/// flat part, its pixels and tiles within what its bytes can expand to,
 /// every chunk within the file.
 fn check_exr_layers(bytes: &[u8]) -> std::result::Result<(), String> {
     let mut read = Cursor::new(bytes);
@@ -234,15 +234,27 @@ fn check_exr_layers(bytes: &[u8]) -> std::result::Result<(), String> {
     if header.deep {
         return Err("a deep image; an environment map is flat".into());
     }
-    // A tiled image's tile buffers are sized by its header before a pixel
-    // is read (a 500-byte file claimed 64 × 16,056,384 tiles: 1.1 GB).
-    // HDRI maps are scanline images; tiled ones are refused, named.
-    if matches!(header.blocks, exr::meta::BlockDescription::Tiles(_)) {
-        return Err("a tiled OpenEXR image; lambert reads scanline EXR environment maps \
-                    (save it again as scanline)"
-            .into());
-    }
-    let pixel_bytes = header.layer_size.area() as u64 * header.channels.bytes_per_pixel as u64;
+    // A tile's buffer is sized by the header before a pixel is read (a
+    // 500-byte file claimed 64 × 16,056,384-pixel tiles: 1.1 GB): held,
+    // as the whole image is, to what the file's bytes can expand to.
+    let bytes_per_pixel = header.channels.bytes_per_pixel as u64;
+    let (chunk_header, size_at) = match header.blocks {
+        exr::meta::BlockDescription::Tiles(tiles) => {
+            let tile_bytes = tiles.tile_size.area() as u64 * bytes_per_pixel;
+            if tile_bytes > MAX_EXPANSION * bytes.len() as u64 {
+                return Err(format!(
+                    "its header claims tiles of {tile_bytes} bytes, more than its {} bytes \
+                     can hold (the file is truncated or corrupt)",
+                    bytes.len()
+                ));
+            }
+            // A tile chunk: tile x, y, level x, level y, then its size.
+            (20, 16)
+        }
+        // A scanline chunk: its first line's y, then its size.
+        exr::meta::BlockDescription::ScanLines => (8, 4),
+    };
+    let pixel_bytes = header.layer_size.area() as u64 * bytes_per_pixel;
     if pixel_bytes > MAX_EXPANSION * bytes.len() as u64 {
         return Err(format!(
             "its header claims {pixel_bytes} bytes of pixels, more than its {} bytes can hold \
@@ -253,42 +265,24 @@ fn check_exr_layers(bytes: &[u8]) -> std::result::Result<(), String> {
     // Every chunk the offset table names must lie within the file: the
     // exr crate allocates what a chunk's size field claims before it finds
     // the bytes missing (a corrupt 500-byte RLE file asked for 1.1 GB).
-    let corrupt = |what: String| format!("{what} (the file is truncated or corrupt)");
+    let corrupt = |what: String| {
+        format!("not a readable OpenEXR image: {what} (the file is truncated or corrupt)")
+    };
     let word = |at: usize, n: usize| bytes.get(at..at + n);
     let table = read.position() as usize;
     for chunk in 0..header.chunk_count {
         let entry = word(table + 8 * chunk, 8)
             .ok_or_else(|| corrupt(format!("its offset table ends before chunk {chunk}")))?;
         let offset = u64::from_le_bytes(entry.try_into().expect("8 bytes")) as usize;
-        let size = word(offset.saturating_add(4), 4)
+        let size = word(offset.saturating_add(size_at), 4)
             .map(|w| i32::from_le_bytes(w.try_into().expect("4 bytes")))
             .ok_or_else(|| corrupt(format!("chunk {chunk} starts past its end")))?;
-        let end = (offset + 8).checked_add(usize::try_from(size).unwrap_or(usize::MAX));
+        let end = (offset + chunk_header).checked_add(usize::try_from(size).unwrap_or(usize::MAX));
         if !end.is_some_and(|end| end <= bytes.len()) {
             return Err(corrupt(format!("chunk {chunk} claims {size} bytes past its end")));
         }
     }
     Ok(())
-}
-
-/// An EXR's first flat layer, at its largest resolution, as linear RGB
-/// (rows top to bottom), its data window's size.
-fn decode_exr(bytes: &[u8]) -> std::result::Result<Vec<[f32; 3]>, String> {
-    use exr::prelude::*;
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .rgb_channels(
-            |size, _| (size.width(), vec![[0.0f32; 3]; size.area()]),
-            |(width, pixels): &mut (usize, Vec<[f32; 3]>),
-             p: Vec2<usize>,
-             (r, g, b): (f32, f32, f32)| { pixels[p.y() * *width + p.x()] = [r, g, b] },
-        )
-        .first_valid_layer()
-        .all_attributes()
-        .from_buffered(Cursor::new(bytes))
-        .map_err(|e| format!("not a readable OpenEXR image: {e}"))?;
-    Ok(image.layer_data.channel_data.pixels.1)
 }
 
 fn decode(path: &Path, bytes: &[u8]) -> Result<(u32, u32, Vec<[f32; 3]>)> {
@@ -333,13 +327,24 @@ fn decode(path: &Path, bytes: &[u8]) -> Result<(u32, u32, Vec<[f32; 3]>)> {
             bytes.len()
         )));
     }
-    // An EXR through the exr crate itself, as `parts` reads: the image
-    // crate's decoder let a corrupt 500-byte RLE file allocate 1.8 GB.
-    let pixels: Vec<[f32; 3]> = if format == image::ImageFormat::OpenExr {
-        decode_exr(bytes).map_err(fail)?
+    // An EXR through the exr crate itself, as `parts` reads, at its data
+    // window's size (which the image crate's may not report).
+    let (width, height, pixels) = if format == image::ImageFormat::OpenExr {
+        let layer = crate::output::decode_exr_rgb(bytes)
+            .map_err(|e| fail(format!("not a readable OpenEXR image: {e}")))?
+            .layer_data;
+        let (w, h) = (layer.size.width(), layer.size.height());
+        let side = |v: usize| u32::try_from(v).ok().filter(|&v| (1..=MAX_ENVIRONMENT_SIDE).contains(&v));
+        let (Some(w), Some(h)) = (side(w), side(h)) else {
+            return Err(fail(format!(
+                "its pixels are {w} × {h}: an environment map's sides are 1 to \
+                 {MAX_ENVIRONMENT_SIDE}"
+            )));
+        };
+        (w, h, layer.channel_data.pixels.1)
     } else {
         let image = reader().decode().map_err(unreadable)?.into_rgb32f();
-        image.pixels().map(|p| p.0).collect()
+        (width, height, image.pixels().map(|p| p.0).collect())
     };
     let mut rgb = Vec::with_capacity((width * height) as usize);
     for (i, p) in pixels.iter().enumerate() {

@@ -60,14 +60,7 @@ impl Glb {
 
     /// An embedded 4×4 PNG of one RGBA colour, as a glTF image entry.
     pub fn png(&mut self, rgba: [u8; 4]) -> Value {
-        let image = image::RgbaImage::from_pixel(4, 4, image::Rgba(rgba));
-        let mut bytes = Vec::new();
-        image
-            .write_to(
-                &mut std::io::Cursor::new(&mut bytes),
-                image::ImageFormat::Png,
-            )
-            .unwrap();
+        let bytes = super::png_bytes(4, rgba);
         json!({"bufferView": self.view(&bytes), "mimeType": "image/png"})
     }
 
