@@ -174,7 +174,8 @@ impl Renderers {
             ..scene.default_settings()
         };
         let lights = scene.lights.len();
-        *scene = std::mem::replace(scene, Scene::from_triangles(Vec::new())).with_settings(&settings);
+        *scene =
+            std::mem::replace(scene, Scene::from_triangles(Vec::new())).with_settings(&settings);
         self.cpu = Renderer::Cpu(Arc::clone(&self.scene));
         if self.scene.lights.len() != lights {
             // Another set of lights: uploaded again on the GPU's next use.

@@ -508,9 +508,13 @@ fn the_parts_hash_covers_the_environment() {
     let hash = |scene: &Scene| lambert::parts::settings_hash(scene, scene.view(), "cpu");
     let mut scene = floor();
     let bare = hash(&scene);
-    scene.set_environment(Some(&color_spec([1.0; 3], 1.0))).unwrap();
+    scene
+        .set_environment(Some(&color_spec([1.0; 3], 1.0)))
+        .unwrap();
     let one = hash(&scene);
-    scene.set_environment(Some(&color_spec([1.0; 3], 2.0))).unwrap();
+    scene
+        .set_environment(Some(&color_spec([1.0; 3], 2.0)))
+        .unwrap();
     let two = hash(&scene);
     assert!(bare != one && one != two && bare != two);
     scene.set_environment(None).unwrap();

@@ -68,7 +68,10 @@ fn a_white_lambert_sphere_vanishes_in_a_white_furnace() {
             (mean - L as f64).abs() <= 0.01 * L as f64,
             "{device}: the sphere renders {mean}, not L = {L}"
         );
-        assert!(lo > 0.8 * L && hi < 1.2 * L, "{device}: pixels from {lo} to {hi}");
+        assert!(
+            lo > 0.8 * L && hi < 1.2 * L,
+            "{device}: pixels from {lo} to {hi}"
+        );
     }
 }
 

@@ -160,7 +160,10 @@ fn an_image_job_writes_the_first_hits_outputs_beside_its_image() {
         .iter()
         .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
         .collect();
-    assert_eq!(names, ["image.albedo.exr", "image.normal.exr", "image.depth.exr"]);
+    assert_eq!(
+        names,
+        ["image.albedo.exr", "image.normal.exr", "image.depth.exr"]
+    );
     let read = |name: &str| image::open(dir.path().join(name)).unwrap().into_rgb32f();
     let (albedo, normal, depth) = (
         read("image.albedo.exr"),
@@ -187,7 +190,10 @@ fn an_image_job_writes_the_first_hits_outputs_beside_its_image() {
     assert!(d[0] > 0.0 && d[0] == d[1] && d[1] == d[2], "depth {d:?}");
     assert!(albedo.get_pixel(x, y).0.iter().any(|&c| c > 0.0));
     // A corner that misses everything is 0 in all three.
-    let sky = rendered.prims.iter().position(|&p| p == lambert::layout::NO_HIT);
+    let sky = rendered
+        .prims
+        .iter()
+        .position(|&p| p == lambert::layout::NO_HIT);
     if let Some(i) = sky {
         let (sx, sy) = (i as u32 % camera.width, i as u32 / camera.width);
         assert_eq!(depth.get_pixel(sx, sy).0, [0.0; 3]);

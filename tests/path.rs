@@ -88,7 +88,7 @@ fn path_tracing_changes_the_light_transport_not_the_exposure() {
     // average (the direct integrator's is exact at any spp).
     let two_lights = scene(&convex());
     let spp = 256;
-        let mean = |r: &Rendered| r.image.rgb.iter().flatten().map(|&v| v as f64).sum::<f64>();
+    let mean = |r: &Rendered| r.image.rgb.iter().flatten().map(|&v| v as f64).sum::<f64>();
     let direct = mean(&render_cpu(&two_lights));
     let path = mean(&render_cpu(&path_traced(&two_lights, spp, 4)));
     assert!(
@@ -118,9 +118,18 @@ fn assert_agrees_with_twin(scene: &Scene) -> (f64, f64) {
         })
         .count();
     let pixels = cpu.image.rgb.len();
-    let differ = bits(&gpu).iter().zip(bits(&cpu)).filter(|(a, b)| **a != *b).count();
-    println!("{close} of {pixels} pixels within 1e-3, {differ} values differ in bits; sums {g} {c}");
-    assert!((g - c).abs() <= 1e-5 * c, "image sums differ: GPU {g}, CPU {c}");
+    let differ = bits(&gpu)
+        .iter()
+        .zip(bits(&cpu))
+        .filter(|(a, b)| **a != *b)
+        .count();
+    println!(
+        "{close} of {pixels} pixels within 1e-3, {differ} values differ in bits; sums {g} {c}"
+    );
+    assert!(
+        (g - c).abs() <= 1e-5 * c,
+        "image sums differ: GPU {g}, CPU {c}"
+    );
     assert!(
         close as f64 >= 0.99 * pixels as f64,
         "only {close} of {pixels} pixels agree within 1e-3"
@@ -146,7 +155,13 @@ fn gpu_path_tracing_agrees_with_its_twin() {
     // Bounced light is there: brighter than direct light (and ambient)
     // alone.
     let direct = render_cpu(&room);
-    let direct_sum = direct.image.rgb.iter().flatten().map(|&v| v as f64).sum::<f64>();
+    let direct_sum = direct
+        .image
+        .rgb
+        .iter()
+        .flatten()
+        .map(|&v| v as f64)
+        .sum::<f64>();
     assert!(c > direct_sum, "no light bounced: {c} against {direct_sum}");
     // The box lit by its ceiling light alone: area light sampling, MIS.
     assert_agrees_with_twin(&small("cornell_area", 48));
@@ -154,10 +169,7 @@ fn gpu_path_tracing_agrees_with_its_twin() {
 
 #[test]
 fn the_integrator_and_depth_come_from_the_scene_file() {
-    let text = convex().replace(
-        "[render]",
-        "[render]\nintegrator = \"path\"\nmax_depth = 3",
-    );
+    let text = convex().replace("[render]", "[render]\nintegrator = \"path\"\nmax_depth = 3");
     let settings = scene(&text).default_settings();
     assert_eq!(settings.integrator, Integrator::Path);
     assert_eq!(settings.max_depth, 3);

@@ -37,9 +37,13 @@ fn the_cornell_box_converges_as_one_over_root_spp() {
     let reference = render(&scene, 2048, 7, Precision::F64);
     let tolerance = Tolerance::default();
     let rmse = |spp| {
-        compare(&render(&scene, spp, 1, Precision::F32), &reference, &tolerance)
-            .unwrap()
-            .rmse
+        compare(
+            &render(&scene, spp, 1, Precision::F32),
+            &reference,
+            &tolerance,
+        )
+        .unwrap()
+        .rmse
     };
     let errors: Vec<f64> = [4, 16, 64].into_iter().map(rmse).collect();
     println!("RMSE at 4, 16, 64 spp against the f64 reference at 2048: {errors:?}");
@@ -54,7 +58,13 @@ fn the_cornell_box_converges_as_one_over_root_spp() {
         );
     }
     // The light arrives: the box is neither black nor blown out.
-    let mean = reference.image.rgb.iter().flatten().map(|&v| v as f64).sum::<f64>()
+    let mean = reference
+        .image
+        .rgb
+        .iter()
+        .flatten()
+        .map(|&v| v as f64)
+        .sum::<f64>()
         / (3 * reference.image.rgb.len()) as f64;
     assert!((0.05..2.0).contains(&mean), "mean radiance {mean}");
 }

@@ -631,8 +631,7 @@ impl NativeScene {
                 })?,
         };
         let max_depth = max_depth.unwrap_or(scene.default_settings().max_depth);
-        lambert::limits::validate_max_depth(max_depth)
-            .map_err(|e| PyValueError::new_err(e))?;
+        lambert::limits::validate_max_depth(max_depth).map_err(|e| PyValueError::new_err(e))?;
         let (image, note) = detached(py, || {
             self.renderers
                 .lock()

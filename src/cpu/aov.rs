@@ -82,13 +82,21 @@ pub fn render_aovs(scene: &Scene, view: &View, aovs: &[Aov]) -> Vec<Image> {
     let kernel = Kernel::with_view(scene, &samples, <f32 as Scalar>::has_ymm_boxes());
     let rows: Vec<Vec<[[f32; 3]; 3]>> = (0..height)
         .into_par_iter()
-        .map(|y| (0..width).map(|x| first_hits(&kernel, x, y, samples.spp)).collect())
+        .map(|y| {
+            (0..width)
+                .map(|x| first_hits(&kernel, x, y, samples.spp))
+                .collect()
+        })
         .collect();
     aovs.iter()
         .map(|&aov| Image {
             width,
             height,
-            rgb: rows.iter().flatten().map(|pixel| pixel[aov as usize]).collect(),
+            rgb: rows
+                .iter()
+                .flatten()
+                .map(|pixel| pixel[aov as usize])
+                .collect(),
         })
         .collect()
 }

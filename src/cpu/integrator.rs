@@ -84,11 +84,23 @@ macro_rules! integrator {
             /// render has shadows; an emitter with area weighted against
             /// BSDF sampling (a punctual light, which BSDF sampling never
             /// finds, is not).
-            fn emitter_light(&self, surface: &Surface, origin: Vec3, bsdf: BsdfParams, frame: Frame, wo: Vec3, state: &mut u32) -> Vec3 {
+            fn emitter_light(
+                &self,
+                surface: &Surface,
+                origin: Vec3,
+                bsdf: BsdfParams,
+                frame: Frame,
+                wo: Vec3,
+                state: &mut u32,
+            ) -> Vec3 {
                 let u_pick = next_random(state);
                 let u = Vec2::new(next_random(state), next_random(state));
-                let sample = self.sample_emitter(surface.position, surface.geometric_normal, u_pick, u);
-                if !(sample.pdf > 0.0) || sample.radiance == Vec3::ZERO || sample.wi.dot(surface.geometric_normal) <= 0.0 {
+                let sample =
+                    self.sample_emitter(surface.position, surface.geometric_normal, u_pick, u);
+                if !(sample.pdf > 0.0)
+                    || sample.radiance == Vec3::ZERO
+                    || sample.wi.dot(surface.geometric_normal) <= 0.0
+                {
                     return Vec3::ZERO;
                 }
                 let wi = to_local(frame, sample.wi);
@@ -96,8 +108,19 @@ macro_rules! integrator {
                 if f == Vec3::ZERO {
                     return Vec3::ZERO;
                 }
-                let tmax = if sample.distance >= FAR { FAR } else { sample.distance * (1.0 - SHADOW_SHORTENING) };
-                if self.scene.shadows && self.trace_any(Ray { origin, tmin: 0.0, dir: sample.wi, tmax }) {
+                let tmax = if sample.distance >= FAR {
+                    FAR
+                } else {
+                    sample.distance * (1.0 - SHADOW_SHORTENING)
+                };
+                if self.scene.shadows
+                    && self.trace_any(Ray {
+                        origin,
+                        tmin: 0.0,
+                        dir: sample.wi,
+                        tmax,
+                    })
+                {
                     return Vec3::ZERO;
                 }
                 let weight = if sample.delta {
@@ -135,7 +158,8 @@ macro_rules! integrator {
                     if surface.emission != Vec3::ZERO {
                         let mut weight = 1.0;
                         if bsdf_pdf_before > 0.0 {
-                            let light_pdf = self.emitter_pdf(origin_before, hit.prim, ray.dir, hit.t);
+                            let light_pdf =
+                                self.emitter_pdf(origin_before, hit.prim, ray.dir, hit.t);
                             weight = power_heuristic(bsdf_pdf_before, light_pdf);
                         }
                         radiance += throughput * surface.emission * weight;
@@ -147,9 +171,21 @@ macro_rules! integrator {
                     let material = self.material_at(&ray, &hit, &surface);
                     let frame = frame_from_normal(material.shading_normal);
                     let wo = to_local(frame, -ray.dir);
-                    let origin = offset_ray_origin(surface.position, surface.error, surface.geometric_normal);
+                    let origin = offset_ray_origin(
+                        surface.position,
+                        surface.error,
+                        surface.geometric_normal,
+                    );
                     if self.has_emitters() {
-                        radiance += throughput * self.emitter_light(&surface, origin, material.bsdf, frame, wo, &mut state);
+                        radiance += throughput
+                            * self.emitter_light(
+                                &surface,
+                                origin,
+                                material.bsdf,
+                                frame,
+                                wo,
+                                &mut state,
+                            );
                     }
 
                     let u_lobe = next_random(&mut state);
@@ -174,7 +210,12 @@ macro_rules! integrator {
                     }
                     bsdf_pdf_before = sample.pdf;
                     origin_before = surface.position;
-                    ray = Ray { origin, tmin: 0.0, dir: wi, tmax: FAR };
+                    ray = Ray {
+                        origin,
+                        tmin: 0.0,
+                        dir: wi,
+                        tmax: FAR,
+                    };
                     hit = self.trace_closest(ray);
                 }
                 radiance

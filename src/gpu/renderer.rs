@@ -396,7 +396,9 @@ impl GpuRenderer {
     /// Whether samples are path traced (the PATH_TRACE override).
     fn path_traced(&self) -> bool {
         let constants = &self.pipelines.constants;
-        constants.iter().any(|&(n, v)| n == "PATH_TRACE" && v != 0.0)
+        constants
+            .iter()
+            .any(|&(n, v)| n == "PATH_TRACE" && v != 0.0)
     }
 
     /// Sets a boolean override, and drops the pipelines built on the old.

@@ -229,7 +229,10 @@ fn check_exr_layers(bytes: &[u8]) -> std::result::Result<(), String> {
     let meta = exr::meta::MetaData::read_from_buffered(&mut read, false)
         .map_err(|e| format!("not a readable OpenEXR image: {e}"))?;
     let [header] = meta.headers.as_slice() else {
-        return Err(format!("has {} parts; an environment map has one", meta.headers.len()));
+        return Err(format!(
+            "has {} parts; an environment map has one",
+            meta.headers.len()
+        ));
     };
     if header.deep {
         return Err("a deep image; an environment map is flat".into());
@@ -279,7 +282,9 @@ fn check_exr_layers(bytes: &[u8]) -> std::result::Result<(), String> {
             .ok_or_else(|| corrupt(format!("chunk {chunk} starts past its end")))?;
         let end = (offset + chunk_header).checked_add(usize::try_from(size).unwrap_or(usize::MAX));
         if !end.is_some_and(|end| end <= bytes.len()) {
-            return Err(corrupt(format!("chunk {chunk} claims {size} bytes past its end")));
+            return Err(corrupt(format!(
+                "chunk {chunk} claims {size} bytes past its end"
+            )));
         }
     }
     Ok(())
@@ -334,7 +339,11 @@ fn decode(path: &Path, bytes: &[u8]) -> Result<(u32, u32, Vec<[f32; 3]>)> {
             .map_err(|e| fail(format!("not a readable OpenEXR image: {e}")))?
             .layer_data;
         let (w, h) = (layer.size.width(), layer.size.height());
-        let side = |v: usize| u32::try_from(v).ok().filter(|&v| (1..=MAX_ENVIRONMENT_SIDE).contains(&v));
+        let side = |v: usize| {
+            u32::try_from(v)
+                .ok()
+                .filter(|&v| (1..=MAX_ENVIRONMENT_SIDE).contains(&v))
+        };
         let (Some(w), Some(h)) = (side(w), side(h)) else {
             return Err(fail(format!(
                 "its pixels are {w} × {h}: an environment map's sides are 1 to \

@@ -8,8 +8,8 @@ use serde::Deserialize;
 
 use super::lighting::EnvironmentEntry;
 use super::{
-    DEFAULT_MAX_DEPTH, Integrator, Intersect, Rgb, Scene, Transform, colour, directional_light, point,
-    point_light, spot_light,
+    DEFAULT_MAX_DEPTH, Integrator, Intersect, Rgb, Scene, Transform, colour, directional_light,
+    point, point_light, spot_light,
 };
 use crate::camera::{Camera, View, validate_camera};
 use crate::error::{Error, Result};

@@ -507,7 +507,11 @@ fn print_image_report(report: &ImageReport, sampling: Sampling, load: Duration) 
         );
     }
     if !report.aovs.is_empty() {
-        let paths: Vec<String> = report.aovs.iter().map(|p| p.display().to_string()).collect();
+        let paths: Vec<String> = report
+            .aovs
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect();
         eprintln!(
             "first-hit outputs ({} on the CPU path): {}",
             seconds(report.aov_time),
