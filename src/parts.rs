@@ -186,7 +186,38 @@ pub struct Part {
     rgb: Vec<[f32; 3]>,
 }
 
-fn read_part(path: &Path) -> Result<Part> {
+impl Part {
+    /// A part held in memory (the Python package's): `band` is rows
+    /// `tile.rows(height)` of a `band.width`×`height` render whose
+    /// settings hash to `hash`; `name` names it in errors.
+    pub fn new(name: PathBuf, band: Image, tile: Tile, height: u32, hash: String) -> Result<Part> {
+        let rows = tile.rows(height)?;
+        if band.height != rows.len() as u32 || band.rgb.len() != band.width as usize * rows.len() {
+            return Err(Error::Usage(format!(
+                "{}: its {}×{} pixels are not part {}/{} of a {}×{height} image (rows {} to {})",
+                name.display(),
+                band.width,
+                band.height,
+                tile.index,
+                tile.count,
+                band.width,
+                rows.start,
+                rows.end
+            )));
+        }
+        Ok(Part {
+            path: name,
+            tile,
+            hash,
+            width: band.width,
+            height,
+            rows,
+            rgb: band.rgb,
+        })
+    }
+}
+
+pub fn read_part(path: &Path) -> Result<Part> {
     let bytes = crate::files::read_capped(path, crate::files::MAX_MODEL_BYTES)?;
     parse_part(&bytes, path)
 }
@@ -298,6 +329,17 @@ pub fn merge(paths: &[PathBuf], output: &Path) -> Result<Image> {
         return Err(Error::Usage("merge needs the part files".into()));
     }
     let parts: Vec<Part> = paths.iter().map(|p| read_part(p)).collect::<Result<_>>()?;
+    let image = assemble(&parts)?;
+    image.save(output)?;
+    Ok(image)
+}
+
+/// The image `parts` make (every part of one render, once), refused as
+/// `merge` refuses them.
+pub fn assemble(parts: &[Part]) -> Result<Image> {
+    if parts.is_empty() {
+        return Err(Error::Usage("merge needs the parts".into()));
+    }
     let first = &parts[0];
     for part in &parts[1..] {
         let differs = if (part.width, part.height) != (first.width, first.height) {
@@ -325,7 +367,7 @@ pub fn merge(paths: &[PathBuf], output: &Path) -> Result<Image> {
     }
     let count = first.tile.count;
     let mut owner: Vec<Option<&Part>> = vec![None; count as usize];
-    for part in &parts {
+    for part in parts {
         if let Some(other) = owner[part.tile.index as usize] {
             return Err(Error::Usage(format!(
                 "{} and {} are both part {}/{count} (duplicated or overlapping)",
@@ -349,11 +391,9 @@ pub fn merge(paths: &[PathBuf], output: &Path) -> Result<Image> {
     }
     let (width, height) = (first.width, first.height);
     let mut rgb = vec![[0.0f32; 3]; width as usize * height as usize];
-    for part in &parts {
+    for part in parts {
         let at = part.rows.start as usize * width as usize;
         rgb[at..at + part.rgb.len()].copy_from_slice(&part.rgb);
     }
-    let image = Image { width, height, rgb };
-    image.save(output)?;
-    Ok(image)
+    Ok(Image { width, height, rgb })
 }

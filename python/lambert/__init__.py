@@ -15,7 +15,6 @@ normal (v1-v0)×(v2-v0). Triangles are watertight: no ray passes between
 two that share an edge. See docs/python.md.
 """
 
-import operator
 import os
 
 # Mesa's device-select Vulkan layer prints "error: XDG_RUNTIME_DIR is
@@ -29,8 +28,39 @@ if "MESA_VK_DEVICE_SELECT" not in os.environ and "NODEVICE_SELECT" not in os.env
 import numpy as np  # noqa: E402
 
 from . import _lambert  # noqa: E402
+from ._errors import (  # noqa: E402
+    LambertError,
+    LambertFileNotFoundError,
+    LambertNotADirectoryError,
+    LambertOSError,
+    LambertPermissionError,
+    LambertRuntimeError,
+    LambertTypeError,
+    LambertValueError,
+)
+from ._image import Camera, Image, merge, to_srgb, write_image  # noqa: E402
+from ._image import _point  # noqa: E402
+from ._options import _colour, _count, _number, progress_callback, render_choices, sampling, tile_pair  # noqa: E402
 
-__all__ = ["RAY_DTYPE", "Scene", "open3d", "trimesh", "write_image"]
+__all__ = [
+    "RAY_DTYPE",
+    "Camera",
+    "Image",
+    "LambertError",
+    "LambertFileNotFoundError",
+    "LambertNotADirectoryError",
+    "LambertOSError",
+    "LambertPermissionError",
+    "LambertRuntimeError",
+    "LambertTypeError",
+    "LambertValueError",
+    "Scene",
+    "merge",
+    "open3d",
+    "to_srgb",
+    "trimesh",
+    "write_image",
+]
 
 #: The record layout of a ray file (docs/ray-query.md): little-endian
 #: float32 ox oy oz tmin dx dy dz tmax, 32 bytes a ray. An array of it goes
@@ -47,11 +77,11 @@ def _floats(name, array):
     """An (N, 3) float32 or float64 array, converted only if it is neither."""
     a = np.asarray(array)
     if a.dtype.kind not in "fiu" or a.dtype.kind == "c":
-        raise ValueError(f"{name} must be a real-valued (N, 3) array, not {a.dtype}")
+        raise LambertValueError(f"{name} must be a real-valued (N, 3) array, not {a.dtype}")
     if a.dtype not in (np.float32, np.float64):
         a = a.astype(np.float64)
     if a.ndim != 2 or a.shape[1] != 3:
-        raise ValueError(f"{name} has shape {a.shape}; it must be (N, 3)")
+        raise LambertValueError(f"{name} has shape {a.shape}; it must be (N, 3)")
     return a
 
 
@@ -60,28 +90,12 @@ def _bound(name, value, n):
     (float64 is kept for float64 origins, traced from f64)."""
     a = np.asarray(value)
     if a.dtype.kind not in "fiub":
-        raise ValueError(f"{name} must be a number or a (N,) array, not {a.dtype}")
+        raise LambertValueError(f"{name} must be a number or a (N,) array, not {a.dtype}")
     if a.ndim == 0:
         return float(a)
     if a.ndim != 1 or a.shape[0] != n:
-        raise ValueError(f"{name} has shape {a.shape}; give a scalar or one value per ray ({n},)")
+        raise LambertValueError(f"{name} has shape {a.shape}; give a scalar or one value per ray ({n},)")
     return a if a.dtype == np.float64 else a.astype(np.float32, copy=False)
-
-
-def _count(name, value):
-    """A width, height or sample count: None, or a whole number that fits
-    (the native module says what range it takes)."""
-    if value is None:
-        return None
-    try:
-        n = operator.index(value)
-    except TypeError:
-        raise TypeError(f"{name} must be a whole number, not {type(value).__name__}") from None
-    if n < 0:
-        raise ValueError(f"{name} = {n}: must be a positive whole number")
-    if n > 0xFFFFFFFF:
-        raise ValueError(f"{name} = {n} is too large")
-    return n
 
 
 def _max_distance(value):
@@ -89,9 +103,9 @@ def _max_distance(value):
     try:
         d = float(value)
     except (TypeError, ValueError):
-        raise TypeError(f"max_distance must be a number, not {type(value).__name__}") from None
+        raise LambertTypeError(f"max_distance must be a number, not {type(value).__name__}") from None
     if not d >= 0.0:
-        raise ValueError(f"max_distance = {d}: must be a number ≥ 0 (inf for no limit)")
+        raise LambertValueError(f"max_distance = {d}: must be a number ≥ 0 (inf for no limit)")
     return d
 
 
@@ -101,7 +115,7 @@ def _albedo(albedo):
         return None
     a = np.asarray(albedo, dtype=np.float64)
     if a.shape not in ((), (1,), (3,)):
-        raise ValueError(
+        raise LambertValueError(
             f"albedo has shape {a.shape}; give one colour for the whole mesh, a number or shape (3,) "
             "(a colour per face, shape (F, 3), is not supported)"
         )
@@ -114,18 +128,18 @@ def _query(origins, directions, tmin, tmax):
     if directions is None:
         records = np.asarray(origins)
         if records.dtype != RAY_DTYPE:
-            raise ValueError(
+            raise LambertValueError(
                 "with no directions, the first argument must be an array of lambert.RAY_DTYPE "
                 f"records, not {records.dtype}"
             )
         if not (np.isscalar(tmin) and tmin == 0.0 and np.isscalar(tmax) and tmax == np.inf):
-            raise ValueError("ray records carry their own tmin and tmax; do not pass them too")
+            raise LambertValueError("ray records carry their own tmin and tmax; do not pass them too")
         records = np.ascontiguousarray(records.reshape(-1))
         return records.view(np.float32).reshape(-1, 8), None, 0.0, 0.0
     o = _floats("origins", origins)
     d = _floats("directions", directions)
     if o.shape[0] != d.shape[0]:
-        raise ValueError(f"{o.shape[0]} origins but {d.shape[0]} directions")
+        raise LambertValueError(f"{o.shape[0]} origins but {d.shape[0]} directions")
     return o, d, _bound("tmin", tmin, o.shape[0]), _bound("tmax", tmax, o.shape[0])
 
 
@@ -146,7 +160,7 @@ class Scene:
 
     def __init__(self, native):
         if not isinstance(native, _lambert.NativeScene):
-            raise TypeError("use Scene.from_arrays(vertices, faces) or Scene.load(path)")
+            raise LambertTypeError("use Scene.from_arrays(vertices, faces) or Scene.load(path)")
         self._native = native
 
     @classmethod
@@ -158,29 +172,36 @@ class Scene:
         light, as ``lambert render model.obj`` uses."""
         v = np.asarray(vertices)
         if v.dtype.kind not in "fiu":
-            raise ValueError(f"vertices must be a float array, not {v.dtype}")
+            raise LambertValueError(f"vertices must be a float array, not {v.dtype}")
         f = np.asarray(faces)
         # An empty list is float64 to numpy; the no-triangles error below fits it better.
         if f.dtype.kind not in "iu" and f.size:
-            raise ValueError(f"faces must be an integer array, not {f.dtype}")
+            raise LambertValueError(f"faces must be an integer array, not {f.dtype}")
         if v.ndim != 2 or v.shape[1] != 3:
-            raise ValueError(f"vertices has shape {v.shape}; it must be (V, 3)")
+            raise LambertValueError(f"vertices has shape {v.shape}; it must be (V, 3)")
         if f.ndim != 2 or f.shape[1] != 3:
-            raise ValueError(f"faces has shape {f.shape}; it must be (F, 3)")
+            raise LambertValueError(f"faces has shape {f.shape}; it must be (F, 3)")
         if f.dtype == np.uint64 and f.size and f.max() > np.iinfo(np.int64).max:
             row = int(np.argmax(f.max(axis=1) > np.iinfo(np.int64).max))
-            raise ValueError(f"faces row {row} = {f[row].tolist()}: index out of range")
+            raise LambertValueError(f"faces row {row} = {f[row].tolist()}: index out of range")
         native = _lambert.NativeScene.from_arrays(
             v.astype(np.float64, copy=False), f.astype(np.int64, copy=False), _albedo(albedo)
         )
         return cls(native)
 
     @classmethod
-    def load(cls, path):
+    def load(cls, path, camera=None):
         """A scene TOML file, or any model file the CLI reads alone (.obj,
-        .ply, .ply.gz, .gltf, .glb, .stl). Raises OSError for a file that cannot
-        be read, ValueError (naming file and line or field) for bad content."""
-        return cls(_lambert.NativeScene.load(os.fspath(path)))
+        .ply, .ply.gz, .gltf, .glb, .stl); ``camera``: a glTF file's camera
+        by name (the CLI's ``--camera``; None: its first). Raises
+        LambertFileNotFoundError (an OSError) for a file that cannot be
+        read, LambertValueError (naming file and line or field) for bad
+        content."""
+        if not isinstance(path, (str, os.PathLike)):
+            raise LambertTypeError(f"path must be a str or os.PathLike, not {type(path).__name__}")
+        if camera is not None and not isinstance(camera, str):
+            raise LambertTypeError(f"camera must be a glTF camera's name (str), not {type(camera).__name__}")
+        return cls(_lambert.NativeScene.load(os.fspath(path), camera))
 
     def intersect(self, origins, directions=None, tmin=0.0, tmax=np.inf, *, device="auto",
                   intersect="watertight", _t64=False):
@@ -231,7 +252,7 @@ class Scene:
         a sensible inside); ``"parity"``: inside where a ray from the point
         crosses the surface an odd number of times (watertight meshes)."""
         if method not in ("winding", "parity"):
-            raise ValueError(f'method={method!r}: use "winding" or "parity"')
+            raise LambertValueError(f'method={method!r}: use "winding" or "parity"')
         return _lambert.point_values(self._native, _floats("points", points), "signed_distance", method, device)
 
     def winding_number(self, points, *, device="auto"):
@@ -262,27 +283,93 @@ class Scene:
         o, d, lo, hi = _query(origins, directions, tmin, tmax)
         return _lambert.crossings(self._native, o, d, lo, hi, device, True)
 
-    def camera_rays(self, width=None, height=None):
-        """(origins, directions), each (width·height, 3) float32: the scene
+    def camera_rays(self, width=None, height=None, *, camera=None):
+        """(origins, directions), each (width·height, 3) float32: the
         camera's rays through pixel centres, row-major from the top (unit
-        directions). Give one of width and height to keep the aspect ratio."""
-        return self._native.camera_rays(_count("width", width), _count("height", height))
+        directions), as ``lambert camera-rays`` writes them and ``render``
+        shoots at 1 spp. ``camera``: a :class:`Camera`, a glTF camera's
+        name, or None (the scene's). Give one of width and height to keep
+        the aspect ratio."""
+        return _lambert.camera_rays(self._native, render_choices(width, height, camera=camera))
 
-    def render(self, width=None, height=None, spp=1, device="auto", integrator=None, max_depth=None):
-        """The image, (H, W, 3) float32 linear RGB, ``spp`` stratified
-        samples per pixel. ``integrator``: "direct" (Lambert shading from
-        the scene's lights with shadows) or "path" (path tracing: physically
-        based materials, area lights, the environment, bounced light, at
-        most ``max_depth`` surfaces a path); None: the scene's own
-        (render.integrator, else "direct")."""
-        return self._native.render(
-            _count("width", width),
-            _count("height", height),
-            _count("spp", spp),
-            device,
-            integrator,
-            _count("max_depth", max_depth),
+    def render(self, width=None, height=None, *, camera=None, spp=None, target_error=None, max_spp=256,
+               time_budget=None, seed=None, ambient=None, shadows=None, integrator=None, max_depth=None,
+               environment=None, environment_strength=1.0, environment_rotation=0.0, device="auto",
+               progress=None, tile=None):
+        """The image, an :class:`Image`: (H, W, 3) float32 linear RGB,
+        bit for bit what ``lambert render`` writes with the same choices.
+
+        - ``width``, ``height``: the size (None: the scene's; one alone
+          keeps the camera's aspect ratio).
+        - ``camera``: a :class:`Camera`, a glTF camera's name (the CLI's
+          ``--camera``), or None (the scene's).
+        - ``spp``: stratified samples per pixel (None: the scene's
+          render.spp, else 1); ``seed``: of the sample jitter.
+        - ``target_error``: adaptive sampling until each pixel's standard
+          error is below it (at most ``max_spp``); ``time_budget``: as many
+          samples as fit in that many seconds.
+        - ``ambient`` (a number or (r, g, b)), ``shadows`` (bool): over
+          the scene's.
+        - ``integrator``: "direct" or "path" (None: the scene's); under
+          "path", ``max_depth`` surfaces a path at most.
+        - ``environment``: an equirectangular .hdr or .exr file, or a
+          colour (r, g, b) (one number: grey), with
+          ``environment_strength`` and ``environment_rotation`` (degrees
+          about +Y): the CLI's ``--environment*``, replacing the scene's.
+        - ``device``: "auto", "gpu" or "cpu".
+        - ``progress``: True (a tqdm bar if tqdm is installed, else a text
+          bar on stderr) or a callable ``progress(done, total, unit)``.
+        - ``tile``: (k, n), part k of n (k from 0): only that band of rows,
+          an Image whose ``part`` :func:`merge` reads (``lambert render
+          --tile k/n``).
+        """
+        choices = render_choices(
+            width, height, camera=camera, spp=spp, seed=seed, ambient=ambient, shadows=shadows,
+            integrator=integrator, max_depth=max_depth, environment=environment,
+            environment_strength=environment_strength, environment_rotation=environment_rotation,
         )
+        tile = tile_pair(tile)
+        budget, target, limit = sampling(spp, target_error, max_spp, time_budget, tile)
+        if device not in _DEVICES:
+            raise LambertValueError(f'device={device!r}: use "auto", "gpu" or "cpu"')
+        image, part = _lambert.render(
+            self._native, choices, budget, target, limit, device, progress_callback(progress), tile
+        )
+        return Image(image, part=part, scene=self._native)
+
+    def add_point_light(self, position, intensity):
+        """Adds a point light, as a TOML ``[[point_light]]``: at world
+        ``position`` (x, y, z), of ``intensity`` (a number or (r, g, b);
+        irradiance at distance r is intensity / r², the lecture's units).
+        A model file's default light and its ambient go, as when the file
+        brings lights of its own. Returns the scene."""
+        self._native = _lambert.with_light(
+            self._native, "point", _point("position", position), None, _colour("intensity", intensity), None
+        )
+        return self
+
+    def add_directional_light(self, direction, irradiance):
+        """Adds a directional light, as a TOML ``[[directional_light]]``:
+        travelling along ``direction``, of ``irradiance`` (a number or
+        (r, g, b)). Returns the scene."""
+        self._native = _lambert.with_light(
+            self._native, "directional", None, _point("direction", direction),
+            _colour("irradiance", irradiance), None,
+        )
+        return self
+
+    def add_spot_light(self, position, direction, intensity, inner_angle_deg=0.0, outer_angle_deg=45.0):
+        """Adds a spot light, as a TOML ``[[spot_light]]``: at
+        ``position``, pointing along ``direction``, ``intensity`` on its
+        axis, full within ``inner_angle_deg`` of it and none beyond
+        ``outer_angle_deg`` (KHR_lights_punctual's falloff between).
+        Returns the scene."""
+        angles = (_number("inner_angle_deg", inner_angle_deg), _number("outer_angle_deg", outer_angle_deg))
+        self._native = _lambert.with_light(
+            self._native, "spot", _point("position", position), _point("direction", direction),
+            _colour("intensity", intensity), angles,
+        )
+        return self
 
     def device(self, device="auto"):
         """What ``device`` resolves to for this scene, e.g. "GPU: llvmpipe
@@ -296,24 +383,6 @@ class Scene:
 
     def __repr__(self):
         return f"<lambert.Scene: {self.triangle_count} triangles, {self.sphere_count} spheres>"
-
-
-def write_image(path, image):
-    """Writes a linear-RGB (H, W, 3) image as .png (8-bit sRGB), .exr or .pfm
-    (float32), chosen by the extension, atomically: a failed write leaves no
-    partial file and any previous one untouched."""
-    a = np.asarray(image)
-    if a.ndim != 3 or a.shape[2] != 3:
-        raise ValueError(f"image has shape {a.shape}; it must be (H, W, 3)")
-    path = os.fspath(path)
-    # A file where a folder of the path should be: the native write would
-    # fail creating the folder, with the OS's bare "File exists".
-    folder = os.path.dirname(os.path.abspath(path))
-    while not os.path.exists(folder):
-        folder = os.path.dirname(folder)
-    if not os.path.isdir(folder):
-        raise NotADirectoryError(f"{path}: cannot write there: {folder} is not a folder")
-    _lambert.write_image(path, np.ascontiguousarray(a, dtype=np.float32))
 
 
 # After Scene: the drop-ins build on it. trimesh and Open3D themselves are

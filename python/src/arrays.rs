@@ -6,7 +6,6 @@
 
 use numpy::ndarray::{ArrayView1, ArrayView2, Dimension, Ix1, Ix2};
 use numpy::{PyReadonlyArray, PyReadonlyArray2, PyUntypedArrayMethods};
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
 /// A float array of either width, as numpy gave it (any strides).
@@ -39,11 +38,11 @@ pub type Rows<'py> = Floats<'py, Ix2>;
 impl<'py> Rows<'py> {
     pub fn extract(name: &str, value: &Bound<'py, PyAny>) -> PyResult<Rows<'py>> {
         let rows = Floats::from_any(value).ok_or_else(|| {
-            PyValueError::new_err(format!("{name} must be a (N, 3) float32 or float64 array"))
+            crate::errors::value_error(format!("{name} must be a (N, 3) float32 or float64 array"))
         })?;
         let shape = rows.shape();
         if shape[1] != 3 {
-            return Err(PyValueError::new_err(format!(
+            return Err(crate::errors::value_error(format!(
                 "{name} has shape {shape:?}; it must be (N, 3)"
             )));
         }
@@ -122,14 +121,14 @@ impl<'py> Bound1<'py> {
         let Some(each) = Floats::from_any(value) else {
             return match value.extract::<f64>() {
                 Ok(v) => Ok(Bound1::All(v)),
-                Err(_) => Err(PyValueError::new_err(format!(
+                Err(_) => Err(crate::errors::value_error(format!(
                     "{name} must be a number or a (N,) float32 or float64 array"
                 ))),
             };
         };
         let len = each.shape()[0];
         if len != n {
-            return Err(PyValueError::new_err(format!(
+            return Err(crate::errors::value_error(format!(
                 "{name} has {len} values for {n} rays; give one per ray or a scalar"
             )));
         }

@@ -10,30 +10,26 @@ use std::panic::AssertUnwindSafe;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
-use lambert::camera::View;
 use lambert::cpu::{
     CpuKernel, QueryOptions, QueryRays, RayFrame, SharedOut, TracedChunk, trace_rays_each,
 };
 use lambert::gpu::AdapterRequest;
-use lambert::jobs::{self, Sampling};
 use lambert::layout::{Hit, NO_HIT, Ray};
-use lambert::output::Image;
 use lambert::render::{DeviceChoice, Renderer, Renderers};
-use lambert::scene::{Integrator, Intersect, Scene, hit_normal, prefetch_hit_triangles};
+use lambert::scene::{Intersect, Scene, hit_normal, prefetch_hit_triangles};
 use lambert::{Error, rays};
-use numpy::ndarray::{Array2, Array3};
-use numpy::{
-    IntoPyArray, PyArray2, PyArray3, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods,
-};
-use pyo3::exceptions::{
-    PyFileNotFoundError, PyOSError, PyPermissionError, PyRuntimeError, PyValueError,
-};
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 mod arrays;
+mod errors;
+mod images;
 mod query;
+mod render;
 use arrays::{Bound1, Rows};
+use errors::Kind;
 use query::{FirstBad, Gathered, Query};
 
 /// The library's errors as the exceptions a Python user expects, with the
@@ -43,16 +39,16 @@ fn to_py(e: Error) -> PyErr {
     let message = e.to_string();
     match &e {
         Error::Io { source, .. } => match source.kind() {
-            std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(message),
-            std::io::ErrorKind::PermissionDenied => PyPermissionError::new_err(message),
-            _ => PyOSError::new_err(message),
+            std::io::ErrorKind::NotFound => errors::error(Kind::FileNotFound, message),
+            std::io::ErrorKind::PermissionDenied => errors::error(Kind::Permission, message),
+            _ => errors::error(Kind::Os, message),
         },
-        Error::Gpu(_) | Error::GpuLimit(_) => PyRuntimeError::new_err(message),
+        Error::Gpu(_) | Error::GpuLimit(_) => errors::error(Kind::Runtime, message),
         // The library leaves the advice to the front end: Python's words.
-        Error::LoopsCut(_) => PyRuntimeError::new_err(format!("{message}: use device=\"cpu\"")),
-        Error::Scene { .. } | Error::Line { .. } | Error::Usage(_) => {
-            PyValueError::new_err(message)
+        Error::LoopsCut(_) => {
+            errors::error(Kind::Runtime, format!("{message}: use device=\"cpu\""))
         }
+        Error::Scene { .. } | Error::Line { .. } | Error::Usage(_) => errors::value_error(message),
     }
 }
 
@@ -69,7 +65,10 @@ fn detached<T: Send>(
                 .cloned()
                 .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
                 .unwrap_or_default();
-            PyRuntimeError::new_err(format!("internal error in lambert (please report): {what}"))
+            errors::error(
+                Kind::Runtime,
+                format!("internal error in lambert (please report): {what}"),
+            )
         })?
         .map_err(to_py)
 }
@@ -79,7 +78,7 @@ fn device_choice(device: &str) -> PyResult<DeviceChoice> {
         "auto" => Ok(DeviceChoice::Auto),
         "gpu" => Ok(DeviceChoice::Gpu),
         "cpu" => Ok(DeviceChoice::Cpu),
-        other => Err(PyValueError::new_err(format!(
+        other => Err(crate::errors::value_error(format!(
             "device={other:?}: use \"auto\", \"gpu\" or \"cpu\""
         ))),
     }
@@ -90,23 +89,10 @@ fn intersect_choice(name: &str) -> PyResult<Intersect> {
         .into_iter()
         .find(|i| i.name() == name.replace('_', "-"))
         .ok_or_else(|| {
-            PyValueError::new_err(format!(
+            crate::errors::value_error(format!(
                 "intersect={name:?}: use \"watertight\", \"moller-trumbore\" or \"seed\""
             ))
         })
-}
-
-/// The scene's camera at `width` and `height` (one of them given keeps
-/// its aspect ratio; neither, its own size).
-fn camera_sized(
-    scene: &Scene,
-    width: Option<u32>,
-    height: Option<u32>,
-) -> Result<lambert::camera::Camera, Error> {
-    let camera = &scene.view().camera;
-    camera
-        .resized(width, height)
-        .map_err(|e| Error::Usage(format!("width/height: {e}")))
 }
 
 /// A vector of `n` elements that parallel chunks write, each once, before
@@ -223,6 +209,8 @@ fn each_chunk(
 #[pyclass(frozen, module = "lambert._lambert")]
 struct NativeScene {
     scene: Arc<Scene>,
+    /// The file it was loaded from, where a glTF camera is found by name.
+    path: Option<PathBuf>,
     renderers: Mutex<Renderers>,
     /// The last GPU query's ray buffer, kept for the next (32 bytes a ray).
     scratch: Mutex<Vec<Ray>>,
@@ -239,6 +227,7 @@ impl NativeScene {
             )),
             scratch: Mutex::new(Vec::new()),
             scene,
+            path: None,
         }
     }
 
@@ -447,14 +436,16 @@ macro_rules! with_query {
             None => {
                 let records: PyReadonlyArray2<f32> = $origins.extract()?;
                 if records.shape()[1] != 8 {
-                    return Err(PyValueError::new_err("ray records must be (N, 8) float32"));
+                    return Err(crate::errors::value_error(
+                        "ray records must be (N, 8) float32",
+                    ));
                 }
                 let flat = records
                     .as_slice()
                     .ok()
                     .filter(|_| records.is_c_contiguous());
                 let flat = flat.ok_or_else(|| {
-                    PyValueError::new_err(
+                    crate::errors::value_error(
                         "ray records must be a contiguous lambert.RAY_DTYPE array",
                     )
                 })?;
@@ -466,7 +457,7 @@ macro_rules! with_query {
                 let directions = Rows::extract("directions", directions)?;
                 let n = origins.len();
                 if directions.len() != n {
-                    return Err(PyValueError::new_err(format!(
+                    return Err(crate::errors::value_error(format!(
                         "{n} origins but {} directions",
                         directions.len()
                     )));
@@ -504,7 +495,7 @@ impl NativeScene {
         albedo: Option<[f64; 3]>,
     ) -> PyResult<NativeScene> {
         if vertices.shape()[1] != 3 || faces.shape()[1] != 3 {
-            return Err(PyValueError::new_err(format!(
+            return Err(crate::errors::value_error(format!(
                 "vertices {:?} and faces {:?} must both be (N, 3)",
                 vertices.shape(),
                 faces.shape()
@@ -512,7 +503,7 @@ impl NativeScene {
         }
         if faces.shape()[0] == 0 {
             // As a model file with no triangles is refused.
-            return Err(PyValueError::new_err(format!(
+            return Err(crate::errors::value_error(format!(
                 "faces is empty: no triangles ({} points)",
                 vertices.shape()[0]
             )));
@@ -523,12 +514,16 @@ impl NativeScene {
     }
 
     #[staticmethod]
-    fn load(py: Python<'_>, path: PathBuf) -> PyResult<NativeScene> {
-        let scene = detached(py, || Scene::load(&path))?;
+    #[pyo3(signature = (path, camera=None))]
+    fn load(py: Python<'_>, path: PathBuf, camera: Option<&str>) -> PyResult<NativeScene> {
+        let scene = detached(py, || Scene::load_with_camera(&path, camera))?;
         for warning in scene.warnings() {
             NativeScene::warn(py, Some(warning.clone()))?;
         }
-        Ok(NativeScene::new(scene))
+        Ok(NativeScene {
+            path: Some(path),
+            ..NativeScene::new(scene)
+        })
     }
 
     /// A ray query: the closest hits, as columns t, prim_id (-1 for a
@@ -577,88 +572,6 @@ impl NativeScene {
                     .map(Bound::into_any)
             }
         })
-    }
-
-    /// The camera's rays through pixel centres, row-major from the top.
-    #[pyo3(signature = (width=None, height=None))]
-    #[allow(clippy::type_complexity)]
-    fn camera_rays<'py>(
-        &self,
-        py: Python<'py>,
-        width: Option<u32>,
-        height: Option<u32>,
-    ) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<f32>>)> {
-        let scene = &self.scene;
-        let (origins, directions) = detached(py, || {
-            let camera = camera_sized(scene, width, height)?;
-            let rays = rays::camera_rays_for(scene, &camera);
-            let origins: Vec<f32> = rays.iter().flat_map(|r| r.origin).collect();
-            let directions: Vec<f32> = rays.iter().flat_map(|r| r.dir).collect();
-            Ok((origins, directions))
-        })?;
-        let n = origins.len() / 3;
-        let rows = |v: Vec<f32>| Array2::from_shape_vec((n, 3), v).expect("3 per ray");
-        Ok((
-            rows(origins).into_pyarray(py),
-            rows(directions).into_pyarray(py),
-        ))
-    }
-
-    /// A linear-RGB render, (H, W, 3) float32.
-    #[pyo3(signature = (width, height, spp, device, integrator, max_depth))]
-    #[allow(clippy::too_many_arguments)]
-    fn render<'py>(
-        &self,
-        py: Python<'py>,
-        width: Option<u32>,
-        height: Option<u32>,
-        spp: Option<u32>,
-        device: &str,
-        integrator: Option<&str>,
-        max_depth: Option<u32>,
-    ) -> PyResult<Bound<'py, PyArray3<f32>>> {
-        let device = device_choice(device)?;
-        let scene = &self.scene;
-        let integrator = match integrator {
-            None => scene.default_settings().integrator,
-            Some(name) => Integrator::ALL
-                .into_iter()
-                .find(|i| i.name() == name)
-                .ok_or_else(|| {
-                    PyValueError::new_err(format!(
-                        "integrator: {name:?} is not \"direct\" or \"path\""
-                    ))
-                })?,
-        };
-        let max_depth = max_depth.unwrap_or(scene.default_settings().max_depth);
-        lambert::limits::validate_max_depth(max_depth).map_err(|e| PyValueError::new_err(e))?;
-        let (image, note) = detached(py, || {
-            self.renderers
-                .lock()
-                .unwrap_or_else(|e| e.into_inner())
-                .set_integrator(integrator, max_depth)?;
-            let camera = camera_sized(scene, width, height)?;
-            let spp = spp.unwrap_or(scene.view().spp);
-            lambert::limits::validate_spp(spp).map_err(Error::Usage)?;
-            // Another size or sample count is only another view: the scene,
-            // and the GPU's buffers, stay the ones uploaded.
-            let view = View {
-                camera,
-                spp,
-                ..scene.view().clone()
-            };
-            // The CLI's job code, at the view's spp.
-            let (sampled, note) = Renderers::run(&self.renderers, device, |renderer| {
-                jobs::render_view(renderer, &view, Sampling::Fixed, None)
-            })?;
-            Ok((sampled.rendered.image, note))
-        })?;
-        NativeScene::warn(py, note)?;
-        let (w, h) = (image.width as usize, image.height as usize);
-        let flat: Vec<f32> = image.rgb.into_iter().flatten().collect();
-        Ok(Array3::from_shape_vec((h, w, 3), flat)
-            .expect("3 per pixel")
-            .into_pyarray(py))
     }
 
     /// What `device` resolves to for this scene ("GPU: …" or "CPU …").
@@ -713,41 +626,13 @@ impl NativeScene {
     }
 }
 
-/// Writes a linear-RGB (H, W, 3) float32 image as .png (8-bit sRGB), .exr
-/// or .pfm, atomically, as the CLI does.
-#[pyfunction]
-fn write_image(py: Python<'_>, path: PathBuf, image: PyReadonlyArray3<'_, f32>) -> PyResult<()> {
-    let shape = image.shape().to_vec();
-    if shape[2] != 3 || shape[0] == 0 || shape[1] == 0 {
-        return Err(PyValueError::new_err(format!(
-            "image has shape {shape:?}; it must be (H, W, 3) with H, W ≥ 1"
-        )));
-    }
-    let (height, width) = (u32::try_from(shape[0]), u32::try_from(shape[1]));
-    let (Ok(height), Ok(width)) = (height, width) else {
-        return Err(PyValueError::new_err(format!(
-            "image of shape {shape:?} is too large"
-        )));
-    };
-    let rgb: Vec<[f32; 3]> = image
-        .as_array()
-        .rows()
-        .into_iter()
-        .map(|p| [p[0], p[1], p[2]])
-        .collect();
-    let image = Image { width, height, rgb };
-    detached(py, || {
-        lambert::output::prepare_output(&path)?;
-        image.save(&path)
-    })
-}
-
 #[pymodule]
 fn _lambert(m: &Bound<'_, PyModule>) -> PyResult<()> {
     // The CPU kernel the user asks for, as the CLI reads it.
     CpuKernel::select(std::env::var(lambert::cpu::CPU_KERNEL_ENV).ok().as_deref());
     m.add_class::<NativeScene>()?;
-    m.add_function(wrap_pyfunction!(write_image, m)?)?;
+    images::register(m)?;
     proximity::register(m)?;
+    render::register(m)?;
     Ok(())
 }

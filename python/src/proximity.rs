@@ -14,7 +14,6 @@ use lambert::placement::LocalRays;
 use lambert::render::{DeviceChoice, IntersectionList, Renderer, Renderers, with_fallback};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyReadonlyArray2, PyUntypedArrayMethods};
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use rayon::prelude::*;
@@ -141,7 +140,7 @@ pub fn point_values<'py>(
         .into_iter()
         .find(|s| s.name() == method)
         .ok_or_else(|| {
-            PyValueError::new_err(format!("method={method:?}: use \"winding\" or \"parity\""))
+            crate::errors::value_error(format!("method={method:?}: use \"winding\" or \"parity\""))
         })?;
     let what = what.to_string();
     let values = points_query(

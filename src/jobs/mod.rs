@@ -19,6 +19,7 @@ use crate::render::{DeviceChoice, Renderer, open_gpu};
 use crate::scene::{Intersect, RenderSettings, Scene};
 
 mod image;
+mod options;
 mod query;
 mod tile;
 mod turntable;
@@ -27,13 +28,14 @@ pub use image::{
     BudgetPlan, BudgetReport, BvhSummary, ImageJob, ImageReport, Sampled, Sampling, render_image,
     render_view,
 };
+pub use options::RenderOverrides;
 pub use query::{
     INSIDE_WINDING, PointQuery, QueryJob, QueryKind, QueryReport, RayQuery, Sign, distances,
     inside, run_query, signed_distances,
 };
 // The point file is a file format beside the ray file (crate::rays).
 pub use crate::rays::{POINT_BYTES, parse_points, read_points};
-pub use tile::{TileJob, TileReport, render_tile};
+pub use tile::{Band, TileJob, TileReport, render_band, render_tile};
 pub use turntable::{
     FrameReport, TurntableJob, TurntableReport, frame_path, frame_paths, render_turntable,
 };

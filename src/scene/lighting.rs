@@ -8,7 +8,9 @@ use std::sync::Arc;
 
 use serde::Deserialize;
 
-use super::{Rgb, Scene, colour};
+use glam::DVec3;
+
+use super::{Rgb, Scene, colour, directional_light, point_light, spot_light};
 use crate::error::{Error, Result};
 use crate::lighting::{
     EmitterTable, Environment, EnvironmentSource, EnvironmentSpec, SceneLights, emitter_table,
@@ -102,6 +104,65 @@ impl Scene {
         })
     }
 
+    /// Adds a `[[point_light]]` (`field` names it in errors), as the TOML
+    /// format gives one: world `position`, `intensity` in the lecture's
+    /// units. `add_light` says what happens to a default light.
+    pub fn add_point_light(
+        &mut self,
+        field: &str,
+        position: [f64; 3],
+        intensity: [f64; 3],
+    ) -> Result<()> {
+        let light = point_light(field, position, Rgb::PerChannel(intensity), self.offset);
+        self.add_light(light)
+    }
+
+    /// Adds a `[[directional_light]]` travelling along `direction`.
+    pub fn add_directional_light(
+        &mut self,
+        field: &str,
+        direction: [f64; 3],
+        irradiance: [f64; 3],
+    ) -> Result<()> {
+        let light = directional_light(field, DVec3::from(direction), Rgb::PerChannel(irradiance));
+        self.add_light(light)
+    }
+
+    /// Adds a `[[spot_light]]`: cone half-angles `[inner, outer]` in degrees.
+    pub fn add_spot_light(
+        &mut self,
+        field: &str,
+        position: [f64; 3],
+        direction: [f64; 3],
+        intensity: [f64; 3],
+        angles_deg: [f64; 2],
+    ) -> Result<()> {
+        let light = spot_light(
+            field,
+            position,
+            DVec3::from(direction),
+            Rgb::PerChannel(intensity),
+            angles_deg,
+            self.offset,
+        );
+        self.add_light(light)
+    }
+
+    /// A light given to a scene: a model file's default light and its
+    /// ambient go (they stand in for a model with no light of its own, as
+    /// when a file brings lights: docs/scene-format.md).
+    fn add_light(&mut self, light: Result<crate::layout::Light, String>) -> Result<()> {
+        let light = light.map_err(Error::Usage)?;
+        if self.default_light {
+            self.lights.clear();
+            self.default_light = false;
+            self.ambient = [0.0; 3];
+        }
+        self.lights.push(light);
+        self.forget_emitters();
+        Ok(())
+    }
+
     /// Drops the emitters' table after an edit it depends on.
     pub(super) fn forget_emitters(&mut self) {
         self.emitters = Default::default();
@@ -111,6 +172,26 @@ impl Scene {
 /// `--environment`'s spec: `R,G,B` (or one value, grey) is a colour,
 /// anything else a file, read from where the command runs.
 pub fn environment_option(text: &str, strength: f64, rotation_deg: f64) -> Result<EnvironmentSpec> {
+    environment_spec(
+        text,
+        strength,
+        rotation_deg,
+        [
+            "--environment",
+            "--environment-strength",
+            "--environment-rotation",
+        ],
+    )
+}
+
+/// `environment_option`, its errors naming the caller's options
+/// (`names`: the environment's, its strength's and its rotation's).
+pub fn environment_spec(
+    text: &str,
+    strength: f64,
+    rotation_deg: f64,
+    names: [&str; 3],
+) -> Result<EnvironmentSpec> {
     let values: Option<Vec<f64>> = text.split(',').map(|v| v.trim().parse().ok()).collect();
     let source = match values.as_deref() {
         Some(&[v]) => EnvironmentSource::Color([v as f32; 3]),
@@ -119,9 +200,9 @@ pub fn environment_option(text: &str, strength: f64, rotation_deg: f64) -> Resul
     };
     EnvironmentSpec::new(source, strength, rotation_deg, |key| {
         match key {
-            "strength" => "--environment-strength",
-            "rotation_deg" => "--environment-rotation",
-            _ => "--environment",
+            "strength" => names[1],
+            "rotation_deg" => names[2],
+            _ => names[0],
         }
         .to_string()
     })

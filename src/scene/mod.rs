@@ -28,7 +28,7 @@ mod lighting;
 mod model;
 mod settings;
 
-pub use lighting::environment_option;
+pub use lighting::{environment_option, environment_spec};
 pub use settings::{DEFAULT_MAX_DEPTH, Integrator, RenderSettings};
 
 /// A loaded, validated scene, flattened into the buffers the GPU receives:
@@ -676,7 +676,12 @@ impl Scene {
     /// The default view's eye and look_at within MAX_LOCAL_COORDINATE of
     /// the offset, as the geometry is, and a camera still in f32 there.
     pub(crate) fn check_camera_placement(&self) -> Result<(), String> {
-        let camera = &self.view.camera;
+        self.check_camera(&self.view.camera)
+    }
+
+    /// `camera` (any view of the scene) within MAX_LOCAL_COORDINATE of
+    /// the offset, and still a camera in f32 there.
+    pub fn check_camera(&self, camera: &Camera) -> Result<(), String> {
         for (name, world) in [("eye", camera.eye), ("look_at", camera.look_at)] {
             checked_local(&format!("camera.{name}"), DVec3::from(world), self.offset)?;
         }

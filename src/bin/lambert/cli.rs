@@ -641,13 +641,13 @@ fn trace(args: &TraceArgs, quiet: bool) -> Result<ExitCode> {
     let start = Instant::now();
     let rays = rays::read_rays(&args.rays)?;
     let read_seconds = start.elapsed().as_secs_f64();
-    let scene = match &args.scene {
+    let mut scene = match &args.scene {
         Some(path) => Scene::load(path)?,
         None => Scene::from_objs(&args.obj)?,
     };
     scene.check_output(&args.output)?;
     let mut settings = scene.default_settings();
-    args.options.apply(&mut settings)?;
+    args.options.apply(&mut scene, &mut settings)?;
     let intersect = settings.intersect;
     // Where a ray's f32 numbers limit its hits (docs/accuracy.md).
     if !quiet {

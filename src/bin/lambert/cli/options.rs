@@ -7,9 +7,9 @@ use std::path::{Path, PathBuf};
 use clap::{Args, ValueEnum};
 
 use lambert::bench::BenchDevices;
-use lambert::error::{Error, Result};
+use lambert::error::Result;
 use lambert::gpu::AdapterRequest;
-use lambert::limits::{validate_max_depth, validate_spp};
+use lambert::jobs::RenderOverrides;
 use lambert::render::DeviceChoice;
 use lambert::scene::{Accel, Integrator, Intersect, RenderSettings, Scene, environment_option};
 
@@ -193,42 +193,39 @@ fn load_scene(path: &Path, camera: Option<&str>) -> Result<(Scene, RenderSetting
 
 impl ViewOptions {
     pub(super) fn load(&self, path: &Path) -> Result<(Scene, RenderSettings)> {
-        let (scene, mut settings) = load_scene(path, self.camera.as_deref())?;
-        self.apply(&mut settings)?;
+        let (mut scene, mut settings) = load_scene(path, self.camera.as_deref())?;
+        let overrides = RenderOverrides {
+            width: self.width,
+            height: self.height,
+            ..RenderOverrides::default()
+        };
+        overrides.apply(&mut scene, &mut settings, &flag)?;
         Ok((scene, settings))
-    }
-
-    pub(super) fn apply(&self, settings: &mut RenderSettings) -> Result<()> {
-        settings.view.camera = settings
-            .view
-            .camera
-            .resized(self.width, self.height)
-            .map_err(|e| Error::Usage(format!("--width/--height: {e}")))?;
-        Ok(())
     }
 }
 
 impl SceneOptions {
-    pub(super) fn load(&self, path: &Path) -> Result<(Scene, RenderSettings)> {
-        let (scene, mut settings) = load_scene(path, self.view.camera.as_deref())?;
-        self.apply(&mut settings)?;
-        Ok((scene, settings))
+    /// The options as the library applies them.
+    fn overrides(&self) -> RenderOverrides {
+        RenderOverrides {
+            accel: Some(self.accel.into()),
+            intersect: self.intersect.map(Into::into),
+            spp: self.spp,
+            seed: self.seed,
+            width: self.view.width,
+            height: self.view.height,
+            ..RenderOverrides::default()
+        }
     }
 
-    pub(super) fn apply(&self, settings: &mut RenderSettings) -> Result<()> {
-        settings.accel = self.accel.into();
-        if let Some(intersect) = self.intersect {
-            settings.intersect = intersect.into();
-        }
-        if let Some(spp) = self.spp {
-            validate_spp(spp).map_err(|e| Error::Usage(format!("--{e}")))?;
-            settings.view.spp = spp;
-        }
-        if let Some(seed) = self.seed {
-            settings.view.seed = seed;
-        }
-        self.view.apply(settings)
+    pub(super) fn apply(&self, scene: &mut Scene, settings: &mut RenderSettings) -> Result<()> {
+        self.overrides().apply(scene, settings, &flag)
     }
+}
+
+/// An option's name on the command line, for the library's errors.
+fn flag(name: &str) -> String {
+    format!("--{name}")
 }
 
 /// `SceneOptions`, and the light of a render.
@@ -282,22 +279,22 @@ impl RenderOptions {
     /// `--environment` (scene content, as a file's `[environment]`, read
     /// once here) replacing its own.
     pub(super) fn load(&self, path: &Path) -> Result<(Scene, RenderSettings)> {
-        let (mut scene, mut settings) = self.scene.load(path)?;
-        if let Some(ambient) = self.ambient {
-            settings.ambient = ambient;
-        }
-        if let Some(integrator) = self.integrator {
-            settings.integrator = integrator.into();
-        }
-        if let Some(max_depth) = self.max_depth {
-            validate_max_depth(max_depth).map_err(|e| Error::Usage(format!("--{e}")))?;
-            settings.max_depth = max_depth;
-        }
-        if let Some(text) = &self.environment {
-            let spec =
-                environment_option(text, self.environment_strength, self.environment_rotation)?;
-            scene.set_environment(Some(&spec))?;
-        }
+        let (mut scene, mut settings) = load_scene(path, self.scene.view.camera.as_deref())?;
+        let environment = self
+            .environment
+            .as_deref()
+            .map(|text| {
+                environment_option(text, self.environment_strength, self.environment_rotation)
+            })
+            .transpose()?;
+        let overrides = RenderOverrides {
+            ambient: self.ambient,
+            integrator: self.integrator.map(Into::into),
+            max_depth: self.max_depth,
+            environment,
+            ..self.scene.overrides()
+        };
+        overrides.apply(&mut scene, &mut settings, &flag)?;
         Ok((scene, settings))
     }
 }
