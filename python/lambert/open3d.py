@@ -56,6 +56,7 @@ Where it differs from Open3D:
 import numpy as np
 
 from . import Scene
+from ._errors import LambertTypeError, LambertValueError
 
 __all__ = ["INVALID_ID", "RaycastingScene"]
 
@@ -79,9 +80,9 @@ def _numpy(x, name, last):
     tensor = _is_tensor(x)
     a = x.numpy() if tensor else np.asarray(x)
     if a.dtype.kind not in "fiu":
-        raise ValueError(f"{name} must be a real-valued (..., {last}) array, not {a.dtype}")
+        raise LambertValueError(f"{name} must be a real-valued (..., {last}) array, not {a.dtype}")
     if a.ndim < 2 or a.shape[-1] != last:
-        raise ValueError(f"{name} has shape {a.shape}; it must be (..., {last}) with at least 2 dims")
+        raise LambertValueError(f"{name} has shape {a.shape}; it must be (..., {last}) with at least 2 dims")
     return a, tensor
 
 
@@ -117,12 +118,12 @@ def _device(device):
         return "cpu"
     if kind in ("SYCL", "CUDA"):
         return "gpu"
-    raise ValueError(f'device={device!r}: use "auto", "gpu", "cpu" or an Open3D CPU or SYCL device')
+    raise LambertValueError(f'device={device!r}: use "auto", "gpu", "cpu" or an Open3D CPU or SYCL device')
 
 
 def _check_nsamples(nsamples):
     if not (isinstance(nsamples, (int, np.integer)) and nsamples >= 1 and nsamples % 2 == 1):
-        raise ValueError(f"nsamples must be odd and >= 1 but is {nsamples}")
+        raise LambertValueError(f"nsamples must be odd and >= 1 but is {nsamples}")
 
 
 class RaycastingScene:
@@ -153,22 +154,22 @@ class RaycastingScene:
             elif hasattr(mesh, "vertices") and hasattr(mesh, "triangles"):
                 vertex_positions, triangle_indices = mesh.vertices, mesh.triangles
             else:
-                raise TypeError(f"add_triangles takes (vertex_positions, triangle_indices) or a mesh, "
+                raise LambertTypeError(f"add_triangles takes (vertex_positions, triangle_indices) or a mesh, "
                                 f"not {type(mesh).__name__}")
         v, _ = _numpy(vertex_positions, "vertex_positions", 3)
         f, _ = _numpy(triangle_indices, "triangle_indices", 3)
         if v.ndim != 2 or f.ndim != 2:
-            raise ValueError(f"vertex_positions {v.shape} and triangle_indices {f.shape} must be (N, 3)")
+            raise LambertValueError(f"vertex_positions {v.shape} and triangle_indices {f.shape} must be (N, 3)")
         if f.dtype.kind not in "iu" and f.size:
-            raise ValueError(f"triangle_indices must be integers, not {f.dtype}")
+            raise LambertValueError(f"triangle_indices must be integers, not {f.dtype}")
         v = v.astype(np.float32)
         if not np.isfinite(v).all():
             row = int(np.flatnonzero(~np.isfinite(v).all(axis=1))[0])
-            raise ValueError(f"vertex_positions row {row} = {v[row].tolist()}: not finite")
+            raise LambertValueError(f"vertex_positions row {row} = {v[row].tolist()}: not finite")
         f = f.astype(np.int64)
         if f.size and (f.min() < 0 or f.max() >= len(v)):
             row = int(np.flatnonzero(((f < 0) | (f >= len(v))).any(axis=1))[0])
-            raise ValueError(f"triangle_indices row {row} = {f[row].tolist()}: index out of range "
+            raise LambertValueError(f"triangle_indices row {row} = {f[row].tolist()}: index out of range "
                              f"({len(v)} vertices)")
         self._vertices.append(v)
         self._triangles.append(f)

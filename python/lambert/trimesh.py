@@ -18,6 +18,7 @@ count once, as in trimesh.
 import numpy as np
 
 from . import Scene
+from ._errors import LambertValueError
 
 __all__ = ["ProximityQuery", "RayMeshIntersector"]
 
@@ -29,7 +30,7 @@ def _rays(ray_origins, ray_directions, mesh):
     o = np.array(ray_origins, dtype=np.float64).reshape(-1, 3)
     d = np.array(ray_directions, dtype=np.float64).reshape(-1, 3)
     if o.shape != d.shape:
-        raise ValueError("Ray origin and direction don't match!")
+        raise LambertValueError("Ray origin and direction don't match!")
     with np.errstate(invalid="ignore", divide="ignore"):
         length = np.linalg.norm(d, axis=1)
         d = d / length[:, None]
@@ -130,7 +131,7 @@ def _points(points):
     """float64 (n, 3) points, as trimesh's proximity functions take them."""
     p = np.asanyarray(points, dtype=np.float64)
     if p.ndim != 2 or p.shape[1] != 3:
-        raise ValueError("points must be (n,3)!")
+        raise LambertValueError("points must be (n,3)!")
     return p
 
 

@@ -131,6 +131,10 @@ CASES = [
     ("merge missing file", lambda s: lambert.merge(["/nonexistent/part.exr"]), F, "part.exr"),
     ("merge not a part", lambda s: lambert.merge([__file__]), V, "test_error_classes.py"),
     ("device", lambda s: s.device("tpu"), V, "device"),
+    # The drop-ins
+    ("open3d add_triangles shape", lambda s: lambert.open3d.RaycastingScene().add_triangles(
+        np.zeros((3, 2), dtype=np.float32), np.zeros((1, 3), dtype=np.uint32)), V, "vertex_positions"),
+    ("open3d device", lambda s: lambert.open3d.RaycastingScene(device="tpu"), V, "device"),
 ]
 
 
