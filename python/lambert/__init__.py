@@ -38,6 +38,7 @@ from ._errors import (  # noqa: E402
     LambertTypeError,
     LambertValueError,
 )
+from ._examples import example_path  # noqa: E402
 from ._image import Camera, Image, merge, to_srgb, write_image  # noqa: E402
 from ._image import _point  # noqa: E402
 from ._options import _colour, _count, _number, progress_callback, render_choices, sampling, tile_pair  # noqa: E402
@@ -55,6 +56,7 @@ __all__ = [
     "LambertTypeError",
     "LambertValueError",
     "Scene",
+    "example_path",
     "merge",
     "open3d",
     "to_srgb",
