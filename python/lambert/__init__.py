@@ -152,10 +152,45 @@ def _native_property(name, doc=None):
 
 class Scene:
     """Triangles (and, from a scene file, spheres, materials, lights and a
-    camera), resident for queries and renders.
+    camera), resident for queries and renders (docs/python.md).
 
-    Build one with :meth:`from_arrays` or :meth:`load`. Tracing releases the
-    GIL; several threads may query one Scene at once.
+    Build one with :meth:`from_arrays` (vertices (V, 3) of any float
+    dtype, faces (F, 3) of any integer dtype) or :meth:`load` (a scene
+    TOML or a model file: .obj, .ply, .gltf, .glb, .stl)::
+
+        scene = lambert.Scene.load(lambert.example_path("bunny"))
+        image = scene.render(320, 240, spp=4)     # lambert.Image, (240, 320, 3) float32
+
+    Renders, as ``lambert render`` does, bit for bit:
+
+    - :meth:`render` → :class:`Image`, (H, W, 3) float32 linear RGB, with
+      the CLI's choices (camera, spp, seed, target_error, time_budget,
+      ambient, shadows, integrator, max_depth, environment, tile);
+    - :meth:`camera_rays` → (origins, directions), (W·H, 3) float32 each;
+    - :meth:`add_point_light`, :meth:`add_directional_light`,
+      :meth:`add_spot_light`: lights as the TOML format names them.
+
+    Ray queries (origins and directions (N, 3), any float dtype, or
+    RAY_DTYPE records; tmin, tmax scalars or (N,)):
+
+    - :meth:`intersect` → dict: ``t`` (N,) float32, ``prim_id`` (N,)
+      int64, ``u``, ``v`` (N,) float32, ``normal`` (N, 3) float32;
+    - :meth:`occluded` → (N,) bool;
+    - :meth:`count_intersections` → (N,) int32; :meth:`list_intersections`
+      → dict of ``ray_splits`` (N + 1,) int64 and one row a crossing.
+
+    Point queries (points (N, 3), any float dtype):
+
+    - :meth:`closest_points` → dict: ``point`` (N, 3) float32,
+      ``prim_id`` int64, ``u``, ``v``, ``distance`` float32;
+    - :meth:`distance`, :meth:`signed_distance`, :meth:`winding_number` →
+      (N,) float32; :meth:`contains` → (N,) bool.
+
+    ``device``: "auto" (a hardware GPU, else the CPU path), "gpu" (any
+    adapter, lavapipe included) or "cpu". Tracing releases the GIL;
+    several threads may query one Scene at once. Bad arguments raise
+    :class:`LambertError` subclasses that are also ValueError, TypeError,
+    OSError or RuntimeError, naming the argument.
     """
 
     __slots__ = ("_native", "__weakref__")
@@ -378,10 +413,13 @@ class Scene:
         (Vulkan, software)" or "CPU reference path (8 threads)"."""
         return self._native.device_name(device)
 
-    triangle_count = _native_property("triangle_count")
-    sphere_count = _native_property("sphere_count")
+    triangle_count = _native_property("triangle_count", "int: how many triangles the scene has (its faces' rows).")
+    sphere_count = _native_property("sphere_count", "int: how many spheres the scene has (a scene TOML's [[sphere]]s).")
     bounds = _native_property("bounds", "((xmin, ymin, zmin), (xmax, ymax, zmax)), or None when empty.")
-    camera = _native_property("camera", "The scene's camera: eye, look_at, up, vfov (degrees), width, height.")
+    camera = _native_property(
+        "camera",
+        "dict: the scene's camera: eye, look_at, up (3-tuples of float), vfov (degrees), width, height (int).",
+    )
 
     def __repr__(self):
         return f"<lambert.Scene: {self.triangle_count} triangles, {self.sphere_count} spheres>"

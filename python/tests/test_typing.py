@@ -51,3 +51,39 @@ scene.add_point_light((0, 1, 0))
     assert 'incompatible types in assignment (expression has type "Image"' in out.lower() or \
         'Incompatible types in assignment (expression has type "Image"' in out, out
     assert 'Missing positional argument "intensity"' in out, out
+
+
+def public_callables():
+    """Every public function and class of the package, and every public
+    method of Scene, with its name."""
+    for name in lambert.__all__:
+        value = getattr(lambert, name)
+        if callable(value) and not isinstance(value, type(lambert)) and not name.startswith("Lambert"):
+            yield name, value
+    for name in dir(lambert.Scene):
+        if not name.startswith("_"):
+            yield f"Scene.{name}", getattr(lambert.Scene, name)
+
+
+def test_every_public_function_has_a_docstring_with_its_shapes():
+    for name, value in public_callables():
+        doc = value.__doc__ or ""
+        assert len(doc) > 40, f"{name} has no docstring"
+    # The array-valued ones say their shape and dtype.
+    for name in ("render", "camera_rays", "intersect", "occluded", "closest_points", "distance",
+                 "signed_distance", "winding_number", "contains", "count_intersections"):
+        doc = getattr(lambert.Scene, name).__doc__
+        assert "(N" in doc or "(H, W, 3)" in doc or "(width·height, 3)" in doc, name
+        assert "float32" in doc or "bool" in doc or "int32" in doc, name
+    for name in ("to_srgb", "write_image", "merge"):
+        assert "(H, W, 3)" in getattr(lambert, name).__doc__, name
+
+
+def test_help_on_scene_reads_like_the_docs():
+    import pydoc
+
+    text = pydoc.render_doc(lambert.Scene, renderer=pydoc.plaintext)
+    for words in ("lambert.Scene.load(lambert.example_path(\"bunny\"))", "(H, W, 3) float32 linear RGB",
+                  "render(self, width=None, height=None, *, camera=None", "add_point_light(self, position, intensity)",
+                  "LambertError"):
+        assert words in text, words
