@@ -33,6 +33,9 @@ class Image(np.ndarray):
         self._scene = getattr(obj, "_scene", None)
 
     def _repr_png_(self):
+        # A slice that is no longer (H, W, 3) shows as an array.
+        if self.ndim != 3 or self.shape[2] != 3 or 0 in self.shape:
+            return None
         return _lambert.png_bytes(_rgb("image", self))
 
 

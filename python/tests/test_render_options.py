@@ -300,6 +300,8 @@ def test_to_srgb_png_and_the_notebook_show_the_written_png(tmp_path):
     lambert.write_image(tmp_path / "a.png", image)
     assert image._repr_png_() == (tmp_path / "a.png").read_bytes()
     assert type(np.asarray(image)) is np.ndarray and np.asarray(image).dtype == np.float32
+    # A row of it is no picture: the notebook shows the array instead.
+    assert image[0]._repr_png_() is None
 
 
 def test_write_image_never_replaces_the_scene_s_input(tmp_path):
