@@ -100,6 +100,20 @@ def _bound(name, value, n):
     return a if a.dtype == np.float64 else a.astype(np.float32, copy=False)
 
 
+def _name(name, value):
+    """A choice given by name (a str; the native module checks which)."""
+    if not isinstance(value, str):
+        raise LambertTypeError(f"{name} must be a str, not {type(value).__name__}")
+    return value
+
+
+def _device(device):
+    """``device``: "auto", "gpu" or "cpu"."""
+    if _name("device", device) not in _DEVICES:
+        raise LambertValueError(f'device="{device}": use "auto", "gpu" or "cpu"')
+    return device
+
+
 def _max_distance(value):
     """A closest-point query's reach: a number ≥ 0, inf for no limit."""
     try:
@@ -253,14 +267,14 @@ class Scene:
         # _t64 (the trimesh drop-in's): t as float64, the traced t plus the
         # origin's move in f64 unrounded, for locations as precise as the trace.
         o, d, lo, hi = _query(origins, directions, tmin, tmax)
-        return self._native.trace(o, d, lo, hi, device, intersect, False, bool(_t64))
+        return self._native.trace(o, d, lo, hi, _device(device), _name("intersect", intersect), False, bool(_t64))
 
     def occluded(self, origins, directions=None, tmin=0.0, tmax=np.inf, *, device="auto",
                  intersect="watertight"):
         """(N,) bool: whether anything lies on each ray with tmin < t < tmax
         (shadow rays: the first hit found ends the search)."""
         o, d, lo, hi = _query(origins, directions, tmin, tmax)
-        return self._native.trace(o, d, lo, hi, device, intersect, True, False)
+        return self._native.trace(o, d, lo, hi, _device(device), _name("intersect", intersect), True, False)
 
     def closest_points(self, points, max_distance=np.inf, *, device="auto"):
         """The closest point of the scene's triangles to each of ``points``
@@ -275,11 +289,11 @@ class Scene:
         float64 vertices); where float32 points are too coarse for the
         scene, a RuntimeWarning names the first. So for every point query."""
         p = _floats("points", points)
-        return _lambert.closest_points(self._native, p, _max_distance(max_distance), device)
+        return _lambert.closest_points(self._native, p, _max_distance(max_distance), _device(device))
 
     def distance(self, points, *, device="auto"):
         """(N,) float32: the distance from each point to the nearest triangle."""
-        return _lambert.point_values(self._native, _floats("points", points), "distance", "winding", device)
+        return _lambert.point_values(self._native, _floats("points", points), "distance", "winding", _device(device))
 
     def signed_distance(self, points, method="winding", *, device="auto"):
         """(N,) float32: the distance to the nearest triangle, negative
@@ -290,19 +304,19 @@ class Scene:
         crosses the surface an odd number of times (watertight meshes)."""
         if method not in ("winding", "parity"):
             raise LambertValueError(f'method={method!r}: use "winding" or "parity"')
-        return _lambert.point_values(self._native, _floats("points", points), "signed_distance", method, device)
+        return _lambert.point_values(self._native, _floats("points", points), "signed_distance", method, _device(device))
 
     def winding_number(self, points, *, device="auto"):
         """(N,) float32: the generalized winding number of the triangles
         about each point (1 inside a closed, outward-facing mesh, -1 facing
         in, 0 outside; within 1e-2 at 1% of the diagonal from the surface,
         fractional near holes)."""
-        return _lambert.point_values(self._native, _floats("points", points), "winding_number", "winding", device)
+        return _lambert.point_values(self._native, _floats("points", points), "winding_number", "winding", _device(device))
 
     def contains(self, points, *, device="auto"):
         """(N,) bool: whether each point is inside (|winding number| ≥ 0.5:
         the inside of a closed mesh facing either way)."""
-        return _lambert.contains(self._native, _floats("points", points), device)
+        return _lambert.contains(self._native, _floats("points", points), _device(device))
 
     def count_intersections(self, origins, directions=None, tmin=0.0, tmax=np.inf, *, device="auto"):
         """(N,) int32: how many times each ray crosses the triangles within
@@ -310,7 +324,7 @@ class Scene:
         traced from f64); a crossing through an edge or vertex that
         triangles share counts once."""
         o, d, lo, hi = _query(origins, directions, tmin, tmax)
-        return _lambert.crossings(self._native, o, d, lo, hi, device, False)
+        return _lambert.crossings(self._native, o, d, lo, hi, _device(device), False)
 
     def list_intersections(self, origins, directions=None, tmin=0.0, tmax=np.inf, *, device="auto"):
         """Every crossing of each ray within tmin < t < tmax, sorted by t
@@ -318,7 +332,7 @@ class Scene:
         i's crossings are rows ray_splits[i]:ray_splits[i+1]), ``ray_ids``
         int64, ``t`` float32, ``prim_id`` int64, ``u``, ``v`` float32."""
         o, d, lo, hi = _query(origins, directions, tmin, tmax)
-        return _lambert.crossings(self._native, o, d, lo, hi, device, True)
+        return _lambert.crossings(self._native, o, d, lo, hi, _device(device), True)
 
     def camera_rays(self, width=None, height=None, *, camera=None):
         """(origins, directions), each (width·height, 3) float32: the
@@ -367,10 +381,8 @@ class Scene:
         )
         tile = tile_pair(tile)
         budget, target, limit = sampling(spp, target_error, max_spp, time_budget, tile)
-        if device not in _DEVICES:
-            raise LambertValueError(f'device={device!r}: use "auto", "gpu" or "cpu"')
         image, part = _lambert.render(
-            self._native, choices, budget, target, limit, device, progress_callback(progress), tile
+            self._native, choices, budget, target, limit, _device(device), progress_callback(progress), tile
         )
         return Image(image, part=part, scene=self._native)
 
@@ -411,7 +423,7 @@ class Scene:
     def device(self, device="auto"):
         """What ``device`` resolves to for this scene, e.g. "GPU: llvmpipe
         (Vulkan, software)" or "CPU reference path (8 threads)"."""
-        return self._native.device_name(device)
+        return self._native.device_name(_device(device))
 
     triangle_count = _native_property("triangle_count", "int: how many triangles the scene has (its faces' rows).")
     sphere_count = _native_property("sphere_count", "int: how many spheres the scene has (a scene TOML's [[sphere]]s).")

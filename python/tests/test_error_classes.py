@@ -49,6 +49,10 @@ CASES = [
     ("intersect tmin type", lambda s: s.intersect(*RAYS, tmin="a"), V, "tmin"),
     ("intersect device", lambda s: s.intersect(*RAYS, device="tpu"), V, "device"),
     ("intersect test", lambda s: s.intersect(*RAYS, intersect="fast"), V, "intersect"),
+    ("intersect test type", lambda s: s.intersect(*RAYS, intersect=1), T, "intersect"),
+    ("intersect device type", lambda s: s.intersect(*RAYS, device=0), T, "device"),
+    ("contains device type", lambda s: s.contains(POINTS, device=None), T, "device"),
+    ("signed_distance method type", lambda s: s.signed_distance(POINTS, method=0), V, "method"),
     ("occluded NaN", lambda s: s.occluded(RAYS[0], RAYS[1] * np.nan), V, "ray 0"),
     ("count_intersections shape", lambda s: s.count_intersections(np.zeros(3), RAYS[1]), V, "origins"),
     ("list_intersections NaN", lambda s: s.list_intersections(RAYS[0], RAYS[1], tmax=np.nan), V, "tmax"),
@@ -131,6 +135,7 @@ CASES = [
     ("merge missing file", lambda s: lambert.merge(["/nonexistent/part.exr"]), F, "part.exr"),
     ("merge not a part", lambda s: lambert.merge([__file__]), V, "test_error_classes.py"),
     ("device", lambda s: s.device("tpu"), V, "device"),
+    ("device type", lambda s: s.device(1), T, "device"),
     # The drop-ins
     ("open3d add_triangles shape", lambda s: lambert.open3d.RaycastingScene().add_triangles(
         np.zeros((3, 2), dtype=np.float32), np.zeros((1, 3), dtype=np.uint32)), V, "vertex_positions"),
