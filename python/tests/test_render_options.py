@@ -318,3 +318,34 @@ def test_write_image_never_replaces_the_scene_s_input(tmp_path):
     assert (tmp_path / "sky.exr").read_bytes() == before
     lambert.write_image(tmp_path / "out.exr", image)
     assert os.path.getsize(tmp_path / "out.exr") > 0
+
+
+def test_progress_true_uses_tqdm_where_installed_else_a_text_bar(tmp_path, monkeypatch, capsys):
+    import sys
+    import types
+
+    scene = lambert.Scene.load(scene_toml(tmp_path, "a.toml", EYE_A, LOOK_A))
+    bars = []
+
+    class FakeTqdm:
+        def __init__(self, total, unit, leave):
+            self.total, self.unit, self.n, self.closed = total, unit, 0, False
+            bars.append(self)
+
+        def update(self, k):
+            self.n += k
+
+        def close(self):
+            self.closed = True
+
+    module = types.ModuleType("tqdm.auto")
+    module.tqdm = FakeTqdm
+    monkeypatch.setitem(sys.modules, "tqdm", types.ModuleType("tqdm"))
+    monkeypatch.setitem(sys.modules, "tqdm.auto", module)
+    scene.render(device="cpu", progress=True)
+    assert [(b.total, b.unit, b.n, b.closed) for b in bars] == [(30, "row", 30, True)]
+    # Without tqdm: the text bar on stderr.
+    monkeypatch.setitem(sys.modules, "tqdm.auto", None)
+    capsys.readouterr()
+    scene.render(device="cpu", progress=True)
+    assert "30/30 rows" in capsys.readouterr().err
