@@ -41,7 +41,7 @@ from ._errors import (  # noqa: E402
 from ._examples import example_path  # noqa: E402
 from ._image import Camera, Image, merge, to_srgb, write_image  # noqa: E402
 from ._image import _point  # noqa: E402
-from ._options import _colour, _count, _number, progress_callback, render_choices, sampling, tile_pair  # noqa: E402
+from ._options import _colour, _number, progress_callback, render_choices, sampling, tile_pair  # noqa: E402
 
 __all__ = [
     "RAY_DTYPE",
