@@ -145,9 +145,12 @@ impl Scene {
         &mut self.spheres
     }
 
-    /// The lights, to edit or add to.
+    /// The lights, to edit or add to: they are the scene's own from then
+    /// on, which no integrator drops or gives back (`with_settings`).
     pub fn lights_mut(&mut self) -> &mut Vec<Light> {
         self.forget_emitters();
+        self.default_light = false;
+        self.dropped_default_light.clear();
         &mut self.lights
     }
 

@@ -77,6 +77,10 @@ pub struct Scene {
     /// own is given (`camera::default_light`), which the path integrator
     /// drops where the model has light of its own (`with_settings`).
     pub(crate) default_light: bool,
+    /// The default light `with_settings` dropped for the path integrator,
+    /// given back when the scene is set to `direct` again (the viewer's
+    /// `p`, the Python package's `integrator=`).
+    pub(crate) dropped_default_light: Vec<Light>,
     /// Under `Integrator::Path`, the most surfaces a path hits.
     pub(crate) max_depth: u32,
     /// What loading read but ignored or could not find (each names its
@@ -247,6 +251,7 @@ impl Scene {
             intersect: Intersect::default(),
             integrator: Integrator::default(),
             default_light: false,
+            dropped_default_light: Vec::new(),
             max_depth: DEFAULT_MAX_DEPTH,
             warnings: Vec::new(),
             inputs: Vec::new(),

@@ -79,14 +79,28 @@ impl Scene {
     /// environment is lit by them alone (the default light and ambient
     /// are for a model with no light at all, which `direct` shows).
     pub fn default_light_goes(&self) -> bool {
-        self.integrator == Integrator::Path
-            && self.default_light
-            && (self.environment().is_some()
-                || self
-                    .emitters()
-                    .entries
-                    .iter()
-                    .any(|e| e.kind == crate::layout::EMITTER_TRIANGLE))
+        self.integrator == Integrator::Path && self.default_light && self.lit_by_itself()
+    }
+
+    /// Whether rendering with `integrator` changes the scene's lights: its
+    /// default light dropped (`default_light_goes`) or given back. A
+    /// renderer must then take the scene again (a GPU's lights are
+    /// uploaded), not only be specialised again.
+    pub fn lights_change_with(&self, integrator: Integrator) -> bool {
+        match integrator {
+            Integrator::Path => self.default_light && self.lit_by_itself(),
+            Integrator::Direct => !self.dropped_default_light.is_empty(),
+        }
+    }
+
+    /// An environment or an emissive triangle: light of the model's own.
+    fn lit_by_itself(&self) -> bool {
+        self.environment().is_some()
+            || self
+                .emitters()
+                .entries
+                .iter()
+                .any(|e| e.kind == crate::layout::EMITTER_TRIANGLE)
     }
 
     /// The scene as `settings` render it, its default view theirs: what
@@ -101,8 +115,12 @@ impl Scene {
         self.integrator = settings.integrator;
         self.max_depth = settings.max_depth;
         if self.default_light_goes() {
-            self.lights.clear();
+            self.dropped_default_light = std::mem::take(&mut self.lights);
             self.default_light = false;
+            self.forget_emitters();
+        } else if self.integrator == Integrator::Direct && !self.dropped_default_light.is_empty() {
+            self.lights = std::mem::take(&mut self.dropped_default_light);
+            self.default_light = true;
             self.forget_emitters();
         }
         self

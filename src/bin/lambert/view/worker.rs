@@ -15,7 +15,7 @@ use lambert::error::{Error, Result};
 use lambert::gpu::Gpu;
 use lambert::output::Image;
 use lambert::render::{Progressive, Renderer};
-use lambert::scene::{Integrator, Scene};
+use lambert::scene::{Integrator, RenderSettings, Scene};
 
 use super::navigate::Reach;
 
@@ -202,11 +202,25 @@ impl Worker {
                     Integrator::Direct => Integrator::Path,
                     Integrator::Path => Integrator::Direct,
                 };
-                let max_depth = self.scene.default_settings().max_depth;
-                self.respecialise(|renderer| renderer.set_integrator(integrator, max_depth))?;
+                let settings = RenderSettings {
+                    integrator,
+                    shadows: self.shadows,
+                    ..self.scene.default_settings()
+                };
+                if self.scene.lights_change_with(integrator) {
+                    // The default light goes (or comes back) as `lambert
+                    // render --integrator` has it: another scene's lights,
+                    // so a renderer takes the scene again.
+                    let scene = Arc::new((*self.scene).clone().with_settings(&settings));
+                    let renderer = self.renderer_for(&scene)?;
+                    self.show(scene, renderer, camera);
+                } else {
+                    let max_depth = settings.max_depth;
+                    self.respecialise(|renderer| renderer.set_integrator(integrator, max_depth))?;
+                    self.restart(camera);
+                }
                 self.integrator = integrator;
                 report(Report::Say(format!("integrator {}", integrator.name())));
-                self.restart(camera);
             }
             Command::Load(path) => match Scene::load(&path) {
                 Ok(scene) => {
