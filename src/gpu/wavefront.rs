@@ -78,8 +78,11 @@ impl ShadowDispatch {
     }
 }
 
-/// The path integrator's dispatch where LAMBERT_SHADOW_DISPATCH is unset.
-const PATH_DISPATCH: ShadowDispatch = ShadowDispatch::Wavefront;
+/// The path integrator's dispatch where LAMBERT_SHADOW_DISPATCH is unset:
+/// the megakernel, which measured faster on lavapipe (examples/wave, CPU
+/// time, 256²: the wavefront 1.06–1.12× the megakernel's on
+/// cornell_area.toml and dragon_cornell.toml; docs/benchmarks.md).
+const PATH_DISPATCH: ShadowDispatch = ShadowDispatch::Megakernel;
 
 /// Camera rays a wavefront dispatch takes with `lights` lights:
 /// `WAVE_RAYS`, fewer where their shadow rays would pass
