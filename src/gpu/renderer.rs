@@ -414,7 +414,7 @@ impl GpuRenderer {
     }
 
     /// The shadow dispatch for the uniform's shadows and lights and the
-    /// integrator (the wavefront shades as the direct one does).
+    /// integrator (each integrator has its own wavefront).
     fn choose_shadow_dispatch(&mut self) -> Result<()> {
         let params = self.resident.scene_params();
         self.shadow_dispatch = ShadowDispatch::for_lights(

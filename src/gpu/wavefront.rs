@@ -28,7 +28,9 @@ use super::{SHADOW_QUERY_BYTES, WAVE_RAYS, WAVE_SHADING_BYTES, WAVE_SHADOW_RAYS}
 /// unset, the wavefront wherever it applies: on a quiet machine it
 /// measured faster than the megakernel at every spp (lavapipe, the dragon,
 /// one point light, device time: 0.73× at 1 spp, 0.98× at 4, 0.95× at 16,
-/// 0.90× at 64; docs/bvh.md).
+/// 0.90× at 64; docs/bvh.md). Under the path integrator, the megakernel
+/// runs `path_radiance` whole, the wavefront a pass a bounce
+/// (gpu::path_wave); unset, the megakernel (`PATH_DISPATCH`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ShadowDispatch {
     Megakernel,
