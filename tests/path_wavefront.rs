@@ -14,6 +14,7 @@ use lambert::Scene;
 use lambert::gpu::{AdapterRequest, Gpu, GpuOptions, GpuRenderer, ShadowDispatch};
 use lambert::output::Rendered;
 use lambert::progress::Progress;
+use lambert::scene::RenderSettings;
 
 /// `scene` rendered on one GPU renderer in the path wavefront, then in the
 /// megakernel.
@@ -135,6 +136,15 @@ fn the_path_wavefront_renders_metal_emitters_and_an_environment_as_the_megakerne
         sum(&image) > sum(&wave_dark),
         "the environment lights nothing"
     );
+    // Without shadows the shade pass adds each light sample's term itself
+    // (no shadow ray): brighter, still the megakernel's image.
+    let settings = RenderSettings {
+        shadows: false,
+        ..scene.default_settings()
+    };
+    let unshadowed = scene.with_settings(&settings);
+    let lit = assert_wavefront_is_megakernel_and_twin(&unshadowed, "no shadows");
+    assert!(sum(&lit) > sum(&image), "no shadow was cast");
 }
 
 #[test]
