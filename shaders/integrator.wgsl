@@ -1,7 +1,9 @@
 // Stage: the integrator. Which integrator a sample's radiance comes from
 // (`radiance`: the direct one's `shade`, or `path_radiance`), and
 // unidirectional path tracing with next-event estimation and multiple
-// importance sampling (docs/rendering.md). CPU twin: src/cpu/integrator.rs.
+// importance sampling, a vertex at a time (`path_vertex`, which the
+// megakernel's `path_radiance` loops over and the wavefront's `path_shade`
+// runs once a pass; docs/rendering.md). CPU twin: src/cpu/integrator.rs.
 
 // Mixed into a path's random-number seed so that its numbers are not the
 // sample jitter's (`sample_position`).
@@ -143,6 +145,8 @@ fn path_vertex(path: ptr<function, PathState>, hit: Hit) -> PathStep {
     let frame = frame_from_normal(material.shading_normal);
     let wo = to_local(frame, -ray.dir);
     let origin = offset_ray_origin(surface.position, surface.error, surface.geometric_normal);
+    // The random state copied in and out: a pointer argument names a whole
+    // variable in WGSL (without unrestricted_pointer_parameters).
     if HAS_EMITTERS {
         var state = (*path).state;
         step = emitter_light(surface, origin, material.bsdf, frame, wo, &state);

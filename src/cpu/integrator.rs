@@ -1,7 +1,8 @@
 //! The path integrator, the twin of shaders/integrator.wgsl: which integrator a
 //! sample's radiance comes from (`radiance`), and unidirectional path
-//! tracing with next-event estimation and multiple importance sampling
-//! (`path_radiance`; docs/rendering.md). Written once for both precisions:
+//! tracing with next-event estimation and multiple importance sampling, a
+//! vertex at a time (`path_vertex`, which `path_radiance` loops over as the
+//! GPU's megakernel does; docs/rendering.md). Written once for both precisions:
 //! `kernel!` (kernel.rs) expands it into `cpu::f32` and `cpu::f64`, whose
 //! `Real`, `Vec2`, `Vec3` and `Vec4` it takes.
 
