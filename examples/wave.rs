@@ -5,7 +5,11 @@
 //! work itself and is disturbed far less than wall or device time when
 //! other processes share the machine; medians and ranges).
 //!
-//! cargo run --release --example wave -- SCENE.toml [ROUNDS] [SPP]
+//! cargo run --release --example wave -- SCENE.toml [ROUNDS] [SPP] [path [SIDE]]
+//!
+//! With `path`, the scene path traced (its max_depth) at SIDE² (default:
+//! the scene's size): the path integrator's wavefront against its
+//! megakernel, no rays alone (a path's rays are not the camera's).
 //!
 //! "Rays alone" are the scene's camera rays (closest hit) and the shadow
 //! rays of their hits towards its first light (any hit), as `lambert
@@ -19,15 +23,33 @@ use std::time::Duration;
 use lambert::Scene;
 use lambert::gpu::{AdapterRequest, ShadowDispatch};
 use lambert::progress::Progress;
+use lambert::scene::{Integrator, RenderSettings};
 
 fn main() -> lambert::Result<()> {
     let mut args = std::env::args().skip(1);
-    let path = args.next().expect("usage: wave SCENE.toml [ROUNDS] [SPP]");
+    let path = args
+        .next()
+        .expect("usage: wave SCENE.toml [ROUNDS] [SPP] [path [SIDE]]");
     let rounds: usize = args.next().map_or(5, |a| a.parse().expect("rounds"));
     let mut scene = Scene::load(std::path::Path::new(&path))?;
     if let Some(spp) = args.next() {
         scene.view_mut().spp = spp.parse().expect("spp");
     }
+    let path_traced = args.next().is_some_and(|a| a == "path");
+    if path_traced {
+        let settings = RenderSettings {
+            integrator: Integrator::Path,
+            ..scene.default_settings()
+        };
+        scene = scene.with_settings(&settings);
+        if let Some(side) = args.next() {
+            let side = Some(side.parse().expect("side"));
+            let camera = scene.view().camera.resized(side, side).expect("side");
+            scene.view_mut().camera = camera;
+        }
+    }
+    // The rays alone where they are what the render traces.
+    let turns = if path_traced { 2 } else { 3 };
     let request = AdapterRequest::default().with_environment(|v| std::env::var(v).ok());
     let mut gpu = lambert::render::open_gpu(&scene, &request)?;
     // The rays alone on a renderer of their own: a ray query's timestamps
@@ -35,8 +57,12 @@ fn main() -> lambert::Result<()> {
     // (not understood yet; the hits were right).
     let mut tracer = lambert::render::open_gpu(&scene, &request)?;
     let primary = lambert::rays::camera_rays(&scene);
-    let hits = lambert::cpu::trace_rays(&scene, &primary, false);
-    let shadow = lambert::bench::shadow_rays(&scene, &primary, &hits);
+    let shadow = if path_traced {
+        Vec::new()
+    } else {
+        let hits = lambert::cpu::trace_rays(&scene, &primary, false);
+        lambert::bench::shadow_rays(&scene, &primary, &hits)
+    };
     println!(
         "{path}: {}x{} at {} spp, {} camera rays, {} shadow rays traced alone; {}",
         scene.view().camera.width,
@@ -51,8 +77,8 @@ fn main() -> lambert::Result<()> {
     let mut cpu_times: [Vec<Duration>; 3] = Default::default();
     // One warm-up of each (pipelines built), not counted.
     for round in 0..=rounds {
-        for turn in 0..3 {
-            let which = (turn + round) % 3;
+        for turn in 0..turns {
+            let which = (turn + round) % turns;
             let cpu_before = process_cpu_time();
             let t = if which < 2 {
                 gpu.shadow_dispatch =
@@ -79,22 +105,32 @@ fn main() -> lambert::Result<()> {
     Ok(())
 }
 
-/// Each renderer's median and range, and its median over the rays alone'.
+/// Each renderer's median and range, and its median over the rays alone'
+/// (where they were traced).
 fn report(what: &str, times: &mut [Vec<Duration>; 3]) {
     let median = |v: &[Duration]| v[v.len() / 2].as_secs_f64();
     times.iter_mut().for_each(|t| t.sort());
-    let alone = median(&times[2]);
+    let alone = if times[2].is_empty() {
+        f64::NAN
+    } else {
+        median(&times[2])
+    };
     println!("{what}:");
     for (name, t) in ["wavefront", "megakernel", "rays alone"]
         .iter()
         .zip(times.iter())
+        .filter(|(_, t)| !t.is_empty())
     {
         let m = median(t);
+        let ratio = if alone.is_nan() {
+            String::new()
+        } else {
+            format!(", {:.2}x the rays alone", m / alone)
+        };
         println!(
-            "  {name:<11} {m:.3} s ({:.3}–{:.3}), {:.2}x the rays alone",
+            "  {name:<11} {m:.3} s ({:.3}–{:.3}){ratio}",
             t[0].as_secs_f64(),
             t[t.len() - 1].as_secs_f64(),
-            m / alone
         );
     }
 }

@@ -1,7 +1,9 @@
 // Stage: the integrator. Which integrator a sample's radiance comes from
 // (`radiance`: the direct one's `shade`, or `path_radiance`), and
 // unidirectional path tracing with next-event estimation and multiple
-// importance sampling (docs/rendering.md). CPU twin: src/cpu/integrator.rs.
+// importance sampling, a vertex at a time (`path_vertex`, which the
+// megakernel's `path_radiance` loops over and the wavefront's `path_shade`
+// runs once a pass; docs/rendering.md). CPU twin: src/cpu/integrator.rs.
 
 // Mixed into a path's random-number seed so that its numbers are not the
 // sample jitter's (`sample_position`).
@@ -58,95 +60,152 @@ fn escaped(ray: Ray, bsdf_pdf: f32) -> vec3<f32> {
     return light * power_heuristic(bsdf_pdf, environment_pdf(ray.dir));
 }
 
-// Direct light from one emitter drawn by power (see the CPU twin).
+// A path between its vertices (see the CPU twin): the ray it goes on
+// along (from `origin` with tmin 0 and tmax FAR), what it carries, what it
+// has gathered, its random numbers, and what the ray was drawn by.
+struct PathState {
+    ray: Ray,
+    throughput: vec3<f32>,
+    radiance: vec3<f32>,
+    state: u32,
+    bsdf_pdf_before: f32,
+    origin_before: vec3<f32>,
+    depth: u32,
+}
+
+// What a path's vertex asks of the tracer (see the CPU twin): the shadow
+// ray of its light sample and what that light adds unless it is blocked
+// (`lit`), and whether the path goes on along `PathState.ray`.
+struct PathStep {
+    shadow: Ray,
+    term: vec3<f32>,
+    lit: bool,
+    goes_on: bool,
+}
+
+// A path that starts along the camera ray `ray` (see the CPU twin).
+fn path_start(ray: Ray, seed: u32) -> PathState {
+    return PathState(ray, vec3<f32>(1.0), vec3<f32>(0.0), seed, 0.0, ray.origin, 0u);
+}
+
+// Direct light from one emitter drawn by power, but for its shadow ray
+// (see the CPU twin).
 fn emitter_light(surface: Surface, origin: vec3<f32>, bsdf: BsdfParams, frame: mat3x3<f32>,
-    wo: vec3<f32>, state: ptr<function, u32>) -> vec3<f32> {
+    wo: vec3<f32>, state: ptr<function, u32>) -> PathStep {
+    var step = PathStep(Ray(origin, 0.0, vec3<f32>(0.0), FAR), vec3<f32>(0.0), false, false);
     let u_pick = next_random(state);
     let u0 = next_random(state);
     let u = vec2<f32>(u0, next_random(state));
     let sample = sample_emitter(surface.position, surface.geometric_normal, u_pick, u);
     if !(sample.pdf > 0.0) || all(sample.radiance == vec3<f32>(0.0))
         || dot(sample.wi, surface.geometric_normal) <= 0.0 {
-        return vec3<f32>(0.0);
+        return step;
     }
     let wi = to_local(frame, sample.wi);
     let f = bsdf_eval(bsdf, wo, wi);
     if all(f == vec3<f32>(0.0)) {
-        return vec3<f32>(0.0);
+        return step;
     }
     var tmax = FAR;
     if sample.distance < FAR {
         tmax = sample.distance * (1.0 - SHADOW_SHORTENING);
     }
-    if params.shadows != 0u && trace_any(Ray(origin, 0.0, sample.wi, tmax)) {
-        return vec3<f32>(0.0);
-    }
     var weight = 1.0;
     if !sample.delta {
         weight = power_heuristic(sample.pdf, bsdf_pdf(bsdf, wo, wi));
     }
-    return rounded3(f * sample.radiance * (weight / sample.pdf));
+    step.shadow = Ray(origin, 0.0, sample.wi, tmax);
+    step.term = rounded3(f * sample.radiance * (weight / sample.pdf));
+    step.lit = true;
+    return step;
 }
 
-// Path tracing from the camera ray `ray` that hit `hit` (see the CPU twin).
-fn path_radiance(camera_ray: Ray, camera_hit: Hit, seed: u32) -> vec3<f32> {
-    var state = seed;
-    var ray = camera_ray;
-    var hit = camera_hit;
-    var radiance = vec3<f32>(0.0);
-    var throughput = vec3<f32>(1.0);
-    var bsdf_pdf_before = 0.0;
-    var origin_before = ray.origin;
-    var depth = 0u;
-    loop {
-        if hit.prim == NO_HIT {
-            radiance += rounded3(throughput * escaped(ray, bsdf_pdf_before));
-            break;
-        }
-        let surface = surface_at(ray, hit);
-        if any(surface.emission != vec3<f32>(0.0)) {
-            var weight = 1.0;
-            if bsdf_pdf_before > 0.0 {
-                let light_pdf = emitter_pdf(origin_before, hit.prim, ray.dir, hit.t);
-                weight = power_heuristic(bsdf_pdf_before, light_pdf);
-            }
-            radiance += rounded3(throughput * surface.emission * weight);
-        }
-        depth += 1u;
-        if depth > params.max_depth {
-            break;
-        }
-        let material = material_at(ray, hit, surface);
-        let frame = frame_from_normal(material.shading_normal);
-        let wo = to_local(frame, -ray.dir);
-        let origin = offset_ray_origin(surface.position, surface.error, surface.geometric_normal);
-        if HAS_EMITTERS {
-            radiance += rounded3(throughput * emitter_light(surface, origin, material.bsdf, frame, wo, &state));
-        }
-
-        let u_lobe = next_random(&state);
-        let u0 = next_random(&state);
-        let u = vec2<f32>(u0, next_random(&state));
-        let sample = bsdf_sample(material.bsdf, wo, u, u_lobe);
-        if !sample.ok {
-            break;
-        }
-        let wi = to_world(frame, sample.wi);
-        if dot(wi, surface.geometric_normal) <= 0.0 {
-            break;
-        }
-        throughput *= sample.weight;
-        if depth >= ROULETTE_DEPTH {
-            let go_on = min(max(max(throughput.x, throughput.y), throughput.z), ROULETTE_CONTINUE);
-            if next_random(&state) >= go_on {
-                break;
-            }
-            throughput /= go_on;
-        }
-        bsdf_pdf_before = sample.pdf;
-        origin_before = surface.position;
-        ray = Ray(origin, 0.0, wi, FAR);
-        hit = trace_closest(ray);
+// One vertex of a path, where its ray hit `hit` (see the CPU twin).
+fn path_vertex(path: ptr<function, PathState>, hit: Hit) -> PathStep {
+    var step = PathStep((*path).ray, vec3<f32>(0.0), false, false);
+    let ray = (*path).ray;
+    if hit.prim == NO_HIT {
+        (*path).radiance += rounded3((*path).throughput * escaped(ray, (*path).bsdf_pdf_before));
+        return step;
     }
-    return radiance;
+    let surface = surface_at(ray, hit);
+    if any(surface.emission != vec3<f32>(0.0)) {
+        var weight = 1.0;
+        if (*path).bsdf_pdf_before > 0.0 {
+            let light_pdf = emitter_pdf((*path).origin_before, hit.prim, ray.dir, hit.t);
+            weight = power_heuristic((*path).bsdf_pdf_before, light_pdf);
+        }
+        (*path).radiance += rounded3((*path).throughput * surface.emission * weight);
+    }
+    (*path).depth += 1u;
+    if (*path).depth > params.max_depth {
+        return step;
+    }
+    let material = material_at(ray, hit, surface);
+    let frame = frame_from_normal(material.shading_normal);
+    let wo = to_local(frame, -ray.dir);
+    let origin = offset_ray_origin(surface.position, surface.error, surface.geometric_normal);
+    // The random state copied in and out: a pointer argument names a whole
+    // variable in WGSL (without unrestricted_pointer_parameters).
+    if HAS_EMITTERS {
+        var state = (*path).state;
+        step = emitter_light(surface, origin, material.bsdf, frame, wo, &state);
+        (*path).state = state;
+        step.term = rounded3((*path).throughput * step.term);
+    }
+
+    var state = (*path).state;
+    let u_lobe = next_random(&state);
+    let u0 = next_random(&state);
+    let u = vec2<f32>(u0, next_random(&state));
+    (*path).state = state;
+    let sample = bsdf_sample(material.bsdf, wo, u, u_lobe);
+    if !sample.ok {
+        return step;
+    }
+    let wi = to_world(frame, sample.wi);
+    if dot(wi, surface.geometric_normal) <= 0.0 {
+        return step;
+    }
+    (*path).throughput *= sample.weight;
+    if (*path).depth >= ROULETTE_DEPTH {
+        let t = (*path).throughput;
+        let go_on = min(max(max(t.x, t.y), t.z), ROULETTE_CONTINUE);
+        var state = (*path).state;
+        let u_roulette = next_random(&state);
+        (*path).state = state;
+        if u_roulette >= go_on {
+            return step;
+        }
+        (*path).throughput /= go_on;
+    }
+    (*path).bsdf_pdf_before = sample.pdf;
+    (*path).origin_before = surface.position;
+    (*path).ray = Ray(origin, 0.0, wi, FAR);
+    step.goes_on = true;
+    return step;
+}
+
+// Whether a vertex's light sample `step` reaches it: its shadow ray not
+// blocked, or the render without shadows.
+fn light_reaches(step: PathStep) -> bool {
+    return step.lit && (params.shadows == 0u || !trace_any(step.shadow));
+}
+
+// Path tracing from the camera ray `ray` that hit `hit`, every vertex in
+// this invocation (the megakernel; see the CPU twin).
+fn path_radiance(camera_ray: Ray, camera_hit: Hit, seed: u32) -> vec3<f32> {
+    var path = path_start(camera_ray, seed);
+    var hit = camera_hit;
+    loop {
+        let step = path_vertex(&path, hit);
+        if light_reaches(step) {
+            path.radiance += step.term;
+        }
+        if !step.goes_on {
+            break;
+        }
+        hit = trace_closest(path.ray);
+    }
+    return path.radiance;
 }

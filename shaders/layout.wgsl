@@ -417,6 +417,35 @@ struct ShadowQuery {
 // `tile_sums`, and the first sample it resolves.
 @group(1) @binding(19) var<storage, read_write> resolve_pixels: array<vec2<u32>>;
 
+// The path wavefront (shaders/entry_paths.wgsl): each path of a dispatch
+// between its vertices, as `PathState` and the hit its ray found.
+struct PathRecord {
+    origin: vec3<f32>,
+    state: u32,
+    dir: vec3<f32>,
+    bsdf_pdf_before: f32,
+    throughput: vec3<f32>,
+    depth: u32,
+    radiance: vec3<f32>,
+    hit_t: f32,
+    origin_before: vec3<f32>,
+    hit_prim: u32,
+    hit_uv: vec2<f32>,
+}
+@group(1) @binding(24) var<storage, read_write> path_records: array<PathRecord>;
+// The live paths a pass takes and those that go on: two halves, which
+// swap from bounce to bounce (`path_counts[4]`: the live one).
+@group(1) @binding(25) var<storage, read_write> path_queues: array<u32>;
+// How many: [0] paths appended to the other half of `path_queues`, [1]
+// shadow rays appended to `shadow_queue`, [2] and [3] those that the
+// passes after `path_advance` take (the appends then start again from 0);
+// [4] which half of `path_queues` is live.
+@group(1) @binding(27) var<storage, read_write> path_counts: array<atomic<u32>, 5>;
+// The indirect dispatches (workgroups x, y, z) of the passes over the live
+// paths (0 to 2) and over the shadow rays (3 to 5): written only by
+// `path_advance`, which is dispatched directly.
+@group(1) @binding(28) var<storage, read_write> path_workgroups: array<u32, 6>;
+
 // Lighting (the path integrator's; shaders/lights.wgsl reads it): the
 // emitters' table and the environment. Whether the scene has an
 // environment (a colour or a map) and any emitter at all: without, their

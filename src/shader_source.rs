@@ -40,6 +40,8 @@ pub const SOURCE: &str = concat!(
     "\n",
     include_str!("../shaders/entry_shadows.wgsl"),
     "\n",
+    include_str!("../shaders/entry_paths.wgsl"),
+    "\n",
     include_str!("../shaders/entry_query.wgsl"),
     "\n",
     include_str!("../shaders/entry_proximity.wgsl"),

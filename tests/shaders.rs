@@ -81,6 +81,11 @@ fn host_structs_match_wgsl_layout() {
         lambert::gpu::WAVE_SHADING_BYTES,
         "size of WaveShading"
     );
+    assert_eq!(
+        reflect(m, "PathRecord").0 as u64,
+        lambert::gpu::PATH_RECORD_BYTES,
+        "size of PathRecord"
+    );
     check_layout!(
         m,
         Params {

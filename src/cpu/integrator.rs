@@ -1,7 +1,8 @@
 //! The path integrator, the twin of shaders/integrator.wgsl: which integrator a
 //! sample's radiance comes from (`radiance`), and unidirectional path
-//! tracing with next-event estimation and multiple importance sampling
-//! (`path_radiance`; docs/rendering.md). Written once for both precisions:
+//! tracing with next-event estimation and multiple importance sampling, a
+//! vertex at a time (`path_vertex`, which `path_radiance` loops over as the
+//! GPU's megakernel does; docs/rendering.md). Written once for both precisions:
 //! `kernel!` (kernel.rs) expands it into `cpu::f32` and `cpu::f64`, whose
 //! `Real`, `Vec2`, `Vec3` and `Vec4` it takes.
 
@@ -48,6 +49,64 @@ macro_rules! integrator {
             a2 / (a2 + b2)
         }
 
+        /// A path between its vertices: the ray it goes on along, what
+        /// it carries, what it has gathered, its random-number state, and
+        /// the pdf of the BSDF sample its ray was drawn by (0: the
+        /// camera's) and where that ray left.
+        #[derive(Clone, Copy, Debug)]
+        pub struct PathState {
+            pub ray: Ray,
+            pub throughput: Vec3,
+            pub radiance: Vec3,
+            pub state: u32,
+            pub bsdf_pdf_before: Real,
+            pub origin_before: Vec3,
+            pub depth: u32,
+        }
+
+        impl PathState {
+            /// A path that starts along the camera ray `ray`.
+            pub fn start(ray: Ray, state: u32) -> PathState {
+                PathState {
+                    ray,
+                    throughput: Vec3::ONE,
+                    radiance: Vec3::ZERO,
+                    state,
+                    bsdf_pdf_before: 0.0,
+                    origin_before: ray.origin,
+                    depth: 0,
+                }
+            }
+        }
+
+        /// What a path's vertex asks of the tracer: the shadow ray of its
+        /// light sample and what that light adds unless the ray is blocked
+        /// (`lit`), and whether the path goes on along `PathState::ray`.
+        #[derive(Clone, Copy, Debug)]
+        pub struct PathStep {
+            pub shadow: Ray,
+            pub term: Vec3,
+            pub lit: bool,
+            pub goes_on: bool,
+        }
+
+        impl PathStep {
+            /// A vertex that lights nothing and ends its path.
+            fn none(origin: Vec3) -> PathStep {
+                PathStep {
+                    shadow: Ray {
+                        origin,
+                        tmin: 0.0,
+                        dir: Vec3::ZERO,
+                        tmax: FAR,
+                    },
+                    term: Vec3::ZERO,
+                    lit: false,
+                    goes_on: false,
+                }
+            }
+        }
+
         impl<'a> Kernel<'a> {
             /// One sample's radiance along the camera ray `ray` that hit
             /// `hit`, by the scene's integrator.
@@ -80,10 +139,10 @@ macro_rules! integrator {
 
             /// Direct light at a path's vertex from one emitter drawn by
             /// power (an emissive triangle, a point, spot or directional
-            /// light, the environment), its shadow ray traced where the
-            /// render has shadows; an emitter with area weighted against
-            /// BSDF sampling (a punctual light, which BSDF sampling never
-            /// finds, is not).
+            /// light, the environment), but for its shadow ray: the ray,
+            /// and what the light adds unless the ray is blocked; an
+            /// emitter with area weighted against BSDF sampling (a
+            /// punctual light, which BSDF sampling never finds, is not).
             fn emitter_light(
                 &self,
                 surface: &Surface,
@@ -92,7 +151,8 @@ macro_rules! integrator {
                 frame: Frame,
                 wo: Vec3,
                 state: &mut u32,
-            ) -> Vec3 {
+            ) -> PathStep {
+                let mut step = PathStep::none(origin);
                 let u_pick = next_random(state);
                 let u = Vec2::new(next_random(state), next_random(state));
                 let sample =
@@ -101,124 +161,138 @@ macro_rules! integrator {
                     || sample.radiance == Vec3::ZERO
                     || sample.wi.dot(surface.geometric_normal) <= 0.0
                 {
-                    return Vec3::ZERO;
+                    return step;
                 }
                 let wi = to_local(frame, sample.wi);
                 let f = bsdf_eval(bsdf, wo, wi);
                 if f == Vec3::ZERO {
-                    return Vec3::ZERO;
+                    return step;
                 }
                 let tmax = if sample.distance >= FAR {
                     FAR
                 } else {
                     sample.distance * (1.0 - SHADOW_SHORTENING)
                 };
-                if self.scene.shadows
-                    && self.trace_any(Ray {
-                        origin,
-                        tmin: 0.0,
-                        dir: sample.wi,
-                        tmax,
-                    })
-                {
-                    return Vec3::ZERO;
-                }
                 let weight = if sample.delta {
                     1.0
                 } else {
                     power_heuristic(sample.pdf, bsdf_pdf(bsdf, wo, wi))
                 };
-                f * sample.radiance * (weight / sample.pdf)
+                step.shadow = Ray {
+                    origin,
+                    tmin: 0.0,
+                    dir: sample.wi,
+                    tmax,
+                };
+                step.term = f * sample.radiance * (weight / sample.pdf);
+                step.lit = true;
+                step
             }
 
-            /// Path tracing from the camera ray `ray` that hit `hit`:
-            /// emission where a path hits it, direct light at each vertex
-            /// (one emitter drawn by power, with multiple importance
-            /// sampling against the BSDF's own direction), the next direction drawn from the BSDF, Russian
-            /// roulette after `ROULETTE_DEPTH` bounces; at most
+            /// One vertex of a path, where its ray hit `hit`: emission
+            /// where the path hits it (weighted against the light sample
+            /// of the vertex before), direct light (one emitter drawn by
+            /// power, with multiple importance sampling against the
+            /// BSDF's own direction: its shadow ray returned for the
+            /// caller to trace), the next direction drawn from the BSDF,
+            /// Russian roulette after `ROULETTE_DEPTH` bounces; at most
             /// `max_depth` surfaces (pbrt-v4's `maxdepth`; Mitsuba 3's
-            /// `max_depth` is one more). Random numbers from `state`.
-            pub fn path_radiance(&self, ray: &Ray, hit: &Hit, state: u32) -> Vec3 {
-                let mut state = state;
-                let mut ray = *ray;
-                let mut hit = *hit;
-                let mut radiance = Vec3::ZERO;
-                let mut throughput = Vec3::ONE;
-                // The pdf of the BSDF sample the ray was drawn by (0: the
-                // camera's), and where it left.
-                let mut bsdf_pdf_before: Real = 0.0;
-                let mut origin_before = ray.origin;
-                let mut depth = 0u32;
-                loop {
-                    if hit.prim == NO_HIT {
-                        radiance += throughput * self.escaped(&ray, bsdf_pdf_before);
-                        break;
-                    }
-                    let surface = self.surface_at(&ray, &hit);
-                    if surface.emission != Vec3::ZERO {
-                        let mut weight = 1.0;
-                        if bsdf_pdf_before > 0.0 {
-                            let light_pdf =
-                                self.emitter_pdf(origin_before, hit.prim, ray.dir, hit.t);
-                            weight = power_heuristic(bsdf_pdf_before, light_pdf);
-                        }
-                        radiance += throughput * surface.emission * weight;
-                    }
-                    depth += 1;
-                    if depth > self.max_depth {
-                        break;
-                    }
-                    let material = self.material_at(&ray, &hit, &surface);
-                    let frame = frame_from_normal(material.shading_normal);
-                    let wo = to_local(frame, -ray.dir);
-                    let origin = offset_ray_origin(
-                        surface.position,
-                        surface.error,
-                        surface.geometric_normal,
-                    );
-                    if self.has_emitters() {
-                        radiance += throughput
-                            * self.emitter_light(
-                                &surface,
-                                origin,
-                                material.bsdf,
-                                frame,
-                                wo,
-                                &mut state,
-                            );
-                    }
-
-                    let u_lobe = next_random(&mut state);
-                    let u = Vec2::new(next_random(&mut state), next_random(&mut state));
-                    let sample = bsdf_sample(material.bsdf, wo, u, u_lobe);
-                    if !sample.ok {
-                        break;
-                    }
-                    let wi = to_world(frame, sample.wi);
-                    // Below the geometric surface (a shading normal's
-                    // artefact): the path would leak through it.
-                    if wi.dot(surface.geometric_normal) <= 0.0 {
-                        break;
-                    }
-                    throughput *= sample.weight;
-                    if depth >= ROULETTE_DEPTH {
-                        let go_on = throughput.max_element().min(ROULETTE_CONTINUE);
-                        if next_random(&mut state) >= go_on {
-                            break;
-                        }
-                        throughput /= go_on;
-                    }
-                    bsdf_pdf_before = sample.pdf;
-                    origin_before = surface.position;
-                    ray = Ray {
-                        origin,
-                        tmin: 0.0,
-                        dir: wi,
-                        tmax: FAR,
-                    };
-                    hit = self.trace_closest(ray);
+            /// `max_depth` is one more). Random numbers from
+            /// `path.state`, in the order both the megakernel and the
+            /// GPU's wavefront (shaders/entry_paths.wgsl) draw them.
+            pub fn path_vertex(&self, path: &mut PathState, hit: &Hit) -> PathStep {
+                let ray = path.ray;
+                let mut step = PathStep::none(ray.origin);
+                if hit.prim == NO_HIT {
+                    path.radiance += path.throughput * self.escaped(&ray, path.bsdf_pdf_before);
+                    return step;
                 }
-                radiance
+                let surface = self.surface_at(&ray, hit);
+                if surface.emission != Vec3::ZERO {
+                    let mut weight = 1.0;
+                    if path.bsdf_pdf_before > 0.0 {
+                        let light_pdf =
+                            self.emitter_pdf(path.origin_before, hit.prim, ray.dir, hit.t);
+                        weight = power_heuristic(path.bsdf_pdf_before, light_pdf);
+                    }
+                    path.radiance += path.throughput * surface.emission * weight;
+                }
+                path.depth += 1;
+                if path.depth > self.max_depth {
+                    return step;
+                }
+                let material = self.material_at(&ray, hit, &surface);
+                let frame = frame_from_normal(material.shading_normal);
+                let wo = to_local(frame, -ray.dir);
+                let origin =
+                    offset_ray_origin(surface.position, surface.error, surface.geometric_normal);
+                if self.has_emitters() {
+                    step = self.emitter_light(
+                        &surface,
+                        origin,
+                        material.bsdf,
+                        frame,
+                        wo,
+                        &mut path.state,
+                    );
+                    step.term = path.throughput * step.term;
+                }
+
+                let u_lobe = next_random(&mut path.state);
+                let u = Vec2::new(next_random(&mut path.state), next_random(&mut path.state));
+                let sample = bsdf_sample(material.bsdf, wo, u, u_lobe);
+                if !sample.ok {
+                    return step;
+                }
+                let wi = to_world(frame, sample.wi);
+                // Below the geometric surface (a shading normal's
+                // artefact): the path would leak through it.
+                if wi.dot(surface.geometric_normal) <= 0.0 {
+                    return step;
+                }
+                path.throughput *= sample.weight;
+                if path.depth >= ROULETTE_DEPTH {
+                    let go_on = path.throughput.max_element().min(ROULETTE_CONTINUE);
+                    if next_random(&mut path.state) >= go_on {
+                        return step;
+                    }
+                    path.throughput /= go_on;
+                }
+                path.bsdf_pdf_before = sample.pdf;
+                path.origin_before = surface.position;
+                path.ray = Ray {
+                    origin,
+                    tmin: 0.0,
+                    dir: wi,
+                    tmax: FAR,
+                };
+                step.goes_on = true;
+                step
+            }
+
+            /// Whether a vertex's light sample `step` reaches it: its
+            /// shadow ray not blocked, or the render without shadows.
+            pub fn light_reaches(&self, step: &PathStep) -> bool {
+                step.lit && (!self.scene.shadows || !self.trace_any(step.shadow))
+            }
+
+            /// Path tracing from the camera ray `ray` that hit `hit`, one
+            /// `path_vertex` after another, each vertex's shadow ray traced
+            /// before the next ray (the megakernel's order, which the
+            /// GPU's wavefront keeps). Random numbers from `state`.
+            pub fn path_radiance(&self, ray: &Ray, hit: &Hit, state: u32) -> Vec3 {
+                let mut path = PathState::start(*ray, state);
+                let mut hit = *hit;
+                loop {
+                    let step = self.path_vertex(&mut path, &hit);
+                    if self.light_reaches(&step) {
+                        path.radiance += step.term;
+                    }
+                    if !step.goes_on {
+                        return path.radiance;
+                    }
+                    hit = self.trace_closest(path.ray);
+                }
             }
         }
     };

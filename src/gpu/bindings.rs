@@ -113,6 +113,25 @@ pub const WAVEFRONT: BindingTable = BindingTable {
     ],
 };
 
+/// Group 1 of the path integrator's wavefront (shaders/entry_paths.wgsl):
+/// the tile's or the pixel list's, the paths, their queues (two halves,
+/// swapped from bounce to bounce), their shadow rays, the counts and the indirect
+/// dispatches.
+pub const PATH_WAVE: BindingTable = BindingTable {
+    label: "image tile, path wavefront",
+    group: 1,
+    entries: &[
+        OUT_PRIM,
+        TILE_SUMS,
+        PIXEL_LIST_INPUT,
+        bind("shadow_queue", 8, StorageWrite),
+        bind("path_records", 24, StorageWrite),
+        bind("path_queues", 25, StorageWrite),
+        bind("path_counts", 27, StorageWrite),
+        bind("path_workgroups", 28, StorageWrite),
+    ],
+};
+
 /// Group 1 of `trace_rays`: its input, then its output (`run_list`).
 pub const RAYS: BindingTable = BindingTable {
     label: "rays",
@@ -157,10 +176,11 @@ pub const LIGHT_PROBE: BindingTable = BindingTable {
 };
 
 /// Every table.
-pub const TABLES: [&BindingTable; 7] = [
+pub const TABLES: [&BindingTable; 8] = [
     &SCENE,
     &IMAGE_TILE,
     &WAVEFRONT,
+    &PATH_WAVE,
     &RAYS,
     &PIXEL_LIST,
     &PROXIMITY,

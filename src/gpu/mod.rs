@@ -17,6 +17,7 @@
 //!   wavefront), tile by tile, of the view each call is given;
 //! - `wavefront`: the wavefront (shadow rays traced apart from the camera
 //!   rays): its passes, lists and bind groups, and `ShadowDispatch`;
+//! - `path_wave`: the path integrator's wavefront (a pass a bounce);
 //! - `wave_list`: adaptive sampling's pixel lists in the wavefront;
 //! - `progressive`: a render's samples added a few at a time (the viewer);
 //! - `query`: ray queries and pixel lists (`Lists`);
@@ -29,6 +30,7 @@ pub mod bindings;
 mod device;
 mod lighting;
 mod options;
+mod path_wave;
 mod pipelines;
 mod progressive;
 mod proximity;
@@ -80,3 +82,10 @@ pub const WAVE_SHADOW_RAYS: u32 = TILE * TILE * 8;
 /// checked against naga's layout in tests/shaders.rs.
 pub const SHADOW_QUERY_BYTES: u64 = 48;
 pub const WAVE_SHADING_BYTES: u64 = 32;
+/// Bytes of the shader's `PathRecord` (a path between its vertices, in
+/// the path integrator's wavefront), checked as `ShadowQuery` is.
+pub const PATH_RECORD_BYTES: u64 = 96;
+/// Paths a dispatch of the path integrator's wavefront takes at most (its
+/// records 18 MiB, within WebGPU's 128 MiB binding): as many as the
+/// direct integrator's wavefront's camera rays, whose tiles it shares.
+pub const PATH_WAVE_PATHS: u32 = WAVE_RAYS;

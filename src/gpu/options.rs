@@ -9,7 +9,8 @@ use crate::error::{Error, Result};
 pub const MAX_BUFFER_ENV: &str = "LAMBERT_GPU_MAX_BUFFER_BYTES";
 
 /// `LAMBERT_SHADOW_DISPATCH`: megakernel or wavefront
-/// (`ShadowDispatch`; unset, the wavefront wherever it applies).
+/// (`ShadowDispatch`; unset, the wavefront wherever it applies under the
+/// direct integrator, the megakernel under the path integrator).
 pub const SHADOW_DISPATCH_ENV: &str = "LAMBERT_SHADOW_DISPATCH";
 
 /// Settings a front end found in the environment, as it found them: each

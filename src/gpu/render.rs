@@ -13,11 +13,12 @@ use crate::progress::Progress;
 
 use super::bindings::{IMAGE_TILE, SCENE};
 use super::device::Gpu;
+use super::path_wave::PathWave;
 use super::readback::TileTargets;
 use super::resident::Host;
 use super::timer::{GpuTimings, Timer};
 use super::wavefront::{ShadowDispatch, Wavefront, wave_budget};
-use super::{RENDER_WORKGROUP, TILE};
+use super::{PATH_WAVE_PATHS, RENDER_WORKGROUP, TILE};
 
 /// Samples a dispatch adds to each pixel on llvmpipe: the bundled scenes'
 /// pixels ran out of loop iterations from about 192 (a 3,674-triangle
@@ -43,8 +44,12 @@ pub(super) struct Tiles {
     targets: TileTargets,
     /// The megakernel's pipeline, built on its first render.
     megakernel: Option<wgpu::ComputePipeline>,
-    /// The wavefront's passes, built on the first wavefront render.
+    /// The wavefront's passes, built on the first wavefront render: the
+    /// direct integrator's, or the path integrator's (`path`).
     wavefront: Option<Wavefront>,
+    path_wave: Option<PathWave>,
+    /// Whether samples are path traced (the PATH_TRACE override).
+    path: bool,
     timer: Option<Timer>,
     /// Samples one dispatch adds to a pixel: few enough that no invocation
     /// trips llvmpipe's loop limit (`loops_completed` in the shader);
@@ -56,8 +61,9 @@ pub(super) struct Tiles {
 }
 
 impl Tiles {
-    /// The tile's buffers and the timer, for a scene of `lights` lights.
-    pub fn new(gpu: &Gpu, lights: u32) -> Tiles {
+    /// The tile's buffers and the timer, for a scene of `lights` lights,
+    /// path traced or not.
+    pub fn new(gpu: &Gpu, lights: u32, path: bool) -> Tiles {
         let samples_per_dispatch = if gpu.is_llvmpipe() {
             LLVMPIPE_SAMPLES_PER_DISPATCH
         } else {
@@ -67,6 +73,8 @@ impl Tiles {
             targets: TileTargets::new(&gpu.device),
             megakernel: None,
             wavefront: None,
+            path_wave: None,
+            path,
             timer: Timer::new(gpu),
             samples_per_dispatch,
             lights,
@@ -82,16 +90,18 @@ impl Tiles {
         self.timer.as_ref()
     }
 
-    /// Lights in the resident scene.
-    pub fn lights(&self) -> u32 {
-        self.lights
-    }
-
     /// Drops the passes built so far (the shader's overrides changed):
     /// `prepare` builds them again.
     pub fn forget_pipelines(&mut self) {
         self.megakernel = None;
         self.wavefront = None;
+        self.path_wave = None;
+    }
+
+    /// Whether samples are path traced (the integrator switched: its
+    /// pipelines are forgotten already).
+    pub fn set_path(&mut self, path: bool) {
+        self.path = path;
     }
 
     /// The wavefront, once `prepare` built it.
@@ -99,10 +109,18 @@ impl Tiles {
         self.wavefront.as_ref()
     }
 
-    /// Builds the wavefront and its pixel list's first pass if not built
+    /// The path integrator's wavefront, once `prepare` built it.
+    pub fn path_wave(&self) -> Option<&PathWave> {
+        self.path_wave.as_ref()
+    }
+
+    /// Builds the wavefront and its pixel list's passes if not built
     /// yet.
     pub fn prepare_wavefront_list(&mut self, host: Host<'_>) -> Result<()> {
         self.prepare(host, ShadowDispatch::Wavefront)?;
+        if let Some(path_wave) = self.path_wave.as_mut() {
+            return path_wave.prepare_list(host);
+        }
         let wavefront = self.wavefront.as_mut().expect("prepared");
         wavefront.prepare_list(host)
     }
@@ -112,6 +130,11 @@ impl Tiles {
     /// can leave the compile out).
     pub fn prepare(&mut self, host: Host<'_>, dispatch: ShadowDispatch) -> Result<()> {
         match dispatch {
+            ShadowDispatch::Wavefront if self.path => {
+                if self.path_wave.is_none() {
+                    self.path_wave = Some(PathWave::new(host, &self.targets)?);
+                }
+            }
             ShadowDispatch::Wavefront if self.wavefront.is_none() => {
                 self.wavefront = Some(Wavefront::new(host, &self.targets, self.lights)?);
             }
@@ -206,7 +229,7 @@ impl Tiles {
             .next_multiple_of(step)
             .clamp(step, TILE);
         if dispatch == ShadowDispatch::Wavefront {
-            let fits = (wave_budget(self.lights) / samples).isqrt() / step * step;
+            let fits = (self.wave_budget() / samples).isqrt() / step * step;
             return side.min(fits.max(step));
         }
         side
@@ -247,12 +270,21 @@ impl Tiles {
     pub fn samples_per_dispatch(&self, dispatch: ShadowDispatch) -> u32 {
         match dispatch {
             ShadowDispatch::Wavefront => {
-                let budget = wave_budget(self.lights);
+                let budget = self.wave_budget();
                 self.samples_per_dispatch
                     .min(budget / WORKGROUP_INVOCATIONS)
             }
             ShadowDispatch::Megakernel => self.samples_per_dispatch,
         }
+    }
+
+    /// Camera rays (paths) a wavefront dispatch takes at most: the path
+    /// integrator's, or the direct one's for the scene's lights.
+    pub fn wave_budget(&self) -> u32 {
+        if self.path {
+            return PATH_WAVE_PATHS;
+        }
+        wave_budget(self.lights)
     }
 
     /// Runs `attempt` (a render of `spp` samples per pixel at the current
@@ -310,7 +342,14 @@ impl Tiles {
         host.write_uniform(params);
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         let workgroups = tile_workgroups(width, height, gpu.cpu_threads());
-        if let (ShadowDispatch::Wavefront, Some(wavefront)) = (dispatch, &self.wavefront) {
+        if let (ShadowDispatch::Wavefront, Some(path_wave)) = (dispatch, &self.path_wave) {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("render tile, path wavefront"),
+                timestamp_writes: self.timer.as_ref().map(Timer::writes),
+            });
+            pass.set_bind_group(SCENE.group, host.scene_group(), &[]);
+            path_wave.dispatch_tile(gpu, &mut pass, params.max_depth, workgroups);
+        } else if let (ShadowDispatch::Wavefront, Some(wavefront)) = (dispatch, &self.wavefront) {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("render tile, wavefront"),
                 timestamp_writes: self.timer.as_ref().map(Timer::writes),

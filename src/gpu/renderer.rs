@@ -105,7 +105,8 @@ impl GpuRenderer {
         let buffers = SceneBuffers::upload(&gpu, scene, storage)?;
         let constants = resident_constants(constants, &buffers, storage, scene, &gpu);
         let lights = scene.lights.len().min(u32::MAX as usize) as u32;
-        let tiles = Tiles::new(&gpu, lights);
+        let path = scene.integrator == Integrator::Path;
+        let tiles = Tiles::new(&gpu, lights, path);
         let layouts = Layouts::new(device);
 
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
@@ -390,6 +391,7 @@ impl GpuRenderer {
     pub fn set_integrator(&mut self, integrator: Integrator, max_depth: u32) -> Result<()> {
         self.resident.set_max_depth(max_depth);
         self.set_constant("PATH_TRACE", integrator == Integrator::Path);
+        self.tiles.set_path(integrator == Integrator::Path);
         self.choose_shadow_dispatch()
     }
 
@@ -412,11 +414,12 @@ impl GpuRenderer {
     }
 
     /// The shadow dispatch for the uniform's shadows and lights and the
-    /// integrator (the wavefront shades as the direct one does).
+    /// integrator (each integrator has its own wavefront).
     fn choose_shadow_dispatch(&mut self) -> Result<()> {
         let params = self.resident.scene_params();
         self.shadow_dispatch = ShadowDispatch::for_lights(
-            params.shadows != 0 && !self.path_traced(),
+            self.path_traced(),
+            params.shadows != 0,
             params.num_lights,
             self.gpu.options.shadow_dispatch.as_deref(),
             self.gpu.limits.max_storage_buffer_binding_size,

@@ -12,7 +12,7 @@ use super::query::Lists;
 use super::readback::SUMS_BYTES;
 use super::render::Tiles;
 use super::resident::Host;
-use super::wavefront::{ShadowDispatch, wave_budget};
+use super::wavefront::ShadowDispatch;
 
 /// Bytes of a listed pixel (x, y).
 const PIXEL_BYTES: u64 = 8;
@@ -47,25 +47,28 @@ impl Tiles {
             .samples_per_dispatch(ShadowDispatch::Wavefront)
             .min(spp);
         // As many camera rays a dispatch as the wavefront's lists hold.
-        let batch = (wave_budget(self.lights()) / step) as usize;
+        let batch = (self.wave_budget() / step) as usize;
         let batch = batch.min(pixels.len()).max(1);
         let [list, sums, staging] =
             lists.buffers(host, batch as u64 * PIXEL_BYTES, batch as u64 * SUMS_BYTES);
         let prim = self.targets().prim.as_entire_binding();
-        let wavefront = self.wavefront().expect("prepared");
         let mut results = Vec::with_capacity(pixels.len());
         for chunk in pixels.chunks(batch) {
             let n = chunk.len() as u64;
             gpu.queue
                 .write_buffer(&list, 0, bytemuck::cast_slice(chunk));
-            let groups = wavefront.list_groups(
-                &gpu.device,
-                [
-                    prim.clone(),
-                    leading_bytes(&sums, n * SUMS_BYTES),
-                    leading_bytes(&list, n * PIXEL_BYTES),
-                ],
-            );
+            let bindings = [
+                prim.clone(),
+                leading_bytes(&sums, n * SUMS_BYTES),
+                leading_bytes(&list, n * PIXEL_BYTES),
+            ];
+            let groups = match self.path_wave() {
+                Some(path_wave) => path_wave.list_groups(&gpu.device, bindings),
+                None => self
+                    .wavefront()
+                    .expect("prepared")
+                    .list_groups(&gpu.device, bindings),
+            };
             let workgroups = n.div_ceil(WORKGROUP_INVOCATIONS as u64) as u32;
             for begin in (0..spp).step_by(step as usize) {
                 host.write_samples(params, begin..(begin + step).min(spp));
@@ -76,7 +79,19 @@ impl Tiles {
                         timestamp_writes: None,
                     });
                     pass.set_bind_group(SCENE.group, host.scene_group(), &[]);
-                    wavefront.dispatch_list(gpu, &mut pass, &groups, workgroups);
+                    match self.path_wave() {
+                        Some(path_wave) => path_wave.dispatch_list(
+                            gpu,
+                            &mut pass,
+                            &groups,
+                            workgroups,
+                            params.max_depth,
+                        ),
+                        None => {
+                            let wavefront = self.wavefront().expect("prepared");
+                            wavefront.dispatch_list(gpu, &mut pass, &groups, workgroups)
+                        }
+                    }
                 }
                 gpu.queue.submit([encoder.finish()]);
                 gpu.wait()?;

@@ -12,6 +12,7 @@ use crate::scene::Scene;
 use super::bindings::WAVEFRONT;
 use super::device::Gpu;
 use super::options::SHADOW_DISPATCH_ENV;
+use super::path_wave::path_wave_bytes;
 use super::readback::TileTargets;
 use super::resident::Host;
 use super::{SHADOW_QUERY_BYTES, WAVE_RAYS, WAVE_SHADING_BYTES, WAVE_SHADOW_RAYS};
@@ -27,7 +28,9 @@ use super::{SHADOW_QUERY_BYTES, WAVE_RAYS, WAVE_SHADING_BYTES, WAVE_SHADOW_RAYS}
 /// unset, the wavefront wherever it applies: on a quiet machine it
 /// measured faster than the megakernel at every spp (lavapipe, the dragon,
 /// one point light, device time: 0.73× at 1 spp, 0.98× at 4, 0.95× at 16,
-/// 0.90× at 64; docs/bvh.md).
+/// 0.90× at 64; docs/bvh.md). Under the path integrator, the megakernel
+/// runs `path_radiance` whole, the wavefront a pass a bounce
+/// (gpu::path_wave); unset, the megakernel (`PATH_DISPATCH`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ShadowDispatch {
     Megakernel,
@@ -35,32 +38,40 @@ pub enum ShadowDispatch {
 }
 
 impl ShadowDispatch {
-    /// `Wavefront` where it applies (shadows traced, and a queue for the
-    /// scene's lights no larger than `max_binding` bytes), unless
-    /// `chosen` (LAMBERT_SHADOW_DISPATCH) says otherwise.
+    /// `Wavefront` where it applies, unless `chosen`
+    /// (LAMBERT_SHADOW_DISPATCH) says otherwise: for the direct
+    /// integrator, where shadows are traced and a queue for the scene's
+    /// lights is no larger than `max_binding` bytes; for the path
+    /// integrator, the path wavefront (gpu::path_wave) where its buffers
+    /// fit `max_binding`.
     pub(super) fn for_scene(
         scene: &Scene,
         chosen: Option<&str>,
         max_binding: u64,
     ) -> Result<ShadowDispatch> {
         let lights = scene.lights.len().min(u32::MAX as usize) as u32;
-        // The wavefront's passes shade as the direct integrator does; a
-        // path traced sample runs whole in one invocation.
-        let shadows = scene.shadows && scene.integrator == crate::scene::Integrator::Direct;
-        ShadowDispatch::for_lights(shadows, lights, chosen, max_binding)
+        let path = scene.integrator == crate::scene::Integrator::Path;
+        ShadowDispatch::for_lights(path, scene.shadows, lights, chosen, max_binding)
     }
 
-    /// `for_scene` from the uniform's shadows and light count (what
-    /// `GpuRenderer::set_shadows` has).
+    /// `for_scene` from the integrator and the uniform's shadows and light
+    /// count (what `GpuRenderer::set_shadows` has).
     pub(super) fn for_lights(
+        path: bool,
         shadows: bool,
         lights: u32,
         chosen: Option<&str>,
         max_binding: u64,
     ) -> Result<ShadowDispatch> {
-        let applies = shadows && lights > 0 && wave_queue_bytes(lights) <= max_binding;
+        let (applies, unset) = if path {
+            (path_wave_bytes() <= max_binding, PATH_DISPATCH)
+        } else {
+            let queue = wave_queue_bytes(lights) <= max_binding;
+            (shadows && lights > 0 && queue, ShadowDispatch::Wavefront)
+        };
         match chosen {
-            None | Some("wavefront") if applies => Ok(ShadowDispatch::Wavefront),
+            None if applies => Ok(unset),
+            Some("wavefront") if applies => Ok(ShadowDispatch::Wavefront),
             None | Some("wavefront") | Some("megakernel") => Ok(ShadowDispatch::Megakernel),
             Some(other) => Err(Error::Usage(format!(
                 "{SHADOW_DISPATCH_ENV}={other:?}: use \"megakernel\" or \"wavefront\""
@@ -68,6 +79,12 @@ impl ShadowDispatch {
         }
     }
 }
+
+/// The path integrator's dispatch where LAMBERT_SHADOW_DISPATCH is unset:
+/// the megakernel, which measured faster on lavapipe (examples/wave, CPU
+/// time, 256²: the wavefront 1.06–1.12× the megakernel's on
+/// cornell_area.toml and dragon_cornell.toml; docs/benchmarks.md).
+const PATH_DISPATCH: ShadowDispatch = ShadowDispatch::Megakernel;
 
 /// Camera rays a wavefront dispatch takes with `lights` lights:
 /// `WAVE_RAYS`, fewer where their shadow rays would pass

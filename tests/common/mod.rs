@@ -16,6 +16,7 @@ pub mod cli;
 pub mod data;
 pub mod formats;
 pub mod lights;
+pub mod paths;
 pub mod pbr;
 mod settings;
 pub mod signals;
