@@ -13,7 +13,7 @@ macro_rules! layout {
             BVH_WIDTH, BvhNode, CompressedNode, FLAG_ATTRIBUTES, FLAG_MASKED, FLAG_SMOOTH,
             LEAF_BIT, LIGHT_POINT, META_LEAF, NO_HIT, NO_TEXTURE, PrimBlock, leaf_range,
         };
-        use crate::scene::{Accel, Intersect, Scene};
+        use crate::scene::{Intersect, Scene};
 
         /// Widens a box's exit distance so that rounding cannot cull a box the ray
         /// grazes, as in the shader.

@@ -7,6 +7,8 @@
 //! - `upload`: the scene's buffers and the BVH's storage;
 //! - `bindings`: the bind group tables, checked against the shader;
 //! - `shader`: the shader's source and its specialisation;
+//! - `hardware`: `--accel hardware`, the scene's acceleration structures
+//!   for ray queries (wgpu's experimental API is named there alone);
 //! - `pipelines`: the shader module, its overrides and layouts;
 //! - `renderer`: `GpuRenderer`, a scene resident on the device: its
 //!   parts, and when each is built;
@@ -26,6 +28,7 @@
 mod adapter;
 pub mod bindings;
 mod device;
+mod hardware;
 mod options;
 mod pipelines;
 mod progressive;
@@ -43,10 +46,11 @@ mod wavefront;
 
 pub use adapter::{AdapterRequest, Presenting, enumerate_adapters};
 pub use device::Gpu;
-pub use options::{GpuOptions, MAX_BUFFER_ENV, SHADOW_DISPATCH_ENV};
+pub use hardware::{AccelerationStats, TriangleGeometry};
+pub use options::{GpuOptions, MAX_BUFFER_ENV, RAY_QUERY_GEOMETRY_ENV, SHADOW_DISPATCH_ENV};
 pub use proximity::binding_runs;
 pub use renderer::GpuRenderer;
-pub use shader::{SHADER_SOURCE, specialisation};
+pub use shader::{HARDWARE_SOURCE, SHADER_SOURCE, specialisation};
 pub use timer::GpuTimings;
 pub use upload::{BvhStorage, TEXELS_PER_ROW};
 pub use wavefront::ShadowDispatch;

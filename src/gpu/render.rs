@@ -11,7 +11,7 @@ use crate::layout::{Params, WORKGROUP_INVOCATIONS};
 use crate::output::{Image, Rendered};
 use crate::progress::Progress;
 
-use super::bindings::{IMAGE_TILE, SCENE};
+use super::bindings::IMAGE_TILE;
 use super::device::Gpu;
 use super::readback::TileTargets;
 use super::resident::Host;
@@ -298,7 +298,7 @@ impl Tiles {
                 label: Some("render tile, wavefront"),
                 timestamp_writes: self.timer.as_ref().map(Timer::writes),
             });
-            pass.set_bind_group(SCENE.group, host.scene_group(), &[]);
+            host.bind_scene(&mut pass);
             let samples = params.sample_end - params.sample_begin;
             wavefront.dispatch_tile(gpu, &mut pass, samples, workgroups);
         } else {
@@ -308,7 +308,7 @@ impl Tiles {
             });
             let [groups_x, groups_y, layers] = workgroups;
             pass.set_pipeline(self.megakernel.as_ref().expect("prepared"));
-            pass.set_bind_group(SCENE.group, host.scene_group(), &[]);
+            host.bind_scene(&mut pass);
             pass.set_bind_group(IMAGE_TILE.group, host.image_group(), &[]);
             pass.dispatch_workgroups(groups_x, groups_y, layers);
         }

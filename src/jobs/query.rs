@@ -203,6 +203,9 @@ pub fn run_query(
     // tree (inside tests, signed distances) from the host's scene.
     let scene = Arc::new(scene);
     let (mut renderer, _) = open(Arc::clone(&scene), job.device, job.adapter, sink)?;
+    if let Some(note) = renderer.bvh_note("proximity and crossing queries") {
+        say(sink, &note);
+    }
     let start = Instant::now();
     let (records, fell_back) = with_fallback(&mut renderer, job.device, &scene, work)?;
     if let Some(note) = &fell_back {

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use glam::{DMat3, DVec3};
 use serde::Deserialize;
 
-use super::{DEFAULT_MAX_DEPTH, Integrator, Intersect, Rgb, Scene, Transform, colour, directional_light, point, point_light};
+use super::{Accel, DEFAULT_MAX_DEPTH, Integrator, Intersect, Rgb, Scene, Transform, colour, directional_light, point, point_light};
 use crate::camera::{Camera, View, validate_camera};
 use crate::error::{Error, Result};
 use crate::layout::Sphere;
@@ -43,6 +43,7 @@ pub struct RenderTable {
     pub intersect: Intersect,
     pub integrator: Integrator,
     pub max_depth: u32,
+    pub accel: Accel,
 }
 
 impl Default for RenderTable {
@@ -56,6 +57,7 @@ impl Default for RenderTable {
             intersect: Intersect::default(),
             integrator: Integrator::default(),
             max_depth: DEFAULT_MAX_DEPTH,
+            accel: Accel::default(),
         }
     }
 }
@@ -143,6 +145,7 @@ impl Scene {
             intersect: file.render.intersect,
             integrator: file.render.integrator,
             max_depth: file.render.max_depth,
+            accel: file.render.accel,
             inputs: vec![path.to_path_buf()],
             ..Scene::bare()
         };

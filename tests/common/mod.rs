@@ -15,6 +15,7 @@ mod bin;
 pub mod cli;
 pub mod data;
 pub mod formats;
+pub mod hardware;
 mod settings;
 pub mod signals;
 pub mod stress;

@@ -228,6 +228,9 @@ enum Comparison {
     GpuOracle,
     /// CPU reference (f32) against the f64 oracle.
     CpuOracle,
+    /// GPU through its ray queries (`--accel hardware`; an error where the
+    /// adapter has none) against the CPU reference (f32).
+    HardwareCpu,
 }
 
 #[derive(Args)]
@@ -571,6 +574,10 @@ fn diff(args: &DiffArgs, quiet: bool) -> Result<ExitCode> {
         ),
         Comparison::GpuOracle => (render_gpu(&scene, view, &request)?, oracle()),
         Comparison::CpuOracle => (cpu(), oracle()),
+        Comparison::HardwareCpu => (
+            jobs::render_hardware(&scene, view, &request)?,
+            cpu::render_gpu_twin(&scene, view, &Progress::hidden()),
+        ),
     };
     let stats = diff::compare(&a, &b, &tolerance)?;
     if let Some(path) = &args.heatmap {

@@ -55,11 +55,15 @@ impl From<BenchDevice> for BenchDevices {
 }
 
 /// `--accel`: `Accel`.
-#[derive(Clone, Copy, Default, ValueEnum)]
+#[derive(Clone, Copy, ValueEnum)]
 enum AccelArg {
-    #[default]
+    /// The BVH (8-wide; compressed on the GPU).
     Bvh,
+    /// Every primitive tested: the reference.
     BruteForce,
+    /// The GPU's ray-tracing units through ray queries (docs/hardware-rays.md);
+    /// the BVH where the device has none, with a note, and on the CPU path.
+    Hardware,
 }
 
 impl From<AccelArg> for Accel {
@@ -67,6 +71,7 @@ impl From<AccelArg> for Accel {
         match accel {
             AccelArg::Bvh => Accel::Bvh,
             AccelArg::BruteForce => Accel::BruteForce,
+            AccelArg::Hardware => Accel::Hardware,
         }
     }
 }
@@ -138,8 +143,9 @@ impl AdapterArgs {
 /// Settings that override the scene file's.
 #[derive(Args, Clone)]
 pub(super) struct SceneOptions {
-    #[arg(long, value_enum, default_value_t)]
-    accel: AccelArg,
+    /// How rays find their hits [default: the scene's render.accel, else bvh].
+    #[arg(long, value_enum)]
+    accel: Option<AccelArg>,
     /// Ray/triangle test [default: the scene's render.intersect, else watertight].
     #[arg(long, value_enum)]
     intersect: Option<IntersectArg>,
@@ -202,7 +208,9 @@ impl SceneOptions {
     }
 
     pub(super) fn apply(&self, settings: &mut RenderSettings) -> Result<()> {
-        settings.accel = self.accel.into();
+        if let Some(accel) = self.accel {
+            settings.accel = accel.into();
+        }
         if let Some(intersect) = self.intersect {
             settings.intersect = intersect.into();
         }
