@@ -11,7 +11,8 @@ use lambert::gpu::{HARDWARE_SOURCE, SHADER_SOURCE};
 /// `ACCELERATION`.
 fn modules() -> Vec<(naga::Module, Vec<&'static BindingTable>)> {
     let parse = |source: &str| {
-        naga::front::wgsl::parse_str(source).unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)))
+        naga::front::wgsl::parse_str(source)
+            .unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)))
     };
     let hardware_tables = TABLES.iter().copied().chain([&ACCELERATION]).collect();
     vec![
@@ -33,9 +34,12 @@ fn shader_kind(
             Ok(BindingKind::StorageWrite)
         }
         (AddressSpace::Storage { .. }, _) => Ok(BindingKind::Storage),
-        (AddressSpace::Handle, TypeInner::AccelerationStructure { vertex_return: false }) => {
-            Ok(BindingKind::AccelerationStructure)
-        }
+        (
+            AddressSpace::Handle,
+            TypeInner::AccelerationStructure {
+                vertex_return: false,
+            },
+        ) => Ok(BindingKind::AccelerationStructure),
         (
             AddressSpace::Handle,
             TypeInner::Image {

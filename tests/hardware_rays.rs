@@ -1,11 +1,13 @@
 //! The hardware path (`--accel hardware`, docs/hardware-rays.md) against
 //! the compute path and the CPU twin: hits, leaks, renders, alpha masks,
-//! rays the hardware cannot take, the fallbacks and their notes, and the
-//! command line. Each test needs a device with ray queries
+//! rays the hardware cannot take, the fallbacks and their notes, the
+//! command line and the viewer. Each test needs a device with ray queries
 //! (`common::hardware::ray_query_gpu`: on CI, Mesa 25's lavapipe, unpacked
 //! privately by scripts/mesa-rt). Every test prints its figures.
 
 mod common;
+#[path = "common/viewer.rs"]
+mod viewer;
 
 use common::hardware::ray_query_gpu;
 use common::stress::*;
@@ -94,7 +96,8 @@ fn agreement(hardware: &[Hit], cpu: &[Hit]) -> Agreement {
             a.ties += 1;
             a.worst_t = a.worst_t.max(relative);
         } else {
-            a.disagree.push(format!("ray {i}: hardware {h:?}, CPU {c:?}"));
+            a.disagree
+                .push(format!("ray {i}: hardware {h:?}, CPU {c:?}"));
         }
     }
     a
@@ -163,14 +166,21 @@ fn hits_agree_with_the_cpu_twin() {
         let failures = hits_agree(&gpu);
         println!("{failures:#?}");
         if TriangleGeometry::for_gpu(&gpu).unwrap() == default {
-            assert!(failures.is_empty(), "triangles as {geometry}: {failures:#?}");
+            assert!(
+                failures.is_empty(),
+                "triangles as {geometry}: {failures:#?}"
+            );
         }
     }
 }
 
 /// The comparison on `gpu`, its table printed: what disagrees.
 fn hits_agree(gpu: &Gpu) -> Vec<String> {
-    let what = gpu.options.ray_query_geometry.as_deref().unwrap_or("default");
+    let what = gpu
+        .options
+        .ray_query_geometry
+        .as_deref()
+        .unwrap_or("default");
     println!("triangles given as {what}:");
     let mut rng = Rng(47);
     let mut failures = Vec::new();
@@ -237,8 +247,14 @@ fn no_ray_leaks_through_ray_queries() {
 /// The probes on `gpu`: rays that leaked, and spawned rays that hit
 /// their own triangle.
 fn probe_leaks(gpu: &Gpu) -> (usize, usize) {
-    let what = gpu.options.ray_query_geometry.as_deref().unwrap_or("default");
-    println!("leaks through ray queries, triangles given as {what} (rays from inside that escape):");
+    let what = gpu
+        .options
+        .ray_query_geometry
+        .as_deref()
+        .unwrap_or("default");
+    println!(
+        "leaks through ray queries, triangles given as {what} (rays from inside that escape):"
+    );
     let mut rng = Rng(11);
     let mut leaks = 0;
     for (name, offset, scene, rays) in leak_cases(&mut rng) {
@@ -258,7 +274,11 @@ fn probe_leaks(gpu: &Gpu) -> (usize, usize) {
     let primary = rays_at_fronts(&triangles, &mut rng);
     let (spawned, sources) = spawned_rays(&scene, &primary, &mut rng);
     let hits = trace(&mut hardware(gpu, &scene), &scene, &spawned, false);
-    let own = hits.iter().zip(&sources).filter(|(h, s)| h.prim == **s).count();
+    let own = hits
+        .iter()
+        .zip(&sources)
+        .filter(|(h, s)| h.prim == **s)
+        .count();
     println!("  self-hits of spawned rays: {own} of {}", spawned.len());
     (leaks, own)
 }
@@ -284,14 +304,23 @@ fn a_lit_plane_has_no_shadow_acne_through_ray_queries() {
             .map(|(c, _)| c[1])
             .collect();
         let acne = on_plane.iter().filter(|&&v| (v - 0.5).abs() > 1e-5).count();
-        println!("scale {scale:e}, translate {translate:?}: {acne} of {} acne", on_plane.len());
+        println!(
+            "scale {scale:e}, translate {translate:?}: {acne} of {} acne",
+            on_plane.len()
+        );
         assert!(on_plane.len() > 1000, "the camera misses the plane");
-        assert_eq!(acne, 0, "shadow acne at scale {scale}, translate {translate:?}");
+        assert_eq!(
+            acne, 0,
+            "shadow acne at scale {scale}, translate {translate:?}"
+        );
     }
 }
 
 fn render(renderer: &mut GpuRenderer, scene: &Scene) -> Rendered {
-    renderer.render(scene.view(), &Progress::hidden()).expect("the render runs").0
+    renderer
+        .render(scene.view(), &Progress::hidden())
+        .expect("the render runs")
+        .0
 }
 
 /// `scene` with `integrator` and `spp` samples a pixel, at most 160 pixels wide.
@@ -326,7 +355,11 @@ fn renders_agree_with_the_compute_path() {
         // The wavefront shades as the direct integrator does: a path is
         // the megakernel's.
         let direct = [ShadowDispatch::Megakernel, ShadowDispatch::Wavefront];
-        let mut variants = vec![("direct", variant(&loaded, Integrator::Direct, 1), &direct[..])];
+        let mut variants = vec![(
+            "direct",
+            variant(&loaded, Integrator::Direct, 1),
+            &direct[..],
+        )];
         if name.contains("cornell") || name.contains("spheres") {
             let path = variant(&loaded, Integrator::Path, 4);
             variants.push(("path, 4 spp", path, &direct[..1]));
@@ -362,7 +395,8 @@ fn renders_agree_with_the_compute_path() {
 /// NaN) through the hardware: every answer the CPU twin's.
 #[test]
 fn rays_the_hardware_cannot_take_are_answered_as_on_the_cpu() {
-    let Some(gpu) = ray_query_gpu("rays_the_hardware_cannot_take_are_answered_as_on_the_cpu") else {
+    let Some(gpu) = ray_query_gpu("rays_the_hardware_cannot_take_are_answered_as_on_the_cpu")
+    else {
         return;
     };
     let scene = load("bunny");
@@ -399,9 +433,13 @@ fn rays_the_hardware_cannot_take_are_answered_as_on_the_cpu() {
         let hw = trace(&mut renderer, &scene, &rays, any_hit);
         let cpu = cpu::trace_rays(&scene, &rays, any_hit);
         for (i, ((h, c), r)) in hw.iter().zip(&cpu).zip(&rays).enumerate() {
-            let same = h == c || h.prim == NO_HIT && c.prim == NO_HIT
+            let same = h == c
+                || h.prim == NO_HIT && c.prim == NO_HIT
                 || any_hit && (h.prim == NO_HIT) == (c.prim == NO_HIT);
-            assert!(same, "ray {i} {r:?} (any hit: {any_hit}): hardware {h:?}, CPU {c:?}");
+            assert!(
+                same,
+                "ray {i} {r:?} (any hit: {any_hit}): hardware {h:?}, CPU {c:?}"
+            );
         }
     }
 }
@@ -415,9 +453,15 @@ fn without_ray_queries_the_compute_bvh_answers_with_a_note() {
     let mut renderer = GpuRenderer::new(open_gpu(), &scene).expect("the scene uploads");
     assert!(renderer.ray_queries().is_none());
     let note = renderer.accel_note().expect("a note").to_string();
-    assert_contains_all(&note, &["--accel hardware: ", "has no ray queries", "compute BVH"]);
+    assert_contains_all(
+        &note,
+        &["--accel hardware: ", "has no ray queries", "compute BVH"],
+    );
     let mut bvh = GpuRenderer::new(open_gpu(), &with_accel(&scene, Accel::Bvh)).unwrap();
-    assert_eq!(bits(&render(&mut renderer, &scene)), bits(&render(&mut bvh, &scene)));
+    assert_eq!(
+        bits(&render(&mut renderer, &scene)),
+        bits(&render(&mut bvh, &scene))
+    );
     // The engine opens the device without ray queries unless the scene
     // asks for them, so the note can come only from such a device here.
     let device = lambert::gpu::AdapterRequest::default();
@@ -454,12 +498,26 @@ fn the_command_line_traces_renders_and_compares_through_ray_queries() {
     for accel in ["hardware", "bvh"] {
         let out = dir.path().join(format!("{accel}.hits"));
         let output = lambert(&[
-            "trace", "--scene", s(&scene_path), "--rays", s(&ray_file), "-o", s(&out),
-            "--device", "gpu", "--accel", accel, "--json",
+            "trace",
+            "--scene",
+            s(&scene_path),
+            "--rays",
+            s(&ray_file),
+            "-o",
+            s(&out),
+            "--device",
+            "gpu",
+            "--accel",
+            accel,
+            "--json",
         ]);
         assert!(output.status.success(), "{}", stderr(&output));
         let report = String::from_utf8_lossy(&output.stdout).to_string();
-        assert_eq!(report.contains(", ray queries"), accel == "hardware", "{report}");
+        assert_eq!(
+            report.contains(", ray queries"),
+            accel == "hardware",
+            "{report}"
+        );
         hits.push(lambert::rays::read_hits(&out).unwrap());
     }
     let differ = hits[0].iter().zip(&hits[1]).filter(|(a, b)| a != b).count();
@@ -472,15 +530,77 @@ fn the_command_line_traces_renders_and_compares_through_ray_queries() {
     let meshes = asset("scenes/meshes");
     let toml = toml.replace("\"meshes/", &format!("\"{}/", meshes.display()));
     let hardware_scene = dir.path().join("hardware.toml");
-    std::fs::write(&hardware_scene, format!("{toml}\n").replacen("[render]", "[render]\naccel = \"hardware\"", 1)).unwrap();
+    std::fs::write(
+        &hardware_scene,
+        format!("{toml}\n").replacen("[render]", "[render]\naccel = \"hardware\"", 1),
+    )
+    .unwrap();
     let image = dir.path().join("image.png");
-    let output = lambert(&["render", s(&hardware_scene), "--device", "gpu", "-o", s(&image)]);
+    let output = lambert(&[
+        "render",
+        s(&hardware_scene),
+        "--device",
+        "gpu",
+        "-o",
+        s(&image),
+    ]);
     assert!(output.status.success(), "{}", stderr(&output));
     let counts = dir.path().join("counts.bin");
     let output = lambert(&[
-        "query", "count", "--scene", s(&hardware_scene), "--rays", s(&ray_file), "-o", s(&counts),
-        "--device", "gpu",
+        "query",
+        "count",
+        "--scene",
+        s(&hardware_scene),
+        "--rays",
+        s(&ray_file),
+        "-o",
+        s(&counts),
+        "--device",
+        "gpu",
     ]);
     assert!(output.status.success(), "{}", stderr(&output));
     assert_contains_all(&stderr(&output), &["--accel hardware: ", "compute BVH"]);
+}
+
+/// `lambert view --accel hardware` (under Xvfb): frames refined through
+/// ray queries, no note of a fallback, and the image `render --accel bvh`
+/// makes, bit for bit (the bunny has no ties).
+#[test]
+fn the_viewer_renders_through_ray_queries() {
+    let Some(_gpu) = ray_query_gpu("the_viewer_renders_through_ray_queries") else {
+        return;
+    };
+    let Some(x) = viewer::xvfb() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let scene = asset("scenes/bunny.toml");
+    let (shot, rendered) = (dir.path().join("view.png"), dir.path().join("render.png"));
+    let size = ["--width", "64", "--height", "48", "--device", "gpu"];
+    let view = lambert_command()
+        .args(["view", s(&scene), "--frames", "3", "--screenshot", s(&shot)])
+        .args(["--accel", "hardware"])
+        .args(size)
+        .env("DISPLAY", &x.display)
+        .output()
+        .unwrap();
+    assert!(view.status.success(), "{}", stderr(&view));
+    assert!(!stderr(&view).contains("compute BVH"), "{}", stderr(&view));
+    let render = lambert_command()
+        .args([
+            "render",
+            s(&scene),
+            "--spp",
+            "3",
+            "-o",
+            s(&rendered),
+            "--accel",
+            "bvh",
+        ])
+        .args(size)
+        .output()
+        .unwrap();
+    assert!(render.status.success(), "{}", stderr(&render));
+    assert_eq!(
+        std::fs::read(&shot).unwrap(),
+        std::fs::read(&rendered).unwrap()
+    );
 }

@@ -90,8 +90,11 @@ impl Gpu {
         let limits = requested_limits(&adapter, max_buffer_bytes);
         // GPU time of each dispatch, where the adapter can measure it; ray
         // queries where asked for and the adapter has them.
-        let (required_features, experimental_features) =
-            device_features(&adapter, wgpu::Features::TIMESTAMP_QUERY, request.ray_queries);
+        let (required_features, experimental_features) = device_features(
+            &adapter,
+            wgpu::Features::TIMESTAMP_QUERY,
+            request.ray_queries,
+        );
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("lambert"),
             required_features,

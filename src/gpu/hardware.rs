@@ -20,9 +20,15 @@ use crate::scene::Scene;
 use super::bindings::{ACCELERATION, unmet_hardware_limits};
 use super::device::Gpu;
 use super::options::RAY_QUERY_GEOMETRY_ENV;
-pub(super) use features::device_features;
 use features::RAY_QUERY;
+pub(super) use features::device_features;
 use plan::{BlasPlan, Kind, Limits, Plan, Run};
+
+/// Whether `adapter` offers ray queries (a device opened on it for
+/// `--accel hardware` has them).
+pub fn offers_ray_queries(adapter: &wgpu::Adapter) -> bool {
+    adapter.features().contains(RAY_QUERY)
+}
 
 /// Why `gpu` cannot trace with ray queries, if it cannot: the device has
 /// no ray queries (it was opened without them, or its adapter has none),
@@ -113,7 +119,10 @@ impl Acceleration {
         }
         let triangles = TriangleGeometry::for_gpu(gpu)?;
         match plan_for(gpu, scene, triangles) {
-            Ok(plan) => Ok((Some(Acceleration::build(gpu, scene, &plan, triangles)?), None)),
+            Ok(plan) => Ok((
+                Some(Acceleration::build(gpu, scene, &plan, triangles)?),
+                None,
+            )),
             Err(why) => Ok((None, note(why))),
         }
     }
@@ -143,7 +152,12 @@ impl Acceleration {
         // Identity transforms: the BLASes hold the scene's local frame.
         const IDENTITY: [f32; 12] = [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0];
         for (i, (blas, planned)) in blases.iter().zip(&plan.blases).enumerate() {
-            tlas[i] = Some(wgpu::TlasInstance::new(blas, IDENTITY, planned.first_run, 0xff));
+            tlas[i] = Some(wgpu::TlasInstance::new(
+                blas,
+                IDENTITY,
+                planned.first_run,
+                0xff,
+            ));
         }
         let mut encoder = device.create_command_encoder(&Default::default());
         encoder.build_acceleration_structures([], [&tlas]);
@@ -159,7 +173,10 @@ impl Acceleration {
             ACCELERATION.label,
             &layout,
             vec![
-                ("scene_tlas", wgpu::BindingResource::AccelerationStructure(&tlas)),
+                (
+                    "scene_tlas",
+                    wgpu::BindingResource::AccelerationStructure(&tlas),
+                ),
                 ("hardware_runs", runs.as_entire_binding()),
             ],
         );
@@ -219,13 +236,21 @@ fn plan_for(
         instances: gpu.limits.max_tlas_instance_count,
     };
     let boxes = triangles == TriangleGeometry::Boxes;
-    plan::plan(&masked, boxes, scene.spheres.len() as u32, limits)
-        .map_err(|why| format!("the scene does not fit {}'s ray queries: {why}", gpu.describe()))
+    plan::plan(&masked, boxes, scene.spheres.len() as u32, limits).map_err(|why| {
+        format!(
+            "the scene does not fit {}'s ray queries: {why}",
+            gpu.describe()
+        )
+    })
 }
 
 /// `values`, or one zero where there are none (a binding is never empty).
 fn with_one(values: &[u32]) -> Vec<u32> {
-    if values.is_empty() { vec![0] } else { values.to_vec() }
+    if values.is_empty() {
+        vec![0]
+    } else {
+        values.to_vec()
+    }
 }
 
 /// Builds one planned BLAS in a submission of its own, so that its input
@@ -348,7 +373,10 @@ fn build_blas(gpu: &Gpu, scene: &Scene, planned: &BlasPlan, pad: f32) -> wgpu::B
 /// error of a ray from anywhere in the scene's bounds.
 fn box_pad(scene: &Scene) -> f32 {
     let triangles = scene.triangles.iter().flat_map(|t| [t.v0, t.v1, t.v2]);
-    let spheres = scene.spheres.iter().map(|s| s.center.map(|c| c.abs() + s.radius));
+    let spheres = scene
+        .spheres
+        .iter()
+        .map(|s| s.center.map(|c| c.abs() + s.radius));
     let largest = triangles
         .chain(spheres)
         .flatten()

@@ -46,7 +46,7 @@ mod wavefront;
 
 pub use adapter::{AdapterRequest, Presenting, enumerate_adapters};
 pub use device::Gpu;
-pub use hardware::{AccelerationStats, TriangleGeometry};
+pub use hardware::{AccelerationStats, TriangleGeometry, offers_ray_queries};
 pub use options::{GpuOptions, MAX_BUFFER_ENV, RAY_QUERY_GEOMETRY_ENV, SHADOW_DISPATCH_ENV};
 pub use proximity::binding_runs;
 pub use renderer::GpuRenderer;

@@ -83,13 +83,8 @@ impl Pipelines {
         let scope = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let mut layouts = vec![&self.layouts.scene, output_layout];
         layouts.extend(&self.acceleration);
-        let pipeline = compute_pipeline(
-            &gpu.device,
-            &self.module,
-            entry_point,
-            &layouts,
-            constants,
-        );
+        let pipeline =
+            compute_pipeline(&gpu.device, &self.module, entry_point, &layouts, constants);
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu(format!(
                 "building the {entry_point} pipeline: {e}"

@@ -14,12 +14,12 @@ use crate::progress::Progress;
 use crate::scene::{Accel, Integrator, Intersect, Scene};
 
 use super::device::Gpu;
+use super::hardware::{Acceleration, AccelerationStats};
 use super::pipelines::{Layouts, Pipelines, resident_constants};
 use super::proximity::Proximity;
 use super::query::Lists;
 use super::render::Tiles;
 use super::resident::{Host, Resident};
-use super::hardware::{Acceleration, AccelerationStats};
 use super::shader::{HARDWARE_SOURCE, SHADER_SOURCE, specialisation};
 use super::timer::GpuTimings;
 use super::upload::{BvhStorage, SceneBuffers};

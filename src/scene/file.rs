@@ -6,7 +6,10 @@ use std::path::{Path, PathBuf};
 use glam::{DMat3, DVec3};
 use serde::Deserialize;
 
-use super::{Accel, DEFAULT_MAX_DEPTH, Integrator, Intersect, Rgb, Scene, Transform, colour, directional_light, point, point_light};
+use super::{
+    Accel, DEFAULT_MAX_DEPTH, Integrator, Intersect, Rgb, Scene, Transform, colour,
+    directional_light, point, point_light,
+};
 use crate::camera::{Camera, View, validate_camera};
 use crate::error::{Error, Result};
 use crate::layout::Sphere;

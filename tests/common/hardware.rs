@@ -18,7 +18,10 @@ const CHILD_ENV: &str = "LAMBERT_RAY_QUERY_CHILD";
 /// (this binary is `<target>/<profile>/deps/<test>`).
 pub fn private_mesa() -> PathBuf {
     let exe = std::env::current_exe().expect("the test binary's path");
-    let target = exe.ancestors().nth(3).expect("<target>/<profile>/deps/<test>");
+    let target = exe
+        .ancestors()
+        .nth(3)
+        .expect("<target>/<profile>/deps/<test>");
     target.join("mesa-rt")
 }
 
@@ -54,7 +57,10 @@ pub fn ray_query_gpu(test: &str) -> Option<Gpu> {
         return Some(gpu);
     }
     if std::env::var_os(CHILD_ENV).is_some() {
-        panic!("the private lavapipe ({}) offers no ray queries", private_mesa().display());
+        panic!(
+            "the private lavapipe ({}) offers no ray queries",
+            private_mesa().display()
+        );
     }
     let prefix = private_mesa();
     if prefix.join("usr/share/vulkan/icd.d/lvp_icd.json").is_file() {
@@ -91,8 +97,14 @@ fn run_in_child(test: &str, prefix: &std::path::Path) {
         String::from_utf8_lossy(&output.stdout),
         String::from_utf8_lossy(&output.stderr)
     );
-    println!("{test} ran on the private lavapipe ({}):\n{text}", prefix.display());
-    assert!(output.status.success(), "{test} failed on the private lavapipe");
+    println!(
+        "{test} ran on the private lavapipe ({}):\n{text}",
+        prefix.display()
+    );
+    assert!(
+        output.status.success(),
+        "{test} failed on the private lavapipe"
+    );
     assert!(
         text.contains("1 passed"),
         "{test}: the child process ran no test"

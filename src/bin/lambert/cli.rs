@@ -15,7 +15,7 @@ mod turntable;
 mod view;
 
 use options::{
-    AdapterArgs, BenchDevice, Device, RenderOptions, SceneOptions, ViewOptions, fraction,
+    AccelArg, AdapterArgs, BenchDevice, Device, RenderOptions, SceneOptions, ViewOptions, fraction,
     non_negative,
 };
 
@@ -319,6 +319,10 @@ struct BenchArgs {
     plot: Option<PathBuf>,
     #[arg(long, value_enum, default_value = "both")]
     device: BenchDevice,
+    /// How rays find their hits [default: each scene's render.accel, else
+    /// bvh]; `hardware` measures the GPU's ray queries (docs/hardware-rays.md).
+    #[arg(long, value_enum)]
+    accel: Option<AccelArg>,
     /// Image side for OBJ models (pixels).
     #[arg(long, default_value_t = 1024)]
     size: u32,

@@ -56,7 +56,7 @@ impl From<BenchDevice> for BenchDevices {
 
 /// `--accel`: `Accel`.
 #[derive(Clone, Copy, ValueEnum)]
-enum AccelArg {
+pub(super) enum AccelArg {
     /// The BVH (8-wide; compressed on the GPU).
     Bvh,
     /// Every primitive tested: the reference.
