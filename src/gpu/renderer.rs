@@ -41,9 +41,15 @@ use super::wavefront::ShadowDispatch;
 /// queries (`Proximity`, proximity.rs). A pass reads the others through
 /// `Host`.
 ///
+/// Under `--accel hardware` (where the device has ray queries), the scene's
+/// acceleration structures (`hardware.rs`) are part of the upload: the
+/// resident bind groups hold their group (group 2 of every pipeline), and
+/// the shader module is the ray-query one.
+///
 /// When each is built (the rule): what every call needs when the renderer
-/// is opened (`new`): the device context, the scene's upload, the shader
-/// module, the tile's buffers and the timer. Every pipeline on the first
+/// is opened (`new`): the device context, the scene's upload (with its
+/// acceleration structures), the shader module, the tile's buffers and the
+/// timer. Every pipeline on the first
 /// use of its pass, by its `prepare_*` (which a caller may call first to
 /// leave the compile out of a timing): the megakernel's `render` pipeline
 /// or the wavefront's passes and lists (`prepare_render`), the wavefront's
