@@ -352,6 +352,15 @@ impl Renderer {
         }
     }
 
+    /// The acceleration structures its rays go through where they go
+    /// through the GPU's ray queries (`--accel hardware`), else None.
+    pub fn ray_queries(&self) -> Option<crate::gpu::AccelerationStats> {
+        match self {
+            Renderer::Gpu(r) => r.ray_queries().copied(),
+            Renderer::Cpu(_) => None,
+        }
+    }
+
     /// Where this renderer traces through ray queries (`--accel
     /// hardware`) but `what` does not (the geometric queries walk the
     /// compute BVH): the note saying so, for the front end to print.

@@ -545,6 +545,7 @@ fn the_command_line_traces_renders_and_compares_through_ray_queries() {
         s(&image),
     ]);
     assert!(output.status.success(), "{}", stderr(&output));
+    assert_contains_all(&stderr(&output), &["ray queries: ", "BLAS", ", ray queries"]);
     let counts = dir.path().join("counts.bin");
     let output = lambert(&[
         "query",

@@ -33,7 +33,7 @@ pub fn offers_ray_queries(adapter: &wgpu::Adapter) -> bool {
 /// Why `gpu` cannot trace with ray queries, if it cannot: the device has
 /// no ray queries (it was opened without them, or its adapter has none),
 /// or too few bindings for the ray-query module.
-pub(super) fn unsupported(gpu: &Gpu) -> Option<String> {
+fn unsupported(gpu: &Gpu) -> Option<String> {
     if !gpu.device.features().contains(RAY_QUERY) {
         return Some(format!(
             "{} has no ray queries (wgpu's EXPERIMENTAL_RAY_QUERY: Vulkan's VK_KHR_ray_query, \
@@ -55,20 +55,29 @@ pub enum TriangleGeometry {
     /// shader by the compute path's own test: the hardware only traverses.
     /// For drivers whose own tests leak: lavapipe's slab test is not
     /// conservative, so rays aimed at a shared vertex or edge escape
-    /// between triangles (docs/hardware-rays.md, "Driver bugs").
+    /// between triangles (docs/hardware-rays.md, "Bugs met").
     Boxes,
 }
 
 impl TriangleGeometry {
+    /// Its value of the variable.
+    pub fn name(self) -> &'static str {
+        match self {
+            TriangleGeometry::Triangles => "triangles",
+            TriangleGeometry::Boxes => "boxes",
+        }
+    }
+
     /// The variable's choice, else boxes on llvmpipe (lavapipe) and
     /// triangles on every other driver.
     pub fn for_gpu(gpu: &Gpu) -> Result<TriangleGeometry> {
+        let all = [TriangleGeometry::Triangles, TriangleGeometry::Boxes];
         match gpu.options.ray_query_geometry.as_deref().map(str::trim) {
-            Some("triangles") => Ok(TriangleGeometry::Triangles),
-            Some("boxes") => Ok(TriangleGeometry::Boxes),
-            Some(other) => Err(Error::Usage(format!(
-                "{RAY_QUERY_GEOMETRY_ENV}={other}: expected triangles or boxes"
-            ))),
+            Some(value) => all.into_iter().find(|g| g.name() == value).ok_or_else(|| {
+                Error::Usage(format!(
+                    "{RAY_QUERY_GEOMETRY_ENV}={value}: expected triangles or boxes"
+                ))
+            }),
             None if gpu.is_llvmpipe() => Ok(TriangleGeometry::Boxes),
             None => Ok(TriangleGeometry::Triangles),
         }

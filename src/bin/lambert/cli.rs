@@ -502,6 +502,15 @@ fn print_image_report(report: &ImageReport, sampling: Sampling, load: Duration) 
         seconds(bvh.build_time),
         bvh.device_bytes as f64 / (1 << 20) as f64
     );
+    if let Some(rq) = &report.ray_queries {
+        eprintln!(
+            "ray queries: {} BLAS, {} geometries, triangles as {}, built in {} (part of upload)",
+            rq.blases,
+            rq.geometries,
+            rq.triangles.name(),
+            seconds(rq.build_time)
+        );
+    }
     let t = &report.timings;
     eprintln!(
         "time: load {}, upload {}, render {}, readback {}, write {}",
