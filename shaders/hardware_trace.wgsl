@@ -131,3 +131,37 @@ fn trace(ray_in: Ray, any_hit: bool) -> Hit {
     }
     return unscale(best, shear);
 }
+
+// Every crossing of a ray (the count and list queries) through a ray
+// query where the triangles are boxes: each box the hardware reports,
+// opaque or not, tested by `crossing` (all_hits.wgsl's watertight test,
+// an edge owned by one triangle), never committed, so that the traversal
+// visits every box along the ray. Triangles the hardware tests itself
+// reach the shader only where its own test hits them, and on an edge that
+// need not be the triangle lambert's rule counts: there, and for rays a
+// query may not take, the compute BVH's walk (`all_hits`).
+fn every_hit(ray_in: Ray, index: u32, pad: f32, fill: bool, base: u32) -> u32 {
+    let prepared = prepare_ray(ray_in);
+    let ray = prepared.ray;
+    let shear = prepared.shear;
+    if !HARDWARE_TRIANGLE_BOXES || is_nan_ray(ray_in) || !hardware_takes(ray) {
+        return all_hits(ray_in, index, pad, fill, base);
+    }
+    var query: ray_query;
+    rayQueryInitialize(&query, scene_tlas, RayDesc(RAY_FLAG_FORCE_NO_OPAQUE, 0xffu, ray.tmin, ray.tmax, ray.origin, ray.dir));
+    var count = 0u;
+    while rayQueryProceed(&query) {
+        let prim = hardware_prim(rayQueryGetCandidateIntersection(&query));
+        if prim < params.num_triangles {
+            let tri = triangle_at(prim);
+            let h = crossing(ray, shear, tri.v0, tri.v1, tri.v2);
+            if h.x < FAR {
+                if fill {
+                    listed_hits[base + count] = ListedHit(index, prim, h.x * shear.t_scale, h.y, h.z);
+                }
+                count += 1u;
+            }
+        }
+    }
+    return count;
+}

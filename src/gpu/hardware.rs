@@ -103,6 +103,18 @@ pub struct AccelerationStats {
     pub build_time: Duration,
 }
 
+impl AccelerationStats {
+    /// Whether crossing counts and lists go through ray queries: where the
+    /// triangles are boxes, each tested by the shader's crossing test, which
+    /// counts an edge once by lambert's rule (shaders/hardware_trace.wgsl,
+    /// `every_hit`). The hardware's own triangles reach the shader only
+    /// where its test hits them, which on an edge need not be the triangle
+    /// the rule counts, so there they walk the compute BVH.
+    pub fn serves_crossings(&self) -> bool {
+        self.triangles == TriangleGeometry::Boxes
+    }
+}
+
 /// The scene's acceleration structures and the bind group over them (the
 /// BLASes live on through the TLAS's instances, the TLAS and the runs'
 /// table through the group).
