@@ -5,7 +5,7 @@ use std::sync::{Arc, Mutex};
 use crate::error::{Error, Result};
 
 use super::adapter::{AdapterRequest, Presenting, choose_adapter, describe, is_software};
-use super::hardware::device_features;
+use super::features::device_features;
 use super::options::GpuOptions;
 
 /// An open device and queue. A clone shares them (a viewer presents on
@@ -90,11 +90,8 @@ impl Gpu {
         let limits = requested_limits(&adapter, max_buffer_bytes);
         // GPU time of each dispatch, where the adapter can measure it; ray
         // queries where asked for and the adapter has them.
-        let (required_features, experimental_features) = device_features(
-            &adapter,
-            wgpu::Features::TIMESTAMP_QUERY,
-            request.ray_queries,
-        );
+        let (required_features, experimental_features) =
+            device_features(&adapter, request.ray_queries);
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("lambert"),
             required_features,

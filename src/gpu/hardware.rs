@@ -1,12 +1,12 @@
 //! `--accel hardware` (docs/hardware-rays.md): the scene in the GPU's
-//! ray-tracing units, through wgpu's experimental ray queries. The one
-//! module of the GPU layer that names that API: whether a device can trace
-//! with it (`unsupported`), and the scene's acceleration structures
+//! ray-tracing units, through wgpu's experimental ray queries. With
+//! `features` (what the device is opened with), the one module of the GPU
+//! layer that names that API: whether a device can trace with it
+//! (`unsupported`), and the scene's acceleration structures
 //! (`Acceleration`: BLASes, the TLAS over them, and the bind group the
 //! ray-query module reads them through, `ACCELERATION`), built once when a
 //! renderer is opened and kept by it. How primitives go into them: `plan`.
 
-mod features;
 mod plan;
 
 use std::time::{Duration, Instant};
@@ -19,9 +19,8 @@ use crate::scene::Scene;
 
 use super::bindings::{ACCELERATION, unmet_hardware_limits};
 use super::device::Gpu;
+use super::features::RAY_QUERY;
 use super::options::RAY_QUERY_GEOMETRY_ENV;
-use features::RAY_QUERY;
-pub(super) use features::device_features;
 use plan::{BlasPlan, Kind, Limits, Plan, Run};
 
 /// Whether `adapter` offers ray queries (a device opened on it for

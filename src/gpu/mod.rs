@@ -7,8 +7,11 @@
 //! - `upload`: the scene's buffers and the BVH's storage;
 //! - `bindings`: the bind group tables, checked against the shader;
 //! - `shader`: the shader's source and its specialisation;
+//! - `features`: what a device is opened with (timestamp queries, and the
+//!   ray queries of `--accel hardware`);
 //! - `hardware`: `--accel hardware`, the scene's acceleration structures
-//!   for ray queries (wgpu's experimental API is named there alone);
+//!   for ray queries (wgpu's experimental API is named there and in
+//!   `features` alone);
 //! - `pipelines`: the shader module, its overrides and layouts;
 //! - `renderer`: `GpuRenderer`, a scene resident on the device: its
 //!   parts, and when each is built;
@@ -28,6 +31,7 @@
 mod adapter;
 pub mod bindings;
 mod device;
+mod features;
 mod hardware;
 mod options;
 mod pipelines;

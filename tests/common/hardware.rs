@@ -81,9 +81,13 @@ pub fn ray_query_gpu(test: &str) -> Option<Gpu> {
 
 const RAY_QUERY: wgpu::Features = wgpu::Features::EXPERIMENTAL_RAY_QUERY;
 
+/// One child at a time: each runs lavapipe on every core.
+static ONE_CHILD: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
 /// Runs test `test` of this binary alone in a child process on the
 /// lavapipe at `prefix`, printing its output; panics if it fails.
 fn run_in_child(test: &str, prefix: &std::path::Path) {
+    let _turn = ONE_CHILD.lock().unwrap_or_else(|e| e.into_inner());
     let exe = std::env::current_exe().expect("the test binary's path");
     let output = Command::new(exe)
         .args([test, "--exact", "--nocapture", "--test-threads=1"])

@@ -1,23 +1,23 @@
-//! What a device is opened with for ray queries: wgpu's experimental
-//! feature and the token that accepts it (a file of its own, so that the
-//! device context, which the rest of the hardware module reads, imports
-//! nothing of it back).
+//! The features a device is opened with: timestamp queries, and the ray
+//! queries of `--accel hardware` (wgpu's experimental feature and the
+//! token that accepts it), the one place besides `hardware` that names
+//! them: the device context opens with them and the hardware module
+//! checks for them, and neither imports the other for it.
 
 /// The wgpu feature the hardware path needs: Vulkan's VK_KHR_ray_query
 /// (docs/hardware-rays.md says where wgpu 30 offers it).
-pub const RAY_QUERY: wgpu::Features = wgpu::Features::EXPERIMENTAL_RAY_QUERY;
+pub(super) const RAY_QUERY: wgpu::Features = wgpu::Features::EXPERIMENTAL_RAY_QUERY;
 
-/// The features to open `adapter`'s device with: `wanted`, and ray
-/// queries where `ray_queries` asks for them, of those the adapter has;
-/// and wgpu's token for experimental features, given only with them.
-pub fn device_features(
+/// The features to open `adapter`'s device with, of those it has: GPU
+/// time of each dispatch, and ray queries where `ray_queries` asks for
+/// them; and wgpu's token for experimental features, given only with them.
+pub(super) fn device_features(
     adapter: &wgpu::Adapter,
-    wanted: wgpu::Features,
     ray_queries: bool,
 ) -> (wgpu::Features, wgpu::ExperimentalFeatures) {
     let wanted = match ray_queries {
-        true => wanted | RAY_QUERY,
-        false => wanted,
+        true => wgpu::Features::TIMESTAMP_QUERY | RAY_QUERY,
+        false => wgpu::Features::TIMESTAMP_QUERY,
     };
     let features = adapter.features() & wanted;
     let experimental = if features.contains(RAY_QUERY) {
