@@ -94,7 +94,7 @@ pub fn plan(
         true => Kind::TriangleBoxes,
         false => Kind::Triangles,
     };
-    let sphere_runs = (spheres > 0).then(|| Run {
+    let sphere_runs = (spheres > 0).then_some(Run {
         first: masked.len() as u32,
         count: spheres,
         opaque: false,
