@@ -58,30 +58,7 @@ fn escaped(ray: Ray, bsdf_pdf: f32) -> vec3<f32> {
     return light * power_heuristic(bsdf_pdf, environment_pdf(ray.dir));
 }
 
-// Direct light from every point, spot and directional light, each
-// emitting π times its lecture-convention colour.
-fn punctual_light(surface: Surface, origin: vec3<f32>, bsdf: BsdfParams, frame: mat3x3<f32>,
-    wo: vec3<f32>) -> vec3<f32> {
-    var sum = vec3<f32>(0.0);
-    for (var i = 0u; i < params.num_lights; i++) {
-        let sample = light_sample(surface, origin, lights[i]);
-        if !sample.lit {
-            continue;
-        }
-        let f = bsdf_eval(bsdf, wo, to_local(frame, sample.shadow_ray.dir));
-        if all(f == vec3<f32>(0.0)) {
-            continue;
-        }
-        if HAS_SHADOWS && params.shadows != 0u && trace_any(sample.shadow_ray) {
-            continue;
-        }
-        sum += f * sample.irradiance * PI;
-    }
-    return sum;
-}
-
-// Direct light from one emitter drawn by power, weighted against BSDF
-// sampling.
+// Direct light from one emitter drawn by power (see the CPU twin).
 fn emitter_light(surface: Surface, origin: vec3<f32>, bsdf: BsdfParams, frame: mat3x3<f32>,
     wo: vec3<f32>, state: ptr<function, u32>) -> vec3<f32> {
     let u_pick = next_random(state);
@@ -101,11 +78,14 @@ fn emitter_light(surface: Surface, origin: vec3<f32>, bsdf: BsdfParams, frame: m
     if sample.distance < FAR {
         tmax = sample.distance * (1.0 - SHADOW_SHORTENING);
     }
-    if trace_any(Ray(origin, 0.0, sample.wi, tmax)) {
+    if params.shadows != 0u && trace_any(Ray(origin, 0.0, sample.wi, tmax)) {
         return vec3<f32>(0.0);
     }
-    let weight = power_heuristic(sample.pdf, bsdf_pdf(bsdf, wo, wi));
-    return f * sample.radiance * (weight / sample.pdf);
+    var weight = 1.0;
+    if !sample.delta {
+        weight = power_heuristic(sample.pdf, bsdf_pdf(bsdf, wo, wi));
+    }
+    return rounded3(f * sample.radiance * (weight / sample.pdf));
 }
 
 // Path tracing from the camera ray `ray` that hit `hit` (see the CPU twin).
@@ -120,7 +100,7 @@ fn path_radiance(camera_ray: Ray, camera_hit: Hit, seed: u32) -> vec3<f32> {
     var depth = 0u;
     loop {
         if hit.prim == NO_HIT {
-            radiance += throughput * escaped(ray, bsdf_pdf_before);
+            radiance += rounded3(throughput * escaped(ray, bsdf_pdf_before));
             break;
         }
         let surface = surface_at(ray, hit);
@@ -130,21 +110,18 @@ fn path_radiance(camera_ray: Ray, camera_hit: Hit, seed: u32) -> vec3<f32> {
                 let light_pdf = emitter_pdf(origin_before, hit.prim, ray.dir, hit.t);
                 weight = power_heuristic(bsdf_pdf_before, light_pdf);
             }
-            radiance += throughput * surface.emission * weight;
+            radiance += rounded3(throughput * surface.emission * weight);
         }
         depth += 1u;
         if depth > params.max_depth {
             break;
         }
         let material = material_at(ray, hit, surface);
-        var lit = surface;
-        lit.shading_normal = material.shading_normal;
         let frame = frame_from_normal(material.shading_normal);
         let wo = to_local(frame, -ray.dir);
         let origin = offset_ray_origin(surface.position, surface.error, surface.geometric_normal);
-        radiance += throughput * punctual_light(lit, origin, material.bsdf, frame, wo);
         if HAS_EMITTERS {
-            radiance += throughput * emitter_light(lit, origin, material.bsdf, frame, wo, &state);
+            radiance += rounded3(throughput * emitter_light(surface, origin, material.bsdf, frame, wo, &state));
         }
 
         let u_lobe = next_random(&state);

@@ -32,9 +32,6 @@ override HAS_SMOOTH: bool = true;
 // Samples are path traced (Integrator::Path): `radiance` calls
 // `path_radiance`. False: the direct integrator's `shade` alone.
 override PATH_TRACE: bool = true;
-// STAND-IN until the lights branch lands.
-override HAS_ENVIRONMENT: bool = true;
-override HAS_EMITTERS: bool = true;
 // false: test every primitive (the reference that tests the BVH).
 override USE_BVH: bool = true;
 // Ray/triangle test: INTERSECT_SEED, INTERSECT_MOLLER_TRUMBORE or
@@ -419,3 +416,51 @@ struct ShadowQuery {
 // The pixels whose shading `render_resolve` finishes: each one's place in
 // `tile_sums`, and the first sample it resolves.
 @group(1) @binding(19) var<storage, read_write> resolve_pixels: array<vec2<u32>>;
+
+// Lighting (the path integrator's; shaders/lights.wgsl reads it): the
+// emitters' table and the environment. Whether the scene has an
+// environment (a colour or a map) and any emitter at all: without, their
+// lookups are compiled out.
+override HAS_ENVIRONMENT: bool = true;
+override HAS_EMITTERS: bool = true;
+const EMITTER_TRIANGLE: u32 = 0u;
+const EMITTER_LIGHT: u32 = 1u;
+const EMITTER_ENVIRONMENT: u32 = 2u;
+const LIGHTING_ENVIRONMENT_IMAGE: u32 = 1u;
+
+// One entry of the emitters' table: the emitter (a triangle by primitive
+// id, a light by index, the environment), the probability of picking it,
+// and its bin of the alias table (keep it with probability q, else take
+// `alias_bin`). Triangles first, by primitive id.
+struct Emitter {
+    kind: u32,
+    index: u32,
+    pmf: f32,
+    q: f32,
+    alias_bin: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+// Counts of the table, and the environment: its constant colour (no
+// image), its map's size, its rotation about +Y, its entry's pmf.
+struct Lighting {
+    environment_color: vec3<f32>,
+    num_emitters: u32,
+    environment_width: u32,
+    environment_height: u32,
+    rotation_cos: f32,
+    rotation_sin: f32,
+    num_triangle_emitters: u32,
+    environment_pmf: f32,
+    total_power: f32,
+    flags: u32,
+}
+@group(0) @binding(20) var<storage, read> emitters: array<Emitter>;
+// The map's pixels, linear RGB × strength, row 0 straight up.
+@group(0) @binding(21) var<storage, read> environment: array<vec4<f32>>;
+// The map's sampling distribution (src/lighting/distribution.rs): the
+// marginal CDF over its rows of cells, then each row's conditional CDF.
+@group(0) @binding(22) var<storage, read> environment_cdf: array<f32>;
+@group(0) @binding(23) var<uniform> lighting: Lighting;

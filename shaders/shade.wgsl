@@ -1,5 +1,5 @@
 // Stage: shading. The surface at a hit, the offset shadow-ray origin, the
-// lights (point, directional), shadows, and Lambert's sum. CPU twin:
+// lights (point, directional, spot), shadows, and Lambert's sum. CPU twin:
 // src/cpu/shade.rs.
 
 fn face_forward(n: vec3<f32>, dir: vec3<f32>) -> vec3<f32> {
@@ -21,6 +21,20 @@ fn self_hit_bound(extent: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(gamma(32.0) * max(max(extent.x, extent.y), extent.z));
 }
 
+// The unit shading normal at barycentrics (w, u, v) of triangle `prim`
+// before it is turned towards the ray: its corners' normals interpolated
+// (FLAG_SMOOTH), else (or where they cancel) `outward`, the face's.
+fn vertex_normal(tri: Triangle, prim: u32, w: f32, u: f32, v: f32, outward: vec3<f32>) -> vec3<f32> {
+    if HAS_SMOOTH && (tri.flags & FLAG_SMOOTH) != 0u {
+        let ns = triangle_normals_at(prim);
+        let interpolated = w * ns.n0.xyz + u * ns.n1.xyz + v * ns.n2.xyz;
+        if dot(interpolated, interpolated) > 0.0 {
+            return normalize(interpolated);
+        }
+    }
+    return outward;
+}
+
 fn surface_at(ray: Ray, hit: Hit) -> Surface {
     // The sphere's half below is compiled out where the scene has none (it
     // would run masked on lavapipe even where no lane hit a sphere).
@@ -30,25 +44,13 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
         // From barycentrics, not o + t·d: the point lies closer to the plane.
         let position = w * tri.v0 + hit.u * tri.v1 + hit.v * tri.v2;
         let error = self_hit_bound(max(max(abs(tri.v0), abs(tri.v1)), abs(tri.v2)));
-        let geometric = face_forward(normalize(cross(tri.v1 - tri.v0, tri.v2 - tri.v0)), ray.dir);
-        var shading = geometric;
-        if HAS_SMOOTH && (tri.flags & FLAG_SMOOTH) != 0u {
-            let ns = triangle_normals_at(hit.prim);
-            let interpolated = w * ns.n0.xyz + hit.u * ns.n1.xyz + hit.v * ns.n2.xyz;
-            if dot(interpolated, interpolated) > 0.0 {
-                shading = face_forward(normalize(interpolated), ray.dir);
-            }
-        }
+        let outward = normalize(cross(tri.v1 - tri.v0, tri.v2 - tri.v0));
+        let geometric = face_forward(outward, ray.dir);
+        let shading = face_forward(vertex_normal(tri, hit.prim, w, hit.u, hit.v, outward), ray.dir);
         // The camera ray's cone where it hits (docs/textures.md).
         let cone_width = hit.t * params.cone_spread;
         let base = base_color_at(tri, hit.prim, hit.u, hit.v, ray.dir, cone_width);
-        var emission = materials[tri.material].emission;
-        let emissive_texture = materials[tri.material].emissive_texture;
-        if HAS_TEXTURES && emissive_texture != NO_TEXTURE
-            && (tri.flags & FLAG_ATTRIBUTES) != 0u {
-            emission *= texture_at(emissive_texture, tri, hit.prim, hit.u, hit.v, ray.dir,
-                cone_width).rgb;
-        }
+        let emission = emission_at(tri, hit.prim, hit.u, hit.v, ray.dir, cone_width);
         return Surface(position, error, geometric, shading, base.rgb, emission);
     }
     let sphere = spheres[hit.prim - params.num_triangles];
@@ -91,6 +93,23 @@ fn offset_ray_origin(p: vec3<f32>, error: vec3<f32>, n: vec3<f32>) -> vec3<f32> 
     return po;
 }
 
+// a · b with each product and sum `rounded`, in the CPU twin's order.
+fn dot_rounded(a: vec3<f32>, b: vec3<f32>) -> f32 {
+    return rounded(rounded(rounded(a.x * b.x) + rounded(a.y * b.y)) + rounded(a.z * b.z));
+}
+
+// KHR_lights_punctual's smooth falloff of a spot light towards unit
+// `to_light`: t² for t the angle's cosine taken from the outer cone's (0) to
+// the inner cone's (1), clamped. A difference over a difference, not the
+// spec's `cd · scale + offset`, and the dot product's terms rounded each,
+// so that no multiply-add fuses: the CPU twin's bits.
+fn spot_falloff(light: Light, to_light: vec3<f32>) -> f32 {
+    let cos_angle = -dot_rounded(light.direction, to_light);
+    let t = clamp(rounded(cos_angle - light.cos_outer)
+        / max(light.cos_inner - light.cos_outer, 1e-3), 0.0, 1.0);
+    return t * t;
+}
+
 // What light `light` gives a point (`surface`, shadow rays leaving from
 // `origin`) unless something blocks it; `lit` false when nothing.
 struct LightSample {
@@ -105,7 +124,8 @@ fn light_sample(surface: Surface, origin: vec3<f32>, light: Light) -> LightSampl
     out.lit = false;
     var to_light: vec3<f32>;
     // Specialisation drops the branch of a light kind the scene lacks.
-    if HAS_POINT_LIGHTS && (!HAS_DIRECTIONAL_LIGHTS || light.kind == LIGHT_POINT) {
+    if (HAS_POINT_LIGHTS || HAS_SPOT_LIGHTS)
+        && (!HAS_DIRECTIONAL_LIGHTS || light.kind != LIGHT_DIRECTIONAL) {
         let d = light.vector - surface.position;
         let distance_squared = dot(d, d);
         // A light on the shaded point: no light (see the CPU twin).
@@ -114,6 +134,9 @@ fn light_sample(surface: Surface, origin: vec3<f32>, light: Light) -> LightSampl
         }
         to_light = d / sqrt(distance_squared);
         out.irradiance = min(light.color / distance_squared, vec3<f32>(FAR));
+        if HAS_SPOT_LIGHTS && light.kind == LIGHT_SPOT {
+            out.irradiance *= spot_falloff(light, to_light);
+        }
         let s = light.vector - origin;
         let shadow_length = length(s);
         out.shadow_ray = Ray(origin, 0.0, s / shadow_length, shadow_length);

@@ -45,16 +45,18 @@ fn texel_position(u: f32, size: u32) -> i32 {
 }
 
 // Texel (x, y) of the level whose entry starts at word `level`, as linear
-// RGBA in 1/LINEAR_ONE (RGB through the sRGB table, A linear).
-fn texel_linear(level: u32, x: i32, y: i32) -> vec4<u32> {
+// RGBA in 1/LINEAR_ONE (RGB through the table at word `table`: the sRGB
+// table for colour, the linear one for data; A linear).
+fn texel_linear(level: u32, x: i32, y: i32, table: u32) -> vec4<u32> {
     let word = textures[textures[level] + u32(y) * textures[level + 1u] + u32(x)];
-    return vec4<u32>(textures[word & 255u], textures[(word >> 8u) & 255u],
-        textures[(word >> 16u) & 255u], ((word >> 24u) * LINEAR_ONE + 127u) / 255u);
+    return vec4<u32>(textures[table + (word & 255u)], textures[table + ((word >> 8u) & 255u)],
+        textures[table + ((word >> 16u) & 255u)], ((word >> 24u) * LINEAR_ONE + 127u) / 255u);
 }
 
 // One level's filtered value at the wrapped `uv`, weighted in 1/65536 (so
 // that 1.0 is LINEAR_ONE · 65536 = 2^31): nearest or bilinear.
-fn level_sum(level: u32, uv: vec2<f32>, wrap_u: u32, wrap_v: u32, bilinear: bool) -> vec4<u32> {
+fn level_sum(level: u32, uv: vec2<f32>, wrap_u: u32, wrap_v: u32, bilinear: bool,
+        table: u32) -> vec4<u32> {
     let width = i32(textures[level + 1u]);
     let height = i32(textures[level + 2u]);
     let px = texel_position(uv.x, u32(width));
@@ -62,7 +64,7 @@ fn level_sum(level: u32, uv: vec2<f32>, wrap_u: u32, wrap_v: u32, bilinear: bool
     if !bilinear {
         let x = wrap_texel((px + 128) >> 8u, width, wrap_u);
         let y = wrap_texel((py + 128) >> 8u, height, wrap_v);
-        return texel_linear(level, x, y) * 65536u;
+        return texel_linear(level, x, y, table) * 65536u;
     }
     let x0 = wrap_texel(px >> 8u, width, wrap_u);
     let x1 = wrap_texel((px >> 8u) + 1, width, wrap_u);
@@ -70,10 +72,10 @@ fn level_sum(level: u32, uv: vec2<f32>, wrap_u: u32, wrap_v: u32, bilinear: bool
     let y1 = wrap_texel((py >> 8u) + 1, height, wrap_v);
     let fx = u32(px & 255);
     let fy = u32(py & 255);
-    return texel_linear(level, x0, y0) * ((256u - fx) * (256u - fy))
-        + texel_linear(level, x1, y0) * (fx * (256u - fy))
-        + texel_linear(level, x0, y1) * ((256u - fx) * fy)
-        + texel_linear(level, x1, y1) * (fx * fy);
+    return texel_linear(level, x0, y0, table) * ((256u - fx) * (256u - fy))
+        + texel_linear(level, x1, y0, table) * (fx * (256u - fy))
+        + texel_linear(level, x0, y1, table) * ((256u - fx) * fy)
+        + texel_linear(level, x1, y1, table) * (fx * fy);
 }
 
 // `x` as rounded here: a select on a value the compiler cannot know (the
@@ -117,25 +119,27 @@ fn fixed_to_float(sum: vec4<u32>) -> vec4<f32> {
 fn sample_texture(slot: u32, uv: vec2<f32>, lod: i32) -> vec4<f32> {
     let flags = textures[slot + 8u];
     let levels = textures[slot + 7u];
+    let table = textures[slot + 9u];
     let count = (flags >> 8u) & 255u;
     let wrap_u = flags & 3u;
     let wrap_v = (flags >> 2u) & 3u;
     let t = transform_uv(slot, uv);
     let w = vec2<f32>(wrap_coordinate(t.x, wrap_u), wrap_coordinate(t.y, wrap_v));
     if lod <= 0 {
-        return fixed_to_float(level_sum(levels, w, wrap_u, wrap_v, (flags & 16u) != 0u));
+        return fixed_to_float(level_sum(levels, w, wrap_u, wrap_v, (flags & 16u) != 0u, table));
     }
     let bilinear = (flags & 32u) != 0u;
     if (flags & 64u) == 0u {
-        return fixed_to_float(level_sum(levels, w, wrap_u, wrap_v, bilinear));
+        return fixed_to_float(level_sum(levels, w, wrap_u, wrap_v, bilinear, table));
     }
     let level = u32(lod >> 8u);
     if level + 1u >= count {
-        return fixed_to_float(level_sum(levels + 4u * (count - 1u), w, wrap_u, wrap_v, bilinear));
+        return fixed_to_float(level_sum(levels + 4u * (count - 1u), w, wrap_u, wrap_v, bilinear,
+            table));
     }
     let f = u32(lod & 255);
-    let finer = level_sum(levels + 4u * level, w, wrap_u, wrap_v, bilinear);
-    let coarser = level_sum(levels + 4u * (level + 1u), w, wrap_u, wrap_v, bilinear);
+    let finer = level_sum(levels + 4u * level, w, wrap_u, wrap_v, bilinear, table);
+    let coarser = level_sum(levels + 4u * (level + 1u), w, wrap_u, wrap_v, bilinear, table);
     return fixed_to_float((finer >> vec4<u32>(8u)) * (256u - f) + (coarser >> vec4<u32>(8u)) * f);
 }
 

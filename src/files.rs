@@ -17,6 +17,11 @@ pub const MAX_RAY_BYTES: u64 = 32 << 30;
 /// The most lambert reads of a TOML scene or an MTL file: text written by
 /// hand or by an exporter, never this large.
 pub const MAX_TEXT_BYTES: u64 = 256 << 20;
+/// The most an image file's compressed bytes expand, with a margin:
+/// deflate's limit is about 1032 to 1, RLE's 64 to 1. A part file's or an
+/// environment map's header that claims more pixels than its bytes could
+/// hold at this is refused before its pixels are allocated.
+pub const MAX_EXPANSION: u64 = 1100;
 
 /// Opens `path` if it is a regular file of at most `cap` bytes; returns
 /// the file and its size.

@@ -28,10 +28,13 @@ pub enum Input {
     Points,
     /// An EXR part file of `lambert merge`.
     Part,
+    /// An environment map, Radiance HDR or OpenEXR (`[environment]`,
+    /// `--environment`).
+    Environment,
 }
 
 impl Input {
-    pub const ALL: [Input; 9] = [
+    pub const ALL: [Input; 10] = [
         Input::Toml,
         Input::Obj,
         Input::Mtl,
@@ -41,12 +44,14 @@ impl Input {
         Input::Rays,
         Input::Points,
         Input::Part,
+        Input::Environment,
     ];
 
     /// The file extension of an input of this kind.
     pub fn extension(self) -> &'static str {
         match self {
             Input::Part => "exr",
+            Input::Environment => "hdr",
             other => other.name(),
         }
     }
@@ -62,6 +67,7 @@ impl Input {
             Input::Rays => "rays",
             Input::Points => "points",
             Input::Part => "part",
+            Input::Environment => "environment",
         }
     }
 
@@ -87,6 +93,9 @@ impl Input {
             Input::Rays => crate::rays::parse_rays(bytes, path).map(drop),
             Input::Points => crate::rays::parse_points(bytes, path).map(drop),
             Input::Part => crate::parts::parse_part(bytes, path).map(drop),
+            Input::Environment => {
+                crate::lighting::EnvironmentMap::parse(bytes, path, 1.0).map(drop)
+            }
         }
     }
 

@@ -534,3 +534,89 @@ pub struct WindingNode {
     pub prim_count: u32,
     pub _pad: u32,
 }
+
+/// `Emitter::kind` of an emissive triangle (`index`: its primitive id).
+pub const EMITTER_TRIANGLE: u32 = 0;
+/// `Emitter::kind` of a punctual light (`index`: its place in the lights).
+pub const EMITTER_LIGHT: u32 = 1;
+/// `Emitter::kind` of the environment (`index` 0).
+pub const EMITTER_ENVIRONMENT: u32 = 2;
+/// `Lighting::flags` bit: the environment is an image (binding
+/// `environment`), not the constant `environment_color`.
+pub const LIGHTING_ENVIRONMENT_IMAGE: u32 = 1;
+
+/// One entry of the emitters' table (docs/rendering.md, "Lights"): an
+/// emitter, the probability `pmf` that `sample_emitter` picks it (its share
+/// of the scene's power), and its bin of the alias table the pick reads
+/// (pbrt-v4's `AliasTable`: bin i keeps i with probability `q`, else
+/// gives `alias_bin`). Triangles come first, ordered by primitive id, so that
+/// `emitter_pdf` finds a hit triangle's entry by binary search.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Emitter {
+    /// `EMITTER_TRIANGLE`, `EMITTER_LIGHT` or `EMITTER_ENVIRONMENT`.
+    pub kind: u32,
+    pub index: u32,
+    pub pmf: f32,
+    pub q: f32,
+    pub alias_bin: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
+}
+
+/// The lighting uniform (group 0, binding 23): the emitters' table's
+/// counts and the environment's parameters.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Lighting {
+    /// The constant environment's radiance × strength (no image: flags).
+    pub environment_color: [f32; 3],
+    pub num_emitters: u32,
+    /// The map's columns and rows (rows ≥ 2: one row is stored twice).
+    pub environment_width: u32,
+    pub environment_height: u32,
+    /// cos and sin of `rotation_deg` (the map turned about +Y).
+    pub rotation_cos: f32,
+    pub rotation_sin: f32,
+    /// Entries of the table that are triangles (its first ones).
+    pub num_triangle_emitters: u32,
+    /// The environment's entry's pmf (0 where there is none).
+    pub environment_pmf: f32,
+    /// The emitters' summed power, which the pmfs are shares of.
+    pub total_power: f32,
+    /// `LIGHTING_ENVIRONMENT_IMAGE`.
+    pub flags: u32,
+}
+
+/// One query of `probe_lights` (shaders/entry_lights.wgsl), the lights
+/// stage's functions run on the GPU for tests to compare with the CPU twin.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct LightQuery {
+    pub position: [f32; 3],
+    pub u_pick: f32,
+    pub normal: [f32; 3],
+    pub hit_prim: u32,
+    pub dir: [f32; 3],
+    pub distance: f32,
+    pub u: [f32; 2],
+    pub _pad: [u32; 2],
+}
+
+/// `probe_lights`' answer to a `LightQuery`: `sample_emitter`'s sample
+/// (`delta` 1 or 0), `environment_radiance` and `environment_pdf` of
+/// `dir`, and `emitter_pdf`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct LightAnswer {
+    pub wi: [f32; 3],
+    pub distance: f32,
+    pub radiance: [f32; 3],
+    pub pdf: f32,
+    pub environment: [f32; 3],
+    pub environment_pdf: f32,
+    pub emitter_pdf: f32,
+    pub delta: u32,
+    pub _pad: [u32; 2],
+}

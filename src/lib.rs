@@ -21,6 +21,7 @@ pub mod gpu;
 pub mod inputs;
 pub mod jobs;
 pub mod layout;
+pub mod lighting;
 pub mod limits;
 pub mod loading;
 pub mod memory;

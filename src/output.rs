@@ -88,6 +88,29 @@ impl Image {
     }
 }
 
+/// An EXR's first flat layer at its largest resolution, as linear RGB
+/// (`.layer_data.channel_data.pixels.1`, rows top to bottom) with its
+/// attributes: what render parts and environment maps are read as. The
+/// caller checks the header first: the decoder allocates what it claims.
+pub type ExrRgb = exr::image::PixelImage<(usize, Vec<[f32; 3]>), exr::image::RgbChannels>;
+
+/// `bytes` decoded as an `ExrRgb`.
+pub fn decode_exr_rgb(bytes: &[u8]) -> std::result::Result<ExrRgb, exr::error::Error> {
+    use exr::prelude::*;
+    read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgb_channels(
+            |size, _| (size.width(), vec![[0.0f32; 3]; size.area()]),
+            |(width, pixels): &mut (usize, Vec<[f32; 3]>),
+             p: Vec2<usize>,
+             (r, g, b): (f32, f32, f32)| { pixels[p.y() * *width + p.x()] = [r, g, b] },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(Cursor::new(bytes))
+}
+
 pub fn linear_to_srgb8(linear: f32) -> u8 {
     let c = linear.clamp(0.0, 1.0);
     let encoded = if c <= 0.003_130_8 {

@@ -75,8 +75,9 @@ impl Fingerprint {
 /// The hash a part records: everything that reaches a pixel. The scene's
 /// geometry and its offset (the geometry is stored relative to the
 /// scene's centre, so a far scene moved whole keeps its local numbers and
-/// differs only there), materials, texture texels (the store's words: an
-/// image's pixels changed at the same size change nothing else), lights,
+/// differs only there), materials and tangent frames, texture texels
+/// (the store's words: an image's pixels changed at the same size change
+/// nothing else), lights,
 /// background, ambient, shadows, intersection test and acceleration; the
 /// view's camera, image size, samples and seed; and which path renders
 /// (the GPU's pixels differ from the CPU's within tolerance, so parts of
@@ -90,9 +91,20 @@ pub fn settings_hash(scene: &Scene, view: &View, device: &str) -> String {
     h.add(bytemuck::cast_slice(&scene.triangles));
     h.add(bytemuck::cast_slice(&scene.normals));
     h.add(bytemuck::cast_slice(&scene.attributes));
+    // Empty but for normal-mapped scenes: other scenes' hashes as before.
+    h.add(bytemuck::cast_slice(&scene.tangents));
     h.add(bytemuck::cast_slice(&scene.spheres));
     h.add(bytemuck::cast_slice(&scene.materials));
     h.add(bytemuck::cast_slice(&scene.lights));
+    // Only a scene with an environment adds to it: other scenes' hashes as
+    // before.
+    if let Some(e) = &scene.environment {
+        h.add(bytemuck::cast_slice(&e.color));
+        h.add(bytemuck::cast_slice(&e.rotation));
+        if let Some(map) = &e.map {
+            h.add(bytemuck::cast_slice(&map.pixels));
+        }
+    }
     let c = &view.camera;
     for v in c.eye.iter().chain(&c.look_at).chain(&c.up).chain([&c.vfov]) {
         h.add(&v.to_le_bytes());
@@ -179,10 +191,6 @@ fn read_part(path: &Path) -> Result<Part> {
     parse_part(&bytes, path)
 }
 
-/// The most a ZIP (deflate) block expands, with a margin: deflate's limit
-/// is about 1032 to 1; RLE's is 64 to 1.
-const MAX_EXPANSION: u64 = 1100;
-
 /// Checks a part's header before its pixels are decoded: the decoder
 /// allocates what the header claims, so a few corrupt bytes could otherwise
 /// ask for gigabytes. Only the compressions lambert writes parts with (and
@@ -218,7 +226,7 @@ fn check_part_header(bytes: &[u8], fail: &dyn Fn(String) -> Error) -> Result<()>
         })
         .map_err(|e| fail(format!("its image: {e}")))?;
     let pixel_bytes = header.layer_size.area() as u64 * header.channels.bytes_per_pixel as u64;
-    if pixel_bytes > MAX_EXPANSION * bytes.len() as u64 {
+    if pixel_bytes > crate::files::MAX_EXPANSION * bytes.len() as u64 {
         return Err(fail(format!(
             "its header claims {pixel_bytes} bytes of pixels, more than its {} bytes can hold \
              (the file is truncated or corrupt)",
@@ -231,21 +239,9 @@ fn check_part_header(bytes: &[u8], fail: &dyn Fn(String) -> Error) -> Result<()>
 /// Decodes and checks a part file's bytes; `path` names it in errors.
 pub fn parse_part(bytes: &[u8], path: &Path) -> Result<Part> {
     use exr::meta::attribute::AttributeValue;
-    use exr::prelude::*;
     let fail = |m: String| crate::error::Error::Usage(format!("{}: {m}", path.display()));
     check_part_header(bytes, &fail)?;
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .rgb_channels(
-            |size, _| (size.width(), vec![[0.0f32; 3]; size.area()]),
-            |(width, pixels): &mut (usize, Vec<[f32; 3]>),
-             p: Vec2<usize>,
-             (r, g, b): (f32, f32, f32)| { pixels[p.y() * *width + p.x()] = [r, g, b] },
-        )
-        .first_valid_layer()
-        .all_attributes()
-        .from_buffered(std::io::Cursor::new(bytes))
+    let image = crate::output::decode_exr_rgb(bytes)
         .map_err(|e| fail(format!("not a readable EXR part: {e}")))?;
     // Read back from either level: a single-layer file has one header.
     let text = |name: &str| {

@@ -12,7 +12,7 @@ use crate::gpu::{AdapterRequest, Gpu, GpuRenderer, Presenting};
 use crate::layout::{Hit, Ray};
 use crate::output::{Image, Rendered};
 use crate::progress::{Progress, ProgressSink};
-use crate::scene::{Accel, Integrator, Intersect, Scene};
+use crate::scene::{Accel, Integrator, Intersect, RenderSettings, Scene};
 
 /// Where to render (`--device`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -183,12 +183,20 @@ impl Renderers {
         if self.scene.integrator == integrator && self.scene.max_depth == max_depth {
             return Ok(());
         }
+        let scene = Arc::make_mut(&mut self.scene);
+        let settings = RenderSettings {
+            integrator,
+            max_depth,
+            ..scene.default_settings()
+        };
+        let lights = scene.lights.len();
+        *scene =
+            std::mem::replace(scene, Scene::from_triangles(Vec::new())).with_settings(&settings);
         self.cpu = Renderer::Cpu(Arc::clone(&self.scene));
-        self.cpu.set_integrator(integrator, max_depth)?;
-        if let Renderer::Cpu(scene) = &self.cpu {
-            self.scene = Arc::clone(scene);
-        }
-        if let Some(gpu) = &mut self.gpu {
+        if self.scene.lights.len() != lights {
+            // Another set of lights: uploaded again on the GPU's next use.
+            self.gpu = None;
+        } else if let Some(gpu) = &mut self.gpu {
             gpu.set_integrator(integrator, max_depth)?;
         }
         Ok(())
@@ -528,7 +536,7 @@ impl Renderer {
                     normals: false,
                 };
                 let rays = cpu::QueryRays::Slice(rays);
-                cpu::trace_local_rays_each(scene, rays, options, &|chunk| {
+                cpu::trace_rays_each(scene, rays, options, cpu::RayFrame::Local, &|chunk| {
                     // SAFETY: chunks are disjoint and within `hits`.
                     unsafe {
                         std::ptr::copy_nonoverlapping(

@@ -31,6 +31,10 @@ macro_rules! compose {
             "\n",
             include_str!("../shaders/shade.wgsl"),
             "\n",
+            include_str!("../shaders/material.wgsl"),
+            "\n",
+            include_str!("../shaders/lights.wgsl"),
+            "\n",
             include_str!("../shaders/sample.wgsl"),
             "\n",
             include_str!("../shaders/closest.wgsl"),
@@ -38,10 +42,6 @@ macro_rules! compose {
             include_str!("../shaders/winding.wgsl"),
             "\n",
             include_str!("../shaders/all_hits.wgsl"),
-            "\n",
-            include_str!("../shaders/material.wgsl"),
-            "\n",
-            include_str!("../shaders/lights.wgsl"),
             "\n",
             include_str!("../shaders/integrator.wgsl"),
             "\n",
@@ -52,6 +52,8 @@ macro_rules! compose {
             include_str!("../shaders/entry_query.wgsl"),
             "\n",
             include_str!("../shaders/entry_proximity.wgsl"),
+            "\n",
+            include_str!("../shaders/entry_lights.wgsl"),
         )
     };
 }

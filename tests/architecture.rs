@@ -312,6 +312,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("diff", 2),
     ("loading", 2),
     ("placement", 2),
+    ("lighting", 2),
     ("probe", 2),
     ("texture", 2),
     ("scene", 3),

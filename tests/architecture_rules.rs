@@ -1,7 +1,8 @@
 //! Rules of the code's shape that the refactors of issue 45 set: no `.rs`
-//! file pasted into another, `Scene`'s fields the crate's, and no front
-//! end naming the renderer's variants (tests/architecture.rs has the
-//! layers, sizes and cycles).
+//! file pasted into another, the CPU twin's precisions defining nothing
+//! but their `Scalar`, `Scene`'s fields the crate's, and no front end
+//! naming the renderer's variants (tests/architecture.rs has the layers,
+//! sizes and cycles).
 
 use std::path::{Path, PathBuf};
 
@@ -47,6 +48,74 @@ fn no_rust_file_is_included_into_another() {
     assert_none(
         &found,
         "`.rs` files pasted in with include! (make them modules, docs/architecture.md)",
+    );
+}
+
+// ---- the twin's precisions ---------------------------------------------------
+
+/// Each item that a precision's module (`text`, src/cpu/f32.rs or f64.rs)
+/// defines at its top level beyond `kernel!`'s expansion, its `impl
+/// Scalar for Real` and its `#[cfg(test)] mod tests`, as `path:line:
+/// item`. The stages `kernel!` expands take what differs by precision
+/// from the trait `Scalar` alone (src/cpu/kernel.rs): an item defined
+/// here would be a name they could come to use unqualified, which the
+/// other precision might not define.
+fn precision_module_items(path: &str, text: &str) -> Vec<String> {
+    let mut found = Vec::new();
+    let mut depth = 0i64;
+    let mut after_cfg_test = false;
+    for (i, line) in code_only(text).lines().enumerate() {
+        let item = line.trim();
+        if depth == 0 && !item.is_empty() {
+            let allowed = item.starts_with("super::kernel::kernel!(")
+                || item == "impl Scalar for Real {"
+                || item == "#[cfg(test)]"
+                || (after_cfg_test && item == "mod tests {")
+                || item == "}";
+            if !allowed {
+                found.push(format!("{path}:{}: {item}", i + 1));
+            }
+            after_cfg_test = item == "#[cfg(test)]";
+        }
+        let count = |brackets: &[char]| line.matches(brackets).count() as i64;
+        depth += count(&['{', '(', '[']) - count(&['}', ')', ']']);
+    }
+    found
+}
+
+#[test]
+fn the_precisions_define_nothing_but_their_scalar() {
+    let mut found = Vec::new();
+    for path in ["src/cpu/f32.rs", "src/cpu/f64.rs"] {
+        let text = std::fs::read_to_string(Path::new(ROOT).join(path)).unwrap();
+        assert!(
+            text.contains("impl Scalar for Real {"),
+            "{path}: no `impl Scalar for Real`"
+        );
+        found.extend(precision_module_items(path, &text));
+    }
+    assert_none(
+        &found,
+        "items in a precision's module beside its `impl Scalar` (put what differs by \
+         precision in the trait, src/cpu/precision.rs, and the rest in a stage)",
+    );
+}
+
+#[test]
+fn the_precision_check_finds_items_beside_the_trait() {
+    let text = "//! fn documented() {}\nsuper::kernel::kernel!(\n    f32,\n    glam::Vec2,\n);\n\
+                impl Scalar for Real {\n    fn high_half(x: Real) -> Real {\n        x\n    }\n}\n\
+                #[inline(always)]\nfn greater_of(a: Vec4, b: Vec4) -> Vec4 {\n    a\n}\n\
+                pub use crate::camera::f32::CameraBasis;\nmod tests {}\n\
+                #[cfg(test)]\nmod tests {\n    fn helper() {}\n}\n";
+    assert_eq!(
+        precision_module_items("src/cpu/f32.rs", text),
+        [
+            "src/cpu/f32.rs:11: #[inline(always)]",
+            "src/cpu/f32.rs:12: fn greater_of(a: Vec4, b: Vec4) -> Vec4 {",
+            "src/cpu/f32.rs:15: pub use crate::camera::f32::CameraBasis;",
+            "src/cpu/f32.rs:16: mod tests {}",
+        ]
     );
 }
 

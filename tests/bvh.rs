@@ -339,9 +339,10 @@ fn gpu_bvh_and_brute_force_render_the_same_image() {
 /// unless LAMBERT_NO_YMM_TEST says the machine is known to lack it.
 #[test]
 fn slab_test_in_one_register_equals_the_portable_one() {
-    use lambert::cpu::f32::{has_ymm_boxes, intersect_boxes, intersect_boxes_ymm, ray_slabs};
+    use lambert::cpu::Scalar;
+    use lambert::cpu::f32::{intersect_boxes, ray_slabs};
     use lambert::layout::{BvhNode, leaf_ref};
-    if !has_ymm_boxes() {
+    if !<f32 as Scalar>::has_ymm_boxes() {
         assert!(
             std::env::var_os("LAMBERT_NO_YMM_TEST").is_some(),
             "this CPU lacks AVX2 or FMA: set LAMBERT_NO_YMM_TEST=1 to skip"
@@ -383,7 +384,7 @@ fn slab_test_in_one_register_equals_the_portable_one() {
         let slabs = ray_slabs(ray);
         let portable = intersect_boxes(ray, &slabs, &node);
         // SAFETY: has_ymm_boxes() holds.
-        let ymm = unsafe { intersect_boxes_ymm(ray, &slabs, &node) };
+        let ymm = unsafe { <f32 as Scalar>::intersect_boxes_ymm(ray, &slabs, &node) };
         assert_eq!(portable.entered, ymm.entered, "entered boxes for {ray:?}");
         assert_eq!(
             portable.t.map(f32::to_bits),

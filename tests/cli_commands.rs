@@ -166,10 +166,11 @@ fn a_models_own_lights_get_no_ambient_and_ambient_sets_it() {
     assert_eq!(centre_pixel(&case, &behind, &[]), [0.0; 3]);
     let info = lambert(&["info", s(&behind)]);
     assert!(String::from_utf8_lossy(&info.stdout).contains("ambient: [0.0, 0.0, 0.0]"));
-    // In front, 2 away: E = 4/2² = 1 along the normal, so 0.5 × 1.
+    // In front, 2 away: E = 4/2² = 1 candela's worth along the normal, so
+    // 0.5 × 1/π (the glTF BRDF's diffuse lobe is albedo/π).
     let front = quad_gltf(&case, "front", &[([0.0, 0.0, 2.0], 4.0)]);
     for c in centre_pixel(&case, &front, &[]) {
-        assert!((c - 0.5).abs() < 1e-4, "{c}");
+        assert!((c - 0.5 / std::f32::consts::PI).abs() < 1e-4, "{c}");
     }
     // --ambient on the file's lights: albedo × ambient, per channel.
     let lit = centre_pixel(&case, &behind, &["--ambient", "0.2,0.3,0.4"]);

@@ -63,9 +63,10 @@ fn rays_near(centre: glam::DVec3, count: usize) -> Vec<(glam::DVec3, glam::DVec3
         .collect()
 }
 
-/// The local rays of the CPU path, traced (trace_local_rays_each).
+/// The local rays of the CPU path, traced (`trace_rays_each` in
+/// `RayFrame::Local`).
 fn trace_local_cpu(scene: &lambert::Scene, rays: &[Ray]) -> Vec<lambert::layout::Hit> {
-    use lambert::cpu::{CpuKernel, QueryOptions, QueryRays, trace_local_rays_each};
+    use lambert::cpu::{CpuKernel, QueryOptions, QueryRays, RayFrame, trace_rays_each};
     let hits = std::sync::Mutex::new(vec![lambert::layout::Hit::MISS; rays.len()]);
     let options = QueryOptions {
         any_hit: false,
@@ -73,7 +74,8 @@ fn trace_local_cpu(scene: &lambert::Scene, rays: &[Ray]) -> Vec<lambert::layout:
         cpu_kernel: CpuKernel::active(),
         normals: false,
     };
-    trace_local_rays_each(scene, QueryRays::Slice(rays), options, &|chunk| {
+    let rays = QueryRays::Slice(rays);
+    trace_rays_each(scene, rays, options, RayFrame::Local, &|chunk| {
         let mut all = hits.lock().unwrap();
         all[chunk.start..chunk.start + chunk.hits.len()].copy_from_slice(chunk.hits);
     });

@@ -52,7 +52,9 @@ fn gltf_hierarchy_camera_lights_and_materials() {
         .find(|l| l.kind == lambert::layout::LIGHT_POINT)
         .unwrap();
     assert_eq!(point.vector, [-3.0, 4.0, 3.0]);
-    assert_eq!(point.color, [40.0, 36.0, 32.0]);
+    // Candela in the lecture's units: ÷ π (docs/rendering.md, "Light units").
+    let expected = glam::Vec3::new(40.0, 36.0, 32.0) / std::f32::consts::PI;
+    assert!((glam::Vec3::from(point.color) - expected).length() < 1e-5);
     let sun = scene
         .lights()
         .iter()
@@ -60,7 +62,11 @@ fn gltf_hierarchy_camera_lights_and_materials() {
         .unwrap();
     let to_light = DVec3::new(0.0, 60f64.to_radians().sin(), 60f64.to_radians().cos());
     assert!((glam::Vec3::from(sun.vector).as_dvec3() - to_light).length() < 1e-6);
-    assert!((glam::Vec3::from(sun.color) - glam::Vec3::new(0.75, 0.75, 0.9)).length() < 1e-6);
+    assert!(
+        (glam::Vec3::from(sun.color) - glam::Vec3::new(0.75, 0.75, 0.9) / std::f32::consts::PI)
+            .length()
+            < 1e-6
+    );
 
     let mut small = scene.clone();
     small.view_mut().camera.width = 64;
@@ -235,8 +241,9 @@ fn gltf_data_uris_external_buffers_and_malformed_files() {
             "invalid glTF: nodes[0].mesh: ",
         ),
     ];
-    // What lambert's model lacks is a warning: spot lights, range,
-    // textures, non-triangle modes; a second node places the mesh again.
+    // What lambert's model lacks is a warning: range, textures,
+    // non-triangle modes; a second node places the mesh again. A spot light
+    // is read, with the spec's default cones (0 and π/4) about the node's −Z.
     let warned = gltf_file(
         d,
         "warned.gltf",
@@ -270,7 +277,6 @@ fn gltf_data_uris_external_buffers_and_malformed_files() {
     let scene = Scene::load(&warned).unwrap();
     let warnings = scene.warnings().join("\n");
     for expected in [
-        "light spot: a spot light, skipped",
         "light lamp: its range is ignored",
         "image 0: ",
         "paint.png is not found; the materials using it keep their factors",
@@ -281,9 +287,19 @@ fn gltf_data_uris_external_buffers_and_malformed_files() {
             "lacks '{expected}': {warnings}"
         );
     }
-    assert_eq!(scene.lights().len(), 1);
-    assert_eq!(scene.lights()[0].vector, [0.0, 0.0, 4.0]);
-    assert_eq!(scene.lights()[0].color, [3.0; 3]);
+    assert_eq!(scene.lights().len(), 2);
+    let spot = scene.lights()[0];
+    assert_eq!(spot.kind, lambert::layout::LIGHT_SPOT);
+    assert_eq!(spot.direction, [0.0, 0.0, -1.0]);
+    assert_eq!(
+        (spot.cos_inner, spot.cos_outer),
+        (1.0, 45f32.to_radians().cos())
+    );
+    assert_eq!(scene.lights()[1].vector, [0.0, 0.0, 4.0]);
+    assert_eq!(
+        scene.lights()[1].color,
+        [(3.0 / std::f64::consts::PI) as f32; 3]
+    );
     // The node's matrix (column-major) moved the triangle 5 along x.
     assert_eq!(scene.triangles()[0].v1, [6.0, 0.0, 0.0]);
 

@@ -39,6 +39,20 @@ fn small(name: &str) -> lambert::Scene {
     scene
 }
 
+/// An image job on the CPU path, writing `output`, no first-hit outputs.
+fn cpu_image_job(output: &std::path::Path, sampling: Sampling) -> ImageJob<'_> {
+    ImageJob {
+        output,
+        device: DeviceChoice::Cpu,
+        adapter: &DEFAULT_ADAPTER,
+        sampling,
+        aovs: &[],
+    }
+}
+
+static DEFAULT_ADAPTER: std::sync::LazyLock<lambert::gpu::AdapterRequest> =
+    std::sync::LazyLock::new(Default::default);
+
 #[test]
 fn a_turntable_job_writes_its_frames_and_says_each() {
     let dir = tempfile::tempdir().unwrap();
@@ -76,12 +90,7 @@ fn an_image_job_reports_what_its_sampling_chose() {
     let dir = tempfile::tempdir().unwrap();
     let output = dir.path().join("image.pfm");
     let budget = 0.2;
-    let job = ImageJob {
-        output: &output,
-        device: DeviceChoice::Cpu,
-        adapter: &Default::default(),
-        sampling: Sampling::Budget(budget),
-    };
+    let job = cpu_image_job(&output, Sampling::Budget(budget));
     let lines = Lines::default();
     let scene = small("spheres");
     let settings = scene.default_settings();
@@ -131,4 +140,62 @@ fn a_view_renders_as_a_scene_with_its_settings() {
     reference.view_mut().spp = 3;
     assert_eq!(sampled.rendered, common::render_cpu(&reference));
     assert_eq!(sampled.samples, (16 * 12 * 3) as f64);
+}
+
+#[test]
+fn an_image_job_writes_the_first_hits_outputs_beside_its_image() {
+    use lambert::cpu::aov::Aov;
+    let dir = tempfile::tempdir().unwrap();
+    let output = dir.path().join("image.png");
+    let job = ImageJob {
+        aovs: &Aov::ALL,
+        ..cpu_image_job(&output, Sampling::Fixed)
+    };
+    let scene = small("spheres");
+    let settings = scene.default_settings();
+    let camera = settings.view.camera.clone();
+    let report = jobs::render_image(scene.clone(), &settings, &job, None).unwrap();
+    let names: Vec<String> = report
+        .aovs
+        .iter()
+        .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(
+        names,
+        ["image.albedo.exr", "image.normal.exr", "image.depth.exr"]
+    );
+    let read = |name: &str| image::open(dir.path().join(name)).unwrap().into_rgb32f();
+    let (albedo, normal, depth) = (
+        read("image.albedo.exr"),
+        read("image.normal.exr"),
+        read("image.depth.exr"),
+    );
+    assert_eq!(albedo.dimensions(), (camera.width, camera.height));
+    // The centre pixel's camera ray hits a sphere (the scene's first hit
+    // there, as the render's): its albedo is the sphere's, its normal a
+    // unit vector facing the camera, its depth the hit's distance.
+    let rendered = lambert::cpu::render(
+        &scene,
+        scene.view(),
+        lambert::cpu::Precision::F32,
+        &lambert::progress::Progress::hidden(),
+    );
+    let (x, y) = (camera.width / 2, camera.height / 2);
+    let prim = rendered.prims[(y * camera.width + x) as usize];
+    assert_ne!(prim, lambert::layout::NO_HIT, "the centre shows a sphere");
+    let n = normal.get_pixel(x, y).0;
+    let length = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    assert!((length - 1.0).abs() < 0.05, "normal {n:?}");
+    let d = depth.get_pixel(x, y).0;
+    assert!(d[0] > 0.0 && d[0] == d[1] && d[1] == d[2], "depth {d:?}");
+    assert!(albedo.get_pixel(x, y).0.iter().any(|&c| c > 0.0));
+    // A corner that misses everything is 0 in all three.
+    let sky = rendered
+        .prims
+        .iter()
+        .position(|&p| p == lambert::layout::NO_HIT);
+    if let Some(i) = sky {
+        let (sx, sy) = (i as u32 % camera.width, i as u32 / camera.width);
+        assert_eq!(depth.get_pixel(sx, sy).0, [0.0; 3]);
+    }
 }

@@ -17,15 +17,7 @@ use lambert::loading::{NormalMode, load_mesh};
 
 /// A 2×2 PNG.
 fn png() -> Vec<u8> {
-    let image = image::RgbaImage::from_pixel(2, 2, image::Rgba([200, 50, 50, 255]));
-    let mut bytes = Vec::new();
-    image
-        .write_to(
-            &mut std::io::Cursor::new(&mut bytes),
-            image::ImageFormat::Png,
-        )
-        .unwrap();
-    bytes
+    png_bytes(2, [200, 50, 50, 255])
 }
 
 fn floats(values: &[f32]) -> Vec<u8> {

@@ -3,6 +3,8 @@
 //! being the library's, and the shader's constants being the twin's bits.
 //! The GPU computing the twin's bits is tests/bsdf_gpu.rs's.
 
+mod common;
+
 use lambert::cpu::{f32 as single, f64 as double};
 use lambert::probe::Rng;
 
@@ -128,12 +130,7 @@ fn shader_constants_are_the_twins() {
     let source = lambert::shader_source::SOURCE;
     let module = naga::front::wgsl::parse_str(source).unwrap();
     let constant = |name: &str| -> f32 {
-        let (_, c) = module
-            .constants
-            .iter()
-            .find(|(_, c)| c.name.as_deref() == Some(name))
-            .unwrap_or_else(|| panic!("WGSL has no const {name}"));
-        match module.global_expressions[c.init] {
+        match *common::wgsl_constant(&module, name) {
             naga::Expression::Literal(naga::Literal::F32(v)) => v,
             ref e => panic!("{name} is {e:?}"),
         }

@@ -140,6 +140,7 @@ fn the_image_job_renders_with_the_settings_it_is_given() {
         device: DeviceChoice::Cpu,
         adapter: &Default::default(),
         sampling: Sampling::Fixed,
+        aovs: &[],
     };
     let report = jobs::render_image(scene.clone(), &settings, &job, None).unwrap();
     assert_eq!((report.width, report.height), (40, 30));

@@ -1,5 +1,7 @@
 //! Every WGSL file validates with naga and every host struct matches its WGSL layout (no GPU needed).
 
+mod common;
+
 use std::mem::{offset_of, size_of};
 
 use lambert::layout::*;
@@ -128,8 +130,16 @@ fn host_structs_match_wgsl_layout() {
     );
     check_layout!(m, TriangleNormals { n0, n1, n2 });
     check_layout!(m, TriangleTangents { t0, t1, t2 });
-    assert_eq!(size_of::<Material>(), 80, "Material: the shared design's 80 bytes");
-    assert_eq!(size_of::<Light>(), 48, "Light: the shared design's 48 bytes");
+    assert_eq!(
+        size_of::<Material>(),
+        80,
+        "Material: the shared design's 80 bytes"
+    );
+    assert_eq!(
+        size_of::<Light>(),
+        48,
+        "Light: the shared design's 48 bytes"
+    );
     check_layout!(
         m,
         Sphere {
@@ -221,17 +231,72 @@ fn host_structs_match_wgsl_layout() {
     );
 }
 
+/// The path integrator's lights' structs (shaders/layout.wgsl's lighting
+/// part, shaders/entry_lights.wgsl).
+#[test]
+fn lighting_structs_match_wgsl_layout() {
+    let m = &module();
+    check_layout!(
+        m,
+        Emitter {
+            kind,
+            index,
+            pmf,
+            q,
+            alias_bin,
+            _pad0,
+            _pad1,
+            _pad2
+        }
+    );
+    check_layout!(
+        m,
+        Lighting {
+            environment_color,
+            num_emitters,
+            environment_width,
+            environment_height,
+            rotation_cos,
+            rotation_sin,
+            num_triangle_emitters,
+            environment_pmf,
+            total_power,
+            flags
+        }
+    );
+    check_layout!(
+        m,
+        LightQuery {
+            position,
+            u_pick,
+            normal,
+            hit_prim,
+            dir,
+            distance,
+            u,
+            _pad
+        }
+    );
+    check_layout!(
+        m,
+        LightAnswer {
+            wi,
+            distance,
+            radiance,
+            pdf,
+            environment,
+            environment_pdf,
+            emitter_pdf,
+            delta,
+            _pad
+        }
+    );
+}
+
 #[test]
 fn shader_constants_match_host() {
     let m = module();
-    let constant = |name: &str| -> String {
-        let (_, c) = m
-            .constants
-            .iter()
-            .find(|(_, c)| c.name.as_deref() == Some(name))
-            .unwrap_or_else(|| panic!("WGSL has no const {name}"));
-        format!("{:?}", m.global_expressions[c.init])
-    };
+    let constant = |name: &str| -> String { format!("{:?}", common::wgsl_constant(&m, name)) };
     let u32s = [
         ("NO_HIT", NO_HIT),
         ("LIGHT_POINT", LIGHT_POINT),

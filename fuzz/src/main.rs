@@ -361,7 +361,7 @@ fn dictionary(input: Input) -> &'static [&'static str] {
             " ",
             "\0\0\0\0",
         ],
-        Input::Rays | Input::Points | Input::Part => &[],
+        Input::Rays | Input::Points | Input::Part | Input::Environment => &[],
     }
 }
 

@@ -129,6 +129,11 @@ def _query(origins, directions, tmin, tmax):
     return o, d, _bound("tmin", tmin, o.shape[0]), _bound("tmax", tmax, o.shape[0])
 
 
+def _native_property(name, doc=None):
+    """A read-only property of :class:`Scene`: its native scene's ``name``."""
+    return property(lambda self: getattr(self._native, name), doc=doc)
+
+
 class Scene:
     """Triangles (and, from a scene file, spheres, materials, lights and a
     camera), resident for queries and renders.
@@ -190,14 +195,14 @@ class Scene:
         # _t64 (the trimesh drop-in's): t as float64, the traced t plus the
         # origin's move in f64 unrounded, for locations as precise as the trace.
         o, d, lo, hi = _query(origins, directions, tmin, tmax)
-        return self._native.intersect(o, d, lo, hi, device, intersect, bool(_t64))
+        return self._native.trace(o, d, lo, hi, device, intersect, False, bool(_t64))
 
     def occluded(self, origins, directions=None, tmin=0.0, tmax=np.inf, *, device="auto",
                  intersect="watertight"):
         """(N,) bool: whether anything lies on each ray with tmin < t < tmax
         (shadow rays: the first hit found ends the search)."""
         o, d, lo, hi = _query(origins, directions, tmin, tmax)
-        return self._native.occluded(o, d, lo, hi, device, intersect)
+        return self._native.trace(o, d, lo, hi, device, intersect, True, False)
 
     def closest_points(self, points, max_distance=np.inf, *, device="auto"):
         """The closest point of the scene's triangles to each of ``points``
@@ -284,23 +289,10 @@ class Scene:
         (Vulkan, software)" or "CPU reference path (8 threads)"."""
         return self._native.device_name(device)
 
-    @property
-    def triangle_count(self):
-        return self._native.triangle_count
-
-    @property
-    def sphere_count(self):
-        return self._native.sphere_count
-
-    @property
-    def bounds(self):
-        """((xmin, ymin, zmin), (xmax, ymax, zmax)), or None when empty."""
-        return self._native.bounds
-
-    @property
-    def camera(self):
-        """The scene's camera: eye, look_at, up, vfov (degrees), width, height."""
-        return self._native.camera
+    triangle_count = _native_property("triangle_count")
+    sphere_count = _native_property("sphere_count")
+    bounds = _native_property("bounds", "((xmin, ymin, zmin), (xmax, ymax, zmax)), or None when empty.")
+    camera = _native_property("camera", "The scene's camera: eye, look_at, up, vfov (degrees), width, height.")
 
     def __repr__(self):
         return f"<lambert.Scene: {self.triangle_count} triangles, {self.sphere_count} spheres>"

@@ -4,32 +4,44 @@
 //! "contiguous" in either order, so contiguity alone says nothing about
 //! where row i lies); every other layout is read through its strides.
 
-use numpy::ndarray::{ArrayView1, ArrayView2};
-use numpy::{PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::ndarray::{ArrayView1, ArrayView2, Dimension, Ix1, Ix2};
+use numpy::{PyReadonlyArray, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
-/// A (N, 3) float array of either width, as numpy gave it (any strides).
-pub enum Rows<'py> {
-    F32(PyReadonlyArray2<'py, f32>),
-    F64(PyReadonlyArray2<'py, f64>),
+/// A float array of either width, as numpy gave it (any strides).
+pub enum Floats<'py, D: Dimension> {
+    F32(PyReadonlyArray<'py, f32, D>),
+    F64(PyReadonlyArray<'py, f64, D>),
 }
+
+impl<'py, D: Dimension> Floats<'py, D> {
+    /// `value` as a float32 array, else as a float64 one; None if it is
+    /// neither.
+    fn from_any(value: &Bound<'py, PyAny>) -> Option<Floats<'py, D>> {
+        match value.extract() {
+            Ok(a) => Some(Floats::F32(a)),
+            Err(_) => value.extract().ok().map(Floats::F64),
+        }
+    }
+
+    fn shape(&self) -> &[usize] {
+        match self {
+            Floats::F32(a) => a.shape(),
+            Floats::F64(a) => a.shape(),
+        }
+    }
+}
+
+/// A (N, 3) float array of either width.
+pub type Rows<'py> = Floats<'py, Ix2>;
 
 impl<'py> Rows<'py> {
     pub fn extract(name: &str, value: &Bound<'py, PyAny>) -> PyResult<Rows<'py>> {
-        let rows = if let Ok(a) = value.extract::<PyReadonlyArray2<f32>>() {
-            Rows::F32(a)
-        } else if let Ok(a) = value.extract::<PyReadonlyArray2<f64>>() {
-            Rows::F64(a)
-        } else {
-            return Err(PyValueError::new_err(format!(
-                "{name} must be a (N, 3) float32 or float64 array"
-            )));
-        };
-        let shape = match &rows {
-            Rows::F32(a) => a.shape().to_vec(),
-            Rows::F64(a) => a.shape().to_vec(),
-        };
+        let rows = Floats::from_any(value).ok_or_else(|| {
+            PyValueError::new_err(format!("{name} must be a (N, 3) float32 or float64 array"))
+        })?;
+        let shape = rows.shape();
         if shape[1] != 3 {
             return Err(PyValueError::new_err(format!(
                 "{name} has shape {shape:?}; it must be (N, 3)"
@@ -39,10 +51,7 @@ impl<'py> Rows<'py> {
     }
 
     pub fn len(&self) -> usize {
-        match self {
-            Rows::F32(a) => a.shape()[0],
-            Rows::F64(a) => a.shape()[0],
-        }
+        self.shape()[0]
     }
 
     pub fn view(&self) -> RowsView<'_> {
@@ -105,17 +114,12 @@ impl RowsView<'_> {
 /// float64 kept in f64 for rays traced in the scene's frame).
 pub enum Bound1<'py> {
     All(f64),
-    Each32(PyReadonlyArray1<'py, f32>),
-    Each64(PyReadonlyArray1<'py, f64>),
+    Each(Floats<'py, Ix1>),
 }
 
 impl<'py> Bound1<'py> {
     pub fn extract(name: &str, value: &Bound<'py, PyAny>, n: usize) -> PyResult<Bound1<'py>> {
-        let each = if let Ok(a) = value.extract::<PyReadonlyArray1<f32>>() {
-            Bound1::Each32(a)
-        } else if let Ok(a) = value.extract::<PyReadonlyArray1<f64>>() {
-            Bound1::Each64(a)
-        } else {
+        let Some(each) = Floats::from_any(value) else {
             return match value.extract::<f64>() {
                 Ok(v) => Ok(Bound1::All(v)),
                 Err(_) => Err(PyValueError::new_err(format!(
@@ -123,24 +127,20 @@ impl<'py> Bound1<'py> {
                 ))),
             };
         };
-        let len = match &each {
-            Bound1::Each32(a) => a.len(),
-            Bound1::Each64(a) => a.len(),
-            Bound1::All(_) => n,
-        };
+        let len = each.shape()[0];
         if len != n {
             return Err(PyValueError::new_err(format!(
                 "{name} has {len} values for {n} rays; give one per ray or a scalar"
             )));
         }
-        Ok(each)
+        Ok(Bound1::Each(each))
     }
 
     pub fn view(&self) -> Bound1View<'_> {
         match self {
             Bound1::All(v) => Bound1View::All(*v),
-            Bound1::Each32(a) => Bound1View::Each32(a.as_array()),
-            Bound1::Each64(a) => Bound1View::Each64(a.as_array()),
+            Bound1::Each(Floats::F32(a)) => Bound1View::Each32(a.as_array()),
+            Bound1::Each(Floats::F64(a)) => Bound1View::Each64(a.as_array()),
         }
     }
 }

@@ -12,8 +12,7 @@ use std::sync::{Arc, Mutex};
 
 use lambert::camera::View;
 use lambert::cpu::{
-    CpuKernel, QueryOptions, QueryRays, SharedOut, TracedChunk, trace_local_rays_each,
-    trace_rays_each,
+    CpuKernel, QueryOptions, QueryRays, RayFrame, SharedOut, TracedChunk, trace_rays_each,
 };
 use lambert::gpu::AdapterRequest;
 use lambert::jobs::{self, Sampling};
@@ -24,8 +23,7 @@ use lambert::scene::{Integrator, Intersect, Scene, hit_normal, prefetch_hit_tria
 use lambert::{Error, rays};
 use numpy::ndarray::{Array2, Array3};
 use numpy::{
-    IntoPyArray, PyArray1, PyArray2, PyArray3, PyReadonlyArray2, PyReadonlyArray3,
-    PyUntypedArrayMethods,
+    IntoPyArray, PyArray2, PyArray3, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods,
 };
 use pyo3::exceptions::{
     PyFileNotFoundError, PyOSError, PyPermissionError, PyRuntimeError, PyValueError,
@@ -96,6 +94,19 @@ fn intersect_choice(name: &str) -> PyResult<Intersect> {
                 "intersect={name:?}: use \"watertight\", \"moller-trumbore\" or \"seed\""
             ))
         })
+}
+
+/// The scene's camera at `width` and `height` (one of them given keeps
+/// its aspect ratio; neither, its own size).
+fn camera_sized(
+    scene: &Scene,
+    width: Option<u32>,
+    height: Option<u32>,
+) -> Result<lambert::camera::Camera, Error> {
+    let camera = &scene.view().camera;
+    camera
+        .resized(width, height)
+        .map_err(|e| Error::Usage(format!("width/height: {e}")))
 }
 
 /// A vector of `n` elements that parallel chunks write, each once, before
@@ -255,7 +266,7 @@ impl NativeScene {
             match query {
                 Query::Records(r) => {
                     rays::validate_rays(r).map_err(|bad| Error::Usage(bad.to_string()))?;
-                    trace_rays_each(scene, QueryRays::Slice(r), options, sink);
+                    trace_rays_each(scene, QueryRays::Slice(r), options, RayFrame::World, sink);
                 }
                 Query::Arrays { n, .. } => {
                     let first_bad = FirstBad::new();
@@ -263,10 +274,11 @@ impl NativeScene {
                         query.fill(start, out, &first_bad)
                     };
                     let rays = QueryRays::Fill(n, &fill);
-                    match query.local() {
-                        Some(_) => trace_local_rays_each(scene, rays, options, sink),
-                        None => trace_rays_each(scene, rays, options, sink),
-                    }
+                    let frame = match query.local() {
+                        Some(_) => RayFrame::Local,
+                        None => RayFrame::World,
+                    };
+                    trace_rays_each(scene, rays, options, frame, sink);
                     first_bad.result(&query)?;
                 }
             }
@@ -305,6 +317,110 @@ impl NativeScene {
             None => renderer.trace(&rays, options.any_hit, options.intersect)?,
         };
         Ok((rays, hits))
+    }
+
+    /// Traces `query` on `device` without the GIL into the columns that
+    /// `make` makes for its n rays: `write` fills ray i's row from its hit
+    /// in the world's frame (`Query::world_hit`, with its t in f64) and,
+    /// with `options.normals`, its normal, each row once and from one
+    /// thread. Warns of the trace's notes and returns what `finish` makes
+    /// of the columns once every row is written.
+    #[allow(clippy::too_many_arguments)]
+    fn trace_rows<C: Sync, R: Send>(
+        &self,
+        py: Python<'_>,
+        query: Query,
+        options: QueryOptions,
+        device: DeviceChoice,
+        make: impl FnOnce(usize) -> C + Send,
+        write: impl Fn(&C, usize, Hit, f64, [f32; 3]) + Sync,
+        finish: impl FnOnce(C, usize) -> R + Send,
+    ) -> PyResult<R> {
+        let (out, notes) = detached(py, || {
+            let n = query.len();
+            let columns = make(n);
+            let notes = self.trace_into(query, options, device, &|chunk| {
+                for (k, hit) in chunk.hits.iter().enumerate() {
+                    let i = chunk.start + k;
+                    // As `intersect` reports it (a hit beyond f32's t is a
+                    // miss, as warned).
+                    let (hit, world_t) = query.world_hit(i, *hit);
+                    let normal = chunk.normals.get(k).copied().unwrap_or_default();
+                    write(&columns, i, hit, world_t, normal);
+                }
+            })?;
+            Ok((finish(columns, n), notes))
+        })?;
+        NativeScene::warn(py, notes.0.into_iter().chain(notes.1))?;
+        Ok(out)
+    }
+
+    /// `trace`'s closest hits, as a dict of columns.
+    fn closest_hits<'py>(
+        &self,
+        py: Python<'py>,
+        query: Query,
+        options: QueryOptions,
+        device: DeviceChoice,
+        t64: bool,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let columns = self.trace_rows(
+            py,
+            query,
+            options,
+            device,
+            |n| {
+                let t = TColumn::new(n, t64);
+                let prim = Column::<i64>::new(n);
+                let (u, v) = (Column::<f32>::new(n), Column::<f32>::new(n));
+                (t, prim, u, v, Column::<[f32; 3]>::new(n))
+            },
+            |(t, prim, u, v, normal), i, hit, world_t, ng| {
+                let id = if hit.prim == NO_HIT {
+                    -1
+                } else {
+                    hit.prim as i64
+                };
+                // SAFETY: `trace_rows` writes each row once, from one
+                // thread, within the n rows.
+                unsafe {
+                    t.set(i, hit.t, world_t);
+                    prim.set(i, id);
+                    u.set(i, hit.u);
+                    v.set(i, hit.v);
+                    normal.set(i, ng);
+                }
+            },
+            // SAFETY: the trace handed over every ray's hit and normal.
+            |(t, prim, u, v, normal), n| unsafe {
+                Columns {
+                    t: t.filled(n),
+                    prim: prim.filled(n),
+                    u: u.filled(n),
+                    v: v.filled(n),
+                    normal: normal.filled(n).into_flattened(),
+                }
+            },
+        )?;
+        let Columns {
+            t,
+            prim,
+            u,
+            v,
+            normal,
+        } = columns;
+        let n = prim.len();
+        let normal = Array2::from_shape_vec((n, 3), normal).expect("3 per hit");
+        let out = PyDict::new(py);
+        match t {
+            TValues::F32(t) => out.set_item("t", t.into_pyarray(py))?,
+            TValues::F64(t) => out.set_item("t", t.into_pyarray(py))?,
+        }
+        out.set_item("prim_id", prim.into_pyarray(py))?;
+        out.set_item("u", u.into_pyarray(py))?;
+        out.set_item("v", v.into_pyarray(py))?;
+        out.set_item("normal", normal.into_pyarray(py))?;
+        Ok(out)
     }
 
     fn warn(py: Python<'_>, notes: impl IntoIterator<Item = String>) -> PyResult<()> {
@@ -415,12 +531,14 @@ impl NativeScene {
         Ok(NativeScene::new(scene))
     }
 
-    /// Closest hits: (t, prim_id, u, v, normal); with `t64`, t in float64
-    /// (the trimesh drop-in's: locations from it are as precise as the
-    /// trace where the f32 t would round a long ray's).
-    #[pyo3(signature = (origins, directions, tmin, tmax, device, intersect, t64=false))]
+    /// A ray query: the closest hits, as columns t, prim_id (-1 for a
+    /// miss), u, v and normal (with `t64`, t in float64: the trimesh
+    /// drop-in's, whose locations from it are as precise as the trace where
+    /// the f32 t would round a long ray's); with `any_hit`, whether
+    /// anything lies on each ray within (tmin, tmax), a bool a ray.
+    #[pyo3(signature = (origins, directions, tmin, tmax, device, intersect, any_hit, t64))]
     #[allow(clippy::too_many_arguments)]
-    fn intersect<'py>(
+    fn trace<'py>(
         &self,
         py: Python<'py>,
         origins: &Bound<'py, PyAny>,
@@ -429,117 +547,35 @@ impl NativeScene {
         tmax: &Bound<'py, PyAny>,
         device: &str,
         intersect: &str,
+        any_hit: bool,
         t64: bool,
-    ) -> PyResult<Bound<'py, PyDict>> {
+    ) -> PyResult<Bound<'py, PyAny>> {
         let (device, intersect) = (device_choice(device)?, intersect_choice(intersect)?);
+        let options = QueryOptions {
+            any_hit,
+            intersect,
+            cpu_kernel: CpuKernel::active(),
+            normals: !any_hit,
+        };
         with_query!(self.scene, origins, directions, tmin, tmax, |query| {
-            let (columns, notes) = detached(py, || {
-                let n = query.len();
-                let t = TColumn::new(n, t64);
-                let prim = Column::new(n);
-                let (u, v) = (Column::new(n), Column::new(n));
-                let normal = Column::<[f32; 3]>::new(n);
-                let options = QueryOptions {
-                    any_hit: false,
-                    intersect,
-                    cpu_kernel: CpuKernel::active(),
-                    normals: true,
-                };
-                let notes = self.trace_into(query, options, device, &|chunk| {
-                    for (k, (hit, ng)) in chunk.hits.iter().zip(chunk.normals).enumerate() {
-                        let i = chunk.start + k;
-                        let (hit, world_t) = query.world_hit(i, *hit);
-                        // SAFETY: each chunk's rows are written by one
-                        // thread, within the n rows.
-                        unsafe {
-                            t.set(i, hit.t, world_t);
-                            prim.set(
-                                i,
-                                if hit.prim == NO_HIT {
-                                    -1
-                                } else {
-                                    hit.prim as i64
-                                },
-                            );
-                            u.set(i, hit.u);
-                            v.set(i, hit.v);
-                            normal.set(i, *ng);
-                        }
-                    }
-                })?;
-                // SAFETY: the trace handed over every ray's hit and normal.
-                let columns = unsafe {
-                    Columns {
-                        t: t.filled(n),
-                        prim: prim.filled(n),
-                        u: u.filled(n),
-                        v: v.filled(n),
-                        normal: normal.filled(n).into_flattened(),
-                    }
-                };
-                Ok((columns, notes))
-            })?;
-            NativeScene::warn(py, notes.0.into_iter().chain(notes.1))?;
-            let Columns {
-                t,
-                prim,
-                u,
-                v,
-                normal,
-            } = columns;
-            let n = prim.len();
-            let normal = Array2::from_shape_vec((n, 3), normal).expect("3 per hit");
-            let out = PyDict::new(py);
-            match t {
-                TValues::F32(t) => out.set_item("t", t.into_pyarray(py))?,
-                TValues::F64(t) => out.set_item("t", t.into_pyarray(py))?,
+            if any_hit {
+                let hit = self.trace_rows(
+                    py,
+                    query,
+                    options,
+                    device,
+                    Column::<bool>::new,
+                    // SAFETY: `trace_rows` writes each row once, from one
+                    // thread, within the n rows.
+                    |hit, i, h, _, _| unsafe { hit.set(i, h.prim != NO_HIT) },
+                    // SAFETY: every row is written.
+                    |hit, n| unsafe { hit.filled(n) },
+                )?;
+                Ok(hit.into_pyarray(py).into_any())
+            } else {
+                self.closest_hits(py, query, options, device, t64)
+                    .map(Bound::into_any)
             }
-            out.set_item("prim_id", prim.into_pyarray(py))?;
-            out.set_item("u", u.into_pyarray(py))?;
-            out.set_item("v", v.into_pyarray(py))?;
-            out.set_item("normal", normal.into_pyarray(py))?;
-            Ok(out)
-        })
-    }
-
-    /// Whether anything lies on each ray within (tmin, tmax).
-    #[pyo3(signature = (origins, directions, tmin, tmax, device, intersect))]
-    fn occluded<'py>(
-        &self,
-        py: Python<'py>,
-        origins: &Bound<'py, PyAny>,
-        directions: Option<&Bound<'py, PyAny>>,
-        tmin: &Bound<'py, PyAny>,
-        tmax: &Bound<'py, PyAny>,
-        device: &str,
-        intersect: &str,
-    ) -> PyResult<Bound<'py, PyArray1<bool>>> {
-        let (device, intersect) = (device_choice(device)?, intersect_choice(intersect)?);
-        with_query!(self.scene, origins, directions, tmin, tmax, |query| {
-            let (hit, notes) = detached(py, || {
-                let n = query.len();
-                let hit = Column::new(n);
-                let options = QueryOptions {
-                    any_hit: true,
-                    intersect,
-                    cpu_kernel: CpuKernel::active(),
-                    normals: false,
-                };
-                let notes = self.trace_into(query, options, device, &|chunk| {
-                    for (k, h) in chunk.hits.iter().enumerate() {
-                        let i = chunk.start + k;
-                        // As `intersect` reports it (a hit beyond f32's t
-                        // is a miss, as warned).
-                        let (h, _) = query.world_hit(i, *h);
-                        // SAFETY: one thread per chunk, within the rays.
-                        unsafe { hit.set(i, h.prim != NO_HIT) };
-                    }
-                })?;
-                // SAFETY: the trace handed over every ray's hit.
-                Ok((unsafe { hit.filled(n) }, notes))
-            })?;
-            NativeScene::warn(py, notes.0.into_iter().chain(notes.1))?;
-            Ok(hit.into_pyarray(py))
         })
     }
 
@@ -554,11 +590,7 @@ impl NativeScene {
     ) -> PyResult<(Bound<'py, PyArray2<f32>>, Bound<'py, PyArray2<f32>>)> {
         let scene = &self.scene;
         let (origins, directions) = detached(py, || {
-            let camera = scene
-                .view()
-                .camera
-                .resized(width, height)
-                .map_err(|e| Error::Usage(format!("width/height: {e}")))?;
+            let camera = camera_sized(scene, width, height)?;
             let rays = rays::camera_rays_for(scene, &camera);
             let origins: Vec<f32> = rays.iter().flat_map(|r| r.origin).collect();
             let directions: Vec<f32> = rays.iter().flat_map(|r| r.dir).collect();
@@ -599,18 +631,13 @@ impl NativeScene {
                 })?,
         };
         let max_depth = max_depth.unwrap_or(scene.default_settings().max_depth);
-        lambert::limits::validate_max_depth(max_depth)
-            .map_err(|e| PyValueError::new_err(e))?;
+        lambert::limits::validate_max_depth(max_depth).map_err(|e| PyValueError::new_err(e))?;
         let (image, note) = detached(py, || {
             self.renderers
                 .lock()
                 .unwrap_or_else(|e| e.into_inner())
                 .set_integrator(integrator, max_depth)?;
-            let camera = scene
-                .view()
-                .camera
-                .resized(width, height)
-                .map_err(|e| Error::Usage(format!("width/height: {e}")))?;
+            let camera = camera_sized(scene, width, height)?;
             let spp = spp.unwrap_or(scene.view().spp);
             lambert::limits::validate_spp(spp).map_err(Error::Usage)?;
             // Another size or sample count is only another view: the scene,

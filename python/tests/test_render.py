@@ -30,6 +30,24 @@ def test_render_equals_the_cli(device, cli, tmp_path):
 
 
 @pytest.mark.parametrize("device", ["cpu", "gpu"])
+def test_path_tracing_equals_the_cli(device, cli, tmp_path):
+    path = os.path.join(SCENES, "cornell_area.toml")
+    cli("render", path, "-o", str(tmp_path / "cli.pfm"), "--device", device, "--width", "32", "--height", "24",
+        "--spp", "4", "--integrator", "path", "--max-depth", "5", "-q")
+    scene = lambert.Scene.load(path)
+    image = scene.render(32, 24, spp=4, device=device, integrator="path", max_depth=5)
+    np.testing.assert_array_equal(image, read_pfm(tmp_path / "cli.pfm"))
+    # The same scene, switched back to direct light (its emissive light is
+    # then seen, lighting nothing): another picture, darker.
+    direct = scene.render(32, 24, spp=4, device=device, integrator="direct")
+    assert direct.mean() < image.mean()
+    with pytest.raises(ValueError, match="integrator"):
+        scene.render(8, 8, integrator="bidirectional")
+    with pytest.raises(ValueError, match="max_depth"):
+        scene.render(8, 8, integrator="path", max_depth=0)
+
+
+@pytest.mark.parametrize("device", ["cpu", "gpu"])
 def test_a_vertex_coloured_model_renders_as_the_cli_does(device, cli, tmp_path):
     # A quad whose corners are red, green, blue and white (OBJ `v x y z r g b`).
     path = tmp_path / "coloured.obj"

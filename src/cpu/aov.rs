@@ -8,7 +8,7 @@
 use rayon::prelude::*;
 
 use super::f32::Kernel;
-use super::f32::has_ymm_boxes;
+use super::precision::Scalar;
 use crate::camera::View;
 use crate::layout::NO_HIT;
 use crate::output::Image;
@@ -79,16 +79,24 @@ pub fn render_aovs(scene: &Scene, view: &View, aovs: &[Aov]) -> Vec<Image> {
         spp: view.spp.min(AOV_SAMPLES),
         ..view.clone()
     };
-    let kernel = Kernel::with_view(scene, &samples, has_ymm_boxes());
+    let kernel = Kernel::with_view(scene, &samples, <f32 as Scalar>::has_ymm_boxes());
     let rows: Vec<Vec<[[f32; 3]; 3]>> = (0..height)
         .into_par_iter()
-        .map(|y| (0..width).map(|x| first_hits(&kernel, x, y, samples.spp)).collect())
+        .map(|y| {
+            (0..width)
+                .map(|x| first_hits(&kernel, x, y, samples.spp))
+                .collect()
+        })
         .collect();
     aovs.iter()
         .map(|&aov| Image {
             width,
             height,
-            rgb: rows.iter().flatten().map(|pixel| pixel[aov as usize]).collect(),
+            rgb: rows
+                .iter()
+                .flatten()
+                .map(|pixel| pixel[aov as usize])
+                .collect(),
         })
         .collect()
 }

@@ -78,35 +78,29 @@ macro_rules! integrator {
                 radiance * power_heuristic(bsdf_pdf, self.environment_pdf(ray.dir))
             }
 
-            /// Direct light at a path's vertex from every point, spot and
-            /// directional light (each has one direction: all are taken,
-            /// as the direct integrator takes them, so that a scene they
-            /// alone light looks the same under both integrators), each
-            /// emitting π times its lecture-convention colour (whose
-            /// `k·I·(n·l)` is `albedo/π` lit by `π·I`).
-            fn punctual_light(&self, surface: &Surface, origin: Vec3, bsdf: BsdfParams, frame: Frame, wo: Vec3) -> Vec3 {
-                let mut sum = Vec3::ZERO;
-                for light in &self.scene.lights {
-                    let Some(sample) = light_sample(surface, origin, light) else {
-                        continue;
-                    };
-                    let f = bsdf_eval(bsdf, wo, to_local(frame, sample.shadow_ray.dir));
-                    if f == Vec3::ZERO || (self.scene.shadows && self.trace_any(sample.shadow_ray)) {
-                        continue;
-                    }
-                    sum += f * sample.irradiance * PI;
-                }
-                sum
-            }
-
-            /// Direct light at a path's vertex from one emitter (an emissive
-            /// triangle or the environment) drawn by power, weighted
-            /// against BSDF sampling.
-            fn emitter_light(&self, surface: &Surface, origin: Vec3, bsdf: BsdfParams, frame: Frame, wo: Vec3, state: &mut u32) -> Vec3 {
+            /// Direct light at a path's vertex from one emitter drawn by
+            /// power (an emissive triangle, a point, spot or directional
+            /// light, the environment), its shadow ray traced where the
+            /// render has shadows; an emitter with area weighted against
+            /// BSDF sampling (a punctual light, which BSDF sampling never
+            /// finds, is not).
+            fn emitter_light(
+                &self,
+                surface: &Surface,
+                origin: Vec3,
+                bsdf: BsdfParams,
+                frame: Frame,
+                wo: Vec3,
+                state: &mut u32,
+            ) -> Vec3 {
                 let u_pick = next_random(state);
                 let u = Vec2::new(next_random(state), next_random(state));
-                let sample = self.sample_emitter(surface.position, surface.geometric_normal, u_pick, u);
-                if !(sample.pdf > 0.0) || sample.radiance == Vec3::ZERO || sample.wi.dot(surface.geometric_normal) <= 0.0 {
+                let sample =
+                    self.sample_emitter(surface.position, surface.geometric_normal, u_pick, u);
+                if !(sample.pdf > 0.0)
+                    || sample.radiance == Vec3::ZERO
+                    || sample.wi.dot(surface.geometric_normal) <= 0.0
+                {
                     return Vec3::ZERO;
                 }
                 let wi = to_local(frame, sample.wi);
@@ -114,19 +108,33 @@ macro_rules! integrator {
                 if f == Vec3::ZERO {
                     return Vec3::ZERO;
                 }
-                let tmax = if sample.distance >= FAR { FAR } else { sample.distance * (1.0 - SHADOW_SHORTENING) };
-                if self.trace_any(Ray { origin, tmin: 0.0, dir: sample.wi, tmax }) {
+                let tmax = if sample.distance >= FAR {
+                    FAR
+                } else {
+                    sample.distance * (1.0 - SHADOW_SHORTENING)
+                };
+                if self.scene.shadows
+                    && self.trace_any(Ray {
+                        origin,
+                        tmin: 0.0,
+                        dir: sample.wi,
+                        tmax,
+                    })
+                {
                     return Vec3::ZERO;
                 }
-                let weight = power_heuristic(sample.pdf, bsdf_pdf(bsdf, wo, wi));
+                let weight = if sample.delta {
+                    1.0
+                } else {
+                    power_heuristic(sample.pdf, bsdf_pdf(bsdf, wo, wi))
+                };
                 f * sample.radiance * (weight / sample.pdf)
             }
 
             /// Path tracing from the camera ray `ray` that hit `hit`:
             /// emission where a path hits it, direct light at each vertex
-            /// (every punctual light, and one emitter drawn by power, with
-            /// multiple importance sampling against the BSDF's own
-            /// direction), the next direction drawn from the BSDF, Russian
+            /// (one emitter drawn by power, with multiple importance
+            /// sampling against the BSDF's own direction), the next direction drawn from the BSDF, Russian
             /// roulette after `ROULETTE_DEPTH` bounces; at most
             /// `max_depth` surfaces (pbrt-v4's `maxdepth`; Mitsuba 3's
             /// `max_depth` is one more). Random numbers from `state`.
@@ -150,7 +158,8 @@ macro_rules! integrator {
                     if surface.emission != Vec3::ZERO {
                         let mut weight = 1.0;
                         if bsdf_pdf_before > 0.0 {
-                            let light_pdf = self.emitter_pdf(origin_before, hit.prim, ray.dir, hit.t);
+                            let light_pdf =
+                                self.emitter_pdf(origin_before, hit.prim, ray.dir, hit.t);
                             weight = power_heuristic(bsdf_pdf_before, light_pdf);
                         }
                         radiance += throughput * surface.emission * weight;
@@ -160,13 +169,23 @@ macro_rules! integrator {
                         break;
                     }
                     let material = self.material_at(&ray, &hit, &surface);
-                    let lit = Surface { shading_normal: material.shading_normal, ..surface };
                     let frame = frame_from_normal(material.shading_normal);
                     let wo = to_local(frame, -ray.dir);
-                    let origin = offset_ray_origin(surface.position, surface.error, surface.geometric_normal);
-                    radiance += throughput * self.punctual_light(&lit, origin, material.bsdf, frame, wo);
+                    let origin = offset_ray_origin(
+                        surface.position,
+                        surface.error,
+                        surface.geometric_normal,
+                    );
                     if self.has_emitters() {
-                        radiance += throughput * self.emitter_light(&lit, origin, material.bsdf, frame, wo, &mut state);
+                        radiance += throughput
+                            * self.emitter_light(
+                                &surface,
+                                origin,
+                                material.bsdf,
+                                frame,
+                                wo,
+                                &mut state,
+                            );
                     }
 
                     let u_lobe = next_random(&mut state);
@@ -191,7 +210,12 @@ macro_rules! integrator {
                     }
                     bsdf_pdf_before = sample.pdf;
                     origin_before = surface.position;
-                    ray = Ray { origin, tmin: 0.0, dir: wi, tmax: FAR };
+                    ray = Ray {
+                        origin,
+                        tmin: 0.0,
+                        dir: wi,
+                        tmax: FAR,
+                    };
                     hit = self.trace_closest(ray);
                 }
                 radiance

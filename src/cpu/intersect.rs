@@ -541,7 +541,7 @@ macro_rules! intersect {
         /// of halves is exact, so a fused multiply-add, which WGSL may or may not
         /// use, gives the same bits.
         fn two_square(a: Real) -> (Real, Real) {
-            let hi = high_half(a);
+            let hi = <Real as Scalar>::high_half(a);
             let lo = a - hi;
             let p = a * a;
             (p, ((hi * hi - p) + 2.0 * hi * lo) + lo * lo)

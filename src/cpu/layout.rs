@@ -11,7 +11,8 @@ macro_rules! layout {
         use crate::camera::View;
         use crate::layout::{
             BVH_WIDTH, BvhNode, CompressedNode, FLAG_ATTRIBUTES, FLAG_MASKED, FLAG_SMOOTH,
-            LEAF_BIT, LIGHT_POINT, META_LEAF, NO_HIT, NO_TEXTURE, PrimBlock, leaf_range,
+            LEAF_BIT, LIGHT_DIRECTIONAL, LIGHT_SPOT, META_LEAF, NO_HIT, NO_TEXTURE, PrimBlock,
+            leaf_range,
         };
         use crate::scene::{Intersect, Scene};
 
@@ -108,7 +109,7 @@ macro_rules! layout {
             strata_x: u32,
             /// The ray/triangle test: the scene's, unless a query asks for another.
             pub intersect: Intersect,
-            /// Whether node visits take `intersect_boxes_ymm` (the CPU has 8-lane
+            /// Whether node visits take `Scalar::intersect_boxes_ymm` (the CPU has 8-lane
             /// vector registers and fused multiply-adds).
             ymm_boxes: bool,
             /// The GPU's compressed nodes of the scene's BVH: with them, `trace`
@@ -133,10 +134,10 @@ macro_rules! layout {
         impl<'a> Kernel<'a> {
             /// `scene` seen from its default view (ray queries use no camera).
             pub fn new(scene: &'a Scene) -> Kernel<'a> {
-                Kernel::new_for(scene, has_ymm_boxes())
+                Kernel::new_for(scene, <Real as Scalar>::has_ymm_boxes())
             }
 
-            /// `new`, with node visits through `intersect_boxes_ymm` or not: the
+            /// `new`, with node visits through `Scalar::intersect_boxes_ymm` or not: the
             /// SIMD kernels' tests compare each against the portable one.
             pub fn new_for(scene: &'a Scene, ymm_boxes: bool) -> Kernel<'a> {
                 Kernel::with_view(scene, &scene.view, ymm_boxes)

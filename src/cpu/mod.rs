@@ -13,18 +13,19 @@ pub mod f32;
 #[allow(clippy::unnecessary_cast)]
 pub mod f64;
 mod fetch;
+mod integrator;
 mod intersect;
 mod kernel;
 mod layout;
+mod lights;
+mod material;
 mod math;
+mod precision;
 mod prefetch;
 mod proximity;
 mod query;
 mod render;
 mod sample;
-mod integrator;
-mod lights;
-mod material;
 mod shade;
 mod simd;
 pub mod texture;
@@ -32,14 +33,15 @@ mod traverse;
 mod traverse_cpu;
 pub mod winding;
 
+pub use precision::Scalar;
 pub use prefetch::LARGE_BVH_BYTES;
 pub use proximity::{
     box_pad, closest_points, count_intersections, list_intersections, sort_hits, spatial_order,
     winding_numbers,
 };
 pub use query::{
-    QueryOptions, QueryRays, SharedOut, TracedChunk, trace_local_rays_each, trace_rays,
-    trace_rays_each, trace_rays_f64, trace_rays_gpu_twin, trace_rays_with,
+    QueryOptions, QueryRays, RayFrame, SharedOut, TracedChunk, trace_rays, trace_rays_each,
+    trace_rays_f64, trace_rays_gpu_twin, trace_rays_with,
 };
 pub use render::{
     add_samples, add_samples_or_cancel, render, render_gpu_twin, render_pixel_list, render_rows,

@@ -64,6 +64,7 @@ pub fn trace_rays_with(
             cpu_kernel,
             normals: false,
         },
+        RayFrame::World,
         &|chunk| {
             // SAFETY: chunks are disjoint and within the capacity.
             unsafe {
@@ -164,36 +165,26 @@ pub struct TracedChunk<'a> {
     pub normals: &'a [[f32; 3]],
 }
 
-/// Traces `rays` in parallel chunks, handing each chunk's hits (with the
-/// index of its first ray) to `each` while they are hot in cache: the
-/// Python binding fills its numpy columns this way, with no hit buffer
-/// between. The rays are in world coordinates (as in a ray file): each is
-/// moved into the scene's frame (`Placement::local_ray`), and its hit back.
+/// The frame a query's rays are in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RayFrame {
+    /// World coordinates (as in a ray file): each ray is moved into the
+    /// scene's frame (`Placement::local_ray`), and its hit back.
+    World,
+    /// The scene's frame already (from `Placement::local_ray`, say, for
+    /// rays given in f64); hits in that frame.
+    Local,
+}
+
+/// Traces `rays`, in `frame`, in parallel chunks, handing each chunk's
+/// hits (with the index of its first ray) to `each` while they are hot in
+/// cache: the Python binding fills its numpy columns this way, with no hit
+/// buffer between.
 pub fn trace_rays_each(
     scene: &Scene,
     rays: QueryRays,
     options: QueryOptions,
-    each: &(dyn Fn(&TracedChunk) + Sync),
-) {
-    trace_rays_each_in(scene, rays, options, true, each)
-}
-
-/// `trace_rays_each` for rays already in the scene's frame (from
-/// `Placement::local_ray`, say, for rays given in f64), hits in that frame.
-pub fn trace_local_rays_each(
-    scene: &Scene,
-    rays: QueryRays,
-    options: QueryOptions,
-    each: &(dyn Fn(&TracedChunk) + Sync),
-) {
-    trace_rays_each_in(scene, rays, options, false, each)
-}
-
-fn trace_rays_each_in(
-    scene: &Scene,
-    rays: QueryRays,
-    options: QueryOptions,
-    world: bool,
+    frame: RayFrame,
     // Not generic: a generic would be compiled in the caller's crate, with
     // its codegen settings, and the kernel ran up to 40% slower there.
     each: &(dyn Fn(&TracedChunk) + Sync),
@@ -236,7 +227,7 @@ fn trace_rays_each_in(
             };
             // Moved rays on the heap, and only where some ray moves: two
             // zeroed stack arrays a chunk cost camera rays 3%.
-            let moved = if world {
+            let moved = if frame == RayFrame::World {
                 placement.localize_chunk(chunk_rays)
             } else {
                 None
@@ -297,7 +288,7 @@ fn trace_rays_each_in(
 /// `PREFETCH` and `VECTOR_SORT`).
 ///
 /// # Safety
-/// With `VECTOR_SORT`, the CPU must have AVX-512 (`f32::has_vector_sort`).
+/// With `VECTOR_SORT`, the CPU must have AVX-512 (f32's `Scalar::has_vector_sort`).
 #[inline(always)]
 unsafe fn trace_chunk<const LANES: usize, const PREFETCH: bool, const VECTOR_SORT: bool>(
     kernel: &f32::Kernel,

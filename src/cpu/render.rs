@@ -4,7 +4,7 @@
 use rayon::prelude::*;
 
 use super::simd::{check_runs, with_simd};
-use super::{CpuKernel, Precision, f32, f64};
+use super::{CpuKernel, Precision, Scalar, f32, f64};
 use crate::camera::View;
 use crate::layout;
 use crate::output::{Image, Rendered};
@@ -196,7 +196,7 @@ fn render_rows_with(
     let mut prims = vec![0u32; width * height];
     let mut variance = vec![0.0; width * height];
     let kernel32 = kernel32(scene, view, cpu_kernel, compressed);
-    let kernel64 = f64::Kernel::with_view(scene, view, f64::has_ymm_boxes());
+    let kernel64 = f64::Kernel::with_view(scene, view, <f64::Real as Scalar>::has_ymm_boxes());
     rgb.par_chunks_mut(width)
         .zip(prims.par_chunks_mut(width))
         .zip(variance.par_chunks_mut(width))
@@ -240,8 +240,8 @@ pub fn render_pixel_list(
     view: &View,
     pixels: &[[u32; 2]],
 ) -> Vec<[::core::primitive::f32; 4]> {
-    let kernel32 = f32::Kernel::with_view(scene, view, f32::has_ymm_boxes());
-    let kernel64 = f64::Kernel::with_view(scene, view, f64::has_ymm_boxes());
+    let kernel32 = f32::Kernel::with_view(scene, view, <f32::Real as Scalar>::has_ymm_boxes());
+    let kernel64 = f64::Kernel::with_view(scene, view, <f64::Real as Scalar>::has_ymm_boxes());
     pixels
         .par_iter()
         .map(|&[x, y]| {

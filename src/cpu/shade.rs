@@ -30,7 +30,7 @@ macro_rules! shade {
             light: &crate::layout::Light,
         ) -> Option<LightSample> {
             let light_vector = vec3(light.vector);
-            let (to_light, irradiance, shadow_ray) = if light.kind == LIGHT_POINT {
+            let (to_light, irradiance, shadow_ray) = if light.kind != LIGHT_DIRECTIONAL {
                 let d = light_vector - surface.position;
                 let distance_squared = d.dot(d);
                 // A point light on the shaded point lies in its tangent plane:
@@ -41,9 +41,14 @@ macro_rules! shade {
                 }
                 let s = light_vector - origin;
                 let shadow_length = s.length();
+                let to_light = d / distance_squared.sqrt();
+                let mut irradiance = (vec3(light.color) / distance_squared).min(Vec3::splat(FAR));
+                if light.kind == LIGHT_SPOT {
+                    irradiance *= spot_falloff(light, to_light);
+                }
                 (
-                    d / distance_squared.sqrt(),
-                    (vec3(light.color) / distance_squared).min(Vec3::splat(FAR)),
+                    to_light,
+                    irradiance,
                     Ray {
                         origin,
                         tmin: 0.0,
@@ -76,7 +81,50 @@ macro_rules! shade {
             })
         }
 
+        /// The shader's `spot_falloff`: KHR_lights_punctual's smooth falloff
+        /// of a spot light towards unit `to_light`, t² for t the angle's cosine
+        /// taken from the outer cone's (0) to the inner cone's (1), clamped.
+        /// Written as a difference over a difference, not the spec's
+        /// `cd · scale + offset`, so that no multiply-add can fuse on the GPU.
+        #[inline(always)]
+        pub fn spot_falloff(light: &crate::layout::Light, to_light: Vec3) -> Real {
+            let cos_angle = -dot_rounded(vec3(light.direction), to_light);
+            let (cos_inner, cos_outer) = (light.cos_inner as Real, light.cos_outer as Real);
+            let t = ((cos_angle - cos_outer) / (cos_inner - cos_outer).max(1e-3)).clamp(0.0, 1.0);
+            t * t
+        }
+
+        /// The shader's `dot_rounded`: a · b in its order (Rust fuses nothing).
+        #[inline(always)]
+        pub fn dot_rounded(a: Vec3, b: Vec3) -> Real {
+            (a.x * b.x + a.y * b.y) + a.z * b.z
+        }
+
         impl<'a> Kernel<'a> {
+            /// The unit shading normal at barycentrics (w, u, v) of triangle
+            /// `prim` before it is turned towards the ray: its corners' normals
+            /// interpolated (FLAG_SMOOTH), else (or where they cancel) `outward`.
+            #[inline(always)]
+            pub fn vertex_normal(
+                &self,
+                tri: &crate::layout::Triangle,
+                prim: u32,
+                w: Real,
+                u: Real,
+                v: Real,
+                outward: Vec3,
+            ) -> Vec3 {
+                if tri.flags & FLAG_SMOOTH != 0 {
+                    let ns = &self.scene.normals[prim as usize];
+                    let corner = |n: [f32; 4]| Vec3::new(n[0] as Real, n[1] as Real, n[2] as Real);
+                    let interpolated = w * corner(ns.n0) + u * corner(ns.n1) + v * corner(ns.n2);
+                    if interpolated.dot(interpolated) > 0.0 {
+                        return interpolated.normalize();
+                    }
+                }
+                outward
+            }
+
             pub fn surface_at(&self, ray: &Ray, hit: &Hit) -> Surface {
                 let scene = self.scene;
                 let num_triangles = scene.triangles.len() as u32;
@@ -86,35 +134,16 @@ macro_rules! shade {
                     let w = 1.0 - hit.u - hit.v;
                     let position = w * v0 + hit.u * v1 + hit.v * v2;
                     let error = self_hit_bound(v0.abs().max(v1.abs()).max(v2.abs()));
-                    let geometric = face_forward((v1 - v0).cross(v2 - v0).normalize(), ray.dir);
+                    let outward = (v1 - v0).cross(v2 - v0).normalize();
+                    let geometric = face_forward(outward, ray.dir);
                     // The camera ray's cone where it hits (docs/textures.md).
                     let cone_width = hit.t * self.cone_spread as Real;
-                    let material = &scene.materials[tri.material as usize];
-                    let mut emission = vec3(material.emission);
-                    if material.emissive_texture != NO_TEXTURE && tri.flags & FLAG_ATTRIBUTES != 0 {
-                        emission *= self
-                            .texture_at(
-                                material.emissive_texture,
-                                tri,
-                                hit.prim,
-                                hit.u,
-                                hit.v,
-                                ray.dir,
-                                cone_width,
-                            )
-                            .truncate();
-                    }
-                    let mut shading = geometric;
-                    if tri.flags & FLAG_SMOOTH != 0 {
-                        let ns = &scene.normals[hit.prim as usize];
-                        let corner =
-                            |n: [f32; 4]| Vec3::new(n[0] as Real, n[1] as Real, n[2] as Real);
-                        let interpolated =
-                            w * corner(ns.n0) + hit.u * corner(ns.n1) + hit.v * corner(ns.n2);
-                        if interpolated.dot(interpolated) > 0.0 {
-                            shading = face_forward(interpolated.normalize(), ray.dir);
-                        }
-                    }
+                    let emission =
+                        self.emission_at(tri, hit.prim, hit.u, hit.v, ray.dir, cone_width);
+                    let shading = face_forward(
+                        self.vertex_normal(tri, hit.prim, w, hit.u, hit.v, outward),
+                        ray.dir,
+                    );
                     return Surface {
                         position,
                         error,

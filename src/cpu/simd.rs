@@ -1,22 +1,6 @@
 //! Which CPU kernel runs: the same functions compiled for different vector
 //! instructions, chosen by what the CPU has.
 
-/// `push_sorted_zmm` where there is none (the oracle; CPUs other than x86):
-/// never called, since only `trace_rays` asks for it, in single precision
-/// and where `f32::has_vector_sort` says the CPU has AVX-512.
-///
-/// # Safety
-/// None needed: unsafe only as `f32::push_sorted_zmm` is.
-pub(crate) unsafe fn no_push_sorted_zmm<Stack, Distances>(
-    _stack: &mut Stack,
-    _sp: &mut usize,
-    _t: &Distances,
-    _children: &[u32; crate::layout::BVH_WIDTH],
-    _entered: u32,
-) -> u32 {
-    unreachable!("push_sorted_zmm needs AVX-512 and single precision")
-}
-
 /// Panics unless this CPU runs `kernel`: what makes `with_simd` safe for
 /// the `_with` entry points.
 pub(super) fn check_runs(kernel: CpuKernel) {
@@ -124,12 +108,13 @@ impl CpuKernel {
         *ACTIVE.get_or_init(|| CpuKernel::narrowed_to(asked))
     }
 
-    /// Whether node visits take `f32::intersect_boxes_ymm`.
+    /// Whether node visits take f32's `Scalar::intersect_boxes_ymm`.
     pub fn ymm_boxes(self) -> bool {
         self >= CpuKernel::Avx2Fma
     }
 
-    /// Whether incoherent rays order children with `f32::push_sorted_zmm`.
+    /// Whether incoherent rays order children with f32's
+    /// `Scalar::push_sorted_zmm`.
     pub fn vector_sort(self) -> bool {
         self == CpuKernel::Avx512
     }

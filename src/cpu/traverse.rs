@@ -266,7 +266,7 @@ macro_rules! traverse {
         /// Where the ray enters and leaves four boxes, within (tmin, tmax), their
         /// planes given by row: `row(2a)` the minima along axis a, `row(2a + 1)`
         /// the maxima. Each plane's distance is one fused multiply-add; a NaN slab
-        /// (from a NaN ray) is ignored as in the shader: `greater_of`/`lesser_of`
+        /// (from a NaN ray) is ignored as in the shader: `Scalar::greater_of`/`lesser_of`
         /// keep the running bound when the comparison fails.
         #[inline(always)]
         fn slab_interval(ray: &Ray, slabs: &Slabs, row: impl Fn(usize) -> Vec4) -> (Vec4, Vec4) {
@@ -282,8 +282,8 @@ macro_rules! traverse {
                     Vec4::splat(slabs.inv_dir_far[axis]),
                     Vec4::splat(slabs.far_offset[axis]),
                 );
-                t_near = greater_of(near, t_near);
-                t_far = lesser_of(far, t_far);
+                t_near = <Real as Scalar>::greater_of(near, t_near);
+                t_far = <Real as Scalar>::lesser_of(far, t_far);
             }
             (t_near, t_far)
         }

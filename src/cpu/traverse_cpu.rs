@@ -77,7 +77,7 @@ macro_rules! traverse_cpu {
 
             /// One pass of `trace_bvh`'s loop: visits the traversal's current node or
             /// leaf and picks the next (with `PREFETCH`, and starts loading it).
-            /// With `VECTOR_SORT`, entered children are ordered by `push_sorted_zmm`,
+            /// With `VECTOR_SORT`, entered children are ordered by `Scalar::push_sorted_zmm`,
             /// without the branches (on how many, and on their order) that
             /// mispredict on rays of random directions. Returns false when the
             /// traversal is done (its `hit` is then the answer).
@@ -85,7 +85,7 @@ macro_rules! traverse_cpu {
             /// # Safety
             /// `stack` must be the one that every earlier pass of this traversal
             /// used: it reads the entries they pushed. With `VECTOR_SORT`, the CPU
-            /// must have AVX-512 (`has_vector_sort`).
+            /// must have AVX-512 (`Scalar::has_vector_sort`).
             #[inline(always)]
             pub(crate) unsafe fn visit<const PREFETCH: bool, const VECTOR_SORT: bool>(
                 &self,
@@ -119,7 +119,7 @@ macro_rules! traverse_cpu {
                     let node = &bvh.nodes[*child as usize];
                     let boxes = if self.ymm_boxes {
                         // SAFETY: `ymm_boxes` says the CPU has what it needs.
-                        unsafe { intersect_boxes_ymm(ray, slabs, node) }
+                        unsafe { <Real as Scalar>::intersect_boxes_ymm(ray, slabs, node) }
                     } else {
                         intersect_boxes(ray, slabs, node)
                     };
@@ -128,7 +128,13 @@ macro_rules! traverse_cpu {
                         // However many children: no branch on their count either.
                         // SAFETY: the caller vouches for AVX-512.
                         *child = unsafe {
-                            push_sorted_zmm(stack, sp, &boxes.t, &node.children, entered)
+                            <Real as Scalar>::push_sorted_zmm(
+                                stack,
+                                sp,
+                                &boxes.t,
+                                &node.children,
+                                entered,
+                            )
                         };
                         self.prefetch::<PREFETCH>(*child);
                         return true;
@@ -188,7 +194,7 @@ macro_rules! traverse_cpu {
         /// `visit`'s ordering of three or more entered children (`entered`), as the
         /// shader's `trace_bvh` does it: pushes them farthest deepest, lower slots
         /// deeper among equal distances, then pops the nearest and returns it.
-        /// `push_sorted_zmm` gives the same order in vector registers, for any
+        /// `Scalar::push_sorted_zmm` gives the same order in vector registers, for any
         /// number of children.
         #[inline(always)]
         pub(crate) fn push_sorted(
@@ -229,9 +235,9 @@ macro_rules! traverse_cpu {
         /// and where (an empty slot's inverted box is never entered unless the ray
         /// has a NaN or infinite component: traversal masks empty slots). Each
         /// plane's distance is one fused multiply-add. A NaN slab (from a NaN ray)
-        /// is ignored as in the shader: `greater_of`/`lesser_of` keep the running
+        /// is ignored as in the shader: `Scalar::greater_of`/`lesser_of` keep the running
         /// bound when the comparison fails. Two 4-lane halves, as in the shader;
-        /// `intersect_boxes_ymm` (x86 with AVX2) does the same in one register.
+        /// `Scalar::intersect_boxes_ymm` (x86 with AVX2) does the same in one register.
         #[inline(always)]
         pub fn intersect_boxes(ray: &Ray, slabs: &Slabs, node: &BvhNode) -> BoxHits {
             let mut t = [0.0; BVH_WIDTH];

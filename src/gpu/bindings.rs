@@ -79,6 +79,10 @@ pub const SCENE: BindingTable = BindingTable {
         bind("textures", 17, Storage),
         bind("triangle_texels", 18, Texels),
         bind("triangle_tangents", 19, Storage),
+        bind("emitters", 20, Storage),
+        bind("environment", 21, Storage),
+        bind("environment_cdf", 22, Storage),
+        bind("lighting", 23, Uniform),
     ],
 };
 
@@ -144,6 +148,16 @@ pub const PROXIMITY: BindingTable = BindingTable {
     ],
 };
 
+/// Group 1 of `probe_lights`: its queries, then its answers.
+pub const LIGHT_PROBE: BindingTable = BindingTable {
+    label: "light probe",
+    group: 1,
+    entries: &[
+        bind("light_queries", 20, Storage),
+        bind("light_answers", 21, StorageWrite),
+    ],
+};
+
 /// Group 2 of every pipeline under `--accel hardware`, in its module alone
 /// (`TABLES` are both modules'): the scene's acceleration structures
 /// (shaders/hardware_trace.wgsl, src/gpu/hardware.rs).
@@ -157,13 +171,14 @@ pub const ACCELERATION: BindingTable = BindingTable {
 };
 
 /// Every table.
-pub const TABLES: [&BindingTable; 6] = [
+pub const TABLES: [&BindingTable; 7] = [
     &SCENE,
     &IMAGE_TILE,
     &WAVEFRONT,
     &RAYS,
     &PIXEL_LIST,
     &PROXIMITY,
+    &LIGHT_PROBE,
 ];
 
 /// Why an adapter with `limits` cannot run the kernel, if it cannot: a

@@ -5,6 +5,7 @@
 //! - `adapter`: which adapter a request asks for, and the choice;
 //! - `device`: the open device, its limits and errors;
 //! - `upload`: the scene's buffers and the BVH's storage;
+//! - `lighting`: the path integrator's lights' buffers and overrides;
 //! - `bindings`: the bind group tables, checked against the shader;
 //! - `shader`: the shader's source and its specialisation;
 //! - `features`: what a device is opened with (timestamp queries, and the
@@ -33,6 +34,7 @@ pub mod bindings;
 mod device;
 mod features;
 mod hardware;
+mod lighting;
 mod options;
 mod pipelines;
 mod progressive;

@@ -7,7 +7,7 @@ use crate::error::{Error, Result};
 use crate::scene::Scene;
 
 use super::RENDER_WORKGROUP;
-use super::bindings::{BindingTable, IMAGE_TILE, PIXEL_LIST, RAYS, SCENE};
+use super::bindings::{BindingTable, IMAGE_TILE, LIGHT_PROBE, PIXEL_LIST, RAYS, SCENE};
 use super::device::Gpu;
 use super::upload::{BvhStorage, SceneBuffers};
 
@@ -18,6 +18,7 @@ pub(super) struct Layouts {
     pub image: wgpu::BindGroupLayout,
     pub rays: ListLayout,
     pub pixels: ListLayout,
+    pub light_probe: ListLayout,
 }
 
 /// The layout of a list pass's group, with the table `run_list` binds its
@@ -39,6 +40,10 @@ impl Layouts {
             pixels: ListLayout {
                 table: &PIXEL_LIST,
                 layout: PIXEL_LIST.layout(device),
+            },
+            light_probe: ListLayout {
+                table: &LIGHT_PROBE,
+                layout: LIGHT_PROBE.layout(device),
             },
         }
     }

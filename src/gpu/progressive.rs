@@ -34,20 +34,17 @@ impl Tiles {
         sums: &mut [[f32; 4]],
         cancel: &AtomicBool,
     ) -> Result<Option<Image>> {
-        loop {
-            // The sums change only once the batch's loops ran whole.
-            let mut next = sums.to_vec();
-            let image =
-                self.add_samples_once(host, dispatch, params, &samples, &mut next, cancel)?;
-            if cancel.load(Ordering::Relaxed) {
-                return Ok(None);
-            }
-            if !host.loops_were_cut()? {
-                sums.copy_from_slice(&next);
-                return Ok(image);
-            }
-            self.fewer_samples_per_dispatch(host.gpu(), dispatch, params.spp)?;
+        // The sums change only once the batch's loops ran whole.
+        let mut next = Vec::new();
+        let image = self.until_whole(host, dispatch, params.spp, |tiles| {
+            next = sums.to_vec();
+            tiles.add_samples_once(host, dispatch, params, &samples, &mut next, cancel)
+        })?;
+        if cancel.load(Ordering::Relaxed) {
+            return Ok(None);
         }
+        sums.copy_from_slice(&next);
+        Ok(image)
     }
 
     fn add_samples_once(

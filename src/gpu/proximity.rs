@@ -183,6 +183,27 @@ impl Proximity {
             })
     }
 
+    /// Runs `entry` over `items` invocations with `inputs` bound and its
+    /// output binding `output` a kept buffer of `len` bytes, and reads the
+    /// output back as `T`s; returns the buffer too (a later pass binds
+    /// it).
+    fn run_query<T: bytemuck::Pod>(
+        &mut self,
+        host: Host<'_>,
+        entry: &'static str,
+        items: usize,
+        inputs: &[Bound],
+        (output, len): (&'static str, u64),
+    ) -> Result<(wgpu::Buffer, Vec<T>)> {
+        use wgpu::BufferUsages as U;
+        let buffer = self.kept_buffer(host, output, len, U::STORAGE | U::COPY_SRC | U::COPY_DST);
+        let mut bound = inputs.to_vec();
+        bound.push((output, &buffer, len));
+        self.dispatch_query(host, entry, items, &bound)?;
+        let values = self.read_back(host, &buffer, len)?;
+        Ok((buffer, values))
+    }
+
     /// `cpu::closest_points` on the device (`margins`: each point's cull
     /// margin, the CPU's `query_margin`).
     pub fn closest_points(
@@ -204,23 +225,16 @@ impl Proximity {
             let points = self.storage(host, "query_points", bytemuck::cast_slice(&input));
             let scalars = self.storage(host, "query_scalars", bytemuck::cast_slice(&scalars));
             let len = (chunk.len() * size_of::<ClosestPoint>()) as u64;
-            let answers = self.kept_buffer(
-                host,
-                "closest_out",
-                len,
-                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            );
-            self.dispatch_query(
+            let (_, answers): (_, Vec<ClosestPoint>) = self.run_query(
                 host,
                 "closest_points",
                 chunk.len(),
                 &[
                     ("query_points", &points, (input.len() * 16) as u64),
                     ("query_scalars", &scalars, 16),
-                    ("closest_out", &answers, len),
                 ],
+                ("closest_out", len),
             )?;
-            let answers: Vec<ClosestPoint> = self.read_back(host, &answers, len)?;
             out.extend(answers.into_iter().map(|a| {
                 if a.prim == NO_HIT {
                     ClosestPoint::NONE
@@ -269,14 +283,7 @@ impl Proximity {
         for chunk in points.chunks(self.batch(host, 16)) {
             let input: Vec<[f32; 4]> = chunk.iter().map(|p| [p[0], p[1], p[2], 0.0]).collect();
             let points = self.storage(host, "query_points", bytemuck::cast_slice(&input));
-            let len = (chunk.len() * 4) as u64;
-            let answers = self.kept_buffer(
-                host,
-                "winding_out",
-                len,
-                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            );
-            self.dispatch_query(
+            let (_, answers) = self.run_query::<f32>(
                 host,
                 "winding_numbers",
                 chunk.len(),
@@ -284,12 +291,19 @@ impl Proximity {
                     ("query_points", &points, (input.len() * 16) as u64),
                     ("winding_nodes", &nodes, nodes.size()),
                     ("winding_prims", &prims, prims.size()),
-                    ("winding_out", &answers, len),
                 ],
+                ("winding_out", (chunk.len() * 4) as u64),
             )?;
-            out.extend(self.read_back::<f32>(host, &answers, len)?);
+            out.extend(answers);
         }
         Ok(out)
+    }
+
+    /// The crossing queries' `query_scalars`: the boxes' pad (the CPU's
+    /// `box_pad`) second.
+    fn crossing_scalars(&mut self, host: Host<'_>, pad: f32) -> wgpu::Buffer {
+        let scalars = [0.0, pad, 0.0, 0.0];
+        self.storage(host, "query_scalars", bytemuck::cast_slice(&scalars))
     }
 
     /// Each ray's count of crossings (`pad`: the CPU's `box_pad`).
@@ -300,31 +314,17 @@ impl Proximity {
         pad: f32,
     ) -> Result<(wgpu::Buffer, wgpu::Buffer, Vec<u32>)> {
         let rays_buffer = self.storage(host, "rays", bytemuck::cast_slice(rays));
-        let scalars = self.storage(
-            host,
-            "query_scalars",
-            bytemuck::cast_slice(&[0.0, pad, 0.0, 0.0]),
-        );
-        let len = (rays.len() * 4) as u64;
-        let counts = self.kept_buffer(
-            host,
-            "hit_counts",
-            len,
-            wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::COPY_SRC
-                | wgpu::BufferUsages::COPY_DST,
-        );
-        self.dispatch_query(
+        let scalars = self.crossing_scalars(host, pad);
+        let (counts, n) = self.run_query::<u32>(
             host,
             "count_hits",
             rays.len(),
             &[
                 ("rays", &rays_buffer, (rays.len() * size_of::<Ray>()) as u64),
                 ("query_scalars", &scalars, 16),
-                ("hit_counts", &counts, len),
             ],
+            ("hit_counts", (rays.len() * 4) as u64),
         )?;
-        let n = self.read_back::<u32>(host, &counts, len)?;
         Ok((rays_buffer, counts, n))
     }
 
@@ -422,19 +422,8 @@ impl Proximity {
         host.gpu()
             .queue
             .write_buffer(counts, 0, bytemuck::cast_slice(&firsts));
-        let scalars = self.storage(
-            host,
-            "query_scalars",
-            bytemuck::cast_slice(&[0.0, pad, 0.0, 0.0]),
-        );
-        let len = total * size_of::<ListedHit>() as u64;
-        let listed = self.kept_buffer(
-            host,
-            "listed_hits",
-            len,
-            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        );
-        self.dispatch_query(
+        let scalars = self.crossing_scalars(host, pad);
+        let (_, listed) = self.run_query::<ListedHit>(
             host,
             "list_hits",
             run.len(),
@@ -442,10 +431,10 @@ impl Proximity {
                 ("rays", run_rays, std::mem::size_of_val(run) as u64),
                 ("query_scalars", &scalars, 16),
                 ("hit_counts", counts, (n.len() * 4) as u64),
-                ("listed_hits", &listed, len),
             ],
+            ("listed_hits", total * size_of::<ListedHit>() as u64),
         )?;
-        self.read_back::<ListedHit>(host, &listed, len)
+        Ok(listed)
     }
 }
 

@@ -1,14 +1,14 @@
-//! Ray queries and pixel lists: one invocation per item, in batches. Their
-//! part of a renderer (`Lists`): the `trace_rays` and `render_pixel_list`
-//! pipelines, each built on its first use, and the buffers kept between
-//! calls.
+//! Ray queries, pixel lists and the lights' probe: one invocation per
+//! item, in batches. Their part of a renderer (`Lists`): the `trace_rays`,
+//! `render_pixel_list` and `probe_lights` pipelines, each built on its
+//! first use, and the buffers kept between calls.
 
 use std::cell::RefCell;
 use std::collections::HashMap;
 use std::time::Duration;
 
 use crate::error::{Error, Result};
-use crate::layout::{Hit, NO_HIT, Params, Ray, WORKGROUP_INVOCATIONS};
+use crate::layout::{Hit, LightAnswer, LightQuery, NO_HIT, Params, Ray, WORKGROUP_INVOCATIONS};
 use crate::scene::Intersect;
 
 use super::bindings::leading_bytes;
@@ -24,6 +24,7 @@ pub(super) struct Lists {
     /// ray/triangle test.
     trace: [[Option<wgpu::ComputePipeline>; 3]; 2],
     pixel_list: Option<wgpu::ComputePipeline>,
+    light_probe: Option<wgpu::ComputePipeline>,
     /// The list passes' input, output and readback buffers, by label
     /// (`buffers`).
     buffers: RefCell<HashMap<&'static str, wgpu::Buffer>>,
@@ -38,6 +39,7 @@ impl Lists {
     pub fn forget_pipelines(&mut self) {
         self.trace = Default::default();
         self.pixel_list = None;
+        self.light_probe = None;
     }
 
     /// Builds the `trace_rays` pipeline for closest or any hit with the
@@ -128,6 +130,22 @@ impl Lists {
         let sampling = Some((params, step));
         let (results, _) = self.run_list(host, None, pipeline, list, pixels, batch, sampling)?;
         Ok(results)
+    }
+
+    /// The lights stage's functions on `queries` (`probe_lights`, which
+    /// tests compare with the CPU twin), its pipeline built on first use.
+    pub fn probe_lights(
+        &mut self,
+        host: Host<'_>,
+        queries: &[LightQuery],
+    ) -> Result<Vec<LightAnswer>> {
+        let list = &host.layouts().light_probe;
+        if self.light_probe.is_none() {
+            self.light_probe = Some(host.build("probe_lights", &list.layout)?);
+        }
+        let pipeline = self.light_probe.as_ref().expect("built");
+        let (answers, _) = self.run_list(host, None, pipeline, list, queries, 1 << 16, None)?;
+        Ok(answers)
     }
 
     /// A list pass's input (written by the host, read by the shader),

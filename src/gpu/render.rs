@@ -126,8 +126,8 @@ impl Tiles {
     /// Renders rows `rows` of the image of the view's uniform `params`
     /// (all or a part of it), tile by tile (`prepare` first). If the driver
     /// cut the shader's loops short anywhere (checked once, after the last
-    /// tile), renders again with half as many samples per dispatch, down
-    /// to one, then fails rather than return a wrong picture.
+    /// tile), renders again with fewer samples per dispatch
+    /// (`until_whole`).
     pub fn render_rows(
         &mut self,
         host: Host<'_>,
@@ -136,13 +136,9 @@ impl Tiles {
         rows: std::ops::Range<u32>,
         progress: &Progress,
     ) -> Result<(Rendered, GpuTimings)> {
-        loop {
-            let result = self.render_rows_once(host, dispatch, params, &rows, progress)?;
-            if !host.loops_were_cut()? {
-                return Ok(result);
-            }
-            self.fewer_samples_per_dispatch(host.gpu(), dispatch, params.spp)?;
-        }
+        self.until_whole(host, dispatch, params.spp, |tiles| {
+            tiles.render_rows_once(host, dispatch, params, &rows, progress)
+        })
     }
 
     fn render_rows_once(
@@ -259,9 +255,30 @@ impl Tiles {
         }
     }
 
+    /// Runs `attempt` (a render of `spp` samples per pixel at the current
+    /// samples per dispatch) until the driver cut none of the shader's
+    /// loops short in it (checked once, after it): after an attempt it
+    /// cut, again with half as many samples per dispatch, down to one,
+    /// then fails rather than return a wrong picture.
+    pub fn until_whole<T>(
+        &mut self,
+        host: Host<'_>,
+        dispatch: ShadowDispatch,
+        spp: u32,
+        mut attempt: impl FnMut(&Tiles) -> Result<T>,
+    ) -> Result<T> {
+        loop {
+            let result = attempt(self)?;
+            if !host.loops_were_cut()? {
+                return Ok(result);
+            }
+            self.fewer_samples_per_dispatch(host.gpu(), dispatch, spp)?;
+        }
+    }
+
     /// Halves `samples_per_dispatch` after the driver cut loops short in a
     /// render of `spp` samples per pixel.
-    pub fn fewer_samples_per_dispatch(
+    fn fewer_samples_per_dispatch(
         &mut self,
         gpu: &Gpu,
         dispatch: ShadowDispatch,

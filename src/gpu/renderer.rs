@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 
 use crate::camera::View;
 use crate::error::{Error, Result};
-use crate::layout::{ClosestPoint, Hit, ListedHit, Params, Ray};
+use crate::layout::{ClosestPoint, Hit, LightAnswer, LightQuery, ListedHit, Params, Ray};
 use crate::output::{Image, Rendered};
 use crate::progress::Progress;
 use crate::scene::{Accel, Integrator, Intersect, Scene};
@@ -211,11 +211,6 @@ impl GpuRenderer {
         self.proximity.set_winding_source(scene);
     }
 
-    /// What a pass reads of the renderer's other parts.
-    fn host(&self) -> Host<'_> {
-        Host::new(&self.gpu, &self.pipelines, &self.resident)
-    }
-
     /// Renders the scene as `view` sees it, tile by tile, reading each
     /// back before the next.
     pub fn render(&mut self, view: &View, progress: &Progress) -> Result<(Rendered, GpuTimings)> {
@@ -363,19 +358,20 @@ impl GpuRenderer {
         }
         let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
         self.lists.prepare_pixel_list(host)?;
-        loop {
-            let step = self.tiles.samples_per_dispatch(ShadowDispatch::Megakernel);
-            let step = step.min(params.spp);
-            let results = self
-                .lists
-                .render_pixel_list(self.host(), &params, pixels, step)?;
-            if !self.resident.loops_were_cut(&self.gpu)? {
-                return Ok(results);
-            }
-            let dispatch = ShadowDispatch::Megakernel;
-            self.tiles
-                .fewer_samples_per_dispatch(&self.gpu, dispatch, params.spp)?;
-        }
+        let (lists, dispatch) = (&self.lists, ShadowDispatch::Megakernel);
+        self.tiles.until_whole(host, dispatch, params.spp, |tiles| {
+            let step = tiles.samples_per_dispatch(dispatch).min(params.spp);
+            lists.render_pixel_list(host, &params, pixels, step)
+        })
+    }
+
+    /// The path integrator's light functions (`sample_emitter`,
+    /// `emitter_pdf`, `environment_radiance`, `environment_pdf`) on each
+    /// of `queries`, in the scene's local frame: what tests compare with
+    /// the CPU twin's.
+    pub fn probe_lights(&mut self, queries: &[LightQuery]) -> Result<Vec<LightAnswer>> {
+        let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
+        self.lists.probe_lights(host, queries)
     }
 
     /// The geometric queries' part, and what it reads of the others.
@@ -450,7 +446,9 @@ impl GpuRenderer {
     /// Whether samples are path traced (the PATH_TRACE override).
     fn path_traced(&self) -> bool {
         let constants = &self.pipelines.constants;
-        constants.iter().any(|&(n, v)| n == "PATH_TRACE" && v != 0.0)
+        constants
+            .iter()
+            .any(|&(n, v)| n == "PATH_TRACE" && v != 0.0)
     }
 
     /// Sets a boolean override, and drops the pipelines built on the old.

@@ -262,7 +262,7 @@ impl<'a> Host<'a> {
 }
 
 /// Group 0: the uniform, the scene's arrays (low and high ranges), the
-/// loop flag and the BVH's texels.
+/// loop flag, the BVH's texels and the path integrator's lights.
 fn scene_bind_group(
     device: &wgpu::Device,
     layouts: &Layouts,
@@ -272,40 +272,37 @@ fn scene_bind_group(
     let node_view = buffers.node_texture.create_view(&Default::default());
     let block_view = buffers.block_texture.create_view(&Default::default());
     let triangle_view = buffers.triangle_texture.create_view(&Default::default());
-    SCENE.bind_group(
-        device,
-        SCENE.label,
-        &layouts.scene,
-        vec![
-            ("params", params_buffer.as_entire_binding()),
-            ("triangles", buffers.triangles.low_binding()),
-            ("triangle_normals", buffers.normals.low_binding()),
-            ("spheres", buffers.spheres.as_entire_binding()),
-            ("materials", buffers.materials.as_entire_binding()),
-            ("lights", buffers.lights.as_entire_binding()),
-            ("bvh_nodes", buffers.nodes.low_binding()),
-            ("bvh_blocks", buffers.blocks.low_binding()),
-            ("triangles_hi", buffers.triangles.high_binding()),
-            ("triangle_normals_hi", buffers.normals.high_binding()),
-            ("bvh_nodes_hi", buffers.nodes.high_binding()),
-            ("bvh_blocks_hi", buffers.blocks.high_binding()),
-            ("loop_status", loop_status.as_entire_binding()),
-            ("triangle_attributes", buffers.attributes.low_binding()),
-            ("triangle_attributes_hi", buffers.attributes.high_binding()),
-            ("textures", buffers.textures.as_entire_binding()),
-            ("triangle_tangents", buffers.tangents.as_entire_binding()),
-            (
-                "bvh_node_texels",
-                wgpu::BindingResource::TextureView(&node_view),
-            ),
-            (
-                "bvh_block_texels",
-                wgpu::BindingResource::TextureView(&block_view),
-            ),
-            (
-                "triangle_texels",
-                wgpu::BindingResource::TextureView(&triangle_view),
-            ),
-        ],
-    )
+    let mut entries = vec![
+        ("params", params_buffer.as_entire_binding()),
+        ("triangles", buffers.triangles.low_binding()),
+        ("triangle_normals", buffers.normals.low_binding()),
+        ("spheres", buffers.spheres.as_entire_binding()),
+        ("materials", buffers.materials.as_entire_binding()),
+        ("lights", buffers.lights.as_entire_binding()),
+        ("bvh_nodes", buffers.nodes.low_binding()),
+        ("bvh_blocks", buffers.blocks.low_binding()),
+        ("triangles_hi", buffers.triangles.high_binding()),
+        ("triangle_normals_hi", buffers.normals.high_binding()),
+        ("bvh_nodes_hi", buffers.nodes.high_binding()),
+        ("bvh_blocks_hi", buffers.blocks.high_binding()),
+        ("loop_status", loop_status.as_entire_binding()),
+        ("triangle_attributes", buffers.attributes.low_binding()),
+        ("triangle_attributes_hi", buffers.attributes.high_binding()),
+        ("textures", buffers.textures.as_entire_binding()),
+        ("triangle_tangents", buffers.tangents.as_entire_binding()),
+        (
+            "bvh_node_texels",
+            wgpu::BindingResource::TextureView(&node_view),
+        ),
+        (
+            "bvh_block_texels",
+            wgpu::BindingResource::TextureView(&block_view),
+        ),
+        (
+            "triangle_texels",
+            wgpu::BindingResource::TextureView(&triangle_view),
+        ),
+    ];
+    entries.extend(buffers.lighting.entries());
+    SCENE.bind_group(device, SCENE.label, &layouts.scene, entries)
 }

@@ -14,7 +14,7 @@ pub const HARDWARE_SOURCE: &str = crate::shader_source::HARDWARE_SOURCE;
 pub fn specialisation(scene: &Scene) -> Vec<(&'static str, f64)> {
     let flag = |b: bool| if b { 1.0 } else { 0.0 };
     let has_light = |kind| scene.lights.iter().any(|l| l.kind == kind);
-    vec![
+    let mut constants = vec![
         ("HAS_TRIANGLES", flag(!scene.triangles.is_empty())),
         ("HAS_SPHERES", flag(!scene.spheres.is_empty())),
         (
@@ -34,8 +34,8 @@ pub fn specialisation(scene: &Scene) -> Vec<(&'static str, f64)> {
         ("HAS_SMOOTH", flag(!scene.normals.is_empty())),
         ("USE_BVH", flag(scene.accel.traverses_bvh())),
         ("PATH_TRACE", flag(scene.integrator == Integrator::Path)),
-        ("HAS_ENVIRONMENT", 0.0),
-        ("HAS_EMITTERS", 0.0),
         ("INTERSECT", scene.intersect.shader_value() as f64),
-    ]
+    ];
+    constants.extend(super::lighting::lighting_specialisation(scene));
+    constants
 }

@@ -1,8 +1,6 @@
 //! The scene's arrays on the device: storage buffers (split over two
 //! bindings when large) and the BVH's texel textures.
 
-use std::borrow::Cow;
-
 use wgpu::util::DeviceExt;
 
 use crate::error::{Error, Result};
@@ -13,7 +11,8 @@ use crate::layout::{
 use crate::scene::Scene;
 
 use super::adapter::is_llvmpipe;
-use super::device::Gpu;
+use super::device::{Gpu, non_empty};
+use super::lighting::LightingBuffers;
 
 /// Where the shader reads the BVH's nodes and leaf blocks from
 /// (`BVH_TEXELS` in shaders/layout.wgsl).
@@ -75,6 +74,8 @@ pub(super) struct SceneBuffers {
     /// `Scene::tangents` (a placeholder where no material has a normal
     /// texture); one binding, as it is kept only for normal-mapped scenes.
     pub tangents: wgpu::Buffer,
+    /// The path integrator's lights (bindings 20 to 23).
+    pub lighting: LightingBuffers,
     /// Bytes of all of them.
     pub device_bytes: u64,
 }
@@ -143,21 +144,23 @@ impl SceneBuffers {
             std::mem::size_of::<PrimBlock>() as u64,
         )?;
         drop(compressed);
-        let device_bytes = [
-            &triangles.buffer,
-            &normals.buffer,
-            &attributes.buffer,
-            &nodes.buffer,
-            &spheres,
-            &materials,
-            &lights,
-            &textures,
-            &tangents,
-            &blocks.buffer,
-        ]
-        .iter()
-        .map(|b| b.size())
-        .sum::<u64>()
+        let lighting = LightingBuffers::upload(gpu, scene)?;
+        let device_bytes = lighting.device_bytes()
+            + [
+                &triangles.buffer,
+                &normals.buffer,
+                &attributes.buffer,
+                &nodes.buffer,
+                &spheres,
+                &materials,
+                &lights,
+                &textures,
+                &tangents,
+                &blocks.buffer,
+            ]
+            .iter()
+            .map(|b| b.size())
+            .sum::<u64>()
             + [&node_texture, &block_texture, &triangle_texture]
                 .iter()
                 .map(|t| 16 * t.width() as u64 * t.height() as u64)
@@ -186,6 +189,7 @@ impl SceneBuffers {
             triangle_texture,
             textures,
             tangents,
+            lighting,
             device_bytes,
         })
     }
@@ -203,16 +207,6 @@ impl SceneBuffers {
         .filter(|(_, b)| b.per_binding != u32::MAX)
         .map(|(name, _)| *name)
         .collect()
-    }
-}
-
-/// At least one element: wgpu rejects empty storage bindings. Borrows the
-/// scene's own memory otherwise, so that upload makes no host copy.
-fn non_empty<T: bytemuck::Pod + Default>(items: &[T]) -> Cow<'_, [u8]> {
-    if items.is_empty() {
-        Cow::Owned(bytemuck::bytes_of(&T::default()).to_vec())
-    } else {
-        Cow::Borrowed(bytemuck::cast_slice(items))
     }
 }
 
@@ -249,7 +243,12 @@ impl SplitBuffer {
 
 impl Gpu {
     /// A storage buffer of `bytes`, which may be at most `max_bytes` long.
-    fn storage_buffer(&self, label: &str, bytes: &[u8], max_bytes: u64) -> Result<wgpu::Buffer> {
+    pub(super) fn storage_buffer(
+        &self,
+        label: &str,
+        bytes: &[u8],
+        max_bytes: u64,
+    ) -> Result<wgpu::Buffer> {
         if bytes.len() as u64 > max_bytes {
             return Err(Error::GpuLimit(format!(
                 "the scene's {label} take {} bytes, {} more than the {max_bytes} bytes {} can \

@@ -29,13 +29,9 @@ impl Tiles {
         pixels: &[[u32; 2]],
     ) -> Result<Vec<[f32; 4]>> {
         self.prepare_wavefront_list(host)?;
-        loop {
-            let results = self.render_list_wavefront_once(host, lists, params, pixels)?;
-            if !host.loops_were_cut()? {
-                return Ok(results);
-            }
-            self.fewer_samples_per_dispatch(host.gpu(), ShadowDispatch::Wavefront, params.spp)?;
-        }
+        self.until_whole(host, ShadowDispatch::Wavefront, params.spp, |tiles| {
+            tiles.render_list_wavefront_once(host, lists, params, pixels)
+        })
     }
 
     fn render_list_wavefront_once(

@@ -1,7 +1,7 @@
 //! glTF 2.0 (`.gltf` with external or data-URI buffers, and `.glb`), with
 //! the `gltf` crate: every mesh primitive of the default scene (else the
 //! first), placed by its node's world transform; its cameras; and its
-//! KHR_lights_punctual lights.
+//! KHR_lights_punctual lights (point, spot and directional).
 
 use std::path::Path;
 
@@ -12,7 +12,7 @@ use super::{Mesh, NormalMode, check_coordinate, corner_values, vertex_normals};
 use crate::error::{Error, Result};
 
 mod materials;
-use materials::{Images, material_desc, texture_coordinate_set};
+use materials::{DEFAULT_BRDF, Images, material_desc, texture_coordinate_set};
 
 /// Extensions lambert implements, so a file may require them.
 const IMPLEMENTED: &[&str] = &[
@@ -35,14 +35,23 @@ pub struct GltfCamera {
     pub aspect_ratio: Option<f64>,
 }
 
-/// A light lambert can model: a point light (intensity in candela, as
-/// lambert's) or a directional one (irradiance in lux, travelling along
-/// `vector`).
+/// A KHR_lights_punctual light in the file's photometric units (colour ×
+/// intensity): a point light (candela), a spot light (candela on its axis,
+/// pointing along `direction`, with its cone half-angles in radians) or a
+/// directional one (lux, travelling along `direction`). The scene stores
+/// them in the lecture's units, ÷ π (docs/rendering.md, "Light units").
 #[derive(Clone, Debug)]
 pub enum GltfLight {
     Point {
         position: DVec3,
         intensity: [f64; 3],
+    },
+    Spot {
+        position: DVec3,
+        direction: DVec3,
+        intensity: [f64; 3],
+        inner_cone_angle: f64,
+        outer_cone_angle: f64,
     },
     Directional {
         direction: DVec3,
@@ -132,6 +141,17 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
     let buffers = read_buffers(&document, base, blob).map_err(fail)?;
 
     let mut scene = GltfScene::default();
+    // Extensions a file may use without requiring (transmission, volume,
+    // clearcoat, sheen, …): the file renders without them, and says so.
+    for extension in document.extensions_used() {
+        if !IMPLEMENTED.contains(&extension) {
+            scene.mesh.warnings.push(format!(
+                "{}: the file uses {extension}, which lambert ignores (docs/rendering.md, \
+                 \"Materials\")",
+                path.display()
+            ));
+        }
+    }
     let Some(root) = document
         .default_scene()
         .or_else(|| document.scenes().next())
@@ -148,6 +168,10 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
     let mut vertex_colors: Vec<[f32; 4]> = Vec::new();
     let mut vertex_uvs: Vec<[f32; 2]> = Vec::new();
     let (mut any_colors, mut any_uvs) = (false, false);
+    // Per vertex, TANGENT placed by its node: kept if every primitive has
+    // it (and NORMAL, which the spec requires of given tangents).
+    let mut vertex_tangents: Vec<[f32; 4]> = Vec::new();
+    let mut all_tangents = true;
     let mut stack: Vec<(gltf::Node, DMat4)> = root.nodes().map(|n| (n, DMat4::IDENTITY)).collect();
     // Nodes in document order within each level, as the file lists them.
     stack.reverse();
@@ -245,6 +269,11 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
                 check_accessor(n, &buffers, Dimensions::Vec3, &vec3)
                     .map_err(|m| fail(format!("{what}: NORMAL {m}")))?;
             }
+            let tangent_accessor = primitive.get(&gltf::Semantic::Tangents);
+            if let Some(t) = &tangent_accessor {
+                check_accessor(t, &buffers, Dimensions::Vec4, &vec3)
+                    .map_err(|m| fail(format!("{what}: TANGENT {m}")))?;
+            }
             let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
             let first = scene.mesh.positions.len() as u32;
             let positions: Vec<[f32; 3]> = reader
@@ -284,6 +313,17 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
                     )))
                 }
             };
+            match (reader.read_tangents(), &tangent_accessor) {
+                (Some(iter), Some(accessor)) if normal_accessor.is_some() => {
+                    same_count(accessor, "TANGENT")?;
+                    let linear = glam::DMat3::from_mat4(world);
+                    vertex_tangents.extend(iter.map(|t| placed_tangent(t, linear)));
+                }
+                _ => {
+                    all_tangents = false;
+                    vertex_tangents.extend(std::iter::repeat_n([0.0; 4], positions.len()));
+                }
+            }
             match (reader.read_colors(0), &color_accessor) {
                 (Some(colors), Some(accessor)) => {
                     same_count(accessor, "COLOR_0")?;
@@ -347,9 +387,11 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
                     (scene.mesh.materials.len() - 1) as u32
                 }),
                 None => *default_material.get_or_insert_with(|| {
-                    // glTF's default material: base colour 1, opaque.
+                    // glTF's default material: base colour 1, opaque,
+                    // metallic and roughness 1.
                     scene.mesh.materials.push(MaterialDesc {
                         name: "(default)".into(),
+                        brdf: DEFAULT_BRDF,
                         ..MaterialDesc::default()
                     });
                     (scene.mesh.materials.len() - 1) as u32
@@ -370,6 +412,9 @@ pub fn parse_scene(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<GltfSc
     }
     if any_uvs {
         scene.mesh.uvs = Some(corner_values(&scene.mesh.triangles, &vertex_uvs));
+    }
+    if all_tangents {
+        scene.mesh.tangents = Some(corner_values(&scene.mesh.triangles, &vertex_tangents));
     }
     if mode == NormalMode::Smooth {
         let given = all_normals.then_some(&normals[..]);
@@ -636,18 +681,40 @@ fn read_light(
             path.display()
         ));
     }
-    match light.kind() {
-        Kind::Point => scene.lights.push(GltfLight::Point {
-            position: world.transform_point3(DVec3::ZERO),
+    let position = world.transform_point3(DVec3::ZERO);
+    // Spot and directional lights point along their node's −Z.
+    let direction = world.transform_vector3(DVec3::NEG_Z).normalize_or_zero();
+    scene.lights.push(match light.kind() {
+        Kind::Point => GltfLight::Point {
+            position,
             intensity: power,
-        }),
-        Kind::Directional => scene.lights.push(GltfLight::Directional {
-            direction: world.transform_vector3(DVec3::NEG_Z).normalize_or_zero(),
+        },
+        Kind::Spot {
+            inner_cone_angle,
+            outer_cone_angle,
+        } => GltfLight::Spot {
+            position,
+            direction,
+            intensity: power,
+            inner_cone_angle: f64::from(inner_cone_angle),
+            outer_cone_angle: f64::from(outer_cone_angle),
+        },
+        Kind::Directional => GltfLight::Directional {
+            direction,
             irradiance: power,
-        }),
-        Kind::Spot { .. } => scene.mesh.warnings.push(format!(
-            "{}: light {name}: a spot light, skipped (not in lambert's light model)",
-            path.display()
-        )),
-    }
+        },
+    });
+}
+
+/// A TANGENT placed by its node's linear map: the direction mapped as
+/// surface vectors are, the bitangent sign flipped by a mirroring map
+/// (which turns the frame's handedness).
+fn placed_tangent(t: [f32; 4], linear: glam::DMat3) -> [f32; 4] {
+    let d = (linear * DVec3::new(t[0].into(), t[1].into(), t[2].into())).normalize_or_zero();
+    let w = if linear.determinant() < 0.0 {
+        -t[3]
+    } else {
+        t[3]
+    };
+    [d.x as f32, d.y as f32, d.z as f32, w]
 }

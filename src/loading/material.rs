@@ -1,6 +1,8 @@
 //! How a model file says its surfaces look, as every loader hands it on:
-//! materials (base colour, alpha, emission, and the textures that scale
-//! them) and the images those textures read. Loaders fill these; the
+//! materials (base colour, alpha, emission, the BRDF with its metallic and
+//! roughness factors, and the textures that scale them or perturb the
+//! normal) and the images those textures read (docs/rendering.md,
+//! "Materials"). Loaders fill these; the
 //! `texture` module decodes the images; the scene flattens both for the
 //! CPU and GPU paths.
 //!
@@ -87,6 +89,17 @@ pub enum AlphaMode {
     Blend,
 }
 
+/// The BRDF a file asks for.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Brdf {
+    /// f = albedo/π: OBJ without specular terms, PLY, STL.
+    #[default]
+    Lambert,
+    /// glTF 2.0's (its appendix B): metalness and perceptual roughness
+    /// factors, each in [0, 1].
+    MetallicRoughness { metallic: f32, roughness: f32 },
+}
+
 /// One material as its file defines it, colours linear.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MaterialDesc {
@@ -103,6 +116,14 @@ pub struct MaterialDesc {
     /// the base colour texture's (glTF has none: its alpha is the base
     /// colour texture's).
     pub alpha_texture: Option<TextureUse>,
+    pub brdf: Brdf,
+    /// glTF metallicRoughnessTexture: data, not colour; its B scales the
+    /// metalness, its G the roughness.
+    pub metallic_roughness_texture: Option<TextureUse>,
+    /// glTF normalTexture: tangent-space normals (data), X and Y scaled
+    /// by `normal_scale`.
+    pub normal_texture: Option<TextureUse>,
+    pub normal_scale: f32,
     /// The file's name for it, for messages (else its index).
     pub name: String,
 }
@@ -117,6 +138,10 @@ impl Default for MaterialDesc {
             alpha_mode: AlphaMode::Opaque,
             alpha_cutoff: 0.5,
             alpha_texture: None,
+            brdf: Brdf::Lambert,
+            metallic_roughness_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
             name: String::new(),
         }
     }

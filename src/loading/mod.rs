@@ -7,9 +7,11 @@
 
 pub mod gltf;
 pub mod material;
+mod mtl_brdf;
 pub mod obj;
 pub mod ply;
 pub mod stl;
+pub mod tangents;
 
 use std::path::Path;
 
@@ -17,7 +19,7 @@ use glam::DVec3;
 use serde::Deserialize;
 
 use crate::error::{Error, Result};
-pub use material::{AlphaMode, ImageSource, MaterialDesc, TextureUse};
+pub use material::{AlphaMode, Brdf, ImageSource, MaterialDesc, TextureUse};
 
 pub use obj::{load_obj, parse_obj};
 
@@ -52,6 +54,10 @@ pub struct Mesh {
     /// Per triangle, its corners' texture coordinates (glTF's convention,
     /// see `material`), when the file gives them.
     pub uvs: Option<Vec<[[f32; 2]; 3]>>,
+    /// Per triangle, its corners' tangents (xyz) and bitangent signs (w),
+    /// glTF TANGENT's convention (`tangents`), where the file gives them
+    /// (glTF TANGENT with NORMAL, in every primitive).
+    pub tangents: Option<Vec<[[f32; 4]; 3]>>,
     /// Per triangle, its corners' linear RGBA colours (glTF COLOR_0, PLY
     /// `red green blue [alpha]`, OBJ `v x y z r g b`), when the file gives
     /// them; they multiply the base colour.

@@ -1,5 +1,6 @@
 //! Wavefront OBJ loading, with its MTL materials (`Kd`, `Ke`, `d`/`Tr`
-//! and their `map_` images), texture coordinates (`vt`, v flipped to glTF's
+//! and their `map_` images; `Ks`, `Ns`, `Pr`, `Pm` as `mtl_brdf` maps
+//! them), texture coordinates (`vt`, v flipped to glTF's
 //! convention) and vertex colours (`v x y z r g b`).
 //!
 //! A small parser of our own rather than tobj: errors must name the file and
@@ -14,6 +15,7 @@ use std::path::{Path, PathBuf};
 use glam::DVec3;
 
 use super::material::{AlphaMode, ImageSource, MaterialDesc, Sampler, TextureUse, Wrap};
+use super::mtl_brdf::MtlSpecular;
 use super::{Mesh, NormalMode, area_weighted_normals, check_coordinate, corner_values};
 use crate::error::{Error, Result};
 
@@ -28,6 +30,9 @@ pub fn load_obj(path: &Path, mode: NormalMode) -> Result<Mesh> {
 pub struct Materials {
     index: HashMap<String, u32>,
     materials: Vec<MaterialDesc>,
+    /// Per material, its specular statements, which make its `brdf` once
+    /// its MTL file is read.
+    specular: Vec<MtlSpecular>,
     /// The images `map_Kd`, `map_Ke` and `map_d` name, each once.
     images: Vec<ImageSource>,
     /// What was read but not understood, each naming its file and line.
@@ -36,8 +41,9 @@ pub struct Materials {
 
 /// The statements of OBJ or MTL text, each with the number of the line it
 /// starts on: a line ending in `\` continues on the next (the OBJ spec),
-/// joined as one line. A UTF-8 byte-order mark (some Windows exporters
-/// write one) is not part of the first statement.
+/// joined as one line; a comment, from `#` to the statement's end, is not
+/// part of it. A UTF-8 byte-order mark (some Windows exporters write one)
+/// is not part of the first statement.
 fn statements(text: &str) -> impl Iterator<Item = (usize, Cow<'_, str>)> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut lines = super::text_lines(text).enumerate();
@@ -52,6 +58,14 @@ fn statements(text: &str) -> impl Iterator<Item = (usize, Cow<'_, str>)> {
             };
             statement = Cow::Owned(format!("{head} {next}"));
         }
+        let end = statement.find('#').unwrap_or(statement.len());
+        let statement = match statement {
+            Cow::Borrowed(whole) => Cow::Borrowed(&whole[..end]),
+            Cow::Owned(mut whole) => {
+                whole.truncate(end);
+                Cow::Owned(whole)
+            }
+        };
         Some((index + 1, statement))
     })
 }
@@ -99,7 +113,6 @@ pub fn parse_mtl(text: &str, mtl: &Path, materials: &mut Materials) -> Result<()
     let first = materials.materials.len();
     for (line_number, line) in statements(text) {
         let fail = line_error(mtl, line_number);
-        let line = line.split('#').next().unwrap_or("");
         let mut tokens = line.split_whitespace();
         match tokens.next() {
             Some("newmtl") => {
@@ -112,6 +125,7 @@ pub fn parse_mtl(text: &str, mtl: &Path, materials: &mut Materials) -> Result<()
                     name: name.to_string(),
                     ..MaterialDesc::default()
                 });
+                materials.specular.push(MtlSpecular::default());
                 // A later definition of a name wins, as in most readers.
                 materials.index.insert(name.to_string(), id);
                 current = Some(id);
@@ -123,12 +137,43 @@ pub fn parse_mtl(text: &str, mtl: &Path, materials: &mut Materials) -> Result<()
                  opacity; d is read)",
                 mtl.display()
             )),
+            Some(keyword @ ("Ks" | "Ns" | "Pr" | "Pm")) => {
+                let id = current.ok_or_else(|| fail(format!("{keyword} before any newmtl")))?;
+                let at = format!("{}:{line_number}", mtl.display());
+                let rest: Vec<&str> = tokens.collect();
+                let specular = &mut materials.specular[id as usize];
+                if keyword == "Ks" {
+                    if let Some(rgb) =
+                        mtl_colour(keyword, &rest, &at, &mut materials.warnings).map_err(fail)?
+                    {
+                        specular.ks = Some(rgb);
+                    }
+                    continue;
+                }
+                let value = rest
+                    .first()
+                    .and_then(|t| t.parse::<f32>().ok())
+                    .filter(|x| x.is_finite() && *x >= 0.0 && (keyword == "Ns" || *x <= 1.0))
+                    .ok_or_else(|| {
+                        let range = if keyword == "Ns" {
+                            "≥ 0"
+                        } else {
+                            "in [0, 1]"
+                        };
+                        fail(format!("{keyword} needs a number {range}"))
+                    })?;
+                match keyword {
+                    "Ns" => specular.ns = Some(value),
+                    "Pr" => specular.pr = Some(value),
+                    _ => specular.pm = Some(value),
+                }
+            }
             Some(keyword @ ("Kd" | "Ke" | "d" | "map_Kd" | "map_Ke" | "map_d")) => {
                 let id = current.ok_or_else(|| fail(format!("{keyword} before any newmtl")))?;
                 let at = format!("{}:{line_number}", mtl.display());
                 let rest: Vec<&str> = tokens.collect();
                 let texture = if keyword.starts_with("map_") {
-                    texture_use(&rest, after_words(line, 1), mtl, &at, materials)
+                    texture_use(&rest, after_words(&line, 1), mtl, &at, materials)
                 } else {
                     None
                 };
@@ -177,7 +222,11 @@ pub fn parse_mtl(text: &str, mtl: &Path, materials: &mut Materials) -> Result<()
             _ => {}
         }
     }
-    for material in &materials.materials[first..] {
+    for (material, specular) in materials.materials[first..]
+        .iter_mut()
+        .zip(&materials.specular[first..])
+    {
+        material.brdf = specular.brdf();
         if material.alpha_mode == AlphaMode::Blend {
             materials.warnings.push(format!(
                 "{}: material {}: its transparency (d < 1 or map_d) is rendered as an alpha \
@@ -469,7 +518,6 @@ pub fn parse_obj(text: &str, path: &Path, mode: NormalMode) -> Result<Mesh> {
     let mut unknown_uvs = Skipped::default();
     for (line_number, line) in statements(text) {
         let fail = line_error(path, line_number);
-        let line = line.split('#').next().unwrap_or("");
         let mut tokens = line.split_whitespace();
         match tokens.next() {
             Some("v") => {

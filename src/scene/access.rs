@@ -58,6 +58,12 @@ impl Scene {
         &self.attributes
     }
 
+    /// One entry per triangle when any material has a normal texture, else
+    /// empty.
+    pub fn tangents(&self) -> &[TriangleTangents] {
+        &self.tangents
+    }
+
     /// Triangles whose file gave them vertex colours (for `lambert info`).
     pub fn colored_triangles(&self) -> usize {
         self.colored_triangles
@@ -113,6 +119,7 @@ impl Scene {
     /// entries in `normals` and `attributes`, where those are kept, are
     /// zero); `rebuild_bvh` after.
     pub fn add_triangles(&mut self, triangles: impl IntoIterator<Item = Triangle>) {
+        self.forget_emitters();
         self.triangles.extend(triangles);
         let n = self.triangles.len();
         if !self.normals.is_empty() {
@@ -128,27 +135,32 @@ impl Scene {
 
     /// The triangles, to edit by hand; `rebuild_bvh` after.
     pub fn triangles_mut(&mut self) -> &mut Vec<Triangle> {
+        self.forget_emitters();
         &mut self.triangles
     }
 
     /// The spheres, to edit by hand; `rebuild_bvh` after.
     pub fn spheres_mut(&mut self) -> &mut Vec<Sphere> {
+        self.forget_emitters();
         &mut self.spheres
     }
 
     /// The lights, to edit or add to.
     pub fn lights_mut(&mut self) -> &mut Vec<Light> {
+        self.forget_emitters();
         &mut self.lights
     }
 
     /// The materials, to edit by hand (a texture given to one, say).
     pub fn materials_mut(&mut self) -> &mut Vec<Material> {
+        self.forget_emitters();
         &mut self.materials
     }
 
     /// The textures, to replace by hand, with `attributes_mut` for the
     /// texture coordinates that read them.
     pub fn textures_mut(&mut self) -> &mut TextureStore {
+        self.forget_emitters();
         &mut self.textures
     }
 

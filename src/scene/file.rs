@@ -6,13 +6,14 @@ use std::path::{Path, PathBuf};
 use glam::{DMat3, DVec3};
 use serde::Deserialize;
 
+use super::lighting::EnvironmentEntry;
 use super::{
     Accel, DEFAULT_MAX_DEPTH, Integrator, Intersect, Rgb, Scene, Transform, colour,
-    directional_light, point, point_light,
+    directional_light, point, point_light, spot_light,
 };
 use crate::camera::{Camera, View, validate_camera};
 use crate::error::{Error, Result};
-use crate::layout::Sphere;
+use crate::layout::{MATERIAL_METALLIC_ROUGHNESS, Material, Sphere};
 use crate::limits::{MAX_SPHERE_RADIUS, checked_point, validate_spp, vector_text};
 use crate::loading::{self, NormalMode};
 use crate::placement::centring_offset;
@@ -31,6 +32,10 @@ struct SceneFile {
     point_light: Vec<PointLightEntry>,
     #[serde(default)]
     directional_light: Vec<DirectionalLightEntry>,
+    #[serde(default)]
+    spot_light: Vec<SpotLightEntry>,
+    #[serde(default)]
+    environment: Option<EnvironmentEntry>,
 }
 
 /// The `[render]` table.
@@ -82,6 +87,14 @@ struct MeshEntry {
     /// Overrides every material of the file when given.
     #[serde(default)]
     albedo: Option<Rgb>,
+    /// Make every material of the file metallic-roughness (`Brdf`).
+    #[serde(default)]
+    metallic: Option<f64>,
+    #[serde(default)]
+    roughness: Option<f64>,
+    /// Replaces every material's emission (radiance): an area light.
+    #[serde(default)]
+    emission: Option<Rgb>,
     #[serde(default)]
     normals: NormalMode,
     #[serde(default)]
@@ -103,6 +116,66 @@ struct SphereEntry {
     radius: f64,
     #[serde(default = "default_albedo")]
     albedo: Rgb,
+    #[serde(default)]
+    metallic: Option<f64>,
+    #[serde(default)]
+    roughness: Option<f64>,
+    #[serde(default)]
+    emission: Option<Rgb>,
+}
+
+/// `metallic` and `roughness` of a `[[mesh]]` or `[[sphere]]`, checked
+/// (each in [0, 1]; `field` names them in errors): either makes its
+/// materials glTF's metallic-roughness BRDF (docs/scene-format.md).
+#[derive(Clone, Copy, Debug)]
+struct Brdf {
+    metallic: Option<f32>,
+    roughness: Option<f32>,
+    /// `emission`, radiance in linear RGB: the materials' own, replaced.
+    emission: Option<[f32; 3]>,
+}
+
+impl Brdf {
+    fn checked(field: &str, metallic: Option<f64>, roughness: Option<f64>) -> Result<Brdf, String> {
+        let factor = |key: &str, value: Option<f64>| match value {
+            Some(v) if !(0.0..=1.0).contains(&v) => {
+                Err(format!("{field}.{key} = {v} must be in [0, 1]"))
+            }
+            v => Ok(v.map(|v| v as f32)),
+        };
+        Ok(Brdf {
+            metallic: factor("metallic", metallic)?,
+            roughness: factor("roughness", roughness)?,
+            emission: None,
+        })
+    }
+
+    /// With `emission` (`field`'s), which every material then emits: an
+    /// area light under the path integrator, seen alone under direct.
+    fn with_emission(self, field: &str, emission: Option<Rgb>) -> Result<Brdf, String> {
+        let emission = emission
+            .map(|e| colour(&format!("{field}.emission"), e))
+            .transpose()?;
+        Ok(Brdf { emission, ..self })
+    }
+
+    /// Applies the factors given to `materials`; one not given keeps the
+    /// material's (a Lambert material's: metallic 0, roughness 1).
+    fn apply(self, materials: &mut [Material]) {
+        if let Some(emission) = self.emission {
+            for material in materials.iter_mut() {
+                material.emission = emission;
+            }
+        }
+        if self.metallic.is_none() && self.roughness.is_none() {
+            return;
+        }
+        for material in materials {
+            material.kind = MATERIAL_METALLIC_ROUGHNESS;
+            material.metallic = self.metallic.unwrap_or(material.metallic);
+            material.roughness = self.roughness.unwrap_or(material.roughness);
+        }
+    }
 }
 
 #[derive(Debug, Deserialize)]
@@ -117,6 +190,28 @@ struct PointLightEntry {
 struct DirectionalLightEntry {
     direction: [f64; 3],
     irradiance: Rgb,
+}
+
+/// `[[spot_light]]`: a point light limited to a cone (KHR_lights_punctual's
+/// spot light, its falloff and defaults: inner 0°, outer 45°).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SpotLightEntry {
+    position: [f64; 3],
+    /// The way it points.
+    direction: [f64; 3],
+    /// On its axis, as a point light's.
+    intensity: Rgb,
+    /// Half-angle of the cone of full intensity, degrees.
+    #[serde(default)]
+    inner_angle_deg: f64,
+    /// Half-angle of the cone beyond which it gives no light, degrees.
+    #[serde(default = "default_outer_angle")]
+    outer_angle_deg: f64,
+}
+
+fn default_outer_angle() -> f64 {
+    45.0
 }
 
 impl Scene {
@@ -134,6 +229,12 @@ impl Scene {
         validate_spp(spp).map_err(|e| fail(format!("render.{e}")))?;
         crate::limits::validate_max_depth(file.render.max_depth)
             .map_err(|e| fail(format!("render.{e}")))?;
+        let environment = file
+            .environment
+            .as_ref()
+            .map(|e| e.spec(base))
+            .transpose()
+            .map_err(fail)?;
 
         let mut scene = Scene {
             view: View {
@@ -165,6 +266,9 @@ impl Scene {
                 .transpose()
                 .map_err(fail)?;
             let transform = mesh_transform(&field, entry).map_err(fail)?;
+            let brdf = Brdf::checked(&field, entry.metallic, entry.roughness)
+                .and_then(|b| b.with_emission(&field, entry.emission))
+                .map_err(fail)?;
             let model = base.join(&entry.file);
             let mesh = loading::load_mesh(&model, entry.normals)?;
             for &p in &mesh.positions {
@@ -172,15 +276,17 @@ impl Scene {
                 bounds = (bounds.0.min(q), bounds.1.max(q));
             }
             let what = format!("{field} ({})", entry.file.display());
-            meshes.push((what, mesh, transform, albedo));
+            meshes.push((what, mesh, transform, albedo, brdf));
         }
         for entry in &file.sphere {
             let (center, radius) = (DVec3::from(entry.center), entry.radius.abs());
             bounds = (bounds.0.min(center - radius), bounds.1.max(center + radius));
         }
         scene.offset = centring_offset(bounds.0, bounds.1);
-        for (what, mesh, transform, albedo) in meshes {
+        for (what, mesh, transform, albedo, brdf) in meshes {
+            let first = scene.materials.len();
             scene.add_mesh(path, &what, mesh, &transform, albedo)?;
+            brdf.apply(&mut scene.materials[first..]);
         }
         for (i, entry) in file.sphere.iter().enumerate() {
             let field = format!("sphere[{i}]");
@@ -199,6 +305,10 @@ impl Scene {
             }
             let albedo = colour(&format!("{field}.albedo"), entry.albedo).map_err(fail)?;
             let material = scene.add_material(albedo);
+            Brdf::checked(&field, entry.metallic, entry.roughness)
+                .and_then(|b| b.with_emission(&field, entry.emission))
+                .map_err(fail)?
+                .apply(&mut scene.materials[material as usize..]);
             scene.spheres.push(Sphere {
                 center,
                 radius: entry.radius as f32,
@@ -220,6 +330,18 @@ impl Scene {
             let light = directional_light(&field, direction, entry.irradiance).map_err(fail)?;
             scene.lights.push(light);
         }
+        for (i, entry) in file.spot_light.iter().enumerate() {
+            let light = spot_light(
+                &format!("spot_light[{i}]"),
+                entry.position,
+                DVec3::from(entry.direction),
+                entry.intensity,
+                [entry.inner_angle_deg, entry.outer_angle_deg],
+                scene.offset,
+            )
+            .map_err(fail)?;
+            scene.lights.push(light);
+        }
         if scene.triangles.is_empty() && scene.spheres.is_empty() {
             return Err(fail(
                 "the scene is empty: it needs a [[mesh]] with faces or a [[sphere]]".into(),
@@ -227,6 +349,7 @@ impl Scene {
         }
         scene.check_camera_placement().map_err(fail)?;
         scene.check_primitive_count(path)?;
+        scene.set_environment(environment.as_ref())?;
         scene.rebuild_bvh();
         Ok(scene)
     }

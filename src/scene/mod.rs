@@ -4,6 +4,7 @@
 //! (`model`).
 
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, OnceLock};
 
 use glam::{DMat3, DVec3};
 use serde::Deserialize;
@@ -12,18 +13,22 @@ use crate::bvh::{Bvh, MAX_PRIMITIVES};
 use crate::camera::{Camera, View, default_up};
 use crate::error::{Error, Result};
 use crate::layout::{
-    ALPHA_MASK, ALPHA_OPAQUE, FLAG_ATTRIBUTES, FLAG_MASKED, FLAG_SMOOTH, Hit, LIGHT_POINT, Light,
-    Material, NO_HIT, Ray, Sphere, Triangle, TriangleAttributes, TriangleNormals, TriangleTangents,
+    ALPHA_MASK, ALPHA_OPAQUE, FLAG_ATTRIBUTES, FLAG_MASKED, FLAG_SMOOTH, Hit, LIGHT_POINT,
+    LIGHT_SPOT, Light, MATERIAL_METALLIC_ROUGHNESS, Material, NO_HIT, Ray, Sphere, Triangle,
+    TriangleAttributes, TriangleNormals, TriangleTangents,
 };
+use crate::lighting::{EmitterTable, Environment};
 use crate::limits::{MAX_COORDINATE, MAX_LOCAL_COORDINATE, checked_point, vector_text};
 use crate::loading;
 use crate::placement::{Placement, checked_local};
 
 mod access;
 mod file;
+mod lighting;
 mod model;
 mod settings;
 
+pub use lighting::environment_option;
 pub use settings::{DEFAULT_MAX_DEPTH, Integrator, RenderSettings};
 
 /// A loaded, validated scene, flattened into the buffers the GPU receives:
@@ -68,6 +73,10 @@ pub struct Scene {
     /// The ray/triangle test both paths use.
     pub(crate) intersect: Intersect,
     pub(crate) integrator: Integrator,
+    /// Whether `lights` is the one default light a model with none of its
+    /// own is given (`camera::default_light`), which the path integrator
+    /// drops where the model has light of its own (`with_settings`).
+    pub(crate) default_light: bool,
     /// Under `Integrator::Path`, the most surfaces a path hits.
     pub(crate) max_depth: u32,
     /// What loading read but ignored or could not find (each names its
@@ -81,6 +90,12 @@ pub struct Scene {
     /// camera the kernels see: the centre of a scene far from the origin,
     /// else zero (`placement::centring_offset`).
     pub(crate) offset: DVec3,
+    /// Light from every direction at infinity (`lighting.rs`), shared by
+    /// the scene's copies: a map may be large.
+    pub(crate) environment: Option<Arc<Environment>>,
+    /// The emitters' table, built on first use (`Scene::emitters`) and
+    /// dropped by every edit of what it is built from.
+    pub(crate) emitters: OnceLock<EmitterTable>,
 }
 
 /// `--intersect`: the ray/triangle test. See docs/accuracy.md for what each
@@ -245,10 +260,13 @@ impl Scene {
             accel: Accel::default(),
             intersect: Intersect::default(),
             integrator: Integrator::default(),
+            default_light: false,
             max_depth: DEFAULT_MAX_DEPTH,
             warnings: Vec::new(),
             inputs: Vec::new(),
             offset: DVec3::ZERO,
+            environment: None,
+            emitters: OnceLock::new(),
         }
     }
 
@@ -271,9 +289,15 @@ impl Scene {
     /// without one, its texture lookups are compiled out).
     pub fn has_textures(&self) -> bool {
         self.materials.iter().any(|m| {
-            [m.base_color_texture, m.emissive_texture, m.alpha_texture]
-                .iter()
-                .any(|&slot| slot != crate::layout::NO_TEXTURE)
+            [
+                m.base_color_texture,
+                m.emissive_texture,
+                m.alpha_texture,
+                m.metallic_roughness_texture,
+                m.normal_texture,
+            ]
+            .iter()
+            .any(|&slot| slot != crate::layout::NO_TEXTURE)
         })
     }
 
@@ -326,6 +350,8 @@ impl Scene {
                             material.base_color_texture = s.base_color;
                             material.emissive_texture = s.emissive;
                             material.alpha_texture = s.alpha;
+                            material.metallic_roughness_texture = s.metallic_roughness;
+                            material.normal_texture = s.normal;
                         }
                         self.push_material(material)
                     })
@@ -376,6 +402,25 @@ impl Scene {
             // Rounded once, from f64, relative to the offset.
             Ok(local.as_vec3().to_array())
         };
+        // Tangent frames where a material reads a normal map with the
+        // mesh's texture coordinates (kept unless `albedo` replaces the
+        // file's materials): the file's, else MikkTSpace's.
+        let normal_mapped = albedo.is_none()
+            && mesh.uvs.is_some()
+            && mesh.materials.iter().any(|m| m.normal_texture.is_some());
+        let tangents = normal_mapped.then(|| match mesh.tangents.take() {
+            Some(given) => given,
+            None => loading::tangents::generate(
+                &mesh.positions,
+                &mesh.triangles,
+                mesh.normals.as_deref(),
+                mesh.uvs.as_deref().unwrap_or_default(),
+            ),
+        });
+        if tangents.is_some() && self.tangents.len() < self.triangles.len() {
+            self.tangents
+                .resize(self.triangles.len(), TriangleTangents::default());
+        }
         let smooth = mesh.normals.is_some();
         if smooth && self.normals.len() < self.triangles.len() {
             self.normals
@@ -454,6 +499,14 @@ impl Scene {
             } else if !self.normals.is_empty() {
                 self.normals.push(TriangleNormals::default());
             }
+            if let Some(tangents) = &tangents {
+                let [ta, tb, tc] = tangents[i];
+                let corners = if mirrored { [ta, tc, tb] } else { [ta, tb, tc] };
+                let [t0, t1, t2] = corners.map(|t| transform.tangent(t));
+                self.tangents.push(TriangleTangents { t0, t1, t2 });
+            } else if !self.tangents.is_empty() {
+                self.tangents.push(TriangleTangents::default());
+            }
         }
         self.check_primitive_count(path)
     }
@@ -475,6 +528,7 @@ impl Scene {
     /// Rebuilds the BVH after the geometry changed.
     pub fn rebuild_bvh(&mut self) {
         self.bvh = Bvh::build(&self.triangles, &self.spheres);
+        self.forget_emitters();
     }
 
     pub fn primitive_count(&self) -> usize {
@@ -489,6 +543,15 @@ fn material_of(desc: &loading::MaterialDesc) -> Material {
     let mut material = Material::from_albedo([r, g, b]);
     material.base_color[3] = a;
     material.emission = desc.emissive;
+    if let loading::Brdf::MetallicRoughness {
+        metallic,
+        roughness,
+    } = desc.brdf
+    {
+        (material.kind, material.metallic, material.roughness) =
+            (MATERIAL_METALLIC_ROUGHNESS, metallic, roughness);
+    }
+    material.normal_scale = desc.normal_scale;
     (material.alpha_mode, material.alpha_cutoff) = match desc.alpha_mode {
         loading::AlphaMode::Opaque => (ALPHA_OPAQUE, desc.alpha_cutoff),
         loading::AlphaMode::Mask => (ALPHA_MASK, desc.alpha_cutoff),
@@ -519,6 +582,21 @@ impl Transform {
     fn normal(&self, n: DVec3) -> DVec3 {
         (self.normal * n).normalize_or_zero()
     }
+
+    /// A tangent (xyz) and bitangent sign (w): the direction mapped as a
+    /// surface's vectors are, the sign flipped by a mirroring transform
+    /// (which turns the frame's handedness: bitangent = w · normal ×
+    /// tangent holds after it only so).
+    fn tangent(&self, t: [f32; 4]) -> [f32; 4] {
+        let d =
+            (self.linear * DVec3::new(t[0] as f64, t[1] as f64, t[2] as f64)).normalize_or_zero();
+        let w = if self.linear.determinant() < 0.0 {
+            -t[3]
+        } else {
+            t[3]
+        };
+        [d.x as f32, d.y as f32, d.z as f32, w]
+    }
 }
 
 /// A point light at world `position` of `intensity` (candela), kept
@@ -537,15 +615,48 @@ fn point_light(
     })
 }
 
-/// A directional light travelling along `direction` (finite, non-zero)
-/// with `irradiance`; the shader takes the way to the light.
-fn directional_light(field: &str, direction: DVec3, irradiance: Rgb) -> Result<Light, String> {
+/// A spot light: `point_light`'s, pointing along `direction`, at full
+/// intensity within `inner_deg` of its axis, falling off smoothly to none
+/// at `outer_deg` (KHR_lights_punctual's cone half-angles: 0 ≤ inner ≤
+/// outer ≤ 90, outer > 0).
+fn spot_light(
+    field: &str,
+    position: [f64; 3],
+    direction: DVec3,
+    intensity: Rgb,
+    [inner_deg, outer_deg]: [f64; 2],
+    offset: DVec3,
+) -> Result<Light, String> {
+    let mut light = point_light(field, position, intensity, offset)?;
+    let direction = checked_direction(field, direction)?;
+    if !(0.0 <= inner_deg && inner_deg <= outer_deg && outer_deg <= 90.0 && outer_deg > 0.0) {
+        return Err(format!(
+            "{field}: the cone angles (inner {inner_deg}°, outer {outer_deg}°) must satisfy \
+             0 ≤ inner ≤ outer ≤ 90 with outer > 0"
+        ));
+    }
+    light.kind = LIGHT_SPOT;
+    light.direction = direction.normalize().as_vec3().to_array();
+    light.cos_inner = inner_deg.to_radians().cos() as f32;
+    light.cos_outer = outer_deg.to_radians().cos() as f32;
+    Ok(light)
+}
+
+/// A light's `direction`: finite and non-zero (`field` names it).
+fn checked_direction(field: &str, direction: DVec3) -> Result<DVec3, String> {
     if !direction.is_finite() || direction.length_squared() == 0.0 {
         return Err(format!(
             "{field}.direction = {} must be a finite, non-zero vector",
             vector_text(direction)
         ));
     }
+    Ok(direction)
+}
+
+/// A directional light travelling along `direction` (finite, non-zero)
+/// with `irradiance`; the shader takes the way to the light.
+fn directional_light(field: &str, direction: DVec3, irradiance: Rgb) -> Result<Light, String> {
+    let direction = checked_direction(field, direction)?;
     let irradiance = colour(&format!("{field}.irradiance"), irradiance)?;
     Ok(crate::camera::directional_light(direction, irradiance))
 }

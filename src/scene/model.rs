@@ -5,7 +5,9 @@ use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 
-use super::{DEFAULT_AMBIENT, Rgb, Scene, Transform, colour, directional_light, point_light};
+use super::{
+    DEFAULT_AMBIENT, Rgb, Scene, Transform, colour, directional_light, point_light, spot_light,
+};
 use crate::bvh::MAX_PRIMITIVES;
 use crate::camera::{
     Camera, DEFAULT_HEIGHT, DEFAULT_WIDTH, default_light, flat_normal, frame_camera,
@@ -96,13 +98,28 @@ impl Scene {
                 } => point_light(
                     &field,
                     position.to_array(),
-                    Rgb::PerChannel(*intensity),
+                    lecture_units(*intensity),
+                    scene.offset,
+                ),
+                loading::gltf::GltfLight::Spot {
+                    position,
+                    direction,
+                    intensity,
+                    inner_cone_angle,
+                    outer_cone_angle,
+                } => spot_light(
+                    &field,
+                    position.to_array(),
+                    *direction,
+                    lecture_units(*intensity),
+                    // The spec's bound π/2, in f32, is a hair above 90°.
+                    [inner_cone_angle, outer_cone_angle].map(|a| a.to_degrees().min(90.0)),
                     scene.offset,
                 ),
                 loading::gltf::GltfLight::Directional {
                     direction,
                     irradiance,
-                } => directional_light(&field, *direction, Rgb::PerChannel(*irradiance)),
+                } => directional_light(&field, *direction, lecture_units(*irradiance)),
             };
             scene.lights.push(light.map_err(|m| Error::scene(path, m))?);
         }
@@ -110,6 +127,7 @@ impl Scene {
         // ambient belong only to a model with no light of its own.
         if scene.lights.is_empty() {
             scene.lights.push(default_light(&scene.view.camera));
+            scene.default_light = true;
         } else {
             scene.ambient = [0.0; 3];
         }
@@ -176,6 +194,7 @@ impl Scene {
             albedo,
         )?;
         scene.lights.push(default_light(&scene.view.camera));
+        scene.default_light = true;
         scene.rebuild_bvh();
         Ok(scene)
     }
@@ -218,6 +237,16 @@ impl Scene {
         scene.rebuild_bvh();
         Ok(scene)
     }
+}
+
+/// KHR_lights_punctual's photometric units (candela, lux) in the lecture's
+/// that `Light::color` holds (docs/rendering.md, "Light units"): I candela
+/// light a white surface, whose glTF BRDF's diffuse lobe is albedo/π, to
+/// radiance I·cos θ/(π r²), which the lecture's albedo · color · cos θ / r²
+/// gives for color = I/π (and lux likewise). Without the ÷ π a glTF file's
+/// lights were π times too bright.
+fn lecture_units(photometric: [f64; 3]) -> Rgb {
+    Rgb::PerChannel(photometric.map(|c| c / std::f64::consts::PI))
 }
 
 fn mesh_bounds(mesh: &loading::Mesh) -> (DVec3, DVec3) {

@@ -74,6 +74,21 @@ impl Scene {
         }
     }
 
+    /// Whether the path integrator, which this scene is set to, drops its
+    /// default light: a model lit by its own emissive surfaces or by an
+    /// environment is lit by them alone (the default light and ambient
+    /// are for a model with no light at all, which `direct` shows).
+    pub fn default_light_goes(&self) -> bool {
+        self.integrator == Integrator::Path
+            && self.default_light
+            && (self.environment().is_some()
+                || self
+                    .emitters()
+                    .entries
+                    .iter()
+                    .any(|e| e.kind == crate::layout::EMITTER_TRIANGLE))
+    }
+
     /// The scene as `settings` render it, its default view theirs: what
     /// the jobs open a renderer on (the backends read the settings with
     /// the geometry, and a GPU specialises its pipelines on them).
@@ -85,6 +100,11 @@ impl Scene {
         self.intersect = settings.intersect;
         self.integrator = settings.integrator;
         self.max_depth = settings.max_depth;
+        if self.default_light_goes() {
+            self.lights.clear();
+            self.default_light = false;
+            self.forget_emitters();
+        }
         self
     }
 }

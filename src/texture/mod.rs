@@ -13,6 +13,6 @@ pub use decode::{DecodedImage, MAX_IMAGE_BYTES, MAX_TEXTURE_SIDE, decode_image};
 pub use lod::cone_spread;
 pub use model::{ImageReport, MaterialSlots, add_model_textures, describe_images};
 pub use store::{
-    LINEAR_ONE, SLOT_WORDS, SRGB_TABLE_WORDS, StoredImage, TextureLevel, TextureSlot, TextureStore,
-    linear_from_srgb, mip_chain,
+    Encoding, LINEAR_ONE, SLOT_WORDS, SRGB_TABLE_WORDS, StoredImage, TextureLevel, TextureSlot,
+    TextureStore, linear_from_srgb, mip_chain,
 };

@@ -1,12 +1,13 @@
 //! A model's textures into a scene's store: each image its materials use
-//! decoded once, and each material's uses of them as slots. An image that
+//! decoded once (and stored once per encoding its uses read it in: colour
+//! or data), and each material's uses of them as slots. An image that
 //! does not decode is a warning naming the model, the image and the
 //! materials that use it, which keep their factors.
 
 use std::path::Path;
 
 use super::decode::{DecodedImage, decode_image};
-use super::store::TextureStore;
+use super::store::{Encoding, TextureStore};
 use crate::layout::NO_TEXTURE;
 use crate::loading::material::{ImageSource, MaterialDesc, TextureUse};
 
@@ -16,6 +17,8 @@ pub struct MaterialSlots {
     pub base_color: u32,
     pub emissive: u32,
     pub alpha: u32,
+    pub metallic_roughness: u32,
+    pub normal: u32,
 }
 
 /// One image of a model as `lambert info` lists it.
@@ -25,7 +28,7 @@ pub struct ImageReport {
     pub name: String,
     /// (width, height, format), or why it did not decode.
     pub decoded: Result<(u32, u32, &'static str), String>,
-    /// The materials that use it (base colour, emissive or alpha).
+    /// The materials that use it (in any slot).
     pub materials: Vec<usize>,
 }
 
@@ -36,24 +39,33 @@ fn image_name(source: &ImageSource) -> String {
     }
 }
 
-/// The uses of each material: (material, base colour or emissive).
-fn uses(materials: &[MaterialDesc]) -> impl Iterator<Item = (usize, &TextureUse)> {
+/// A material's texture slots with the encoding each reads its image in:
+/// base colour, emissive, alpha, metallic-roughness, normal (the order of
+/// `MaterialSlots`).
+fn slots(desc: &MaterialDesc) -> [(&Option<TextureUse>, Encoding); 5] {
+    [
+        (&desc.base_color_texture, Encoding::Srgb),
+        (&desc.emissive_texture, Encoding::Srgb),
+        // Alpha is linear in either encoding.
+        (&desc.alpha_texture, Encoding::Srgb),
+        (&desc.metallic_roughness_texture, Encoding::Linear),
+        (&desc.normal_texture, Encoding::Linear),
+    ]
+}
+
+/// The uses of each material: (material, texture, encoding).
+fn uses(materials: &[MaterialDesc]) -> impl Iterator<Item = (usize, &TextureUse, Encoding)> {
     materials.iter().enumerate().flat_map(|(m, desc)| {
-        [
-            &desc.base_color_texture,
-            &desc.emissive_texture,
-            &desc.alpha_texture,
-        ]
-        .into_iter()
-        .flatten()
-        .map(move |t| (m, t))
+        slots(desc)
+            .into_iter()
+            .filter_map(move |(t, encoding)| t.as_ref().map(|t| (m, t, encoding)))
     })
 }
 
 /// Per image of `images`, the materials that use it.
 fn users(images: &[ImageSource], materials: &[MaterialDesc]) -> Vec<Vec<usize>> {
     let mut users = vec![Vec::new(); images.len()];
-    for (m, texture) in uses(materials) {
+    for (m, texture, _) in uses(materials) {
         if let Some(list) = users.get_mut(texture.image as usize)
             && list.last() != Some(&m)
         {
@@ -74,14 +86,27 @@ pub fn add_model_textures(
     warnings: &mut Vec<String>,
 ) -> Vec<MaterialSlots> {
     let users = users(images, materials);
-    let mut stored: Vec<Option<u32>> = Vec::with_capacity(images.len());
-    for (source, users) in images.iter().zip(&users) {
+    // Per image, whether some use reads it as colour, as data.
+    let mut encodings = vec![[false; 2]; images.len()];
+    for (_, texture, encoding) in uses(materials) {
+        if let Some(e) = encodings.get_mut(texture.image as usize) {
+            e[(encoding == Encoding::Linear) as usize] = true;
+        }
+    }
+    // Per image, its index in the store as colour and as data.
+    let mut stored: Vec<[Option<u32>; 2]> = Vec::with_capacity(images.len());
+    for ((source, users), needed) in images.iter().zip(&users).zip(&encodings) {
         if users.is_empty() {
-            stored.push(None);
+            stored.push([None; 2]);
             continue;
         }
         stored.push(match decode_image(source) {
-            Ok(image) => Some(store.add_image(&image, image_name(source))),
+            Ok(image) => {
+                let mut add = |i: usize, encoding| {
+                    needed[i].then(|| store.add_encoded_image(&image, image_name(source), encoding))
+                };
+                [add(0, Encoding::Srgb), add(1, Encoding::Linear)]
+            }
             Err(why) => {
                 warnings.push(format!(
                     "{}: {why}; material{} {} keep{} {} colour without it",
@@ -91,17 +116,19 @@ pub fn add_model_textures(
                     if users.len() == 1 { "s" } else { "" },
                     if users.len() == 1 { "its" } else { "their" },
                 ));
-                None
+                [None; 2]
             }
         });
     }
-    let mut slot = |m: usize, texture: &Option<TextureUse>| {
+    let mut slot = |m: usize, (texture, encoding): (&Option<TextureUse>, Encoding)| {
         let Some(texture) = texture else {
             return NO_TEXTURE;
         };
         match stored.get(texture.image as usize) {
-            Some(Some(image)) => store.slot(*image, texture),
-            Some(None) => NO_TEXTURE,
+            Some(images) => match images[(encoding == Encoding::Linear) as usize] {
+                Some(image) => store.slot(image, texture),
+                None => NO_TEXTURE,
+            },
             None => {
                 warnings.push(format!(
                     "{}: material {} names image {}, and the model has {}; it keeps its colour \
@@ -118,10 +145,16 @@ pub fn add_model_textures(
     materials
         .iter()
         .enumerate()
-        .map(|(m, desc)| MaterialSlots {
-            base_color: slot(m, &desc.base_color_texture),
-            emissive: slot(m, &desc.emissive_texture),
-            alpha: slot(m, &desc.alpha_texture),
+        .map(|(m, desc)| {
+            let [base_color, emissive, alpha, metallic_roughness, normal] =
+                slots(desc).map(|s| slot(m, s));
+            MaterialSlots {
+                base_color,
+                emissive,
+                alpha,
+                metallic_roughness,
+                normal,
+            }
         })
         .collect()
 }

@@ -2,10 +2,13 @@
 //! paths read (docs/textures.md):
 //!
 //! - words 0..256: the sRGB table, 8-bit sRGB → linear in 1/`LINEAR_ONE`;
+//! - once some image holds data rather than colour (normal and
+//!   metallic-roughness maps), the linear table, 8-bit value v → v/255 in
+//!   1/`LINEAR_ONE`, where the first such image was added;
 //! - per image, its mip levels, 4 words each: the level's first texel
 //!   word, width, height, 0;
-//! - the texels, one word each, RGBA8 (RGB sRGB-encoded, A linear), rows
-//!   top first;
+//! - the texels, one word each, RGBA8 (RGB encoded as its table says, A
+//!   linear), rows top first;
 //! - per texture use (`TextureSlot`), `SLOT_WORDS` words: the UV transform,
 //!   texel area, where its image's levels are, its sampler. A material
 //!   names a use by the word where it starts (`layout::NO_TEXTURE` for none).
@@ -37,7 +40,18 @@ pub struct TextureSlot {
     /// wrap u (bits 0–1), wrap v (2–3), bilinear magnify (4), bilinear
     /// minify (5), mipmaps (6), level count (8–15).
     pub flags: u32,
-    pub _pad: u32,
+    /// Word of the table its image's RGB bytes decode through: 0, the sRGB
+    /// table, for colour; the linear table for data (`Encoding::Linear`).
+    pub table: u32,
+}
+
+/// How an image's RGB bytes encode their values: colour (base colour,
+/// emission) is sRGB, as glTF and MTL say; data (normal vectors,
+/// metalness, roughness) is linear, v/255.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Encoding {
+    Srgb,
+    Linear,
 }
 
 /// One mip level's entry (4 words).
@@ -66,8 +80,13 @@ fn srgb_table() -> [u32; 256] {
     std::array::from_fn(|s| linear_from_srgb(s as u8))
 }
 
-/// The 8-bit sRGB value whose linear value (in `table`) is nearest.
-fn srgb_from_linear(table: &[u32; 256], linear: u32) -> u8 {
+/// An 8-bit linear value v as v/255 in 1/`LINEAR_ONE` (as alpha decodes).
+fn linear_table() -> [u32; 256] {
+    std::array::from_fn(|v| (v as u32 * LINEAR_ONE + 127) / 255)
+}
+
+/// The 8-bit value whose decoded value (in `table`, increasing) is nearest.
+fn encode_nearest(table: &[u32; 256], linear: u32) -> u8 {
     let above = table.partition_point(|&t| t < linear).min(255);
     if above > 0 && linear - table[above - 1] <= table[above].saturating_sub(linear) {
         (above - 1) as u8
@@ -94,7 +113,21 @@ fn footprint(i: u32, size: u32) -> std::ops::Range<u32> {
 /// level as (width, height, packed texels): a box filter of the level
 /// above, averaged in linear light and re-encoded to 8-bit sRGB.
 pub fn mip_chain(width: u32, height: u32, rgba: &[u8]) -> Vec<(u32, u32, Vec<u32>)> {
-    let table = srgb_table();
+    encoded_mip_chain(width, height, rgba, Encoding::Srgb)
+}
+
+/// `mip_chain` of an image whose RGB is encoded as `encoding` says:
+/// averaged as the values they decode to, re-encoded the same way.
+fn encoded_mip_chain(
+    width: u32,
+    height: u32,
+    rgba: &[u8],
+    encoding: Encoding,
+) -> Vec<(u32, u32, Vec<u32>)> {
+    let table = match encoding {
+        Encoding::Srgb => srgb_table(),
+        Encoding::Linear => linear_table(),
+    };
     let top: Vec<u32> = rgba
         .chunks_exact(4)
         .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
@@ -122,9 +155,9 @@ pub fn mip_chain(width: u32, height: u32, rgba: &[u8]) -> Vec<(u32, u32, Vec<u32
                 }
                 let mean = |s: u32| (s + n / 2) / n;
                 texels.push(
-                    srgb_from_linear(&table, mean(sum[0])) as u32
-                        | (srgb_from_linear(&table, mean(sum[1])) as u32) << 8
-                        | (srgb_from_linear(&table, mean(sum[2])) as u32) << 16
+                    encode_nearest(&table, mean(sum[0])) as u32
+                        | (encode_nearest(&table, mean(sum[1])) as u32) << 8
+                        | (encode_nearest(&table, mean(sum[2])) as u32) << 16
                         | mean(sum[3]) << 24,
                 );
             }
@@ -146,6 +179,8 @@ pub struct StoredImage {
     /// The word of its first level entry.
     pub levels: u32,
     pub level_count: u32,
+    /// Colour (sRGB) or data (linear).
+    pub encoding: Encoding,
 }
 
 /// A scene's textures as the shader reads them (see the module's words).
@@ -154,6 +189,8 @@ pub struct TextureStore {
     words: Vec<u32>,
     images: Vec<StoredImage>,
     slots: usize,
+    /// The word where the linear table starts, once an image needs it.
+    linear_table: Option<u32>,
 }
 
 /// No textures: the sRGB table alone (never an empty binding).
@@ -163,15 +200,30 @@ impl Default for TextureStore {
             words: srgb_table().to_vec(),
             images: Vec::new(),
             slots: 0,
+            linear_table: None,
         }
     }
 }
 
 impl TextureStore {
-    /// Adds `image` (called `name`) with its mip chain; returns its index
-    /// for `slot`.
+    /// Adds `image` (called `name`), a colour image (sRGB), with its mip
+    /// chain; returns its index for `slot`.
     pub fn add_image(&mut self, image: &DecodedImage, name: String) -> u32 {
-        let levels = mip_chain(image.width, image.height, &image.rgba);
+        self.add_encoded_image(image, name, Encoding::Srgb)
+    }
+
+    /// `add_image` of an image encoded as `encoding` says.
+    pub fn add_encoded_image(
+        &mut self,
+        image: &DecodedImage,
+        name: String,
+        encoding: Encoding,
+    ) -> u32 {
+        if encoding == Encoding::Linear && self.linear_table.is_none() {
+            self.linear_table = Some(self.words.len() as u32);
+            self.words.extend(linear_table());
+        }
+        let levels = encoded_mip_chain(image.width, image.height, &image.rgba, encoding);
         let first = self.words.len() as u32;
         let mut texel_word = self.words.len() + 4 * levels.len();
         for (w, h, texels) in &levels {
@@ -188,6 +240,7 @@ impl TextureStore {
             format: image.format,
             levels: first,
             level_count: levels.len() as u32,
+            encoding,
         });
         self.images.len() as u32 - 1
     }
@@ -204,6 +257,10 @@ impl TextureStore {
             stored.width,
             stored.height,
         );
+        let table = match stored.encoding {
+            Encoding::Srgb => 0,
+            Encoding::Linear => self.linear_table.expect("added with its linear image"),
+        };
         let [[a, b, c], [d, e, f]] = texture.transform;
         let wrap = |w: Wrap| match w {
             Wrap::Repeat => 0,
@@ -224,7 +281,7 @@ impl TextureStore {
                 | linear(sampler.minify) << 5
                 | (sampler.mipmaps as u32) << 6
                 | count << 8,
-            _pad: 0,
+            table,
         };
         let start = self.words.len() as u32;
         self.words.extend_from_slice(bytemuck::cast_slice(&[slot]));
@@ -245,6 +302,23 @@ impl TextureStore {
     /// The images added, in order.
     pub fn images(&self) -> &[StoredImage] {
         &self.images
+    }
+
+    /// The mean linear RGB of the image the slot starting at word `slot`
+    /// reads: its coarsest mip level (1×1, averaged in linear light), the
+    /// emitters' table's estimate of a textured emitter's power.
+    pub fn mean_color(&self, slot: u32) -> [f64; 3] {
+        let word = |at: u32| self.words[at as usize];
+        let count = (word(slot + 8) >> 8) & 255;
+        let level = word(slot + 7) + 4 * (count - 1);
+        let (first, texels) = (word(level), word(level + 1) * word(level + 2));
+        let mut sum = [0.0; 3];
+        for t in first..first + texels {
+            for (c, s) in sum.iter_mut().enumerate() {
+                *s += word((word(t) >> (8 * c)) & 255) as f64 / LINEAR_ONE as f64;
+            }
+        }
+        sum.map(|s| s / texels as f64)
     }
 
     /// The image (an index into `images`) the slot starting at word `slot`

@@ -16,6 +16,8 @@ pub mod cli;
 pub mod data;
 pub mod formats;
 pub mod hardware;
+pub mod lights;
+pub mod pbr;
 mod settings;
 pub mod signals;
 pub mod stress;
@@ -33,6 +35,37 @@ pub fn asset(path: &str) -> PathBuf {
 
 pub fn load(name: &str) -> Scene {
     Scene::load(&asset(&format!("scenes/{name}.toml"))).expect("bundled scene loads")
+}
+
+/// A `side` × `side` PNG of one RGBA colour, encoded.
+pub fn png_bytes(side: u32, rgba: [u8; 4]) -> Vec<u8> {
+    let image = image::RgbaImage::from_pixel(side, side, image::Rgba(rgba));
+    let mut bytes = Vec::new();
+    image
+        .write_to(
+            &mut std::io::Cursor::new(&mut bytes),
+            image::ImageFormat::Png,
+        )
+        .unwrap();
+    bytes
+}
+
+/// The initialiser of the WGSL constant `name` in `module`.
+pub fn wgsl_constant<'m>(module: &'m naga::Module, name: &str) -> &'m naga::Expression {
+    let (_, c) = module
+        .constants
+        .iter()
+        .find(|(_, c)| c.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("WGSL has no const {name}"));
+    &module.global_expressions[c.init]
+}
+
+/// A `[camera]` table `distance` up the +Z axis looking at the origin.
+pub fn camera_on_z(distance: f64, vfov: f64, width: u32, height: u32) -> String {
+    format!(
+        "[camera]\neye = [0.0, 0.0, {distance:?}]\nlook_at = [0.0, 0.0, 0.0]\n\
+         vfov = {vfov:?}\nwidth = {width}\nheight = {height}\n"
+    )
 }
 
 /// Parses scene text as if it sat in assets/scenes (so meshes/… resolves).

@@ -15,8 +15,8 @@ mod turntable;
 mod view;
 
 use options::{
-    AccelArg, AdapterArgs, BenchDevice, Device, RenderOptions, SceneOptions, ViewOptions, fraction,
-    non_negative,
+    AccelArg, AdapterArgs, BenchDevice, Device, RenderOptions, SceneArgs, SceneOptions,
+    ViewOptions, fraction, non_negative,
 };
 
 use crate::progress_bar;
@@ -32,7 +32,7 @@ use lambert::limits::MAX_SPP;
 use lambert::progress::Progress;
 use lambert::rays;
 use lambert::render::Renderer;
-use lambert::scene::Scene;
+use lambert::scene::{Integrator, RenderSettings, Scene};
 
 #[derive(Parser)]
 #[command(
@@ -97,16 +97,11 @@ struct InfoArgs {
 
 #[derive(Args)]
 struct RenderArgs {
-    scene: PathBuf,
+    #[command(flatten)]
+    input: SceneArgs,
     /// Output image: .png, .exr or .pfm.
     #[arg(short, long)]
     output: PathBuf,
-    #[arg(long, value_enum, default_value_t)]
-    device: Device,
-    #[command(flatten)]
-    options: RenderOptions,
-    #[command(flatten)]
-    adapter: AdapterArgs,
     /// Render N frames orbiting camera.look_at about camera.up; the scene
     /// stays on the device and only the camera changes. The output name
     /// holds the frame number as {}, {:04} (zero-padded to 4) or similar.
@@ -176,15 +171,12 @@ fn render_part(args: &RenderArgs, tile_text: &str, quiet: bool) -> Result<ExitCo
             args.output.display()
         )));
     }
-    check_output_path(&args.output, &[&args.scene])?;
-    let (scene, settings) = args.options.load(&args.scene)?;
-    scene.check_output(&args.output)?;
-    print_warnings(&scene, quiet);
+    let (scene, settings) = load_for(&args.input, &[&args.output], quiet)?;
     let job = TileJob {
         tile,
         output: &args.output,
-        device: args.device.into(),
-        adapter: &args.adapter.request(),
+        device: args.input.device.into(),
+        adapter: &args.input.adapter.request(),
     };
     let report = jobs::render_tile(scene, &settings, &job, progress_bar::unless_quiet(quiet))?;
     if !quiet {
@@ -378,10 +370,15 @@ pub fn run() -> Result<ExitCode> {
     }
 }
 
-/// Loading's warnings, each on its own line.
-fn print_warnings(scene: &Scene, quiet: bool) {
+/// Loading's warnings, each on its own line, and what the direct
+/// integrator leaves out of the scene where it renders it (`rendered_by`;
+/// None for no render).
+fn print_warnings(scene: &Scene, rendered_by: Option<Integrator>, quiet: bool) {
     if !quiet {
-        for warning in scene.warnings() {
+        let ignored = (rendered_by == Some(Integrator::Direct))
+            .then(|| scene.ignored_by_direct())
+            .flatten();
+        for warning in scene.warnings().iter().cloned().chain(ignored) {
             eprintln!("warning: {warning}");
         }
     }
@@ -423,22 +420,17 @@ fn render(args: &RenderArgs, quiet: bool) -> Result<ExitCode> {
     if let Some(frames) = args.turntable {
         return turntable::turntable(args, frames, quiet);
     }
-    // Fail on a bad output name before spending time on the render.
-    check_output_path(&args.output, &[&args.scene])?;
-    let start = Instant::now();
-    let (scene, settings) = args.options.load(&args.scene)?;
-    let load = start.elapsed();
-    scene.check_output(&args.output)?;
     let aovs = match &args.aov {
         Some(list) => Aov::parse_list(list).map_err(|e| Error::Usage(format!("--aov: {e}")))?,
         None => Vec::new(),
     };
-    for aov in &aovs {
-        let path = aov.path_beside(&args.output);
-        check_output_path(&path, &[&args.scene, &args.output])?;
-        scene.check_output(&path)?;
-    }
-    print_warnings(&scene, quiet);
+    let aov_paths: Vec<PathBuf> = aovs.iter().map(|a| a.path_beside(&args.output)).collect();
+    let outputs: Vec<&Path> = std::iter::once(args.output.as_path())
+        .chain(aov_paths.iter().map(PathBuf::as_path))
+        .collect();
+    let start = Instant::now();
+    let (scene, settings) = load_for(&args.input, &outputs, quiet)?;
+    let load = start.elapsed();
     let sampling = match (args.time_budget, args.target_error) {
         (Some(budget), _) => Sampling::Budget(budget),
         (None, Some(target_error)) => Sampling::Adaptive {
@@ -449,8 +441,8 @@ fn render(args: &RenderArgs, quiet: bool) -> Result<ExitCode> {
     };
     let job = ImageJob {
         output: &args.output,
-        device: args.device.into(),
-        adapter: &args.adapter.request(),
+        device: args.input.device.into(),
+        adapter: &args.input.adapter.request(),
         sampling,
         aovs: &aovs,
     };
@@ -531,13 +523,46 @@ fn print_image_report(report: &ImageReport, sampling: Sampling, load: Duration) 
         );
     }
     if !report.aovs.is_empty() {
-        let paths: Vec<String> = report.aovs.iter().map(|p| p.display().to_string()).collect();
+        let paths: Vec<String> = report
+            .aovs
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect();
         eprintln!(
             "first-hit outputs ({} on the CPU path): {}",
             seconds(report.aov_time),
             paths.join(", ")
         );
     }
+}
+
+/// `input`'s scene with its options applied to the scene's default
+/// settings, for a command that writes `outputs`: `load_scene_for`.
+fn load_for(input: &SceneArgs, outputs: &[&Path], quiet: bool) -> Result<(Scene, RenderSettings)> {
+    load_scene_for(&input.scene, &input.options, outputs, quiet)
+}
+
+/// The scene at `path` with `options` applied to its default settings,
+/// for a command that writes `outputs` (an image, a turntable's frames, a
+/// screenshot, a heatmap, or none): the first output's name checked
+/// (`check_output_path`: they share a folder) before the time a load
+/// takes, then every output against the files the scene read; the
+/// scene's warnings printed unless `quiet`.
+fn load_scene_for(
+    path: &Path,
+    options: &RenderOptions,
+    outputs: &[&Path],
+    quiet: bool,
+) -> Result<(Scene, RenderSettings)> {
+    if let Some(first) = outputs.first() {
+        check_output_path(first, &[path])?;
+    }
+    let (scene, settings) = options.load(path)?;
+    for output in outputs {
+        scene.check_output(output)?;
+    }
+    print_warnings(&scene, Some(settings.integrator), quiet);
+    Ok((scene, settings))
 }
 
 /// An image output: a known format, writable, and none of `inputs`.
@@ -556,14 +581,9 @@ fn check_output_path(path: &Path, inputs: &[&Path]) -> Result<()> {
 }
 
 fn diff(args: &DiffArgs, quiet: bool) -> Result<ExitCode> {
-    if let Some(path) = &args.heatmap {
-        check_output_path(path, &[&args.scene])?;
-    }
-    let (scene, settings) = args.options.load(&args.scene)?;
-    if let Some(path) = &args.heatmap {
-        scene.check_output(path)?;
-    }
-    print_warnings(&scene, quiet || args.json);
+    let heatmap: Vec<&Path> = args.heatmap.as_deref().into_iter().collect();
+    let (scene, settings) =
+        load_scene_for(&args.scene, &args.options, &heatmap, quiet || args.json)?;
     let scene = scene.with_settings(&settings);
     let tolerance = Tolerance {
         abs: args.tol_abs,

@@ -47,6 +47,18 @@ fn png_and_svg(
     write_atomically(&stem.with_extension("png"), &image)
 }
 
+/// `png_and_svg` with one drawing, `|area| { … }`, for both backends (a
+/// closure cannot be generic over them).
+macro_rules! png_and_svg {
+    ($stem:expr, |$area:ident| $draw:block) => {
+        png_and_svg(
+            $stem,
+            |$area: DrawingArea<SVGBackend, Shift>| $draw,
+            |$area: DrawingArea<BitMapBackend, Shift>| $draw,
+        )
+    };
+}
+
 /// A chart whose two axes are logarithmic.
 type LogLogChart<'a, DB> = ChartContext<'a, DB, Cartesian2d<LogCoord<f64>, LogCoord<f64>>>;
 
@@ -153,80 +165,72 @@ pub fn time_vs_error(points: &[Point], stem: &Path) -> Result<()> {
     let (e_lo, e_hi) = bounds(&|p| p.rmse.max(floor));
     let mut front: Vec<&Point> = points.iter().filter(|p| p.on_pareto_front).collect();
     front.sort_by(|a, b| a.seconds.total_cmp(&b.seconds));
-    macro_rules! draw {
-        ($area:expr) => {{
-            let area = $area;
-            let mut chart = log_log_chart(
-                &area,
-                &title,
-                (t_lo..t_hi, "render time (s, median)", &|v| {
-                    format!("{v:.3}")
-                }),
-                (e_lo..e_hi, "RMSE against the converged reference", &|v| {
-                    format!("{v:.0e}")
-                }),
-            )?;
-            for path in [Path32::GpuF32, Path32::CpuF32, Path32::CpuF64] {
-                for intersect in Intersect::ALL {
-                    let colour = series_colour(path, intersect);
-                    let series: Vec<(f64, f64)> = points
-                        .iter()
-                        .filter(|p| {
-                            p.path == path && p.intersect == intersect && p.sampling == "uniform"
-                        })
-                        .map(|p| (p.seconds.max(1e-6), p.rmse.max(floor)))
-                        .collect();
-                    draw_points(
-                        &mut chart,
-                        &series,
-                        format!("{path:?} {}", intersect.name()),
-                        |c| Circle::new(c, 4, colour.filled()),
-                        move |c| Circle::new(c, 4, colour.filled()),
-                    )?;
-                }
-            }
-            for path in [Path32::GpuF32, Path32::CpuF32] {
-                let colour = series_colour(path, Intersect::Watertight);
+    png_and_svg!(stem, |area| {
+        let mut chart = log_log_chart(
+            &area,
+            &title,
+            (t_lo..t_hi, "render time (s, median)", &|v| {
+                format!("{v:.3}")
+            }),
+            (e_lo..e_hi, "RMSE against the converged reference", &|v| {
+                format!("{v:.0e}")
+            }),
+        )?;
+        for path in [Path32::GpuF32, Path32::CpuF32, Path32::CpuF64] {
+            for intersect in Intersect::ALL {
+                let colour = series_colour(path, intersect);
                 let series: Vec<(f64, f64)> = points
                     .iter()
-                    .filter(|p| p.path == path && p.sampling == "adaptive")
+                    .filter(|p| {
+                        p.path == path && p.intersect == intersect && p.sampling == "uniform"
+                    })
                     .map(|p| (p.seconds.max(1e-6), p.rmse.max(floor)))
                     .collect();
                 draw_points(
                     &mut chart,
                     &series,
-                    format!("{path:?} adaptive"),
-                    |c| TriangleMarker::new(c, 7, colour.filled()),
-                    move |c| TriangleMarker::new(c, 7, colour.filled()),
+                    format!("{path:?} {}", intersect.name()),
+                    |c| Circle::new(c, 4, colour.filled()),
+                    move |c| Circle::new(c, 4, colour.filled()),
                 )?;
             }
-            chart
-                .draw_series(LineSeries::new(
-                    front
-                        .iter()
-                        .map(|p| (p.seconds.max(1e-6), p.rmse.max(floor))),
+        }
+        for path in [Path32::GpuF32, Path32::CpuF32] {
+            let colour = series_colour(path, Intersect::Watertight);
+            let series: Vec<(f64, f64)> = points
+                .iter()
+                .filter(|p| p.path == path && p.sampling == "adaptive")
+                .map(|p| (p.seconds.max(1e-6), p.rmse.max(floor)))
+                .collect();
+            draw_points(
+                &mut chart,
+                &series,
+                format!("{path:?} adaptive"),
+                |c| TriangleMarker::new(c, 7, colour.filled()),
+                move |c| TriangleMarker::new(c, 7, colour.filled()),
+            )?;
+        }
+        chart
+            .draw_series(LineSeries::new(
+                front
+                    .iter()
+                    .map(|p| (p.seconds.max(1e-6), p.rmse.max(floor))),
+                BLACK.stroke_width(2),
+            ))
+            .map_err(plot_error)?
+            .label("Pareto front")
+            .legend(|(x, y)| PathElement::new([(x - 8, y), (x + 8, y)], BLACK.stroke_width(2)));
+        chart
+            .draw_series(front.iter().map(|p| {
+                Circle::new(
+                    (p.seconds.max(1e-6), p.rmse.max(floor)),
+                    8,
                     BLACK.stroke_width(2),
-                ))
-                .map_err(plot_error)?
-                .label("Pareto front")
-                .legend(|(x, y)| PathElement::new([(x - 8, y), (x + 8, y)], BLACK.stroke_width(2)));
-            chart
-                .draw_series(front.iter().map(|p| {
-                    Circle::new(
-                        (p.seconds.max(1e-6), p.rmse.max(floor)),
-                        8,
-                        BLACK.stroke_width(2),
-                    )
-                }))
-                .map_err(plot_error)?;
-            finish(&mut chart, &area, SeriesLabelPosition::UpperRight)
-        }};
-    }
-    png_and_svg(
-        stem,
-        |a: DrawingArea<SVGBackend, Shift>| draw!(a),
-        |a: DrawingArea<BitMapBackend, Shift>| draw!(a),
-    )
+                )
+            }))
+            .map_err(plot_error)?;
+        finish(&mut chart, &area, SeriesLabelPosition::UpperRight)
+    })
 }
 
 /// Time per ray (ns, log) against triangle count (log), one line per device
@@ -264,52 +268,44 @@ pub fn ladder(rows: &[LadderRow], stem: &Path) -> Result<()> {
         RGBColor(214, 39, 40),
         RGBColor(148, 103, 189),
     ];
-    macro_rules! draw {
-        ($area:expr) => {{
-            let area = $area;
-            let mut chart = log_log_chart(
-                &area,
-                "Time per ray against scene size",
-                (x_lo..x_hi, "triangles", &|v| format!("{v:.0}")),
-                (y_lo..y_hi, "ns per ray (median)", &|v| format!("{v:.0}")),
-            )?;
-            for (i, device) in devices.iter().enumerate() {
-                let colour = palette[i % palette.len()];
-                for (kind, dashed) in [("primary", false), ("shadow", true)] {
-                    let mut series: Vec<(f64, f64)> = rows
-                        .iter()
-                        .filter(|r| &r.device == device)
-                        .map(|r| {
-                            let m = if dashed {
-                                r.shadow_mrays_per_s
-                            } else {
-                                r.primary_mrays_per_s
-                            };
-                            (r.triangles as f64, ns(m))
-                        })
-                        .collect();
-                    series.sort_by(|a, b| a.0.total_cmp(&b.0));
-                    let style = if dashed {
-                        colour.stroke_width(1)
-                    } else {
-                        colour.stroke_width(3)
-                    };
-                    chart
-                        .draw_series(LineSeries::new(series.clone(), style))
-                        .map_err(plot_error)?
-                        .label(format!("{device}: {kind}"))
-                        .legend(move |(x, y)| PathElement::new([(x - 8, y), (x + 8, y)], style));
-                    chart
-                        .draw_series(series.iter().map(|&p| Circle::new(p, 4, colour.filled())))
-                        .map_err(plot_error)?;
-                }
+    png_and_svg!(stem, |area| {
+        let mut chart = log_log_chart(
+            &area,
+            "Time per ray against scene size",
+            (x_lo..x_hi, "triangles", &|v| format!("{v:.0}")),
+            (y_lo..y_hi, "ns per ray (median)", &|v| format!("{v:.0}")),
+        )?;
+        for (i, device) in devices.iter().enumerate() {
+            let colour = palette[i % palette.len()];
+            for (kind, dashed) in [("primary", false), ("shadow", true)] {
+                let mut series: Vec<(f64, f64)> = rows
+                    .iter()
+                    .filter(|r| &r.device == device)
+                    .map(|r| {
+                        let m = if dashed {
+                            r.shadow_mrays_per_s
+                        } else {
+                            r.primary_mrays_per_s
+                        };
+                        (r.triangles as f64, ns(m))
+                    })
+                    .collect();
+                series.sort_by(|a, b| a.0.total_cmp(&b.0));
+                let style = if dashed {
+                    colour.stroke_width(1)
+                } else {
+                    colour.stroke_width(3)
+                };
+                chart
+                    .draw_series(LineSeries::new(series.clone(), style))
+                    .map_err(plot_error)?
+                    .label(format!("{device}: {kind}"))
+                    .legend(move |(x, y)| PathElement::new([(x - 8, y), (x + 8, y)], style));
+                chart
+                    .draw_series(series.iter().map(|&p| Circle::new(p, 4, colour.filled())))
+                    .map_err(plot_error)?;
             }
-            finish(&mut chart, &area, SeriesLabelPosition::UpperLeft)
-        }};
-    }
-    png_and_svg(
-        stem,
-        |a: DrawingArea<SVGBackend, Shift>| draw!(a),
-        |a: DrawingArea<BitMapBackend, Shift>| draw!(a),
-    )
+        }
+        finish(&mut chart, &area, SeriesLabelPosition::UpperLeft)
+    })
 }

@@ -91,16 +91,17 @@ macro_rules! texture {
 
         impl Textures<'_> {
             /// Texel (x, y) of the level whose entry starts at word `level`, as
-            /// linear RGBA in 1/LINEAR_ONE.
+            /// linear RGBA in 1/LINEAR_ONE (RGB through the table at word `table`).
             #[inline(always)]
-            pub fn texel_linear(&self, level: u32, x: i32, y: i32) -> [u32; 4] {
+            pub fn texel_linear(&self, level: u32, x: i32, y: i32, table: u32) -> [u32; 4] {
                 let w = self.words;
                 let at = w[level as usize] + y as u32 * w[level as usize + 1] + x as u32;
                 let word = w[at as usize];
+                let decode = |shift: u32| w[(table + ((word >> shift) & 255)) as usize];
                 [
-                    w[(word & 255) as usize],
-                    w[((word >> 8) & 255) as usize],
-                    w[((word >> 16) & 255) as usize],
+                    decode(0),
+                    decode(8),
+                    decode(16),
                     ((word >> 24) * LINEAR_ONE + 127) / 255,
                 ]
             }
@@ -114,6 +115,7 @@ macro_rules! texture {
                 wrap_u: u32,
                 wrap_v: u32,
                 bilinear: bool,
+                table: u32,
             ) -> [u32; 4] {
                 let width = self.words[level as usize + 1] as i32;
                 let height = self.words[level as usize + 2] as i32;
@@ -122,7 +124,7 @@ macro_rules! texture {
                 if !bilinear {
                     let x = wrap_texel((px + 128) >> 8, width, wrap_u);
                     let y = wrap_texel((py + 128) >> 8, height, wrap_v);
-                    return self.texel_linear(level, x, y).map(|c| c * 65536);
+                    return self.texel_linear(level, x, y, table).map(|c| c * 65536);
                 }
                 let x0 = wrap_texel(px >> 8, width, wrap_u);
                 let x1 = wrap_texel((px >> 8) + 1, width, wrap_u);
@@ -131,10 +133,13 @@ macro_rules! texture {
                 let fx = (px & 255) as u32;
                 let fy = (py & 255) as u32;
                 let taps = [
-                    (self.texel_linear(level, x0, y0), (256 - fx) * (256 - fy)),
-                    (self.texel_linear(level, x1, y0), fx * (256 - fy)),
-                    (self.texel_linear(level, x0, y1), (256 - fx) * fy),
-                    (self.texel_linear(level, x1, y1), fx * fy),
+                    (
+                        self.texel_linear(level, x0, y0, table),
+                        (256 - fx) * (256 - fy),
+                    ),
+                    (self.texel_linear(level, x1, y0, table), fx * (256 - fy)),
+                    (self.texel_linear(level, x0, y1, table), (256 - fx) * fy),
+                    (self.texel_linear(level, x1, y1, table), fx * fy),
                 ];
                 std::array::from_fn(|c| taps.iter().map(|(t, weight)| t[c] * weight).sum())
             }
@@ -159,6 +164,7 @@ macro_rules! texture {
             pub fn sample_texture(&self, slot: u32, uv: Vec2, lod: i32) -> Vec4 {
                 let flags = self.words[slot as usize + 8];
                 let levels = self.words[slot as usize + 7];
+                let table = self.words[slot as usize + 9];
                 let count = (flags >> 8) & 255;
                 let wrap_u = flags & 3;
                 let wrap_v = (flags >> 2) & 3;
@@ -171,11 +177,14 @@ macro_rules! texture {
                         wrap_u,
                         wrap_v,
                         flags & 16 != 0,
+                        table,
                     ));
                 }
                 let bilinear = flags & 32 != 0;
                 if flags & 64 == 0 {
-                    return fixed_to_float(self.level_sum(levels, w, wrap_u, wrap_v, bilinear));
+                    return fixed_to_float(
+                        self.level_sum(levels, w, wrap_u, wrap_v, bilinear, table),
+                    );
                 }
                 let level = (lod >> 8) as u32;
                 if level + 1 >= count {
@@ -185,11 +194,13 @@ macro_rules! texture {
                         wrap_u,
                         wrap_v,
                         bilinear,
+                        table,
                     ));
                 }
                 let f = (lod & 255) as u32;
-                let finer = self.level_sum(levels + 4 * level, w, wrap_u, wrap_v, bilinear);
-                let coarser = self.level_sum(levels + 4 * (level + 1), w, wrap_u, wrap_v, bilinear);
+                let finer = self.level_sum(levels + 4 * level, w, wrap_u, wrap_v, bilinear, table);
+                let coarser =
+                    self.level_sum(levels + 4 * (level + 1), w, wrap_u, wrap_v, bilinear, table);
                 fixed_to_float(std::array::from_fn(|c| {
                     (finer[c] >> 8) * (256 - f) + (coarser[c] >> 8) * f
                 }))

@@ -1,13 +1,23 @@
-//! glTF materials: base colour, emission and alpha, their textures (the
-//! images they name, samplers, KHR_texture_transform) and which texture
-//! coordinate set a primitive's material reads.
+//! glTF materials: base colour, emission and alpha, metalness and
+//! roughness, the normal map, their textures (the images they name,
+//! samplers, KHR_texture_transform) and which texture coordinate set a
+//! primitive's material reads.
 
 use std::path::Path;
 
 use super::material_name;
 use super::percent_decoded;
 use crate::loading::material::{
-    AlphaMode, Filter, IDENTITY_UV_TRANSFORM, ImageSource, MaterialDesc, Sampler, TextureUse, Wrap,
+    AlphaMode, Brdf, Filter, IDENTITY_UV_TRANSFORM, ImageSource, MaterialDesc, Sampler, TextureUse,
+    Wrap,
+};
+
+/// glTF's BRDF with the spec's defaults (metallicFactor and
+/// roughnessFactor 1): what a primitive without a material gets, as
+/// three.js and the Khronos sample viewer give it.
+pub(super) const DEFAULT_BRDF: Brdf = Brdf::MetallicRoughness {
+    metallic: 1.0,
+    roughness: 1.0,
 };
 
 /// A material as lambert renders it: baseColorFactor (negative components,
@@ -15,7 +25,10 @@ use crate::loading::material::{
 /// 0 with a warning, as trimesh and Blender read such files; above 1 kept,
 /// as a TOML or MTL albedo may be), its texture, emissiveFactor ×
 /// KHR_materials_emissive_strength and its texture, alphaMode and
-/// alphaCutoff (BLEND with a warning: it is rendered as MASK at 0.5).
+/// alphaCutoff (BLEND with a warning: it is rendered as MASK at 0.5);
+/// metallicFactor and roughnessFactor (clamped to the spec's [0, 1]) and
+/// metallicRoughnessTexture; normalTexture and its scale. occlusionTexture
+/// is not read (docs/rendering.md, "Materials").
 pub(super) fn material_desc(
     material: &gltf::Material,
     path: &Path,
@@ -44,26 +57,40 @@ pub(super) fn material_desc(
             AlphaMode::Blend
         }
     };
+    let normal = material.normal_texture();
     MaterialDesc {
         base_color: factor.map(|c| c.max(0.0)),
         base_color_texture: pbr
             .base_color_texture()
-            .and_then(|info| images.texture_use(&info, warnings)),
+            .and_then(|info| images.info_use(&info, warnings)),
         emissive: material.emissive_factor().map(|c| (c * strength).max(0.0)),
         emissive_texture: material
             .emissive_texture()
-            .and_then(|info| images.texture_use(&info, warnings)),
+            .and_then(|info| images.info_use(&info, warnings)),
         alpha_mode,
         alpha_cutoff: material.alpha_cutoff().unwrap_or(0.5),
         alpha_texture: None,
+        brdf: Brdf::MetallicRoughness {
+            metallic: pbr.metallic_factor().clamp(0.0, 1.0),
+            roughness: pbr.roughness_factor().clamp(0.0, 1.0),
+        },
+        metallic_roughness_texture: pbr
+            .metallic_roughness_texture()
+            .and_then(|info| images.info_use(&info, warnings)),
+        // The crate reads no KHR_texture_transform on a normalTexture.
+        normal_texture: normal
+            .as_ref()
+            .and_then(|n| images.texture_use(&n.texture(), None, warnings)),
+        normal_scale: normal.as_ref().map_or(1.0, |n| n.scale()),
         name,
     }
 }
 
 /// Which TEXCOORD_n a primitive's material reads: its base colour
-/// texture's set (KHR_texture_transform may name another), else its
-/// emissive texture's; a material whose textures read two sets gets the
-/// base colour's, with a warning. None without textures. A texture whose
+/// texture's set (KHR_texture_transform may name another), else that of
+/// the first of its emissive, metallic-roughness and normal textures; a
+/// material whose textures read two sets gets that one, with a warning
+/// naming the other. None without textures. A texture whose
 /// set the primitive lacks is a warning naming the material, the texture
 /// and the set: the primitive reads it at (0, 0), as an OBJ face without
 /// `vt` does.
@@ -75,11 +102,7 @@ pub(super) fn texture_coordinate_set(
     warnings: &mut Vec<String>,
 ) -> Option<u32> {
     let name = material_name(material);
-    let mut set = |info: gltf::texture::Info, slot: &str| {
-        let (set, whose) = match info.texture_transform().and_then(|t| t.tex_coord()) {
-            Some(set) => (set, "its KHR_texture_transform texCoord"),
-            None => (info.tex_coord(), "texCoord"),
-        };
+    let mut set = |(set, whose): (u32, &str), slot: &str| {
         // One warning a material's texture, naming the first primitive.
         let said = format!(
             "{}: material {name}: its {slot} reads TEXCOORD_{set} ({whose})",
@@ -95,26 +118,43 @@ pub(super) fn texture_coordinate_set(
         }
         set
     };
-    let base = material
-        .pbr_metallic_roughness()
-        .base_color_texture()
-        .map(|info| set(info, "baseColorTexture"));
-    let emissive = material
-        .emissive_texture()
-        .map(|info| set(info, "emissiveTexture"));
-    if let (Some(b), Some(e)) = (base, emissive)
-        && b != e
-    {
-        let warning = format!(
-            "{}: material {name}: its emissiveTexture reads TEXCOORD_{e}, its baseColorTexture \
-             TEXCOORD_{b}; both read TEXCOORD_{b}",
-            path.display(),
-        );
-        if !warnings.contains(&warning) {
-            warnings.push(warning);
+    let info_set =
+        |info: gltf::texture::Info| match info.texture_transform().and_then(|t| t.tex_coord()) {
+            Some(set) => (set, "its KHR_texture_transform texCoord"),
+            None => (info.tex_coord(), "texCoord"),
+        };
+    let pbr = material.pbr_metallic_roughness();
+    let sets: Vec<(u32, &str)> = [
+        (pbr.base_color_texture().map(info_set), "baseColorTexture"),
+        (material.emissive_texture().map(info_set), "emissiveTexture"),
+        (
+            pbr.metallic_roughness_texture().map(info_set),
+            "metallicRoughnessTexture",
+        ),
+        (
+            material
+                .normal_texture()
+                .map(|n| (n.tex_coord(), "texCoord")),
+            "normalTexture",
+        ),
+    ]
+    .into_iter()
+    .filter_map(|(texture, slot)| texture.map(|t| (set(t, slot), slot)))
+    .collect();
+    let &(first, first_slot) = sets.first()?;
+    for &(other, slot) in &sets[1..] {
+        if other != first {
+            let warning = format!(
+                "{}: material {name}: its {slot} reads TEXCOORD_{other}, its {first_slot} \
+                 TEXCOORD_{first}; both read TEXCOORD_{first}",
+                path.display(),
+            );
+            if !warnings.contains(&warning) {
+                warnings.push(warning);
+            }
         }
     }
-    base.or(emissive)
+    Some(first)
 }
 
 /// The file's images as materials use them: each read once, in the order
@@ -144,14 +184,23 @@ impl<'a> Images<'a> {
         }
     }
 
-    /// A texture reference as lambert keeps it: its image (None, with a
-    /// warning, where the image cannot be found), sampler and transform.
-    fn texture_use(
+    /// `texture_use` of a texture reference with its KHR_texture_transform.
+    fn info_use(
         &mut self,
         info: &gltf::texture::Info,
         warnings: &mut Vec<String>,
     ) -> Option<TextureUse> {
-        let texture = info.texture();
+        self.texture_use(&info.texture(), info.texture_transform(), warnings)
+    }
+
+    /// A texture as lambert keeps it: its image (None, with a warning,
+    /// where the image cannot be found), sampler and transform.
+    fn texture_use(
+        &mut self,
+        texture: &gltf::Texture,
+        transform: Option<gltf::texture::TextureTransform>,
+        warnings: &mut Vec<String>,
+    ) -> Option<TextureUse> {
         let image = texture.source();
         let id = match self.ids[image.index()] {
             Some(id) => id,
@@ -177,7 +226,7 @@ impl<'a> Images<'a> {
         Some(TextureUse {
             image: id,
             sampler: sampler(&texture.sampler()),
-            transform: info.texture_transform().map_or(IDENTITY_UV_TRANSFORM, |t| {
+            transform: transform.map_or(IDENTITY_UV_TRANSFORM, |t| {
                 uv_transform(t.offset(), t.rotation(), t.scale())
             }),
         })

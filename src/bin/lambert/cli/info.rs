@@ -71,6 +71,17 @@ pub(super) fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> 
             let [r, g, b] = m.emission;
             line += &format!(", emissive [{r}, {g}, {b}]");
         }
+        if m.kind == lambert::layout::MATERIAL_METALLIC_ROUGHNESS {
+            line += &format!(", metallic {}, roughness {}", m.metallic, m.roughness);
+            if m.metallic_roughness_texture != lambert::layout::NO_TEXTURE {
+                line += " (× the metallic-roughness texture)";
+            }
+        } else {
+            line += ", Lambert";
+        }
+        if m.normal_texture != lambert::layout::NO_TEXTURE {
+            line += &format!(", normal map (scale {})", m.normal_scale);
+        }
         println!("{line}");
     }
     let textures = scene.textures().images();
@@ -86,6 +97,8 @@ pub(super) fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> 
                     (m.base_color_texture, "base colour"),
                     (m.emissive_texture, "emissive"),
                     (m.alpha_texture, "alpha"),
+                    (m.metallic_roughness_texture, "metallic-roughness"),
+                    (m.normal_texture, "normal"),
                 ]
                 .into_iter()
                 .filter(|&(slot, _)| {
@@ -129,10 +142,38 @@ pub(super) fn model_info(path: &Path, camera: Option<&str>) -> Result<ExitCode> 
         let color = lambert::limits::vector_text(glam::Vec3::from(light.color).as_dvec3());
         if light.kind == lambert::layout::LIGHT_POINT {
             println!("    point at {vector}, intensity {color}");
+        } else if light.kind == lambert::layout::LIGHT_SPOT {
+            let direction =
+                lambert::limits::vector_text(glam::Vec3::from(light.direction).as_dvec3());
+            let angle = |cos: f32| cos.clamp(-1.0, 1.0).acos().to_degrees();
+            println!(
+                "    spot at {vector} pointing {direction}, intensity {color}, cones {:.2}° to \
+                 {:.2}°",
+                angle(light.cos_inner),
+                angle(light.cos_outer)
+            );
         } else {
             println!("    directional towards {vector} (from the surface), irradiance {color}");
         }
     }
+    if let Some(e) = scene.environment() {
+        let what = match (&e.map, e.file()) {
+            (Some(map), Some(file)) => {
+                format!("{} ({} × {} texels)", file.display(), map.width, map.height)
+            }
+            _ => format!("colour {:?}", e.color),
+        };
+        println!(
+            "  environment (path integrator only): {what}, strength {}, turned {}° about +Y",
+            e.spec.strength, e.spec.rotation_deg
+        );
+    }
+    let table = scene.emitters();
+    println!(
+        "  emitters (path integrator): {} ({} emissive triangles)",
+        table.entries.len(),
+        table.uniform.num_triangle_emitters
+    );
     // f32 values, printed as f32 (0.1, not 0.10000000149011612).
     println!("  ambient: {:?}", scene.ambient());
     for warning in scene.warnings() {

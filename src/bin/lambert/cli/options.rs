@@ -2,7 +2,7 @@
 //! view and a render's light, their value parsers, and the command line's
 //! names of the library's choices (the library knows nothing of clap).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use clap::{Args, ValueEnum};
 
@@ -11,7 +11,7 @@ use lambert::error::{Error, Result};
 use lambert::gpu::AdapterRequest;
 use lambert::limits::{validate_max_depth, validate_spp};
 use lambert::render::DeviceChoice;
-use lambert::scene::{Accel, Integrator, Intersect, RenderSettings, Scene};
+use lambert::scene::{Accel, Integrator, Intersect, RenderSettings, Scene, environment_option};
 
 /// `--device` of render, diff and trace: `DeviceChoice`.
 #[derive(Clone, Copy, Default, ValueEnum)]
@@ -140,6 +140,20 @@ impl AdapterArgs {
     }
 }
 
+/// What a render reads and where it renders, as `render` and `view` take
+/// them.
+#[derive(Args)]
+pub(super) struct SceneArgs {
+    /// A scene (.toml) or model file.
+    pub scene: PathBuf,
+    #[arg(long, value_enum, default_value_t)]
+    pub device: Device,
+    #[command(flatten)]
+    pub options: RenderOptions,
+    #[command(flatten)]
+    pub adapter: AdapterArgs,
+}
+
 /// Settings that override the scene file's.
 #[derive(Args, Clone)]
 pub(super) struct SceneOptions {
@@ -241,6 +255,27 @@ pub(super) struct RenderOptions {
     /// the scene's render.max_depth, else 8].
     #[arg(long, value_name = "N")]
     max_depth: Option<u32>,
+    /// Light from every direction at infinity, for the path integrator: an
+    /// equirectangular .hdr or .exr map, or a colour R,G,B (one value:
+    /// grey) [default: a scene's [environment]; a model file's none].
+    #[arg(long, value_name = "FILE|R[,G,B]")]
+    environment: Option<String>,
+    /// The environment's radiance multiplied by this.
+    #[arg(
+        long,
+        value_name = "S",
+        default_value_t = 1.0,
+        requires = "environment"
+    )]
+    environment_strength: f64,
+    /// The environment's map turned about +Y by this many degrees.
+    #[arg(
+        long,
+        value_name = "DEG",
+        default_value_t = 0.0,
+        requires = "environment"
+    )]
+    environment_rotation: f64,
     #[command(flatten)]
     scene: SceneOptions,
 }
@@ -251,8 +286,11 @@ impl RenderOptions {
         self.scene.spp
     }
 
+    /// The scene with the options' light: `--ambient` in its settings,
+    /// `--environment` (scene content, as a file's `[environment]`, read
+    /// once here) replacing its own.
     pub(super) fn load(&self, path: &Path) -> Result<(Scene, RenderSettings)> {
-        let (scene, mut settings) = self.scene.load(path)?;
+        let (mut scene, mut settings) = self.scene.load(path)?;
         if let Some(ambient) = self.ambient {
             settings.ambient = ambient;
         }
@@ -262,6 +300,11 @@ impl RenderOptions {
         if let Some(max_depth) = self.max_depth {
             validate_max_depth(max_depth).map_err(|e| Error::Usage(format!("--{e}")))?;
             settings.max_depth = max_depth;
+        }
+        if let Some(text) = &self.environment {
+            let spec =
+                environment_option(text, self.environment_strength, self.environment_rotation)?;
+            scene.set_environment(Some(&spec))?;
         }
         Ok((scene, settings))
     }

@@ -149,7 +149,7 @@ pub(super) fn query(args: &QueryArgs, quiet: bool) -> Result<ExitCode> {
         None => Scene::from_objs(&args.obj)?,
     };
     scene.check_output(&args.output)?;
-    print_warnings(&scene, quiet);
+    print_warnings(&scene, None, quiet);
     let job = QueryJob {
         kind,
         input,

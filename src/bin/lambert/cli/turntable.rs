@@ -1,9 +1,10 @@
 //! `lambert render --turntable N`: its options checked, then the job
 //! (`jobs::render_turntable`) and its report.
 
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use super::{RenderArgs, check_output_path, print_warnings};
+use super::{RenderArgs, load_for};
 use crate::progress_bar;
 use lambert::error::{Error, Result};
 use lambert::jobs::{TurntableJob, frame_paths, render_turntable, seconds};
@@ -37,20 +38,16 @@ pub(super) fn turntable(args: &RenderArgs, frames: u32, quiet: bool) -> Result<E
     // Every frame's name is checked before the first is rendered.
     let paths = frame_paths(&args.output, range.clone())?;
     for path in &paths {
-        lambert::output::refuse_input(path, &[&args.scene])?;
+        lambert::output::refuse_input(path, &[&args.input.scene])?;
     }
-    check_output_path(&paths[0], &[&args.scene])?;
-    let (scene, settings) = args.options.load(&args.scene)?;
-    for path in &paths {
-        scene.check_output(path)?;
-    }
-    print_warnings(&scene, quiet);
+    let outputs: Vec<&Path> = paths.iter().map(PathBuf::as_path).collect();
+    let (scene, settings) = load_for(&args.input, &outputs, quiet)?;
     let job = TurntableJob {
         pattern: &args.output,
         frames,
         range,
-        device: args.device.into(),
-        adapter: &args.adapter.request(),
+        device: args.input.device.into(),
+        adapter: &args.input.adapter.request(),
     };
     let report = render_turntable(scene, &settings, &job, progress_bar::unless_quiet(quiet))?;
     if !quiet {

@@ -1,6 +1,6 @@
 //! `lambert view`'s arguments, handed to the viewer (src/bin/lambert/view/).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::Args;
@@ -8,8 +8,8 @@ use clap::Args;
 use lambert::error::{Error, Result};
 use lambert::limits::validate_spp;
 
-use super::options::{AdapterArgs, Device, RenderOptions};
-use super::{check_output_path, print_warnings};
+use super::load_for;
+use super::options::SceneArgs;
 use crate::view::{INTERACTIVE_SPP, Settings, view};
 
 #[derive(Args)]
@@ -17,14 +17,8 @@ use crate::view::{INTERACTIVE_SPP, Settings, view};
     "Samples per pixel the image is refined to, one a frame [default: the scene's render.spp, else 1024]"
 )))]
 pub(super) struct ViewArgs {
-    /// A scene (.toml) or model file, as `render` takes.
-    scene: PathBuf,
-    #[arg(long, value_enum, default_value_t)]
-    device: Device,
     #[command(flatten)]
-    options: RenderOptions,
-    #[command(flatten)]
-    adapter: AdapterArgs,
+    input: SceneArgs,
     /// Render N frames of one sample per pixel each (the image `render
     /// --spp N` makes, bit for bit), write --screenshot and exit. Without
     /// it the image is refined up to --spp (default: the scene's
@@ -43,28 +37,22 @@ pub(super) struct ViewArgs {
 }
 
 pub(super) fn run(args: ViewArgs, quiet: bool) -> Result<ExitCode> {
-    if let Some(path) = &args.screenshot {
-        check_output_path(path, &[&args.scene])?;
-    }
     if let Some(frames) = args.frames {
         validate_spp(frames).map_err(|e| Error::Usage(format!("--frames: {e}")))?;
     }
-    let (scene, settings) = args.options.load(&args.scene)?;
-    if let Some(path) = &args.screenshot {
-        scene.check_output(path)?;
-    }
-    print_warnings(&scene, quiet);
+    let screenshot: Vec<&Path> = args.screenshot.as_deref().into_iter().collect();
+    let (scene, settings) = load_for(&args.input, &screenshot, quiet)?;
     let spp = args
         .frames
-        .or(args.options.spp())
+        .or(args.input.options.spp())
         .or(scene.spp_given().then_some(scene.view().spp))
         .unwrap_or(INTERACTIVE_SPP);
     view(Settings {
-        path: args.scene,
+        path: args.input.scene,
         // The viewer renders the scene as the options set it.
         scene: scene.with_settings(&settings),
-        device: args.device.into(),
-        request: args.adapter.request(),
+        device: args.input.device.into(),
+        request: args.input.adapter.request(),
         spp,
         frames: args.frames.is_some(),
         screenshot: args.screenshot,
