@@ -26,9 +26,10 @@ pub fn private_mesa() -> PathBuf {
 }
 
 /// The variables that point the Vulkan loader at the private lavapipe
-/// alone (its ICD file) and the linker at its libraries.
+/// alone (its ICD file) and the linker at its libraries (in Debian's
+/// multiarch directory, as scripts/mesa-rt unpacks them).
 pub fn private_mesa_env(prefix: &std::path::Path) -> [(&'static str, String); 2] {
-    let libs = prefix.join("usr/lib/x86_64-linux-gnu");
+    let libs = prefix.join(format!("usr/lib/{}-linux-gnu", std::env::consts::ARCH));
     let path = match std::env::var("LD_LIBRARY_PATH") {
         Ok(old) if !old.is_empty() => format!("{}:{old}", libs.display()),
         _ => libs.display().to_string(),
