@@ -1,10 +1,10 @@
 //! A device with ray queries for the hardware path's tests
-//! (tests/hardware_rays.rs): this process's, where its adapter has them
-//! (a real RT GPU, or a system Mesa ≥ 24.1); else the private lavapipe
-//! that scripts/mesa-rt unpacks into the target directory (Mesa 25 from
-//! Debian's bookworm-backports), in a child process of the test binary,
-//! since the Vulkan loader and the dynamic linker read their variables
-//! once per process. The rest of the suite keeps the system's Mesa.
+//! (tests/hardware_rays.rs, tests/hardware_path.rs): this process's,
+//! where its adapter has them (a real RT GPU, or a system Mesa ≥ 24.1);
+//! else the private lavapipe that scripts/mesa-rt unpacks into the target
+//! directory (Mesa 25 from Debian's bookworm-backports), in a child
+//! process of the test binary, since the Vulkan loader and the dynamic
+//! linker read their variables once per process. The rest of the suite keeps the system's Mesa.
 
 use std::path::PathBuf;
 use std::process::Command;
