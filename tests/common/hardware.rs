@@ -4,7 +4,8 @@
 //! else the private lavapipe that scripts/mesa-rt unpacks into the target
 //! directory (Mesa 25 from Debian's bookworm-backports), in a child
 //! process of the test binary, since the Vulkan loader and the dynamic
-//! linker read their variables once per process. The rest of the suite keeps the system's Mesa.
+//! linker read their variables once per process. The rest of the suite
+//! keeps the system's Mesa.
 
 use std::path::PathBuf;
 use std::process::Command;
