@@ -48,7 +48,7 @@ fn count_hits(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) 
     if id.x >= arrayLength(&rays) {
         return;
     }
-    hit_counts[id.x] = all_hits(rays[id.x], id.x, query_scalars[0].y, false, 0u);
+    hit_counts[id.x] = every_hit(rays[id.x], id.x, query_scalars[0].y, false, 0u);
     report_cut_loops();
 }
 
@@ -59,6 +59,6 @@ fn list_hits(@builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) g
     if id.x >= arrayLength(&rays) {
         return;
     }
-    all_hits(rays[id.x], id.x, query_scalars[0].y, true, hit_counts[id.x]);
+    every_hit(rays[id.x], id.x, query_scalars[0].y, true, hit_counts[id.x]);
     report_cut_loops();
 }

@@ -1,7 +1,9 @@
 // Stage: traversal. The slab test of a compressed node's eight children,
 // the traversal stack (workgroup memory, spilling when the tree is deep),
-// the compressed BVH's traversal and the brute-force reference, and
-// `trace`, `trace_closest`, `trace_any`. CPU twin: src/cpu/traverse.rs.
+// the compressed BVH's traversal and the brute-force reference, a ray's
+// preparation for them (`prepare_ray`, `unscale`), and `trace_closest`,
+// `trace_any` over `trace` (shaders/trace.wgsl, or hardware_trace.wgsl).
+// CPU twin: src/cpu/traverse.rs.
 
 // What the slab test needs of a ray, computed once per ray (ray_slabs): per
 // axis, the reciprocal direction (widened by the slack for exit distances),
@@ -243,17 +245,18 @@ fn has_nan(v: vec3<f32>) -> bool {
     return any((bitcast<vec3<u32>>(v) & vec3<u32>(0x7fffffffu)) > vec3<u32>(0x7f800000u));
 }
 
-fn trace(ray_in: Ray, any_hit: bool) -> Hit {
-    // A ray with a NaN in its origin, direction or tmin hits nothing (every
-    // distance test fails), but its slab test enters every box (a NaN
-    // comparison is false, so the slab is ignored): without this it would
-    // walk the whole tree, which on an H200 took 0.39 s for one ray.
-    if has_nan(ray_in.origin) || has_nan(ray_in.dir) || has_nan(vec3<f32>(ray_in.tmin)) {
-        return miss();
-    }
+// A ray as the traversal takes it (the CPU twin's prepare_ray returns the
+// pair): its direction scaled by a power of two, exactly, so that tiny
+// directions' clamped components stay negligible (see the twin), tmin and
+// tmax by the inverse; its shear, whose t_scale takes a hit's distance
+// back (`unscale`).
+struct PreparedRay {
+    ray: Ray,
+    shear: Shear,
+}
+
+fn prepare_ray(ray_in: Ray) -> PreparedRay {
     var ray = ray_in;
-    // The direction scaled by a power of two, exactly (see the CPU twin's
-    // prepare_ray): tiny directions' clamped components stay negligible.
     let m = abs(ray.dir);
     let scale = direction_scale(max(max(m.x, m.y), m.z));
     ray.dir *= scale.x;
@@ -265,17 +268,29 @@ fn trace(ray_in: Ray, any_hit: bool) -> Hit {
     ray.tmax = select(FAR, ray.tmax, ray.tmax < FAR);
     var shear = ray_shear(ray.dir);
     shear.t_scale = scale.x;
-    var hit: Hit;
-    if USE_BVH {
-        hit = trace_compressed(ray, shear, any_hit);
-    } else {
-        hit = trace_brute_force(ray, shear, any_hit);
-    }
+    return PreparedRay(ray, shear);
+}
+
+// A hit of a prepared ray, its distance back in the ray's own units.
+fn unscale(hit_in: Hit, shear: Shear) -> Hit {
+    var hit = hit_in;
     if hit.prim != NO_HIT {
         hit.t *= shear.t_scale;
     }
     return hit;
 }
+
+// Whether a ray has a NaN in its origin, direction or tmin: it hits
+// nothing (every distance test fails), but its slab test enters every box
+// (a NaN comparison is false, so the slab is ignored), so `trace` returns
+// a miss at once: walking the whole tree took an H200 0.39 s for one ray.
+fn is_nan_ray(ray: Ray) -> bool {
+    return has_nan(ray.origin) || has_nan(ray.dir) || has_nan(vec3<f32>(ray.tmin));
+}
+
+// `trace` itself, which the functions below and the ray-query entry point
+// call, is shaders/trace.wgsl's (the compute traversal above) or, under
+// `--accel hardware`, shaders/hardware_trace.wgsl's (a ray query).
 
 fn trace_closest(ray: Ray) -> Hit {
     return trace(ray, false);

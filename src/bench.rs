@@ -340,6 +340,7 @@ fn accel_name(accel: Accel) -> &'static str {
     match accel {
         Accel::Bvh => "bvh",
         Accel::BruteForce => "brute-force",
+        Accel::Hardware => "hardware",
     }
 }
 

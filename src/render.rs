@@ -12,7 +12,7 @@ use crate::gpu::{AdapterRequest, Gpu, GpuRenderer, Presenting};
 use crate::layout::{Hit, Ray};
 use crate::output::{Image, Rendered};
 use crate::progress::{Progress, ProgressSink};
-use crate::scene::{Integrator, Intersect, RenderSettings, Scene};
+use crate::scene::{Accel, Integrator, Intersect, RenderSettings, Scene};
 
 /// Where to render (`--device`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -100,6 +100,7 @@ fn open_device(
     request: &AdapterRequest,
     presenting: Option<&Presenting>,
 ) -> Result<Opened> {
+    let request = &with_ray_queries(scene, request);
     match choice {
         DeviceChoice::Cpu => Ok(Opened::Cpu(None)),
         DeviceChoice::Gpu => Ok(Opened::Gpu(Box::new(open_any_gpu(
@@ -123,7 +124,22 @@ fn open_device(
 /// software ones included, failing if none opens or the scene does not fit.
 /// Also what the measurements and comparisons of the GPU itself use.
 pub fn open_gpu(scene: &Scene, request: &AdapterRequest) -> Result<GpuRenderer> {
-    open_any_gpu(scene, request, None)
+    open_any_gpu(scene, &with_ray_queries(scene, request), None)
+}
+
+/// `request`, asking for ray queries where `scene` is traced in them
+/// (`--accel hardware`; otherwise the device is opened without them).
+fn with_ray_queries(scene: &Scene, request: &AdapterRequest) -> AdapterRequest {
+    AdapterRequest {
+        ray_queries: scene.accel == Accel::Hardware,
+        ..request.clone()
+    }
+}
+
+/// The note of a GPU renderer that was asked for `--accel hardware` but
+/// traces through the compute BVH (`GpuRenderer::accel_note`).
+fn accel_note(renderer: &GpuRenderer) -> Option<String> {
+    renderer.accel_note().map(str::to_string)
 }
 
 fn open_any_gpu(
@@ -206,7 +222,8 @@ impl Renderers {
     }
 
     /// The renderer `choice` asks for, opening it if need be. The note, on
-    /// the first fallback of `auto` to the CPU path only, says why.
+    /// the first fallback of `auto` to the CPU path only (or when a GPU
+    /// opened for `--accel hardware` has no ray queries), says why.
     pub fn get(&mut self, choice: DeviceChoice) -> Result<(&mut Renderer, Option<String>)> {
         let named = self.request.names_adapter();
         match choice {
@@ -223,8 +240,9 @@ impl Renderers {
                     Opened::Gpu(mut renderer) => {
                         renderer.set_winding_source(Arc::downgrade(&self.scene));
                         self.gpu_is_hardware = !renderer.gpu().is_software();
+                        let note = accel_note(&renderer);
                         let gpu = self.gpu.insert(Renderer::Gpu(renderer));
-                        Ok((gpu, None))
+                        Ok((gpu, note))
                     }
                     Opened::Cpu(note) => {
                         self.auto_fell_back = true;
@@ -269,7 +287,8 @@ impl Renderer {
             Opened::Gpu(mut renderer) => {
                 // Winding queries build the scene's winding tree from it.
                 renderer.set_winding_source(Arc::downgrade(&scene));
-                (Renderer::Gpu(renderer), None)
+                let note = accel_note(&renderer);
+                (Renderer::Gpu(renderer), note)
             }
             Opened::Cpu(note) => (Renderer::Cpu(scene), note),
         })
@@ -341,6 +360,28 @@ impl Renderer {
         }
     }
 
+    /// The acceleration structures its rays go through where they go
+    /// through the GPU's ray queries (`--accel hardware`), else None.
+    pub fn ray_queries(&self) -> Option<crate::gpu::AccelerationStats> {
+        match self {
+            Renderer::Gpu(r) => r.ray_queries().copied(),
+            Renderer::Cpu(_) => None,
+        }
+    }
+
+    /// Where this renderer traces through ray queries (`--accel
+    /// hardware`) but `what` does not (the geometric queries walk the
+    /// compute BVH): the note saying so, for the front end to print.
+    pub fn bvh_note(&self, what: &str) -> Option<String> {
+        match self {
+            Renderer::Gpu(r) if r.ray_queries().is_some() => Some(format!(
+                "note: --accel hardware: {what} go through the compute BVH \
+                 (docs/hardware-rays.md, \"Fallbacks\")"
+            )),
+            _ => None,
+        }
+    }
+
     /// Device time of the last GPU `trace`, from timestamp queries.
     pub fn trace_device_time(&self) -> Option<std::time::Duration> {
         match self {
@@ -351,6 +392,9 @@ impl Renderer {
 
     pub fn describe(&self) -> String {
         match self {
+            Renderer::Gpu(r) if r.ray_queries().is_some() => {
+                format!("GPU: {}, ray queries", r.gpu().describe())
+            }
             Renderer::Gpu(r) => format!("GPU: {}", r.gpu().describe()),
             Renderer::Cpu(_) => format!(
                 "CPU reference path ({} threads)",

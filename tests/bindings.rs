@@ -3,11 +3,22 @@
 //! group and binding, of that kind and access, and every shader binding has
 //! an entry. No GPU needed.
 
-use lambert::gpu::bindings::{BindingKind, BindingTable, TABLES};
+use lambert::gpu::bindings::{ACCELERATION, BindingKind, BindingTable, TABLES};
+use lambert::gpu::{HARDWARE_SOURCE, SHADER_SOURCE};
 
-fn module() -> naga::Module {
-    naga::front::wgsl::parse_str(lambert::gpu::SHADER_SOURCE)
-        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(lambert::gpu::SHADER_SOURCE)))
+/// Each module with the tables its pipelines bind: the compute module
+/// `TABLES`, the ray-query module (`--accel hardware`) those and
+/// `ACCELERATION`.
+fn modules() -> Vec<(naga::Module, Vec<&'static BindingTable>)> {
+    let parse = |source: &str| {
+        naga::front::wgsl::parse_str(source)
+            .unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)))
+    };
+    let hardware_tables = TABLES.iter().copied().chain([&ACCELERATION]).collect();
+    vec![
+        (parse(SHADER_SOURCE), TABLES.to_vec()),
+        (parse(HARDWARE_SOURCE), hardware_tables),
+    ]
 }
 
 /// The kind a bind group layout must give `global`, read from the shader,
@@ -23,6 +34,12 @@ fn shader_kind(
             Ok(BindingKind::StorageWrite)
         }
         (AddressSpace::Storage { .. }, _) => Ok(BindingKind::Storage),
+        (
+            AddressSpace::Handle,
+            TypeInner::AccelerationStructure {
+                vertex_return: false,
+            },
+        ) => Ok(BindingKind::AccelerationStructure),
         (
             AddressSpace::Handle,
             TypeInner::Image {
@@ -60,9 +77,14 @@ fn shader_bindings(module: &naga::Module) -> Vec<(String, u32, u32, Result<Bindi
 
 #[test]
 fn every_table_entry_is_the_shader_binding_of_that_name() {
-    let module = module();
-    let shader = shader_bindings(&module);
-    for table in TABLES {
+    for (module, tables) in modules() {
+        every_entry_is_bound(&module, &tables);
+    }
+}
+
+fn every_entry_is_bound(module: &naga::Module, tables: &[&BindingTable]) {
+    let shader = shader_bindings(module);
+    for table in tables {
         for entry in table.entries {
             let (_, group, binding, kind) = shader
                 .iter()
@@ -88,11 +110,16 @@ fn every_table_entry_is_the_shader_binding_of_that_name() {
 
 #[test]
 fn every_shader_binding_has_a_table_entry() {
-    let module = module();
-    let shader = shader_bindings(&module);
+    for (module, tables) in modules() {
+        every_binding_has_an_entry(&module, &tables);
+    }
+}
+
+fn every_binding_has_an_entry(module: &naga::Module, tables: &[&BindingTable]) {
+    let shader = shader_bindings(module);
     assert!(!shader.is_empty(), "the shader binds nothing");
     let in_tables = |name: &str, group: u32, binding: u32| {
-        TABLES.iter().any(|t: &&BindingTable| {
+        tables.iter().any(|t: &&BindingTable| {
             t.group == group
                 && t.entries
                     .iter()
@@ -109,7 +136,7 @@ fn every_shader_binding_has_a_table_entry() {
 
 #[test]
 fn no_table_binds_a_number_twice() {
-    for table in TABLES {
+    for table in TABLES.iter().chain([&&ACCELERATION]) {
         let mut numbers: Vec<u32> = table.entries.iter().map(|e| e.binding).collect();
         numbers.sort();
         let len = numbers.len();

@@ -11,48 +11,12 @@ use glam::{DVec3, Vec3};
 use lambert::Scene;
 use lambert::cpu;
 use lambert::layout::{Hit, NO_HIT, Ray, Triangle};
-use lambert::probe::{Rng, edge_aimed_rays, icosphere};
+use lambert::probe::Rng;
 use lambert::rays::{Agreement, ulp_distance};
 use lambert::scene::Intersect;
 use proptest::prelude::{prop, prop_assert, prop_assert_eq, prop_assume, proptest};
 
 // ------------------------------------------------------------ watertightness
-
-/// The closed meshes of the leak test, as f64 vertices and faces, about 20
-/// units across.
-/// A named mesh: vertices and triangles as vertex indices.
-type NamedMesh = (&'static str, Vec<DVec3>, Vec<[u32; 3]>);
-
-fn closed_meshes() -> Vec<NamedMesh> {
-    let (ico_v, ico_f) = icosphere(10.0, 3);
-    let cube = lambert::loading::load_obj(
-        &asset("scenes/meshes/cube.obj"),
-        lambert::loading::NormalMode::Face,
-    )
-    .unwrap();
-    let bunny = lambert::loading::load_obj(
-        &asset("scenes/meshes/bunny_lowres.obj"),
-        lambert::loading::NormalMode::Face,
-    )
-    .unwrap();
-    let scale = |m: lambert::loading::Mesh, size: f64| {
-        let lo = m.positions.iter().fold(DVec3::MAX, |a, &b| a.min(b));
-        let hi = m.positions.iter().fold(DVec3::MIN, |a, &b| a.max(b));
-        let k = size / (hi - lo).max_element();
-        let centre = 0.5 * (lo + hi);
-        let v = m.positions.iter().map(|&p| (p - centre) * k).collect();
-        (v, m.triangles)
-    };
-    let (cube_v, cube_f) = scale(cube, 20.0);
-    let (bunny_v, bunny_f) = scale(bunny, 20.0);
-    vec![
-        ("icosphere", ico_v, ico_f),
-        ("cube", cube_v, cube_f),
-        ("bunny_lowres", bunny_v, bunny_f),
-    ]
-}
-
-const OFFSETS: [[f64; 3]; 3] = [[0.0; 3], [1.5e5, 1.2e3, -2.2e5], [1e6, 1e6, 1e6]];
 
 #[test]
 fn watertight_meshes_do_not_leak() {
@@ -63,38 +27,21 @@ fn watertight_meshes_do_not_leak() {
         "{:<14} {:>22} {:>7} {:>16} {:>16}",
         "mesh", "offset", "rays", "variant", "CPU / GPU"
     );
-    for (name, vertices, faces) in closed_meshes() {
-        for offset in OFFSETS {
-            let offset = DVec3::from(offset);
-            let v32: Vec<Vec3> = vertices.iter().map(|&v| (v + offset).as_vec3()).collect();
-            let triangles: Vec<Triangle> = faces
-                .iter()
-                .map(|f| triangle(f.map(|i| v32[i as usize])))
-                .collect();
-            let scene = scene_of(triangles, vec![]);
-            let rays = edge_aimed_rays(&v32, &faces, &mut rng);
-            // Every ray is aimed at the surface: the oracle must hit with all.
-            let oracle = cpu::trace_rays_f64(&scene, &rays, false);
-            assert_eq!(
-                oracle.iter().filter(|h| h.prim == NO_HIT).count(),
-                0,
-                "{name} at {offset}: the f64 oracle leaks"
+    for (name, offset, scene, rays) in leak_cases(&mut rng) {
+        for intersect in Intersect::ALL {
+            let s = with_intersect(&scene, intersect);
+            let cpu_leaks = misses(&trace_cpu(&s, &rays, false));
+            let gpu_leaks = misses(&trace_gpu(&s, &rays, false));
+            println!(
+                "{name:<14} {:>22} {:>7} {:>16} {:>7} / {:<7}",
+                format!("{offset}"),
+                rays.len(),
+                intersect.name(),
+                cpu_leaks,
+                gpu_leaks
             );
-            for intersect in Intersect::ALL {
-                let s = with_intersect(&scene, intersect);
-                let cpu_leaks = misses(&trace_cpu(&s, &rays, false));
-                let gpu_leaks = misses(&trace_gpu(&s, &rays, false));
-                println!(
-                    "{name:<14} {:>22} {:>7} {:>16} {:>7} / {:<7}",
-                    format!("{offset}"),
-                    rays.len(),
-                    intersect.name(),
-                    cpu_leaks,
-                    gpu_leaks
-                );
-                if intersect == Intersect::Watertight {
-                    watertight_leaks += cpu_leaks + gpu_leaks;
-                }
+            if intersect == Intersect::Watertight {
+                watertight_leaks += cpu_leaks + gpu_leaks;
             }
         }
     }
@@ -103,66 +50,17 @@ fn watertight_meshes_do_not_leak() {
 
 // --------------------------------------------------------- self-intersection
 
-/// Triangles at random scales from 1e-8 to 1e8, each placed at a random
-/// distance of up to a few times its size from the origin.
-fn random_scale_triangles(rng: &mut Rng, n: usize) -> Vec<Triangle> {
-    (0..n)
-        .map(|_| {
-            let scale = 10f64.powf(rng.range(-8.0, 8.0));
-            let centre = rng.direction() * scale * rng.range(0.0, 4.0);
-            triangle(
-                [0, 1, 2]
-                    .map(|_| (centre + rng.direction() * scale * rng.range(0.2, 1.0)).as_vec3()),
-            )
-        })
-        .collect()
-}
-
 #[test]
 fn rays_spawned_from_hits_never_hit_their_own_triangle() {
     let mut rng = Rng(5);
     let triangles = random_scale_triangles(&mut rng, 3000);
     let base = scene_of(triangles.clone(), vec![]);
-    // Aim a ray at a random interior point of each triangle from its front.
-    let primary: Vec<Ray> = triangles
-        .iter()
-        .map(|t| {
-            let [a, b, c] = [t.v0, t.v1, t.v2].map(|v| Vec3::from(v).as_dvec3());
-            let n = (b - a).cross(c - a).normalize();
-            let (u, v) = (rng.range(0.1, 0.45), rng.range(0.1, 0.45));
-            let p = a + u * (b - a) + v * (c - a);
-            let size = (b - a).length().max((c - a).length());
-            let origin = p + n * size;
-            ray(origin.as_vec3(), (p - origin).as_vec3())
-        })
-        .collect();
+    let primary = rays_at_fronts(&triangles, &mut rng);
     println!("self-hits of spawned rays (3000 triangles, scales 1e-8..1e8, 4 rays each):");
     let mut default_self_hits = 0;
     for intersect in Intersect::ALL {
         let scene = with_intersect(&base, intersect);
-        let kernel = cpu::f32::Kernel::new(&scene);
-        let hits = trace_cpu(&scene, &primary, false);
-        // Spawn from each hit as shading does: the hit point, its error
-        // bound and the offset along the normal facing the incoming ray.
-        let mut spawned = Vec::new();
-        let mut sources = Vec::new();
-        for (r, h) in primary.iter().zip(&hits) {
-            if h.prim == NO_HIT {
-                continue;
-            }
-            let surface =
-                kernel.surface_at(&cpu::f32::Ray::from_query(r), &cpu::f32::Hit::from_query(h));
-            let n = surface.geometric_normal;
-            let origin = cpu::f32::offset_ray_origin(surface.position, surface.error, n);
-            for _ in 0..4 {
-                let mut d = rng.direction().as_vec3();
-                if d.dot(n) < 0.0 {
-                    d = -d;
-                }
-                spawned.push(ray(origin, d));
-                sources.push(h.prim);
-            }
-        }
+        let (spawned, sources) = spawned_rays(&scene, &primary, &mut rng);
         assert!(
             spawned.len() > 4 * 2900,
             "too few primary hits: {}",
@@ -186,33 +84,6 @@ fn rays_spawned_from_hits_never_hit_their_own_triangle() {
         }
     }
     assert_eq!(default_self_hits, 0, "spawned rays hit their own triangle");
-}
-
-/// A quad scaled by `scale` and moved by `translate`, lit at 60° by a
-/// directional light, seen from above at an angle; shadows on.
-fn lit_plane(scale: f64, translate: [f64; 3], intersect: Intersect) -> Scene {
-    let at = |p: [f64; 3]| {
-        format!(
-            "[{:e}, {:e}, {:e}]",
-            p[0] * scale + translate[0],
-            p[1] * scale + translate[1],
-            p[2] * scale + translate[2]
-        )
-    };
-    let s = scene(&format!(
-        "[camera]\neye = {}\nlook_at = {}\nvfov = 40.0\nwidth = 48\nheight = 48\n\
-         [[mesh]]\nobj = \"meshes/quad.obj\"\nscale = {:e}\ntranslate = {}\nalbedo = 0.5\n\
-         [[directional_light]]\ndirection = [0.0, -0.5, -0.8660254037844386]\nirradiance = 2.0\n",
-        at([0.0, 1.0, 1.2]),
-        at([0.0; 3]),
-        4.0 * scale,
-        at([0.0; 3]),
-    ));
-    let settings = lambert::scene::RenderSettings {
-        intersect,
-        ..s.default_settings()
-    };
-    s.with_settings(&settings)
 }
 
 #[test]

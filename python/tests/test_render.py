@@ -1,6 +1,7 @@
 """Renders from Python: the CLI's images, on both devices."""
 
 import os
+import warnings
 
 import numpy as np
 import pytest
@@ -95,3 +96,21 @@ def test_write_image_formats_round_trip(tmp_path, cli):
     assert (tmp_path / "a.exr").read_bytes()[:4] == b"\x76\x2f\x31\x01"  # OpenEXR magic
     lambert.write_image(tmp_path / "new" / "folder" / "b.png", image)
     assert (tmp_path / "new" / "folder" / "b.png").exists()
+
+
+def test_a_scene_file_asking_for_ray_queries_renders_the_compute_paths_image(tmp_path):
+    # render.accel = "hardware" (docs/hardware-rays.md): ray queries where the
+    # GPU has them, else the compute BVH with a RuntimeWarning saying so; the
+    # bunny's image either way (it has no ties).
+    plain = os.path.join(SCENES, "bunny.toml")
+    with open(plain) as f:
+        text = f.read().replace('"meshes/', '"' + MESHES + "/")
+    path = tmp_path / "hardware.toml"
+    path.write_text(text.replace("[render]", '[render]\naccel = "hardware"', 1))
+    bvh = lambert.Scene.load(plain).render(64, 48, device="gpu")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        hardware = lambert.Scene.load(str(path)).render(64, 48, device="gpu")
+    np.testing.assert_array_equal(hardware, bvh)
+    notes = [str(w.message) for w in caught if "--accel hardware" in str(w.message)]
+    assert all("has no ray queries" in note and "compute BVH" in note for note in notes), notes

@@ -14,7 +14,7 @@ macro_rules! layout {
             LEAF_BIT, LIGHT_DIRECTIONAL, LIGHT_SPOT, META_LEAF, NO_HIT, NO_TEXTURE, PrimBlock,
             leaf_range,
         };
-        use crate::scene::{Accel, Intersect, Scene};
+        use crate::scene::{Intersect, Scene};
 
         /// Widens a box's exit distance so that rounding cannot cull a box the ray
         /// grazes, as in the shader.

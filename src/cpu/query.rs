@@ -9,7 +9,7 @@ use super::render::twin_stack_entries;
 use super::simd::{check_runs, with_simd};
 use super::{CpuKernel, f32, f64};
 use crate::layout::{self, NO_HIT};
-use crate::scene::{Accel, Intersect, Scene};
+use crate::scene::{Intersect, Scene};
 
 /// The GPU's twin of a ray query (as `render_gpu_twin`): the same hits as
 /// the GPU's, primitive for primitive and bit for bit, where the GPU's
@@ -300,7 +300,7 @@ unsafe fn trace_chunk<const LANES: usize, const PREFETCH: bool, const VECTOR_SOR
     if rays.is_empty() {
         return;
     }
-    if kernel.scene.accel != Accel::Bvh {
+    if !kernel.scene.accel.traverses_bvh() {
         for (i, (ray, out)) in rays.iter().zip(hits).enumerate() {
             let hit = query_hit(kernel.trace(f32::Ray::from_query(ray), any_hit));
             if let Some(normal) = normals.get_mut(i) {

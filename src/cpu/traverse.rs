@@ -191,10 +191,10 @@ macro_rules! traverse {
                     return miss();
                 }
                 let (ray, shear) = prepare_ray(ray_in);
-                let hit = match (self.scene.accel, self.compressed) {
-                    (Accel::Bvh, Some(nodes)) => self.trace_compressed(nodes, ray, &shear, any_hit),
-                    (Accel::Bvh, None) => self.trace_bvh(ray, &shear, any_hit),
-                    (Accel::BruteForce, _) => self.trace_brute_force(ray, &shear, any_hit),
+                let hit = match (self.scene.accel.traverses_bvh(), self.compressed) {
+                    (true, Some(nodes)) => self.trace_compressed(nodes, ray, &shear, any_hit),
+                    (true, None) => self.trace_bvh(ray, &shear, any_hit),
+                    (false, _) => self.trace_brute_force(ray, &shear, any_hit),
                 };
                 unscale(hit, &shear)
             }

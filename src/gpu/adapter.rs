@@ -4,7 +4,9 @@
 use crate::error::{Error, Result};
 
 use super::bindings::unmet_limits;
-use super::options::{GpuOptions, LLVMPIPE_THREADS_ENV, MAX_BUFFER_ENV, SHADOW_DISPATCH_ENV};
+use super::options::{
+    GpuOptions, LLVMPIPE_THREADS_ENV, MAX_BUFFER_ENV, RAY_QUERY_GEOMETRY_ENV, SHADOW_DISPATCH_ENV,
+};
 
 /// Which adapter to use: `--adapter`, `--backend`, or wgpu's own
 /// `WGPU_ADAPTER_NAME` and `WGPU_BACKEND` when those are unset, and the
@@ -20,6 +22,10 @@ pub struct AdapterRequest {
     /// list, used when `backend` is unset.
     pub backend_list: Option<String>,
     pub options: GpuOptions,
+    /// Open the device with ray queries where the adapter has them (wgpu's
+    /// experimental EXPERIMENTAL_RAY_QUERY): what `--accel hardware` needs.
+    /// Off, the device is what it was before the hardware path existed.
+    pub ray_queries: bool,
 }
 
 impl AdapterRequest {
@@ -34,6 +40,7 @@ impl AdapterRequest {
                 max_buffer_bytes: var(MAX_BUFFER_ENV),
                 shadow_dispatch: var(SHADOW_DISPATCH_ENV),
                 llvmpipe_threads: var(LLVMPIPE_THREADS_ENV),
+                ray_query_geometry: var(RAY_QUERY_GEOMETRY_ENV),
             },
             ..self
         }

@@ -14,6 +14,8 @@ pub enum BindingKind {
     StorageWrite,
     /// A read-only rgba32uint storage texture (`BvhStorage::Texels`).
     Texels,
+    /// A top-level acceleration structure (`--accel hardware`).
+    AccelerationStructure,
 }
 
 /// One binding: the shader's name for it, its number, its kind.
@@ -50,7 +52,7 @@ const fn bind(name: &'static str, binding: u32, kind: BindingKind) -> Binding {
     }
 }
 
-use BindingKind::{Storage, StorageWrite, Texels, Uniform};
+use BindingKind::{AccelerationStructure, Storage, StorageWrite, Texels, Uniform};
 
 /// Group 0 of every pipeline: the resident scene.
 pub const SCENE: BindingTable = BindingTable {
@@ -175,6 +177,18 @@ pub const LIGHT_PROBE: BindingTable = BindingTable {
     ],
 };
 
+/// Group 2 of every pipeline under `--accel hardware`, in its module alone
+/// (`TABLES` are both modules'): the scene's acceleration structures
+/// (shaders/hardware_trace.wgsl, src/gpu/hardware.rs).
+pub const ACCELERATION: BindingTable = BindingTable {
+    label: "acceleration",
+    group: 2,
+    entries: &[
+        bind("scene_tlas", 0, AccelerationStructure),
+        bind("hardware_runs", 1, Storage),
+    ],
+};
+
 /// Every table.
 pub const TABLES: [&BindingTable; 8] = [
     &SCENE,
@@ -194,12 +208,22 @@ pub const TABLES: [&BindingTable; 8] = [
 /// buffers are too few; without this check wgpu fails later with "Too many
 /// bindings" and `auto` never falls back.
 pub fn unmet_limits(limits: &wgpu::Limits) -> Option<String> {
+    unmet_limits_with(limits, &[])
+}
+
+/// `unmet_limits` of the hardware module, whose pipelines bind
+/// `ACCELERATION` too.
+pub(super) fn unmet_hardware_limits(limits: &wgpu::Limits) -> Option<String> {
+    unmet_limits_with(limits, &[&ACCELERATION])
+}
+
+/// `unmet_limits` with the groups `extra` bound by every pipeline too.
+fn unmet_limits_with(limits: &wgpu::Limits, extra: &[&BindingTable]) -> Option<String> {
     let most = |kind: fn(BindingKind) -> bool| {
         let count = |table: &BindingTable| table.entries.iter().filter(|e| kind(e.kind)).count();
-        (count(&SCENE) + TABLES[1..].iter().map(|t| count(t)).max().unwrap_or(0)) as u32
+        let second = TABLES[1..].iter().map(|t| count(t)).max().unwrap_or(0);
+        (count(&SCENE) + second + extra.iter().map(|t| count(t)).sum::<usize>()) as u32
     };
-    let buffers = most(|k| matches!(k, Storage | StorageWrite));
-    let textures = most(|k| k == Texels);
     let short = |what: &str, has: u32, needs: u32| {
         (has < needs).then(|| {
             format!(
@@ -207,18 +231,25 @@ pub fn unmet_limits(limits: &wgpu::Limits) -> Option<String> {
             )
         })
     };
-    short(
-        "storage buffers",
-        limits.max_storage_buffers_per_shader_stage,
-        buffers,
-    )
-    .or_else(|| {
-        short(
+    [
+        (
+            "storage buffers",
+            limits.max_storage_buffers_per_shader_stage,
+            most(|k| matches!(k, Storage | StorageWrite)),
+        ),
+        (
             "storage textures",
             limits.max_storage_textures_per_shader_stage,
-            textures,
-        )
-    })
+            most(|k| k == Texels),
+        ),
+        (
+            "acceleration structures",
+            limits.max_acceleration_structures_per_shader_stage,
+            most(|k| k == AccelerationStructure),
+        ),
+    ]
+    .into_iter()
+    .find_map(|(what, has, needs)| short(what, has, needs))
 }
 
 impl BindingTable {
@@ -242,6 +273,9 @@ impl BindingTable {
                         access: wgpu::StorageTextureAccess::ReadOnly,
                         format: wgpu::TextureFormat::Rgba32Uint,
                         view_dimension: wgpu::TextureViewDimension::D2,
+                    },
+                    AccelerationStructure => wgpu::BindingType::AccelerationStructure {
+                        vertex_return: false,
                     },
                 },
                 count: None,

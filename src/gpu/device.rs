@@ -6,6 +6,7 @@ use std::sync::{Arc, Mutex};
 use crate::error::{Error, Result};
 
 use super::adapter::{AdapterRequest, Presenting, choose_adapter, describe, is_software};
+use super::features::device_features;
 use super::options::GpuOptions;
 
 /// An open device and queue. A clone shares them (a viewer presents on
@@ -88,11 +89,15 @@ impl Gpu {
     ) -> Result<Gpu> {
         let info = adapter.get_info();
         let limits = requested_limits(&adapter, max_buffer_bytes);
+        // GPU time of each dispatch, where the adapter can measure it; ray
+        // queries where asked for and the adapter has them.
+        let (required_features, experimental_features) =
+            device_features(&adapter, request.ray_queries);
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("lambert"),
-            // GPU time of each dispatch, where the adapter can measure it.
-            required_features: adapter.features() & wgpu::Features::TIMESTAMP_QUERY,
+            required_features,
             required_limits: limits.clone(),
+            experimental_features,
             ..Default::default()
         }))
         .map_err(|e| Error::Gpu(format!("cannot open {}: {e}", describe(&info))))?;

@@ -8,6 +8,11 @@
 //! - `lighting`: the path integrator's lights' buffers and overrides;
 //! - `bindings`: the bind group tables, checked against the shader;
 //! - `shader`: the shader's source and its specialisation;
+//! - `features`: what a device is opened with (timestamp queries, and the
+//!   ray queries of `--accel hardware`);
+//! - `hardware`: `--accel hardware`, the scene's acceleration structures
+//!   for ray queries (wgpu's experimental API is named there and in
+//!   `features` alone);
 //! - `pipelines`: the shader module, its overrides and layouts;
 //! - `renderer`: `GpuRenderer`, a scene resident on the device: its
 //!   parts, and when each is built;
@@ -28,6 +33,8 @@
 mod adapter;
 pub mod bindings;
 mod device;
+mod features;
+mod hardware;
 mod lighting;
 mod options;
 mod path_wave;
@@ -47,10 +54,11 @@ mod wavefront;
 
 pub use adapter::{AdapterRequest, Presenting, enumerate_adapters};
 pub use device::Gpu;
-pub use options::{GpuOptions, MAX_BUFFER_ENV, SHADOW_DISPATCH_ENV};
+pub use hardware::{AccelerationStats, TriangleGeometry, offers_ray_queries};
+pub use options::{GpuOptions, MAX_BUFFER_ENV, RAY_QUERY_GEOMETRY_ENV, SHADOW_DISPATCH_ENV};
 pub use proximity::binding_runs;
 pub use renderer::GpuRenderer;
-pub use shader::{SHADER_SOURCE, specialisation};
+pub use shader::{HARDWARE_SOURCE, SHADER_SOURCE, specialisation};
 pub use timer::GpuTimings;
 pub use upload::{BvhStorage, TEXELS_PER_ROW};
 pub use wavefront::ShadowDispatch;

@@ -13,6 +13,11 @@ pub const MAX_BUFFER_ENV: &str = "LAMBERT_GPU_MAX_BUFFER_BYTES";
 /// direct integrator, the megakernel under the path integrator).
 pub const SHADOW_DISPATCH_ENV: &str = "LAMBERT_SHADOW_DISPATCH";
 
+/// `LAMBERT_RAY_QUERY_GEOMETRY`: how `--accel hardware` gives the driver
+/// its triangles, `triangles` or `boxes` (`hardware::TriangleGeometry`;
+/// unset, boxes on lavapipe and triangles elsewhere).
+pub const RAY_QUERY_GEOMETRY_ENV: &str = "LAMBERT_RAY_QUERY_GEOMETRY";
+
 /// Settings a front end found in the environment, as it found them: each
 /// is parsed where it is used, so that a bad value fails only the work that
 /// needs it.
@@ -25,6 +30,9 @@ pub struct GpuOptions {
     /// `LLVMPIPE_THREADS_ENV`, Mesa's own: how many threads llvmpipe runs
     /// a dispatch on.
     pub llvmpipe_threads: Option<String>,
+    /// `RAY_QUERY_GEOMETRY_ENV`, checked when a scene's acceleration
+    /// structures are built.
+    pub ray_query_geometry: Option<String>,
 }
 
 /// Mesa's variable for llvmpipe's thread count (its default: the CPUs).

@@ -56,6 +56,9 @@ pub(super) struct Pipelines {
     pub module: wgpu::ShaderModule,
     pub constants: Vec<(&'static str, f64)>,
     pub layouts: Layouts,
+    /// Group 2 of the ray-query module's pipelines (`--accel hardware`),
+    /// which every pass binds then (`Host::bind_scene`).
+    pub acceleration: Option<wgpu::BindGroupLayout>,
 }
 
 impl Pipelines {
@@ -63,15 +66,18 @@ impl Pipelines {
         module: wgpu::ShaderModule,
         constants: Vec<(&'static str, f64)>,
         layouts: Layouts,
+        acceleration: Option<wgpu::BindGroupLayout>,
     ) -> Pipelines {
         Pipelines {
             module,
             constants,
             layouts,
+            acceleration,
         }
     }
 
-    /// `entry_point` with the scene at group 0 and `output_layout` at 1.
+    /// `entry_point` with the scene at group 0, `output_layout` at 1, and
+    /// in the ray-query module the acceleration structures at 2.
     pub fn build(
         &self,
         gpu: &Gpu,
@@ -80,13 +86,10 @@ impl Pipelines {
         constants: &[(&str, f64)],
     ) -> Result<wgpu::ComputePipeline> {
         let scope = gpu.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let pipeline = compute_pipeline(
-            &gpu.device,
-            &self.module,
-            entry_point,
-            &[&self.layouts.scene, output_layout],
-            constants,
-        );
+        let mut layouts = vec![&self.layouts.scene, output_layout];
+        layouts.extend(&self.acceleration);
+        let pipeline =
+            compute_pipeline(&gpu.device, &self.module, entry_point, &layouts, constants);
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu(format!(
                 "building the {entry_point} pipeline: {e}"

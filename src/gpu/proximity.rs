@@ -12,7 +12,7 @@ use crate::error::{Error, Result};
 use crate::layout::{ClosestPoint, ListedHit, NO_HIT, Ray, WORKGROUP_INVOCATIONS};
 use crate::scene::Scene;
 
-use super::bindings::{PROXIMITY, SCENE, leading_bytes};
+use super::bindings::{PROXIMITY, leading_bytes};
 use super::resident::Host;
 
 /// Items per dispatch at most: no dispatch runs long enough for a watchdog,
@@ -146,7 +146,7 @@ impl Proximity {
                 timestamp_writes: None,
             });
             pass.set_pipeline(&self.pipelines[entry]);
-            pass.set_bind_group(SCENE.group, host.scene_group(), &[]);
+            host.bind_scene(&mut pass);
             pass.set_bind_group(PROXIMITY.group, &group, &[]);
             pass.dispatch_workgroups(items.div_ceil(WORKGROUP_INVOCATIONS as usize) as u32, 1, 1);
         }

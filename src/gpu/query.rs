@@ -11,7 +11,7 @@ use crate::error::{Error, Result};
 use crate::layout::{Hit, LightAnswer, LightQuery, NO_HIT, Params, Ray, WORKGROUP_INVOCATIONS};
 use crate::scene::Intersect;
 
-use super::bindings::{SCENE, leading_bytes};
+use super::bindings::leading_bytes;
 use super::pipelines::ListLayout;
 use super::resident::Host;
 use super::timer::Timer;
@@ -235,7 +235,7 @@ impl Lists {
                         timestamp_writes: timer.map(Timer::writes),
                     });
                     pass.set_pipeline(pipeline);
-                    pass.set_bind_group(SCENE.group, host.scene_group(), &[]);
+                    host.bind_scene(&mut pass);
                     pass.set_bind_group(table.group, &group, &[]);
                     pass.dispatch_workgroups(chunk.len().div_ceil(LIST_WORKGROUP) as u32, 1, 1);
                 }

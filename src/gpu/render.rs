@@ -11,7 +11,7 @@ use crate::layout::{Params, WORKGROUP_INVOCATIONS};
 use crate::output::{Image, Rendered};
 use crate::progress::Progress;
 
-use super::bindings::{IMAGE_TILE, SCENE};
+use super::bindings::IMAGE_TILE;
 use super::device::Gpu;
 use super::path_wave::PathWave;
 use super::readback::TileTargets;
@@ -347,14 +347,14 @@ impl Tiles {
                 label: Some("render tile, path wavefront"),
                 timestamp_writes: self.timer.as_ref().map(Timer::writes),
             });
-            pass.set_bind_group(SCENE.group, host.scene_group(), &[]);
+            host.bind_scene(&mut pass);
             path_wave.dispatch_tile(gpu, &mut pass, params.max_depth, workgroups);
         } else if let (ShadowDispatch::Wavefront, Some(wavefront)) = (dispatch, &self.wavefront) {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("render tile, wavefront"),
                 timestamp_writes: self.timer.as_ref().map(Timer::writes),
             });
-            pass.set_bind_group(SCENE.group, host.scene_group(), &[]);
+            host.bind_scene(&mut pass);
             let samples = params.sample_end - params.sample_begin;
             wavefront.dispatch_tile(gpu, &mut pass, samples, workgroups);
         } else {
@@ -364,7 +364,7 @@ impl Tiles {
             });
             let [groups_x, groups_y, layers] = workgroups;
             pass.set_pipeline(self.megakernel.as_ref().expect("prepared"));
-            pass.set_bind_group(SCENE.group, host.scene_group(), &[]);
+            host.bind_scene(&mut pass);
             pass.set_bind_group(IMAGE_TILE.group, host.image_group(), &[]);
             pass.dispatch_workgroups(groups_x, groups_y, layers);
         }

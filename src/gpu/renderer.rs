@@ -11,15 +11,16 @@ use crate::error::{Error, Result};
 use crate::layout::{ClosestPoint, Hit, LightAnswer, LightQuery, ListedHit, Params, Ray};
 use crate::output::{Image, Rendered};
 use crate::progress::Progress;
-use crate::scene::{Integrator, Intersect, Scene};
+use crate::scene::{Accel, Integrator, Intersect, Scene};
 
 use super::device::Gpu;
+use super::hardware::{Acceleration, AccelerationStats};
 use super::pipelines::{Layouts, Pipelines, resident_constants};
 use super::proximity::Proximity;
 use super::query::Lists;
 use super::render::Tiles;
 use super::resident::{Host, Resident};
-use super::shader::{SHADER_SOURCE, specialisation};
+use super::shader::{HARDWARE_SOURCE, SHADER_SOURCE, specialisation};
 use super::timer::GpuTimings;
 use super::upload::{BvhStorage, SceneBuffers};
 use super::wavefront::ShadowDispatch;
@@ -40,9 +41,15 @@ use super::wavefront::ShadowDispatch;
 /// queries (`Proximity`, proximity.rs). A pass reads the others through
 /// `Host`.
 ///
+/// Under `--accel hardware` (where the device has ray queries), the scene's
+/// acceleration structures (`hardware.rs`) are part of the upload: the
+/// resident bind groups hold their group (group 2 of every pipeline), and
+/// the shader module is the ray-query one.
+///
 /// When each is built (the rule): what every call needs when the renderer
-/// is opened (`new`): the device context, the scene's upload, the shader
-/// module, the tile's buffers and the timer. Every pipeline on the first
+/// is opened (`new`): the device context, the scene's upload (with its
+/// acceleration structures), the shader module, the tile's buffers and the
+/// timer. Every pipeline on the first
 /// use of its pass, by its `prepare_*` (which a caller may call first to
 /// leave the compile out of a timing): the megakernel's `render` pipeline
 /// or the wavefront's passes and lists (`prepare_render`), the wavefront's
@@ -67,6 +74,11 @@ pub struct GpuRenderer {
     pub upload_time: Duration,
     /// The resident scene's placement: `trace_rays` takes world rays.
     pub placement: crate::placement::Placement,
+    /// Under `--accel hardware`, what was built; None where the rays go
+    /// through the compute BVH.
+    acceleration_stats: Option<AccelerationStats>,
+    /// Why `--accel hardware` traces through the compute BVH instead.
+    accel_note: Option<String>,
 }
 
 impl GpuRenderer {
@@ -101,19 +113,37 @@ impl GpuRenderer {
         storage: BvhStorage,
     ) -> Result<GpuRenderer> {
         let start = Instant::now();
+        let (acceleration, accel_note) = match scene.accel {
+            Accel::Hardware => Acceleration::for_scene(&gpu, scene)?,
+            _ => (None, None),
+        };
         let device = &gpu.device;
         let buffers = SceneBuffers::upload(&gpu, scene, storage)?;
-        let constants = resident_constants(constants, &buffers, storage, scene, &gpu);
+        let mut constants = resident_constants(constants, &buffers, storage, scene, &gpu);
+        if let Some(acceleration) = &acceleration {
+            constants.push(acceleration.constant());
+        }
         let lights = scene.lights.len().min(u32::MAX as usize) as u32;
         let path = scene.integrator == Integrator::Path;
         let tiles = Tiles::new(&gpu, lights, path);
         let layouts = Layouts::new(device);
 
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let resident = Resident::new(device, scene, &layouts, &buffers, tiles.targets());
+        let resident = Resident::new(
+            device,
+            scene,
+            &layouts,
+            &buffers,
+            tiles.targets(),
+            acceleration.as_ref().map(|a| a.group().clone()),
+        );
+        let source = match acceleration {
+            Some(_) => HARDWARE_SOURCE,
+            None => SHADER_SOURCE,
+        };
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("lambert shader"),
-            source: wgpu::ShaderSource::Wgsl(SHADER_SOURCE.into()),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
         });
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu(format!("uploading the scene: {e}")));
@@ -126,7 +156,14 @@ impl GpuRenderer {
         )?;
         Ok(GpuRenderer {
             gpu,
-            pipelines: Pipelines::new(module, constants, layouts),
+            pipelines: Pipelines::new(
+                module,
+                constants,
+                layouts,
+                acceleration.as_ref().map(|a| a.layout().clone()),
+            ),
+            acceleration_stats: acceleration.map(|a| a.stats),
+            accel_note,
             resident,
             tiles,
             lists: Lists::default(),
@@ -142,6 +179,19 @@ impl GpuRenderer {
 
     pub fn gpu(&self) -> &Gpu {
         &self.gpu
+    }
+
+    /// Whether its rays go through ray queries (`--accel hardware` on a
+    /// device that has them): the acceleration structures built, if so.
+    pub fn ray_queries(&self) -> Option<&AccelerationStats> {
+        self.acceleration_stats.as_ref()
+    }
+
+    /// Why a scene that asked for `--accel hardware` traces through the
+    /// compute BVH instead (the device has no ray queries, or the scene
+    /// exceeds their limits), for the front end to say.
+    pub fn accel_note(&self) -> Option<&str> {
+        self.accel_note.as_deref()
     }
 
     /// The uniform of a render of `view` (camera, size, spp, seed): the

@@ -13,7 +13,7 @@ use crate::error::Result;
 use crate::layout::Params;
 use crate::scene::Scene;
 
-use super::bindings::{IMAGE_TILE, SCENE};
+use super::bindings::{ACCELERATION, IMAGE_TILE, SCENE};
 use super::device::Gpu;
 use super::pipelines::{Layouts, Pipelines};
 use super::readback::{LoopStatus, TileTargets};
@@ -23,6 +23,8 @@ use super::upload::SceneBuffers;
 /// them), the uniform, the scene's part of it and the shader's loop flag.
 pub(super) struct Resident {
     scene_group: wgpu::BindGroup,
+    /// Group 2 under `--accel hardware`: the acceleration structures.
+    acceleration_group: Option<wgpu::BindGroup>,
     image_group: wgpu::BindGroup,
     params_buffer: wgpu::Buffer,
     /// The uniform's scene part (its counts, background, ambient); the
@@ -40,6 +42,7 @@ impl Resident {
         layouts: &Layouts,
         buffers: &SceneBuffers,
         tile: &TileTargets,
+        acceleration_group: Option<wgpu::BindGroup>,
     ) -> Resident {
         let params = scene_params(scene);
         let params_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -65,6 +68,7 @@ impl Resident {
         );
         Resident {
             scene_group,
+            acceleration_group,
             image_group,
             params_buffer,
             scene_params: params,
@@ -72,9 +76,13 @@ impl Resident {
         }
     }
 
-    /// The scene's bind group (group 0 of every pass).
-    pub fn scene_group(&self) -> &wgpu::BindGroup {
-        &self.scene_group
+    /// Binds the scene's groups in `pass`: group 0, and under `--accel
+    /// hardware` group 2 (the acceleration structures).
+    pub fn bind_scene(&self, pass: &mut wgpu::ComputePass<'_>) {
+        pass.set_bind_group(SCENE.group, &self.scene_group, &[]);
+        if let Some(group) = &self.acceleration_group {
+            pass.set_bind_group(ACCELERATION.group, group, &[]);
+        }
     }
 
     /// The megakernel's group 1: the tile's buffers.
@@ -190,9 +198,9 @@ impl<'a> Host<'a> {
         self.gpu
     }
 
-    /// The scene's bind group (group 0 of every pass).
-    pub fn scene_group(&self) -> &wgpu::BindGroup {
-        self.resident.scene_group()
+    /// Binds the scene's groups in `pass` (`Resident::bind_scene`).
+    pub fn bind_scene(&self, pass: &mut wgpu::ComputePass<'_>) {
+        self.resident.bind_scene(pass)
     }
 
     /// The uniform's scene part alone: all the queries read.

@@ -2,10 +2,13 @@
 //! the host reads `shaders/` from.
 
 use crate::layout::{LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_SPOT};
-use crate::scene::{Accel, Integrator, Scene};
+use crate::scene::{Integrator, Scene};
 
 /// The kernel's source, validated by naga in tests/shaders.rs.
 pub const SHADER_SOURCE: &str = crate::shader_source::SOURCE;
+
+/// The kernel tracing through ray queries (`--accel hardware`).
+pub const HARDWARE_SOURCE: &str = crate::shader_source::HARDWARE_SOURCE;
 
 /// Pipeline-overridable constants that strip what `scene` does not use.
 pub fn specialisation(scene: &Scene) -> Vec<(&'static str, f64)> {
@@ -29,7 +32,7 @@ pub fn specialisation(scene: &Scene) -> Vec<(&'static str, f64)> {
         ("HAS_NORMAL_MAPS", flag(!scene.tangents.is_empty())),
         // Normals are kept for every triangle once one mesh is smooth.
         ("HAS_SMOOTH", flag(!scene.normals.is_empty())),
-        ("USE_BVH", flag(scene.accel == Accel::Bvh)),
+        ("USE_BVH", flag(scene.accel.traverses_bvh())),
         ("PATH_TRACE", flag(scene.integrator == Integrator::Path)),
         ("INTERSECT", scene.intersect.shader_value() as f64),
     ];

@@ -7,7 +7,7 @@
 use crate::error::Result;
 use crate::layout::{Params, WORKGROUP_INVOCATIONS};
 
-use super::bindings::{SCENE, leading_bytes};
+use super::bindings::leading_bytes;
 use super::query::Lists;
 use super::readback::SUMS_BYTES;
 use super::render::Tiles;
@@ -78,7 +78,7 @@ impl Tiles {
                         label: Some("pixel list, wavefront"),
                         timestamp_writes: None,
                     });
-                    pass.set_bind_group(SCENE.group, host.scene_group(), &[]);
+                    host.bind_scene(&mut pass);
                     match self.path_wave() {
                         Some(path_wave) => path_wave.dispatch_list(
                             gpu,

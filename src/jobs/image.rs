@@ -11,7 +11,7 @@ use crate::bvh::Bvh;
 use crate::camera::View;
 use crate::cpu::aov::{Aov, render_aovs};
 use crate::error::Result;
-use crate::gpu::AdapterRequest;
+use crate::gpu::{AccelerationStats, AdapterRequest};
 use crate::limits::MAX_SPP;
 use crate::output::Rendered;
 use crate::progress::ProgressSink;
@@ -182,6 +182,9 @@ pub struct ImageReport {
     pub height: u32,
     pub primitives: usize,
     pub bvh: BvhSummary,
+    /// Under `--accel hardware`, the acceleration structures the GPU's
+    /// ray queries traced (None where the rays went through a BVH).
+    pub ray_queries: Option<AccelerationStats>,
     /// Opening the device and uploading the scene.
     pub upload: Duration,
     pub timings: RenderTimings,
@@ -244,6 +247,7 @@ pub fn render_image(
         height: view.camera.height,
         primitives,
         bvh,
+        ray_queries: renderer.ray_queries(),
         upload,
         timings: sampled.timings,
         write: start.elapsed(),

@@ -11,12 +11,12 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use crate::camera::View;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::gpu::AdapterRequest;
 use crate::output::Rendered;
 use crate::progress::{Progress, ProgressSink};
 use crate::render::{DeviceChoice, Renderer, open_gpu};
-use crate::scene::{Intersect, RenderSettings, Scene};
+use crate::scene::{Accel, Intersect, RenderSettings, Scene};
 
 mod image;
 mod options;
@@ -52,6 +52,20 @@ pub fn oracle_scene(scene: &Scene) -> Scene {
 /// included), showing no progress.
 pub fn render_gpu(scene: &Scene, view: &View, request: &AdapterRequest) -> Result<Rendered> {
     let mut renderer = open_gpu(scene, request)?;
+    Ok(renderer.render(view, &Progress::hidden())?.0)
+}
+
+/// `render_gpu` through the GPU's ray queries (`--accel hardware`), or an
+/// error saying why not where the device has none: what a comparison of
+/// the hardware path (`lambert diff --compare hardware-cpu`) renders, which
+/// must not compare the compute BVH in its place.
+pub fn render_hardware(scene: &Scene, view: &View, request: &AdapterRequest) -> Result<Rendered> {
+    let mut scene = scene.clone();
+    scene.accel = Accel::Hardware;
+    let mut renderer = open_gpu(&scene, request)?;
+    if let Some(note) = renderer.accel_note() {
+        return Err(Error::Gpu(note.to_string()));
+    }
     Ok(renderer.render(view, &Progress::hidden())?.0)
 }
 

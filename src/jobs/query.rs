@@ -203,6 +203,17 @@ pub fn run_query(
     // tree (inside tests, signed distances) from the host's scene.
     let scene = Arc::new(scene);
     let (mut renderer, _) = open(Arc::clone(&scene), job.device, job.adapter, sink)?;
+    // Under --accel hardware, what walks the compute BVH all the same.
+    let walks_bvh = match job.kind {
+        QueryKind::Points(_) => Some("closest points, distances, winding numbers and inside tests"),
+        QueryKind::Rays(_) if !renderer.ray_queries().is_some_and(|s| s.serves_crossings()) => {
+            Some("crossing counts and lists")
+        }
+        QueryKind::Rays(_) => None,
+    };
+    if let Some(note) = walks_bvh.and_then(|what| renderer.bvh_note(what)) {
+        say(sink, &note);
+    }
     let start = Instant::now();
     let (records, fell_back) = with_fallback(&mut renderer, job.device, &scene, work)?;
     if let Some(note) = &fell_back {

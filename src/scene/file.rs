@@ -8,8 +8,8 @@ use serde::Deserialize;
 
 use super::lighting::EnvironmentEntry;
 use super::{
-    DEFAULT_MAX_DEPTH, Integrator, Intersect, Rgb, Scene, Transform, colour, directional_light,
-    point, point_light, spot_light,
+    Accel, DEFAULT_MAX_DEPTH, Integrator, Intersect, Rgb, Scene, Transform, colour,
+    directional_light, point, point_light, spot_light,
 };
 use crate::camera::{Camera, View, validate_camera};
 use crate::error::{Error, Result};
@@ -51,6 +51,7 @@ pub struct RenderTable {
     pub intersect: Intersect,
     pub integrator: Integrator,
     pub max_depth: u32,
+    pub accel: Accel,
 }
 
 impl Default for RenderTable {
@@ -64,6 +65,7 @@ impl Default for RenderTable {
             intersect: Intersect::default(),
             integrator: Integrator::default(),
             max_depth: DEFAULT_MAX_DEPTH,
+            accel: Accel::default(),
         }
     }
 }
@@ -247,6 +249,7 @@ impl Scene {
             intersect: file.render.intersect,
             integrator: file.render.integrator,
             max_depth: file.render.max_depth,
+            accel: file.render.accel,
             inputs: vec![path.to_path_buf()],
             ..Scene::bare()
         };

@@ -142,13 +142,27 @@ impl Intersect {
     }
 }
 
-/// `--accel`: the BVH, or testing every primitive (the reference that tests
-/// the BVH).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// `--accel` (`render.accel`): the BVH, testing every primitive (the
+/// reference that tests the BVH), or the GPU's ray-tracing units
+/// (docs/hardware-rays.md).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum Accel {
     #[default]
     Bvh,
     BruteForce,
+    /// Ray queries against acceleration structures the GPU's driver builds
+    /// (wgpu's experimental ray queries). The CPU path, and on the GPU the
+    /// queries and rays they cannot take, traverse the BVH.
+    Hardware,
+}
+
+impl Accel {
+    /// Whether the BVH is traversed: under `Bvh`, and under `Hardware`
+    /// wherever ray queries are not used.
+    pub fn traverses_bvh(self) -> bool {
+        self != Accel::BruteForce
+    }
 }
 
 /// A colour given as one number (grey) or as `[r, g, b]`.

@@ -15,6 +15,7 @@ mod bin;
 pub mod cli;
 pub mod data;
 pub mod formats;
+pub mod hardware;
 pub mod lights;
 pub mod paths;
 pub mod pbr;

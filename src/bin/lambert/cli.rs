@@ -15,8 +15,8 @@ mod turntable;
 mod view;
 
 use options::{
-    AdapterArgs, BenchDevice, Device, RenderOptions, SceneArgs, SceneOptions, ViewOptions,
-    fraction, non_negative,
+    AccelArg, AdapterArgs, BenchDevice, Device, RenderOptions, SceneArgs, SceneOptions,
+    ViewOptions, fraction, non_negative,
 };
 
 use crate::progress_bar;
@@ -220,6 +220,9 @@ enum Comparison {
     GpuOracle,
     /// CPU reference (f32) against the f64 oracle.
     CpuOracle,
+    /// GPU through its ray queries (`--accel hardware`; an error where the
+    /// adapter has none) against the CPU reference (f32).
+    HardwareCpu,
 }
 
 #[derive(Args)]
@@ -308,6 +311,10 @@ struct BenchArgs {
     plot: Option<PathBuf>,
     #[arg(long, value_enum, default_value = "both")]
     device: BenchDevice,
+    /// How rays find their hits [default: each scene's render.accel, else
+    /// bvh]; `hardware` measures the GPU's ray queries (docs/hardware-rays.md).
+    #[arg(long, value_enum)]
+    accel: Option<AccelArg>,
     /// Image side for OBJ models (pixels).
     #[arg(long, default_value_t = 1024)]
     size: u32,
@@ -487,6 +494,15 @@ fn print_image_report(report: &ImageReport, sampling: Sampling, load: Duration) 
         seconds(bvh.build_time),
         bvh.device_bytes as f64 / (1 << 20) as f64
     );
+    if let Some(rq) = &report.ray_queries {
+        eprintln!(
+            "ray queries: {} BLAS, {} geometries, triangles as {}, built in {} (part of upload)",
+            rq.blases,
+            rq.geometries,
+            rq.triangles.name(),
+            seconds(rq.build_time)
+        );
+    }
     let t = &report.timings;
     eprintln!(
         "time: load {}, upload {}, render {}, readback {}, write {}",
@@ -591,6 +607,10 @@ fn diff(args: &DiffArgs, quiet: bool) -> Result<ExitCode> {
         ),
         Comparison::GpuOracle => (render_gpu(&scene, view, &request)?, oracle()),
         Comparison::CpuOracle => (cpu(), oracle()),
+        Comparison::HardwareCpu => (
+            jobs::render_hardware(&scene, view, &request)?,
+            cpu::render_gpu_twin(&scene, view, &Progress::hidden()),
+        ),
     };
     let stats = diff::compare(&a, &b, &tolerance)?;
     if let Some(path) = &args.heatmap {

@@ -52,7 +52,13 @@ pub(super) fn bench(args: &BenchArgs, quiet: bool) -> Result<ExitCode> {
         "", "", "Mrays/s", "Mrays/s", "s", "", "", "MiB", ""
     );
     for (input, name) in inputs.iter().zip(input_names(&inputs)) {
-        let scene = std::sync::Arc::new(bench::load_input(input, args.size)?);
+        let mut scene = bench::load_input(input, args.size)?;
+        if let Some(accel) = args.accel {
+            let mut settings = scene.default_settings();
+            settings.accel = accel.into();
+            scene = scene.with_settings(&settings);
+        }
+        let scene = std::sync::Arc::new(scene);
         check_scene_inputs(&scene, args)?;
         for row in bench::ladder_rows(&name, &scene, args.device.into(), &request, args.runs)? {
             println!(

@@ -244,6 +244,10 @@ pub(super) fn info(args: &AdapterArgs) -> Result<ExitCode> {
             "  timestamp queries: {}",
             adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY)
         );
+        println!(
+            "  ray queries (--accel hardware): {}",
+            gpu::offers_ray_queries(&adapter)
+        );
         if let Some(why) = gpu::bindings::unmet_limits(&limits) {
             println!("  cannot run lambert: {why}");
         }

@@ -55,11 +55,15 @@ impl From<BenchDevice> for BenchDevices {
 }
 
 /// `--accel`: `Accel`.
-#[derive(Clone, Copy, Default, ValueEnum)]
-enum AccelArg {
-    #[default]
+#[derive(Clone, Copy, ValueEnum)]
+pub(super) enum AccelArg {
+    /// The BVH (8-wide; compressed on the GPU).
     Bvh,
+    /// Every primitive tested: the reference.
     BruteForce,
+    /// The GPU's ray-tracing units through ray queries (docs/hardware-rays.md);
+    /// the BVH where the device has none, with a note, and on the CPU path.
+    Hardware,
 }
 
 impl From<AccelArg> for Accel {
@@ -67,6 +71,7 @@ impl From<AccelArg> for Accel {
         match accel {
             AccelArg::Bvh => Accel::Bvh,
             AccelArg::BruteForce => Accel::BruteForce,
+            AccelArg::Hardware => Accel::Hardware,
         }
     }
 }
@@ -152,8 +157,9 @@ pub(super) struct SceneArgs {
 /// Settings that override the scene file's.
 #[derive(Args, Clone)]
 pub(super) struct SceneOptions {
-    #[arg(long, value_enum, default_value_t)]
-    accel: AccelArg,
+    /// How rays find their hits [default: the scene's render.accel, else bvh].
+    #[arg(long, value_enum)]
+    accel: Option<AccelArg>,
     /// Ray/triangle test [default: the scene's render.intersect, else watertight].
     #[arg(long, value_enum)]
     intersect: Option<IntersectArg>,
@@ -208,7 +214,7 @@ impl SceneOptions {
     /// The options as the library applies them.
     fn overrides(&self) -> RenderOverrides {
         RenderOverrides {
-            accel: Some(self.accel.into()),
+            accel: self.accel.map(Into::into),
             intersect: self.intersect.map(Into::into),
             spp: self.spp,
             seed: self.seed,
