@@ -8,7 +8,7 @@ use common::paths::*;
 use common::*;
 use lambert::Scene;
 use lambert::output::Rendered;
-use lambert::scene::{Integrator, RenderSettings};
+use lambert::scene::Integrator;
 
 /// Largest difference of two images, relative to the larger value (values
 /// under `floor` compared absolutely).
