@@ -7,6 +7,15 @@
 /// The stage's items, expanded into the module that invokes it (`kernel!`).
 macro_rules! intersect {
     () => {
+        /// `record_block_hits`' `FEATURES` bits: alpha-masked triangles, spheres,
+        /// and a ray/triangle test other than the watertight one.
+        pub const FEATURE_ALPHA: u8 = 1;
+        pub const FEATURE_SPHERES: u8 = 2;
+        pub const FEATURE_OTHER_TESTS: u8 = 4;
+        /// Every feature checked at run time: the generic kernel, the portable
+        /// original that the specialised ones are tested against.
+        pub const ALL_FEATURES: u8 = FEATURE_ALPHA | FEATURE_SPHERES | FEATURE_OTHER_TESTS;
+
         pub fn miss() -> Hit {
             Hit {
                 t: FAR,
@@ -144,6 +153,22 @@ macro_rules! intersect {
                 color
             }
 
+            /// The `FEATURES` this kernel's scene needs: a bit for each of
+            /// alpha masks, spheres and another triangle test that it has.
+            pub fn features(&self) -> u8 {
+                let mut features = 0;
+                if self.alpha_mask {
+                    features |= FEATURE_ALPHA;
+                }
+                if !self.scene.spheres.is_empty() {
+                    features |= FEATURE_SPHERES;
+                }
+                if self.intersect != Intersect::Watertight {
+                    features |= FEATURE_OTHER_TESTS;
+                }
+                features
+            }
+
             /// Whether a hit at (u, v) of `prim` falls in an alpha-masked
             /// triangle's cut-out: the shader's any-hit test, where hits are
             /// recorded (opaque triangles pay a flag test; scenes without masks,
@@ -236,8 +261,11 @@ macro_rules! intersect {
             /// watertight test, then (in lane order) its spheres, and its triangles
             /// too under another triangle test. Each hit nearer than ray.tmax
             /// becomes the hit and shortens the ray; returns whether there was one.
+            /// `FEATURES` (`Kernel::features`) names what the scene may hold:
+            /// the checks for what it lacks are compiled out, as the shader's
+            /// overrides do; `ALL_FEATURES` checks them all at run time.
             #[inline(always)]
-            pub fn record_block_hits(
+            pub fn record_block_hits<const FEATURES: u8>(
                 &self,
                 ray: &mut Ray,
                 shear: &Shear,
@@ -245,7 +273,8 @@ macro_rules! intersect {
                 block: &PrimBlock,
             ) -> bool {
                 let scene = self.scene;
-                let watertight = self.intersect == Intersect::Watertight;
+                let other_tests = FEATURES & FEATURE_OTHER_TESTS != 0;
+                let watertight = !other_tests || self.intersect == Intersect::Watertight;
                 let mut recorded = false;
                 let num_triangles = scene.triangles.len() as u32;
                 if watertight && num_triangles > 0 {
@@ -253,13 +282,15 @@ macro_rules! intersect {
                     // The alpha test decided once a block, not a lane: inside the
                     // lane loop, its mere presence cost camera rays 12% (callgrind:
                     // 30% more instructions in the kernel).
-                    recorded = if self.alpha_mask {
+                    recorded = if FEATURES & FEATURE_ALPHA != 0 && self.alpha_mask {
                         self.record_masked_lanes(ray, hit, block, &lanes, num_triangles)
                     } else {
                         self.record_lanes::<false>(ray, hit, block, &lanes, num_triangles)
                     };
                 }
-                if !watertight || !scene.spheres.is_empty() {
+                if (other_tests && !watertight)
+                    || (FEATURES & FEATURE_SPHERES != 0 && !scene.spheres.is_empty())
+                {
                     for &prim in &block.prims {
                         if prim != NO_HIT && !(watertight && prim < num_triangles) {
                             recorded |= self.record_hit(ray, shear, hit, prim);

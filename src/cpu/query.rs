@@ -51,11 +51,37 @@ pub fn trace_rays_with(
     intersect: Intersect,
     cpu_kernel: CpuKernel,
 ) -> Vec<layout::Hit> {
+    trace_rays_as(scene, rays, any_hit, intersect, cpu_kernel, true)
+}
+
+/// `trace_rays_with` through the generic kernel (`f32::ALL_FEATURES`: alpha
+/// masks, spheres and the triangle test checked at run time) rather than
+/// the variant specialised for what the scene holds: the portable
+/// original that the variants are tested against, bit for bit.
+pub fn trace_rays_generic(
+    scene: &Scene,
+    rays: &[layout::Ray],
+    any_hit: bool,
+    intersect: Intersect,
+    cpu_kernel: CpuKernel,
+) -> Vec<layout::Hit> {
+    trace_rays_as(scene, rays, any_hit, intersect, cpu_kernel, false)
+}
+
+/// `trace_rays_with`, specialised for the scene or not.
+fn trace_rays_as(
+    scene: &Scene,
+    rays: &[layout::Ray],
+    any_hit: bool,
+    intersect: Intersect,
+    cpu_kernel: CpuKernel,
+    specialise: bool,
+) -> Vec<layout::Hit> {
     // Written by the threads themselves: filling it first on one thread
     // would cost a twentieth of the trace.
     let mut hits: Vec<layout::Hit> = Vec::with_capacity(rays.len());
     let out = SharedOut(hits.as_mut_ptr());
-    trace_rays_each(
+    trace_each(
         scene,
         QueryRays::Slice(rays),
         QueryOptions {
@@ -65,6 +91,7 @@ pub fn trace_rays_with(
             normals: false,
         },
         RayFrame::World,
+        specialise,
         &|chunk| {
             // SAFETY: chunks are disjoint and within the capacity.
             unsafe {
@@ -189,6 +216,19 @@ pub fn trace_rays_each(
     // its codegen settings, and the kernel ran up to 40% slower there.
     each: &(dyn Fn(&TracedChunk) + Sync),
 ) {
+    trace_each(scene, rays, options, frame, true, each)
+}
+
+/// `trace_rays_each`; with `specialise`, through the kernel compiled for
+/// what the scene holds (`Kernel::features`), else the generic one.
+fn trace_each(
+    scene: &Scene,
+    rays: QueryRays,
+    options: QueryOptions,
+    frame: RayFrame,
+    specialise: bool,
+    each: &(dyn Fn(&TracedChunk) + Sync),
+) {
     use std::mem::MaybeUninit;
     const CHUNK: usize = 1024;
     let QueryOptions {
@@ -203,6 +243,10 @@ pub fn trace_rays_each(
     let placement = scene.placement();
     let large = scene.bvh.device_bytes() > LARGE_BVH_BYTES;
     let vector_sort = cpu_kernel.vector_sort();
+    // Chosen once for the query: a scene of watertight-tested triangles
+    // alone (the usual one) takes the kernel without the alpha test, the
+    // sphere loop and the choice of triangle test; any other the generic.
+    let triangles_only = specialise && kernel.features() == 0;
     // Rays closer than this count as leaving from nearby points.
     let nearby = scene
         .bvh
@@ -243,6 +287,13 @@ pub fn trace_rays_each(
             // VECTOR_SORT.
             macro_rules! chunk {
                 ($lanes:expr, $prefetch:expr, $vector_sort:expr) => {
+                    if triangles_only {
+                        chunk!($lanes, $prefetch, $vector_sort, 0)
+                    } else {
+                        chunk!($lanes, $prefetch, $vector_sort, f32::ALL_FEATURES)
+                    }
+                };
+                ($lanes:expr, $prefetch:expr, $vector_sort:expr, $features:expr) => {
                     // SAFETY: the kernel was checked; VECTOR_SORT only
                     // where `vector_sort` says the CPU can.
                     unsafe {
@@ -250,7 +301,7 @@ pub fn trace_rays_each(
                             cpu_kernel,
                             #[inline(always)]
                             || {
-                                trace_chunk::<{ $lanes }, $prefetch, $vector_sort>(
+                                trace_chunk::<{ $lanes }, $prefetch, $vector_sort, { $features }>(
                                     &kernel, chunk_rays, hits, normal_out, any_hit,
                                 )
                             },
@@ -285,12 +336,18 @@ pub fn trace_rays_each(
 }
 
 /// Traces `rays` into `hits`, `LANES` rays in turn (`Kernel::visit` with
-/// `PREFETCH` and `VECTOR_SORT`).
+/// `PREFETCH`, `VECTOR_SORT` and `FEATURES`, which must include the
+/// kernel's `features()`).
 ///
 /// # Safety
 /// With `VECTOR_SORT`, the CPU must have AVX-512 (f32's `Scalar::has_vector_sort`).
 #[inline(always)]
-unsafe fn trace_chunk<const LANES: usize, const PREFETCH: bool, const VECTOR_SORT: bool>(
+unsafe fn trace_chunk<
+    const LANES: usize,
+    const PREFETCH: bool,
+    const VECTOR_SORT: bool,
+    const FEATURES: u8,
+>(
     kernel: &f32::Kernel,
     rays: &[layout::Ray],
     hits: &mut [std::mem::MaybeUninit<layout::Hit>],
@@ -334,7 +391,10 @@ unsafe fn trace_chunk<const LANES: usize, const PREFETCH: bool, const VECTOR_SOR
             // vouches for VECTOR_SORT.
             if index[k] == usize::MAX
                 || unsafe {
-                    kernel.visit::<PREFETCH, VECTOR_SORT>(&mut traversals[k], &mut stacks[k])
+                    kernel.visit::<PREFETCH, VECTOR_SORT, FEATURES>(
+                        &mut traversals[k],
+                        &mut stacks[k],
+                    )
                 }
             {
                 continue;

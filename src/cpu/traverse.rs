@@ -136,7 +136,9 @@ macro_rules! traverse {
                         let i = leaf_blocks.trailing_zeros();
                         leaf_blocks &= leaf_blocks - 1;
                         let block = &blocks[(block_base + i) as usize];
-                        if self.record_block_hits(&mut ray, shear, &mut hit, block) && any_hit {
+                        if self.record_block_hits::<ALL_FEATURES>(&mut ray, shear, &mut hit, block)
+                            && any_hit
+                        {
                             return hit;
                         }
                     }

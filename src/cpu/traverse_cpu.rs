@@ -71,7 +71,9 @@ macro_rules! traverse_cpu {
                 let mut traversal = Traversal::new(ray, *shear, any_hit);
                 let mut stack = new_stack();
                 // SAFETY: every pass gets this traversal's own stack.
-                while unsafe { self.visit::<false, false>(&mut traversal, &mut stack) } {}
+                while unsafe {
+                    self.visit::<false, false, ALL_FEATURES>(&mut traversal, &mut stack)
+                } {}
                 traversal.hit
             }
 
@@ -80,14 +82,20 @@ macro_rules! traverse_cpu {
             /// With `VECTOR_SORT`, entered children are ordered by `Scalar::push_sorted_zmm`,
             /// without the branches (on how many, and on their order) that
             /// mispredict on rays of random directions. Returns false when the
-            /// traversal is done (its `hit` is then the answer).
+            /// traversal is done (its `hit` is then the answer). `FEATURES`:
+            /// `Kernel::record_block_hits`', which must include the kernel's
+            /// `features()` (a variant without a scene's feature misses it).
             ///
             /// # Safety
             /// `stack` must be the one that every earlier pass of this traversal
             /// used: it reads the entries they pushed. With `VECTOR_SORT`, the CPU
             /// must have AVX-512 (`Scalar::has_vector_sort`).
             #[inline(always)]
-            pub(crate) unsafe fn visit<const PREFETCH: bool, const VECTOR_SORT: bool>(
+            pub(crate) unsafe fn visit<
+                const PREFETCH: bool,
+                const VECTOR_SORT: bool,
+                const FEATURES: u8,
+            >(
                 &self,
                 traversal: &mut Traversal,
                 stack: &mut TraversalStack,
@@ -108,7 +116,7 @@ macro_rules! traverse_cpu {
                     for (b, block) in
                         (first..).zip(&bvh.blocks[first as usize..(first + count) as usize])
                     {
-                        if self.record_block_hits(ray, shear, hit, block) {
+                        if self.record_block_hits::<FEATURES>(ray, shear, hit, block) {
                             *hit_block = b;
                             if *any_hit {
                                 return false;

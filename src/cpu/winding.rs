@@ -14,5 +14,6 @@
 pub(super) mod stage;
 
 pub use super::f32::{
-    WINDING_BETA, WINDING_STACK, dipole_winding, triangle_winding, winding_number, winding_sum,
+    WINDING_BETA, WINDING_STACK, dipole_winding, triangle_winding, triangle_winding4,
+    winding_number, winding_sum,
 };

@@ -189,56 +189,23 @@ macro_rules! closest {
             )
         }
 
-        /// A best-first queue of boxes (node or leaf references) by squared
-        /// distance: a binary min-heap, kept by the caller between queries so that
-        /// a query allocates nothing.
+        /// The boxes (node or leaf references) waiting in a query's walk, with
+        /// their squared distances: a stack, each node's children pushed
+        /// farthest first, kept by the caller between queries so that a query
+        /// allocates nothing.
         pub type BoxQueue = Vec<(Real, u32)>;
-
-        fn queue_push(queue: &mut BoxQueue, entry: (Real, u32)) {
-            queue.push(entry);
-            let mut i = queue.len() - 1;
-            while i > 0 {
-                let parent = (i - 1) / 2;
-                if queue[parent].0 <= queue[i].0 {
-                    break;
-                }
-                queue.swap(parent, i);
-                i = parent;
-            }
-        }
-
-        fn queue_pop(queue: &mut BoxQueue) -> Option<(Real, u32)> {
-            let last = queue.pop()?;
-            if queue.is_empty() {
-                return Some(last);
-            }
-            let top = std::mem::replace(&mut queue[0], last);
-            let mut i = 0;
-            loop {
-                let (l, r) = (2 * i + 1, 2 * i + 2);
-                let mut m = i;
-                if l < queue.len() && queue[l].0 < queue[m].0 {
-                    m = l;
-                }
-                if r < queue.len() && queue[r].0 < queue[m].0 {
-                    m = r;
-                }
-                if m == i {
-                    return Some(top);
-                }
-                queue.swap(i, m);
-                i = m;
-            }
-        }
 
         /// The nearest point of the BVH's triangles (ids below `triangle_count`)
         /// to `p` within squared distance `max_d2` (None when none is): boxes
-        /// nearest first from a queue (`queue`, emptied first), each leaf's blocks
+        /// from a stack (`queue`, emptied first), each leaf's blocks
         /// four triangles at a time, boxes beyond `cull_bound` of the best so far
-        /// skipped. `hint`, a triangle (id and vertices) likely near `p` (a
+        /// skipped. Depth first, each node's children nearest first (a
+        /// stack, not a heap of every box met: with the hint's bound the same
+        /// boxes are opened, and a stack's push and pop cost less than a
+        /// heap's). `hint`, a triangle (id and vertices) likely near `p` (a
         /// neighbouring query's answer), is the first candidate: its bound prunes
         /// from the start, and as `better` orders candidates totally the answer
-        /// is the same with or without it.
+        /// is the same with or without it, and in any order of visits.
         pub fn closest_point(
             bvh: &Bvh,
             triangle_count: usize,
@@ -273,6 +240,7 @@ macro_rules! closest {
             loop {
                 if current & LEAF_BIT == 0 {
                     let node = &bvh.nodes[current as usize];
+                    let base = queue.len();
                     for half in 0..2 {
                         let row = |r: usize| {
                             let b = &node.bounds[r][4 * half..4 * half + 4];
@@ -288,7 +256,13 @@ macro_rules! closest {
                         for lane in 0..4 {
                             let slot = 4 * half + lane;
                             if node.occupied >> slot & 1 == 1 && d2[lane] <= bound {
-                                queue_push(queue, (d2[lane], node.children[slot]));
+                                // Farther entries deeper: the nearest is popped first.
+                                queue.push((d2[lane], node.children[slot]));
+                                let mut j = queue.len() - 1;
+                                while j > base && queue[j - 1].0 < queue[j].0 {
+                                    queue.swap(j - 1, j);
+                                    j -= 1;
+                                }
                             }
                         }
                     }
@@ -314,10 +288,16 @@ macro_rules! closest {
                         }
                     }
                 }
-                // The nearest box left, if it is within the bound.
-                match queue_pop(queue) {
-                    Some((d2, child)) if d2 <= bound => current = child,
-                    _ => return (best.prim != NO_HIT).then_some(best),
+                // The last box pushed that the best so far leaves within the bound.
+                loop {
+                    match queue.pop() {
+                        Some((d2, child)) if d2 <= bound => {
+                            current = child;
+                            break;
+                        }
+                        Some(_) => {}
+                        None => return (best.prim != NO_HIT).then_some(best),
+                    }
                 }
             }
         }

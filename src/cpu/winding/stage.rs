@@ -42,6 +42,53 @@ macro_rules! winding {
             approx_atan2(det, den) * INV_TWO_PI
         }
 
+        /// `triangle_winding` of four triangles at once (corners per axis, a
+        /// lane a triangle): lane for lane the same IEEE operations in the same
+        /// order, its branches as selects, so the same bits.
+        #[inline(always)]
+        pub fn triangle_winding4(q: Vec3, corners: [[Vec4; 3]; 3]) -> Vec4 {
+            let sub = |v: [Vec4; 3]| {
+                [
+                    v[0] - Vec4::splat(q.x),
+                    v[1] - Vec4::splat(q.y),
+                    v[2] - Vec4::splat(q.z),
+                ]
+            };
+            let dot = |x: [Vec4; 3], y: [Vec4; 3]| x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
+            let [qa, qb, qc] = corners.map(sub);
+            let la = dot(qa, qa).sqrt();
+            let lb = dot(qb, qb).sqrt();
+            let lc = dot(qc, qc).sqrt();
+            let cross = [
+                qb[1] * qc[2] - qb[2] * qc[1],
+                qb[2] * qc[0] - qb[0] * qc[2],
+                qb[0] * qc[1] - qb[1] * qc[0],
+            ];
+            let det = dot(qa, cross);
+            let den = la * lb * lc + dot(qa, qb) * lc + dot(qa, qc) * lb + dot(qb, qc) * la;
+            // `approx_atan2`, lane by lane.
+            let (ax, ay) = (den.abs(), det.abs());
+            let zero = Vec4::ZERO;
+            let steep = ay.cmpgt(ax);
+            let hi = Vec4::select(steep, ay, ax);
+            let lo = Vec4::select(steep, ax, ay);
+            let z = lo / hi;
+            let z2 = z * z;
+            let c = Vec4::splat;
+            let mut r = z
+                * (c(0.999_999_94)
+                    + z2 * (c(-0.333_320_95)
+                        + z2 * (c(0.199_713_74)
+                            + z2 * (c(-0.140_294_12)
+                                + z2 * (c(0.099_427_36)
+                                    + z2 * (c(-0.059_904_337)
+                                        + z2 * (c(0.024_556_82) + z2 * c(-0.004_780_36))))))));
+            r = Vec4::select(steep, c(HALF_PI) - r, r);
+            r = Vec4::select(den.cmplt(zero), c(PI) - r, r);
+            r = Vec4::select(det.cmplt(zero), -r, r);
+            Vec4::select(hi.cmpeq(zero), zero, r) * c(INV_TWO_PI)
+        }
+
         /// The far field of a node's triangles at `q`: n · (centre − q) / (4π
         /// |centre − q|³), n the sum of their area vectors.
         #[inline(always)]
@@ -87,14 +134,37 @@ macro_rules! winding {
                     error += e;
                     continue;
                 }
-                for &prim in &tree.prims
-                    [node.first_prim as usize..(node.first_prim + node.prim_count) as usize]
-                {
-                    let t = &triangles[prim as usize];
-                    let winding = triangle_winding(q, vec3(t.v0), vec3(t.v1), vec3(t.v2));
-                    let (sum, e) = winding_sum(w, winding);
-                    w = sum;
-                    error += e;
+                let prims = &tree.prims
+                    [node.first_prim as usize..(node.first_prim + node.prim_count) as usize];
+                if EXACT {
+                    // The oracle's exact atan has no four-lane form.
+                    for &prim in prims {
+                        let t = &triangles[prim as usize];
+                        let winding = triangle_winding(q, vec3(t.v0), vec3(t.v1), vec3(t.v2));
+                        let (sum, e) = winding_sum(w, winding);
+                        w = sum;
+                        error += e;
+                    }
+                } else {
+                    // Four triangles at a time (the last group's spare lanes
+                    // repeat its first), summed in order as one at a time.
+                    for group in prims.chunks(4) {
+                        let t = |k: usize| &triangles[group[k.min(group.len() - 1)] as usize];
+                        let corners = |v: fn(&Triangle) -> [f32; 3]| {
+                            let [t0, t1, t2, t3] = [t(0), t(1), t(2), t(3)].map(v);
+                            [0, 1, 2].map(|a| vec4([t0[a], t1[a], t2[a], t3[a]]))
+                        };
+                        let windings = triangle_winding4(
+                            q,
+                            [corners(|t| t.v0), corners(|t| t.v1), corners(|t| t.v2)],
+                        )
+                        .to_array();
+                        for &winding in &windings[..group.len()] {
+                            let (sum, e) = winding_sum(w, winding);
+                            w = sum;
+                            error += e;
+                        }
+                    }
                 }
                 for child in node.first_child..node.first_child + node.child_count {
                     stack[sp] = child;

@@ -1,0 +1,142 @@
+//! Issue 48, item 4: the CPU's point queries walk faster with the same
+//! answers. Closest points go depth first, each node's children nearest
+//! first, and must still find the best candidate by `better`'s total order
+//! (the brute-force minimum, bit for bit) wherever the walk starts; winding
+//! numbers take a leaf's triangles four at a time (`triangle_winding4`),
+//! which must be `triangle_winding` lane for lane, bit for bit.
+
+use glam::Vec3;
+use lambert::Scene;
+use lambert::cpu::closest::{better, closest_point, closest_point_triangle, query_margin};
+use lambert::cpu::winding::{triangle_winding, triangle_winding4};
+use lambert::layout::{NO_HIT, Triangle};
+use lambert::probe::Rng;
+
+fn point(rng: &mut Rng, half: f64) -> Vec3 {
+    Vec3::new(
+        rng.range(-half, half) as f32,
+        rng.range(-half, half) as f32,
+        rng.range(-half, half) as f32,
+    )
+}
+
+/// `n` small triangles around the cube of side 2 at the origin, and a
+/// strip of triangles sharing edges and vertices (ties).
+fn triangles(seed: u64, n: usize) -> Vec<Triangle> {
+    let mut rng = Rng(seed);
+    let mut out: Vec<Triangle> = (0..n)
+        .map(|_| {
+            let p = point(&mut rng, 1.0);
+            let [v0, v1, v2] = [0; 3].map(|_| (p + point(&mut rng, 0.1)).to_array());
+            Triangle {
+                v0,
+                v1,
+                v2,
+                ..Default::default()
+            }
+        })
+        .collect();
+    for i in 0..40 {
+        let x = i as f32 * 0.05 - 1.0;
+        let corner = |dx: f32, y: f32| [x + dx, y, 1.5];
+        out.push(Triangle {
+            v0: corner(0.0, 0.0),
+            v1: corner(0.05, 0.0),
+            v2: corner(0.0, 0.05),
+            ..Default::default()
+        });
+        out.push(Triangle {
+            v0: corner(0.05, 0.0),
+            v1: corner(0.05, 0.05),
+            v2: corner(0.0, 0.05),
+            ..Default::default()
+        });
+    }
+    out
+}
+
+/// The depth-first walk finds `better`'s minimum over every triangle, bit
+/// for bit (point, distance, id, u, v), with and without a hint, for points
+/// inside the soup, far outside it and on the strip's shared vertices,
+/// through a BVH of many levels.
+#[test]
+fn the_depth_first_walk_finds_the_brute_force_minimum() {
+    let triangles = triangles(3, 20_000);
+    let scene = Scene::from_triangles(triangles.clone());
+    let radius = scene.placement().radius as f32;
+    let mut rng = Rng(4);
+    let mut points: Vec<Vec3> = (0..200).map(|_| point(&mut rng, 1.2)).collect();
+    points.extend((0..100).map(|_| point(&mut rng, 6.0)));
+    points.extend(triangles[20_000..].iter().map(|t| Vec3::from(t.v1)));
+    let mut queue = Vec::new();
+    for (i, &p) in points.iter().enumerate() {
+        let mut best = (f32::INFINITY, NO_HIT, Vec3::ZERO, 0.0, 0.0);
+        for (id, t) in triangles.iter().enumerate() {
+            let (q, d2, u, v) = closest_point_triangle(p, t.v0.into(), t.v1.into(), t.v2.into());
+            if better(d2, id as u32, best.0, best.1) {
+                best = (d2, id as u32, q, u, v);
+            }
+        }
+        let hint_id = (i * 7919) % triangles.len();
+        let t = &triangles[hint_id];
+        let hint = (hint_id as u32, [t.v0, t.v1, t.v2].map(Vec3::from));
+        let margin = query_margin(p.abs().max_element(), radius);
+        for hint in [None, Some(hint)] {
+            let found = closest_point(
+                scene.bvh(),
+                triangles.len(),
+                p,
+                f32::INFINITY,
+                margin,
+                hint,
+                &mut queue,
+            )
+            .expect("a nearest triangle");
+            assert_eq!(
+                (
+                    found.prim,
+                    found.d2.to_bits(),
+                    found.u.to_bits(),
+                    found.v.to_bits(),
+                    found.point.to_array().map(f32::to_bits)
+                ),
+                (
+                    best.1,
+                    best.0.to_bits(),
+                    best.3.to_bits(),
+                    best.4.to_bits(),
+                    best.2.to_array().map(f32::to_bits)
+                ),
+                "point {i} {p}, hint {hint:?}"
+            );
+        }
+    }
+}
+
+/// Four lanes of `triangle_winding4` are four calls of `triangle_winding`,
+/// bit for bit: random triangles and points, points on a corner (0), in a
+/// triangle's plane, and behind and in front of it (every branch of the
+/// arctangent).
+#[test]
+fn four_lane_windings_are_the_scalar_ones_bit_for_bit() {
+    let triangles = triangles(5, 400);
+    let mut rng = Rng(6);
+    for group in triangles.chunks(4) {
+        let mut points: Vec<Vec3> = (0..30).map(|_| point(&mut rng, 2.0)).collect();
+        let t = &group[0];
+        let (a, b, c) = (Vec3::from(t.v0), Vec3::from(t.v1), Vec3::from(t.v2));
+        points.extend([a, (a + b + c) / 3.0, 2.0 * a - b, (a + b) / 2.0]);
+        for p in points {
+            let corners = |v: fn(&Triangle) -> [f32; 3]| {
+                [0, 1, 2].map(|axis| glam::Vec4::from(std::array::from_fn(|k| v(&group[k])[axis])))
+            };
+            let lanes =
+                triangle_winding4(p, [corners(|t| t.v0), corners(|t| t.v1), corners(|t| t.v2)])
+                    .to_array();
+            for (k, t) in group.iter().enumerate() {
+                let scalar = triangle_winding(p, t.v0.into(), t.v1.into(), t.v2.into());
+                assert_eq!(lanes[k].to_bits(), scalar.to_bits(), "{p} {t:?}");
+            }
+        }
+    }
+}
