@@ -260,4 +260,31 @@ fn the_shadow_dispatch_variable_chooses_the_path_wavefront() {
         ShadowDispatch::Megakernel,
         "unset: the megakernel, faster on lavapipe"
     );
+    let textured = Scene::load(&asset("scenes/meshes/textured.glb")).expect("bundled model");
+    let textured = path_traced(&textured, 1, 4);
+    let gpu = Gpu::open(&AdapterRequest::default(), false).expect("an adapter (lavapipe on CI)");
+    let renderer = GpuRenderer::new(gpu, &textured).expect("scene uploads");
+    assert_eq!(
+        renderer.shadow_dispatch,
+        ShadowDispatch::Wavefront,
+        "unset, a textured scene: the wavefront, faster on lavapipe"
+    );
+}
+
+/// A textured model (base-colour textures, an alpha-masked leaf) under an
+/// environment: the wavefront its scene's default dispatch, the
+/// megakernel's image bit for bit and the twin's within the bound.
+#[test]
+fn the_path_wavefront_renders_a_textured_model_as_the_megakernel() {
+    let model = Scene::load(&asset("scenes/meshes/textured.glb")).expect("bundled model");
+    let mut settings = RenderSettings {
+        integrator: lambert::scene::Integrator::Path,
+        max_depth: 4,
+        ..model.default_settings()
+    };
+    settings.view.spp = 2;
+    settings.view.camera.width = 48;
+    settings.view.camera.height = 32;
+    let scene = model.with_settings(&settings);
+    assert_wavefront_is_megakernel_and_twin(&scene, "textured.glb");
 }

@@ -447,10 +447,13 @@ impl GpuRenderer {
 
     /// Whether samples are path traced (the PATH_TRACE override).
     fn path_traced(&self) -> bool {
+        self.constant_on("PATH_TRACE")
+    }
+
+    /// Whether the boolean override `name` is on.
+    fn constant_on(&self, name: &str) -> bool {
         let constants = &self.pipelines.constants;
-        constants
-            .iter()
-            .any(|&(n, v)| n == "PATH_TRACE" && v != 0.0)
+        constants.iter().any(|&(n, v)| n == name && v != 0.0)
     }
 
     /// Sets a boolean override, and drops the pipelines built on the old.
@@ -469,6 +472,7 @@ impl GpuRenderer {
         let params = self.resident.scene_params();
         self.shadow_dispatch = ShadowDispatch::for_lights(
             self.path_traced(),
+            self.constant_on("HAS_TEXTURES"),
             params.shadows != 0,
             params.num_lights,
             self.gpu.options.shadow_dispatch.as_deref(),

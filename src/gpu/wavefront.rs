@@ -30,7 +30,8 @@ use super::{SHADOW_QUERY_BYTES, WAVE_RAYS, WAVE_SHADING_BYTES, WAVE_SHADOW_RAYS}
 /// one point light, device time: 0.73× at 1 spp, 0.98× at 4, 0.95× at 16,
 /// 0.90× at 64; docs/bvh.md). Under the path integrator, the megakernel
 /// runs `path_radiance` whole, the wavefront a pass a bounce
-/// (gpu::path_wave); unset, the megakernel (`PATH_DISPATCH`).
+/// (gpu::path_wave); unset, the megakernel, or the wavefront where the
+/// scene has textures (`path_dispatch`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ShadowDispatch {
     Megakernel,
@@ -51,20 +52,23 @@ impl ShadowDispatch {
     ) -> Result<ShadowDispatch> {
         let lights = scene.lights.len().min(u32::MAX as usize) as u32;
         let path = scene.integrator == crate::scene::Integrator::Path;
-        ShadowDispatch::for_lights(path, scene.shadows, lights, chosen, max_binding)
+        let textured = scene.has_textures();
+        ShadowDispatch::for_lights(path, textured, scene.shadows, lights, chosen, max_binding)
     }
 
-    /// `for_scene` from the integrator and the uniform's shadows and light
-    /// count (what `GpuRenderer::set_shadows` has).
+    /// `for_scene` from the integrator, whether the scene has textures and
+    /// the uniform's shadows and light count (what `GpuRenderer::set_shadows`
+    /// has).
     pub(super) fn for_lights(
         path: bool,
+        textured: bool,
         shadows: bool,
         lights: u32,
         chosen: Option<&str>,
         max_binding: u64,
     ) -> Result<ShadowDispatch> {
         let (applies, unset) = if path {
-            (path_wave_bytes() <= max_binding, PATH_DISPATCH)
+            (path_wave_bytes() <= max_binding, path_dispatch(textured))
         } else {
             let queue = wave_queue_bytes(lights) <= max_binding;
             (shadows && lights > 0 && queue, ShadowDispatch::Wavefront)
@@ -80,11 +84,19 @@ impl ShadowDispatch {
     }
 }
 
-/// The path integrator's dispatch where LAMBERT_SHADOW_DISPATCH is unset:
-/// the megakernel, which measured faster on lavapipe (examples/wave, CPU
-/// time, 256²: the wavefront 1.06–1.12× the megakernel's on
-/// cornell_area.toml and dragon_cornell.toml; docs/benchmarks.md).
-const PATH_DISPATCH: ShadowDispatch = ShadowDispatch::Megakernel;
+/// The path integrator's dispatch where LAMBERT_SHADOW_DISPATCH is unset,
+/// as measured on lavapipe (docs/benchmarks.md): the megakernel for an
+/// untextured scene (the wavefront took 1.06–1.12× its time on
+/// cornell_area.toml and dragon_cornell.toml), the wavefront for a textured
+/// one, whose megakernel carries every texture fetch of every bounce in one
+/// function (the wavefront took 0.56–0.75× its time on textured.glb).
+fn path_dispatch(textured: bool) -> ShadowDispatch {
+    if textured {
+        ShadowDispatch::Wavefront
+    } else {
+        ShadowDispatch::Megakernel
+    }
+}
 
 /// Camera rays a wavefront dispatch takes with `lights` lights:
 /// `WAVE_RAYS`, fewer where their shadow rays would pass
