@@ -27,21 +27,6 @@ fn one_light() -> String {
     camera_on_z(8.0, 40.0, 48, 32) + ONE_LIGHT
 }
 
-const ONE_LIGHT: &str = r#"
-[render]
-background = [0.1, 0.2, 0.3]
-
-[[sphere]]
-center = [-1.3, 0.0, 0.0]
-radius = 1.0
-albedo = [0.8, 0.5, 0.2]
-
-[[point_light]]
-position = [-4.0, 3.0, 5.0]
-intensity = [30.0, 30.0, 30.0]
-
-"#;
-
 /// `one_light()` and a directional light.
 fn convex() -> String {
     one_light() + DIRECTIONAL

@@ -153,23 +153,7 @@ fn paths_that_end_early_and_at_max_depth_are_handled() {
     // environment: every continuation escapes and brings nothing back, so
     // the wavefront shows the direct integrator's image (as the CPU twin
     // does, tests/path.rs).
-    let one_sphere = scene(&format!(
-        "{}{}",
-        camera_on_z(8.0, 40.0, 32, 24),
-        r#"
-[render]
-background = [0.1, 0.2, 0.3]
-
-[[sphere]]
-center = [-1.3, 0.0, 0.0]
-radius = 1.0
-albedo = [0.8, 0.5, 0.2]
-
-[[point_light]]
-position = [-4.0, 3.0, 5.0]
-intensity = [30.0, 30.0, 30.0]
-"#
-    ));
+    let one_sphere = scene(&(camera_on_z(8.0, 40.0, 32, 24) + ONE_LIGHT));
     let direct = render_gpu(&one_sphere);
     let (path, _) = wavefront_and_megakernel(&path_traced(&one_sphere, 1, 1));
     assert_eq!(direct.prims, path.prims);

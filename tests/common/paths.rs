@@ -70,3 +70,20 @@ pub fn small(name: &str, side: u32) -> Scene {
     scene.view_mut().clone_from(&view);
     scene
 }
+
+/// One sphere lit by one point light, no ambient, before a camera (the
+/// scene the integrators must show alike).
+pub const ONE_LIGHT: &str = r#"
+[render]
+background = [0.1, 0.2, 0.3]
+
+[[sphere]]
+center = [-1.3, 0.0, 0.0]
+radius = 1.0
+albedo = [0.8, 0.5, 0.2]
+
+[[point_light]]
+position = [-4.0, 3.0, 5.0]
+intensity = [30.0, 30.0, 30.0]
+
+"#;
