@@ -168,12 +168,16 @@ impl ProgressSink for PySink {
 }
 
 impl PyBar {
-    fn tell(&self, done: u64) {
+    /// Adds `units` to what is done and tells the callable the new total.
+    fn tell(&self, units: u64) {
         let mut failure = self.failure.lock().unwrap_or_else(|e| e.into_inner());
+        // Counted under the lock, so that the totals reach the callable in
+        // the order they grow, one call at a time, whichever thread ends
+        // its rows first.
+        let done = self.done.fetch_add(units, Ordering::Relaxed) + units;
         if failure.is_some() {
             return;
         }
-        // Under the lock: calls come in order, one at a time.
         Python::attach(|py| {
             if let Err(e) = self
                 .callback
@@ -187,8 +191,7 @@ impl PyBar {
 
 impl ProgressBar for PyBar {
     fn inc(&self, units: u64) {
-        let done = self.done.fetch_add(units, Ordering::Relaxed) + units;
-        self.tell(done);
+        self.tell(units);
     }
 
     fn finish(&self) {}
