@@ -72,6 +72,7 @@ impl LocalRays<'_> {
 /// A local hit on a ray whose origin was moved `shift` along it, on the
 /// ray as given: t + shift, in f64 then rounded once. A t beyond f32's
 /// range is a miss (`Placement::ray_problem` warns of it beforehand).
+#[inline]
 pub fn world_hit(hit: Hit, shift: f64) -> Hit {
     if hit.prim == NO_HIT || shift == 0.0 {
         return hit;
@@ -91,6 +92,7 @@ impl Placement {
     /// is at t + shift on the ray as given (`world_hit`). A ray that cannot
     /// reach the geometry comes back as one that hits nothing (tmin = tmax
     /// = 0). See `place`.
+    #[inline]
     pub fn local_ray(&self, origin: DVec3, dir: DVec3, tmin: f64, tmax: f64) -> (Ray, f64) {
         match self.place(origin, dir, tmin, tmax) {
             Some((o, tmin, tmax, shift)) => (f32_ray(o, dir, tmin, tmax), shift),
@@ -103,6 +105,7 @@ impl Placement {
     /// within FAR_RATIO radii stays where it is (shift 0); one beyond moves
     /// to where the ray enters the sphere of twice the radius, which every
     /// hit lies beyond.
+    #[inline]
     pub fn place(
         &self,
         origin: DVec3,
@@ -368,6 +371,7 @@ fn world(v: [f32; 3]) -> DVec3 {
     DVec3::from(v.map(f64::from))
 }
 
+#[inline]
 fn f32_ray(origin: DVec3, dir: DVec3, tmin: f64, tmax: f64) -> Ray {
     Ray {
         origin: origin.as_vec3().to_array(),
