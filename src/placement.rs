@@ -72,6 +72,7 @@ impl LocalRays<'_> {
 /// A local hit on a ray whose origin was moved `shift` along it, on the
 /// ray as given: t + shift, in f64 then rounded once. A t beyond f32's
 /// range is a miss (`Placement::ray_problem` warns of it beforehand).
+#[inline]
 pub fn world_hit(hit: Hit, shift: f64) -> Hit {
     if hit.prim == NO_HIT || shift == 0.0 {
         return hit;
@@ -91,6 +92,7 @@ impl Placement {
     /// is at t + shift on the ray as given (`world_hit`). A ray that cannot
     /// reach the geometry comes back as one that hits nothing (tmin = tmax
     /// = 0). See `place`.
+    #[inline]
     pub fn local_ray(&self, origin: DVec3, dir: DVec3, tmin: f64, tmax: f64) -> (Ray, f64) {
         match self.place(origin, dir, tmin, tmax) {
             Some((o, tmin, tmax, shift)) => (f32_ray(o, dir, tmin, tmax), shift),
@@ -103,6 +105,7 @@ impl Placement {
     /// within FAR_RATIO radii stays where it is (shift 0); one beyond moves
     /// to where the ray enters the sphere of twice the radius, which every
     /// hit lies beyond.
+    #[inline]
     pub fn place(
         &self,
         origin: DVec3,
@@ -206,6 +209,23 @@ impl Placement {
         None
     }
 
+    /// Whether no ray can have a `ray_problem` whose origin's coordinates
+    /// are all within ±`origin_max` and whose direction has an axis at
+    /// least `dir_min` long (a bound over a chunk of rays, so that a query
+    /// checks ray by ray only the chunks it cannot clear at once). False
+    /// where it cannot tell (NaN, a zero direction).
+    pub fn rays_clear(&self, origin_max: f64, dir_min: f64, in_f32: bool) -> bool {
+        // f32's spacing grows with the magnitude, and `coarse_in_f32`'s
+        // scale is at least the scene's size.
+        let magnitude = origin_max as f32;
+        let spacing = (magnitude.next_up() - magnitude) as f64;
+        let fine = !in_f32 || spacing <= ORIGIN_PRECISION * 2.0 * self.radius;
+        // |origin − offset| ≤ √3·origin_max + |offset| and |dir| ≥ dir_min;
+        // half f32's largest t leaves room for rounding.
+        let last = (2.0 * origin_max + self.offset.length() + 2.0 * self.radius) / dir_min;
+        fine && last <= f32::MAX as f64 / 2.0
+    }
+
     /// Where a world position given in f32 is held more coarsely than
     /// ORIGIN_PRECISION of the larger of the scene's size and the
     /// position's distance from it: what it says of the `what` (a ray's
@@ -246,6 +266,12 @@ impl Placement {
         })
     }
 
+    /// The warnings of the problems a query's rays were found to have, in
+    /// order of the ray (as `warnings_for` words them).
+    pub fn ray_problem_warnings(&self, problems: Vec<(usize, RayProblem)>) -> Vec<String> {
+        grouped("ray", problems)
+    }
+
     /// The warning of a point query given in world f32 (a point file,
     /// float32 arrays), if any: where f32 holds points more coarsely than
     /// the scene's precision (a point near a mesh placed at 1e8, where f32
@@ -274,6 +300,12 @@ fn grouped_warnings(
         .into_par_iter()
         .filter_map(|i| problem(i).map(|p| (i, p)))
         .collect();
+    grouped(what, problems)
+}
+
+/// One warning per kind of `problems` (in order of the item), naming the
+/// first item with it and how many have it.
+fn grouped(what: &str, problems: Vec<(usize, RayProblem)>) -> Vec<String> {
     let mut first: Vec<(usize, RayProblem, usize)> = Vec::new();
     for (i, problem) in problems {
         let kind = std::mem::discriminant(&problem);
@@ -339,6 +371,7 @@ fn world(v: [f32; 3]) -> DVec3 {
     DVec3::from(v.map(f64::from))
 }
 
+#[inline]
 fn f32_ray(origin: DVec3, dir: DVec3, tmin: f64, tmax: f64) -> Ray {
     Ray {
         origin: origin.as_vec3().to_array(),

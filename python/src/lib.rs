@@ -30,7 +30,7 @@ mod query;
 mod render;
 use arrays::{Bound1, Rows};
 use errors::Kind;
-use query::{FirstBad, Gathered, Query};
+use query::{FirstBad, Gathered, Problems, Query};
 
 /// The library's errors as the exceptions a Python user expects, with the
 /// CLI's messages (advice, where the library leaves it to the front end,
@@ -247,9 +247,12 @@ impl NativeScene {
         sink: &(dyn Fn(&TracedChunk) + Sync),
     ) -> Result<(Option<String>, Vec<String>), Error> {
         let scene = &self.scene;
+        let problems = Problems::new(&query, scene.placement());
         let (traced, note) = Renderers::run(&self.renderers, device, |renderer| {
             if !renderer.is_cpu() {
-                return self.trace_gathered(&query, options, renderer).map(Some);
+                return self
+                    .trace_gathered(&query, options, renderer, &problems)
+                    .map(Some);
             }
             // The CPU path traces the rays as it reads them.
             match query {
@@ -260,7 +263,7 @@ impl NativeScene {
                 Query::Arrays { n, .. } => {
                     let first_bad = FirstBad::new();
                     let fill = |start: usize, out: &mut [MaybeUninit<Ray>]| {
-                        query.fill(start, out, &first_bad)
+                        query.fill(start, out, &first_bad, &problems)
                     };
                     let rays = QueryRays::Fill(n, &fill);
                     let frame = match query.local() {
@@ -281,7 +284,7 @@ impl NativeScene {
                 }
             }
         }
-        Ok((note, query.warnings(&scene.placement())))
+        Ok((note, problems.warnings(&query)))
     }
 
     /// `query`'s rays gathered into one buffer and traced on `renderer`
@@ -291,6 +294,7 @@ impl NativeScene {
         query: &'q Query<'_>,
         options: QueryOptions,
         renderer: &mut Renderer,
+        problems: &Problems,
     ) -> Result<(Gathered<'q>, Vec<Hit>), Error> {
         // The scene's buffer from an earlier query, if no other thread
         // holds it: its pages are mapped already (fresh ones cost a
@@ -300,7 +304,7 @@ impl NativeScene {
             .try_lock()
             .map(|mut b| std::mem::take(&mut *b))
             .unwrap_or_default();
-        let rays = query.gathered(buffer)?;
+        let rays = query.gathered(buffer, problems)?;
         let hits = match query.local() {
             Some(_) => renderer.trace_local(&rays, options.any_hit, options.intersect)?,
             None => renderer.trace(&rays, options.any_hit, options.intersect)?,

@@ -19,7 +19,7 @@ use pyo3::types::PyDict;
 use rayon::prelude::*;
 
 use crate::arrays::{Bound1, Rows, RowsView};
-use crate::query::Query;
+use crate::query::{Problems, Query};
 use crate::{NativeScene, detached, device_choice};
 
 /// Query points as given (float32 widened exactly: float64 points stay f64
@@ -189,7 +189,8 @@ fn rays_query<'py, T: Send>(
     let device = device_choice(device)?;
     with_query!(native.scene, origins, directions, tmin, tmax, |query| {
         let (out, notes) = detached(py, || {
-            let rays = query.gathered(Vec::new())?;
+            let problems = Problems::new(&query, native.scene.placement());
+            let rays = query.gathered(Vec::new(), &problems)?;
             let local = query.local().map(|placement| LocalRays {
                 rays: Cow::Borrowed(&rays[..]),
                 shifts: query.shifts(placement),
@@ -199,7 +200,7 @@ fn rays_query<'py, T: Send>(
                 None => Crossings::World(&rays),
             };
             let (out, note) = on_device(native, device, |renderer| work(renderer, crossings))?;
-            Ok((out, (note, query.warnings(&native.scene.placement()))))
+            Ok((out, (note, problems.warnings(&query))))
         })?;
         NativeScene::warn(py, notes.0.into_iter().chain(notes.1))?;
         Ok(out)

@@ -6,11 +6,13 @@
 //! hit as precisely as one at it.
 
 use std::mem::MaybeUninit;
+use std::ops::Range;
+use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use glam::DVec3;
 use lambert::layout::{Hit, NO_HIT, Ray};
-use lambert::placement::{Placement, world_hit};
+use lambert::placement::{Placement, RayProblem, world_hit};
 use lambert::{Error, rays};
 
 use crate::arrays::{Bound1View, RowsView};
@@ -95,13 +97,6 @@ impl Query<'_> {
         }
     }
 
-    /// Ray `i` in the scene's frame, and how far along it its origin moved.
-    #[inline]
-    fn local_ray(&self, placement: &Placement, i: usize) -> (Ray, f64) {
-        let (origin, dir, tmin, tmax) = self.ray_f64(i);
-        placement.local_ray(origin, dir, tmin, tmax)
-    }
-
     /// Ray `i`'s hit `traced` (as the tracer returned it) on the ray as
     /// given: the hit, t rounded once to f32 (a miss beyond f32's t, as
     /// `world_hit` has it), and t in f64 (the local t plus the shift,
@@ -110,11 +105,21 @@ impl Query<'_> {
     pub fn world_hit(&self, i: usize, traced: Hit) -> (Hit, f64) {
         match self.local() {
             Some(placement) if traced.prim != NO_HIT => {
-                let shift = self.local_ray(placement, i).1;
+                let shift = self.shift(placement, i);
                 (world_hit(traced, shift), traced.t as f64 + shift)
             }
             _ => (traced, traced.t as f64),
         }
+    }
+
+    /// How far along ray `i` its origin moved into the scene's frame
+    /// (`local_ray`'s shift, without the local ray).
+    #[inline]
+    fn shift(&self, placement: &Placement, i: usize) -> f64 {
+        let (origin, dir, tmin, tmax) = self.ray_f64(i);
+        placement
+            .place(origin, dir, tmin, tmax)
+            .map_or(0.0, |(.., shift)| shift)
     }
 
     /// How far along its ray each origin moved into the scene's frame
@@ -123,26 +128,23 @@ impl Query<'_> {
         use rayon::prelude::*;
         (0..self.len())
             .into_par_iter()
-            .map(|i| self.local_ray(placement, i).1)
+            .map(|i| self.shift(placement, i))
             .collect()
     }
 
-    /// Where f32 limits the query's hits (`Placement::ray_problem`): one
-    /// warning per kind, naming the first ray and counting the rest.
-    pub fn warnings(&self, placement: &Placement) -> Vec<String> {
-        let in_f32 = self.local().is_none();
-        placement.warnings_for(self.len(), in_f32, |i| {
-            let (origin, dir, ..) = self.ray_f64(i);
-            (origin, dir)
-        })
-    }
-
     /// Writes rays start.. into all of `out` as they are traced (world,
-    /// or local where `local`), checking each as given: per chunk, so the
-    /// usual arrays (packed float32 rows, scalar bounds) take a loop of
-    /// their own, with no choice per ray.
+    /// or local where `local`), checking each as given and noting the
+    /// chunk's precision problems in `problems`: per chunk, so the usual
+    /// arrays (packed rows, scalar bounds) take a loop of their own, with
+    /// no choice of layout per ray.
     #[inline]
-    pub fn fill(&self, start: usize, out: &mut [MaybeUninit<Ray>], first_bad: &FirstBad) {
+    pub fn fill(
+        &self,
+        start: usize,
+        out: &mut [MaybeUninit<Ray>],
+        first_bad: &FirstBad,
+        problems: &Problems,
+    ) {
         if let Query::Arrays {
             origins: RowsView::PackedF32(o),
             directions: RowsView::PackedF32(d),
@@ -156,6 +158,9 @@ impl Query<'_> {
             let rows = start * 3..(start + out.len()) * 3;
             let (o, d) = (o[rows.clone()].chunks_exact(3), d[rows].chunks_exact(3));
             let mut valid = true;
+            // The chunk's largest origin coordinate and shortest direction
+            // axis (as `Placement::rays_clear` takes them).
+            let (mut origin_max, mut dir_min) = (0.0f32, f32::INFINITY);
             for (slot, (o, d)) in out.iter_mut().zip(o.zip(d)) {
                 valid &= rays::ray_is_valid(slot.write(Ray {
                     origin: [o[0], o[1], o[2]],
@@ -163,24 +168,85 @@ impl Query<'_> {
                     dir: [d[0], d[1], d[2]],
                     tmax,
                 }));
+                origin_max = origin_max.max(o[0].abs().max(o[1].abs()).max(o[2].abs()));
+                dir_min = dir_min.min(d[0].abs().max(d[1].abs()).max(d[2].abs()));
             }
             if valid {
+                let rows = start..start + out.len();
+                problems.check(self, rows, origin_max as f64, dir_min as f64);
                 return;
             }
         }
-        for (i, slot) in (start..).zip(out) {
-            let ray = self.ray(i);
-            first_bad.check(&ray, i);
-            slot.write(match self.local() {
-                Some(placement) => self.local_ray(placement, i).0,
-                None => ray,
-            });
+        // float64 origins in packed rows with scalar bounds: the general
+        // loop below, compiled for that layout.
+        if let Query::Arrays {
+            origins: RowsView::PackedF64(o),
+            directions,
+            tmin: Bound1View::All(tmin),
+            tmax: Bound1View::All(tmax),
+            local: Some(_),
+            ..
+        } = *self
+        {
+            match directions {
+                RowsView::PackedF64(d) => {
+                    return self.fill_from(start, out, first_bad, problems, |i| {
+                        let row = |a: &[f64]| DVec3::new(a[3 * i], a[3 * i + 1], a[3 * i + 2]);
+                        (row(o), row(d), tmin, tmax)
+                    });
+                }
+                RowsView::PackedF32(d) => {
+                    return self.fill_from(start, out, first_bad, problems, |i| {
+                        let dir = [d[3 * i], d[3 * i + 1], d[3 * i + 2]].map(f64::from);
+                        let origin = DVec3::new(o[3 * i], o[3 * i + 1], o[3 * i + 2]);
+                        (origin, DVec3::from(dir), tmin, tmax)
+                    });
+                }
+                _ => {}
+            }
         }
+        self.fill_from(start, out, first_bad, problems, |i| self.ray_f64(i))
+    }
+
+    /// `fill`'s loop, ray i being `ray(i)` as given in f64 (`ray_f64`).
+    #[inline(always)]
+    fn fill_from(
+        &self,
+        start: usize,
+        out: &mut [MaybeUninit<Ray>],
+        first_bad: &FirstBad,
+        problems: &Problems,
+        ray: impl Fn(usize) -> (DVec3, DVec3, f64, f64),
+    ) {
+        let (mut origin_max, mut dir_min) = (0.0f64, f64::INFINITY);
+        let len = out.len();
+        for (i, slot) in (start..).zip(out) {
+            let (origin, dir, tmin, tmax) = ray(i);
+            // As given, in f32 (`ray`): what is checked.
+            let world = Ray {
+                origin: origin.as_vec3().to_array(),
+                tmin: tmin as f32,
+                dir: dir.as_vec3().to_array(),
+                tmax: tmax as f32,
+            };
+            first_bad.check(&world, i);
+            slot.write(match self.local() {
+                Some(placement) => placement.local_ray(origin, dir, tmin, tmax).0,
+                None => world,
+            });
+            origin_max = origin_max.max(origin.abs().max_element());
+            dir_min = dir_min.min(dir.abs().max_element());
+        }
+        problems.check(self, start..start + len, origin_max, dir_min);
     }
 
     /// The rays in one buffer (what a GPU uploads), checked: records as
     /// they are, arrays assembled into `buffer` in one parallel pass.
-    pub fn gathered(&self, mut buffer: Vec<Ray>) -> Result<Gathered<'_>, Error> {
+    pub fn gathered(
+        &self,
+        mut buffer: Vec<Ray>,
+        problems: &Problems,
+    ) -> Result<Gathered<'_>, Error> {
         use rayon::prelude::*;
         const CHUNK: usize = 4096;
         if let Query::Records(r) = self {
@@ -194,7 +260,7 @@ impl Query<'_> {
         buffer.spare_capacity_mut()[..n]
             .par_chunks_mut(CHUNK)
             .enumerate()
-            .for_each(|(c, chunk)| self.fill(c * CHUNK, chunk, &first_bad));
+            .for_each(|(c, chunk)| self.fill(c * CHUNK, chunk, &first_bad, problems));
         // SAFETY: every one of the n slots was written above.
         unsafe { buffer.set_len(n) };
         first_bad.result(self)?;
@@ -240,5 +306,68 @@ impl FirstBad {
             usize::MAX => Ok(()),
             i => Err(Error::Usage(rays::bad_ray(&query.ray(i), i).to_string())),
         }
+    }
+}
+
+/// The precision problems of a query's rays (`Placement::ray_problem`),
+/// noted as `Query::fill` reads them: a chunk that
+/// `Placement::rays_clear` clears at once is not checked ray by ray (a
+/// second pass over every ray after the trace cost half the kernel's time
+/// on the dragon's camera rays).
+pub struct Problems {
+    placement: Placement,
+    in_f32: bool,
+    found: Mutex<Vec<(usize, RayProblem)>>,
+}
+
+impl Problems {
+    pub fn new(query: &Query, placement: Placement) -> Problems {
+        Problems {
+            placement,
+            in_f32: query.local().is_none(),
+            found: Mutex::new(Vec::new()),
+        }
+    }
+
+    /// Notes the problems of `query`'s rays `rows`, whose origins'
+    /// coordinates are within ±`origin_max` and whose directions' longest
+    /// axes are at least `dir_min`.
+    fn check(&self, query: &Query, rows: Range<usize>, origin_max: f64, dir_min: f64) {
+        let placement = &self.placement;
+        if placement.rays_clear(origin_max, dir_min, self.in_f32) {
+            return;
+        }
+        let found: Vec<(usize, RayProblem)> = rows
+            .filter_map(|i| {
+                let (origin, dir, ..) = query.ray_f64(i);
+                placement
+                    .ray_problem(origin, dir, self.in_f32)
+                    .map(|p| (i, p))
+            })
+            .collect();
+        if !found.is_empty() {
+            self.found
+                .lock()
+                .unwrap_or_else(|poisoned| poisoned.into_inner())
+                .extend(found);
+        }
+    }
+
+    /// Where f32 limits `query`'s hits: one warning per kind, naming the
+    /// first ray and counting the rest (records, which `fill` does not
+    /// read, are checked here).
+    pub fn warnings(self, query: &Query) -> Vec<String> {
+        if let Query::Records(r) = query {
+            return self.placement.ray_warnings(r);
+        }
+        let mut found = self
+            .found
+            .into_inner()
+            .unwrap_or_else(|poisoned| poisoned.into_inner());
+        found.sort_unstable_by_key(|&(i, _)| i);
+        // A ray may be read twice (the kernel samples some alone to judge
+        // the query's coherence); a ray has at most one problem.
+        found.dedup_by_key(|&mut (i, _)| i);
+        self.placement.ray_problem_warnings(found)
     }
 }
