@@ -199,7 +199,9 @@ impl Viewer {
             let (mut process, stdout, stderr) = spawn();
             let deadline = Instant::now() + PATIENCE;
             loop {
-                let found = xdotool(&x, &["search", "--name", "^lambert view"]);
+                // Mapped, not only created: the pointer moved over it below
+                // must be over a window that takes the wheel's clicks.
+                let found = xdotool(&x, &["search", "--onlyvisible", "--name", "^lambert view"]);
                 if let Some(id) = found.lines().next() {
                     break 'started (id.to_string(), (process, stdout, stderr));
                 }
