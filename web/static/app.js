@@ -88,6 +88,16 @@ function draw(v) {
  * Mrays/s is rays traced (width·height·rays per sample·samples) over the
  * wall time of the batches since the view last changed. */
 async function refine(v) {
+  try {
+    await refineWhileShown(v);
+  } finally {
+    // Freed here, not by the load that replaced it: a batch in flight
+    // holds it until it ends.
+    v.free();
+  }
+}
+
+async function refineWhileShown(v) {
   let rays = 0;
   let seconds = 0;
   let batch = 1;
@@ -129,7 +139,6 @@ async function load(bytes, name) {
     showMessage(e && e.message ? e.message : String(e));
     return;
   }
-  if (viewer) viewer.free();
   viewer = v;
   modelName = name;
   pending = freshInput();
