@@ -141,7 +141,7 @@ impl Default for Bvh {
 
 impl Bvh {
     pub fn build(triangles: &[Triangle], spheres: &[Sphere]) -> Bvh {
-        let start = std::time::Instant::now();
+        let start = web_time::Instant::now();
         let triangle_items = triangles.par_iter().enumerate().map(|(i, t)| {
             let mut b = Aabb::EMPTY;
             for v in [t.v0, t.v1, t.v2] {

@@ -8,6 +8,7 @@ use crate::error::{Error, Result};
 use super::adapter::{AdapterRequest, Presenting, choose_adapter, describe, is_software};
 use super::features::device_features;
 use super::options::GpuOptions;
+use super::signal::signal;
 
 /// An open device and queue. A clone shares them (a viewer presents on
 /// the device its renderer renders on).
@@ -57,6 +58,19 @@ impl Gpu {
         Gpu::open_limited(request, hardware_only, request.options.max_buffer_bytes()?)
     }
 
+    /// Opens `adapter`'s device (one the caller found: the browser's, which
+    /// only `request_adapter` gives) with `options`, requesting the
+    /// adapter's limits; the one asynchronous opening the blocking ones
+    /// wait on.
+    pub async fn open_adapter_async(adapter: wgpu::Adapter, options: &GpuOptions) -> Result<Gpu> {
+        let request = AdapterRequest {
+            options: options.clone(),
+            ..AdapterRequest::default()
+        };
+        let max_buffer_bytes = options.max_buffer_bytes()?;
+        Gpu::open_adapter(adapter, &request, max_buffer_bytes).await
+    }
+
     /// `open`, requesting at most `max_buffer_bytes` per buffer and per
     /// storage binding (when given) instead of all the adapter offers: what
     /// a smaller GPU would do, for tests and for sharing a device.
@@ -65,11 +79,11 @@ impl Gpu {
         hardware_only: bool,
         max_buffer_bytes: Option<u64>,
     ) -> Result<Gpu> {
-        Gpu::open_adapter(
+        pollster::block_on(Gpu::open_adapter(
             choose_adapter(request, hardware_only, None)?,
             request,
             max_buffer_bytes,
-        )
+        ))
     }
 
     /// `open`, choosing among the adapters that can present to a window.
@@ -79,10 +93,11 @@ impl Gpu {
         presenting: &Presenting,
     ) -> Result<Gpu> {
         let adapter = choose_adapter(request, hardware_only, Some(presenting))?;
-        Gpu::open_adapter(adapter, request, request.options.max_buffer_bytes()?)
+        let max_buffer_bytes = request.options.max_buffer_bytes()?;
+        pollster::block_on(Gpu::open_adapter(adapter, request, max_buffer_bytes))
     }
 
-    fn open_adapter(
+    async fn open_adapter(
         adapter: wgpu::Adapter,
         request: &AdapterRequest,
         max_buffer_bytes: Option<u64>,
@@ -93,14 +108,16 @@ impl Gpu {
         // queries where asked for and the adapter has them.
         let (required_features, experimental_features) =
             device_features(&adapter, request.ray_queries);
-        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-            label: Some("lambert"),
-            required_features,
-            required_limits: limits.clone(),
-            experimental_features,
-            ..Default::default()
-        }))
-        .map_err(|e| Error::Gpu(format!("cannot open {}: {e}", describe(&info))))?;
+        let (device, queue) = adapter
+            .request_device(&wgpu::DeviceDescriptor {
+                label: Some("lambert"),
+                required_features,
+                required_limits: limits.clone(),
+                experimental_features,
+                ..Default::default()
+            })
+            .await
+            .map_err(|e| Error::Gpu(format!("cannot open {}: {e}", describe(&info))))?;
         let errors = error_slot(&device, &info);
         Ok(Gpu {
             device,
@@ -129,10 +146,17 @@ impl Gpu {
         }
     }
 
-    pub(super) fn wait(&self) -> Result<()> {
+    /// Waits until the queue's work is done, and fails with the first
+    /// error the device reported meanwhile. Natively `poll` blocks until
+    /// then (and runs the callbacks); on the web it does nothing and the
+    /// queue's callback comes when the browser's event loop turns.
+    pub(super) async fn wait(&self) -> Result<()> {
+        let (sender, done) = signal();
+        self.queue.on_submitted_work_done(move || sender.send(()));
         self.device
             .poll(wgpu::PollType::wait_indefinitely())
             .map_err(|e| Error::Gpu(format!("waiting for the device: {e}")))?;
+        done.await;
         self.check_errors()
     }
 

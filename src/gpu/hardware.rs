@@ -9,7 +9,9 @@
 
 mod plan;
 
-use std::time::{Duration, Instant};
+use std::time::Duration;
+
+use web_time::Instant;
 
 use wgpu::util::DeviceExt;
 
@@ -128,7 +130,10 @@ impl Acceleration {
     /// queries or the scene exceeds their limits, none and the note of why
     /// its rays go through the compute BVH instead (never a wrong answer:
     /// the BVH is the CPU path's twin). Fails only where the device does.
-    pub fn for_scene(gpu: &Gpu, scene: &Scene) -> Result<(Option<Acceleration>, Option<String>)> {
+    pub async fn for_scene(
+        gpu: &Gpu,
+        scene: &Scene,
+    ) -> Result<(Option<Acceleration>, Option<String>)> {
         let note = |why: String| {
             Some(format!(
                 "--accel hardware: {why}\nnote: tracing through the compute BVH instead"
@@ -140,7 +145,7 @@ impl Acceleration {
         let triangles = TriangleGeometry::for_gpu(gpu)?;
         match plan_for(gpu, scene, triangles) {
             Ok(plan) => Ok((
-                Some(Acceleration::build(gpu, scene, &plan, triangles)?),
+                Some(Acceleration::build(gpu, scene, &plan, triangles).await?),
                 None,
             )),
             Err(why) => Ok((None, note(why))),
@@ -148,7 +153,7 @@ impl Acceleration {
     }
 
     /// Builds the planned structures on `gpu` (which `unsupported` passed).
-    fn build(
+    async fn build(
         gpu: &Gpu,
         scene: &Scene,
         plan: &Plan,
@@ -200,12 +205,12 @@ impl Acceleration {
                 ("hardware_runs", runs.as_entire_binding()),
             ],
         );
-        if let Some(e) = pollster::block_on(scope.pop()) {
+        if let Some(e) = scope.pop().await {
             return Err(Error::Gpu(format!(
                 "building the acceleration structures: {e}"
             )));
         }
-        gpu.wait()?;
+        gpu.wait().await?;
         Ok(Acceleration {
             layout,
             group,

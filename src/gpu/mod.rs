@@ -47,6 +47,7 @@ mod render;
 mod renderer;
 mod resident;
 mod shader;
+mod signal;
 mod timer;
 mod upload;
 mod wave_list;

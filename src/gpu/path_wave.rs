@@ -58,7 +58,7 @@ struct PathBuffers {
 impl PathWave {
     /// The passes and buffers of `PATH_WAVE_PATHS` paths a dispatch,
     /// writing `tile`'s buffers.
-    pub fn new(host: Host<'_>, tile: &TileTargets) -> Result<PathWave> {
+    pub async fn new(host: Host<'_>, tile: &TileTargets) -> Result<PathWave> {
         let device = &host.gpu().device;
         let paths = PATH_WAVE_PATHS as u64;
         let buffer = |label, size, usage| {
@@ -100,13 +100,13 @@ impl PathWave {
         );
         let build = |entry| host.build(entry, &buffers.layout);
         Ok(PathWave {
-            begin: build("path_begin")?,
+            begin: build("path_begin").await?,
             list_begin: None,
-            advance: build("path_advance")?,
-            shade: build("path_shade")?,
-            shadows: build("path_shadows")?,
-            extend: build("path_extend")?,
-            resolve: build("path_resolve")?,
+            advance: build("path_advance").await?,
+            shade: build("path_shade").await?,
+            shadows: build("path_shadows").await?,
+            extend: build("path_extend").await?,
+            resolve: build("path_resolve").await?,
             list_resolve: None,
             buffers,
             tile_groups,
@@ -114,10 +114,13 @@ impl PathWave {
     }
 
     /// Builds the pixel list's first and last passes if not built yet.
-    pub fn prepare_list(&mut self, host: Host<'_>) -> Result<()> {
+    pub async fn prepare_list(&mut self, host: Host<'_>) -> Result<()> {
         if self.list_begin.is_none() {
-            self.list_begin = Some(host.build("path_list_begin", &self.buffers.layout)?);
-            self.list_resolve = Some(host.build("path_list_resolve", &self.buffers.layout)?);
+            self.list_begin = Some(host.build("path_list_begin", &self.buffers.layout).await?);
+            self.list_resolve = Some(
+                host.build("path_list_resolve", &self.buffers.layout)
+                    .await?,
+            );
         }
         Ok(())
     }

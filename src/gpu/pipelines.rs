@@ -78,7 +78,7 @@ impl Pipelines {
 
     /// `entry_point` with the scene at group 0, `output_layout` at 1, and
     /// in the ray-query module the acceleration structures at 2.
-    pub fn build(
+    pub async fn build(
         &self,
         gpu: &Gpu,
         entry_point: &str,
@@ -90,12 +90,12 @@ impl Pipelines {
         layouts.extend(&self.acceleration);
         let pipeline =
             compute_pipeline(&gpu.device, &self.module, entry_point, &layouts, constants);
-        if let Some(e) = pollster::block_on(scope.pop()) {
+        if let Some(e) = scope.pop().await {
             return Err(Error::Gpu(format!(
                 "building the {entry_point} pipeline: {e}"
             )));
         }
-        gpu.wait()?;
+        gpu.wait().await?;
         Ok(pipeline)
     }
 }

@@ -25,7 +25,7 @@ impl Tiles {
     /// stopped before its next tile once `cancel` is set (then `sums` are
     /// as they were, and None comes back). When `samples.end` is the
     /// view's spp, returns the finished image.
-    pub fn add_samples(
+    pub async fn add_samples(
         &mut self,
         host: Host<'_>,
         dispatch: ShadowDispatch,
@@ -36,10 +36,14 @@ impl Tiles {
     ) -> Result<Option<Image>> {
         // The sums change only once the batch's loops ran whole.
         let mut next = Vec::new();
-        let image = self.until_whole(host, dispatch, params.spp, |tiles| {
-            next = sums.to_vec();
-            tiles.add_samples_once(host, dispatch, params, &samples, &mut next, cancel)
-        })?;
+        let image = self
+            .until_whole(host, dispatch, params.spp, async |tiles| {
+                next = sums.to_vec();
+                tiles
+                    .add_samples_once(host, dispatch, params, &samples, &mut next, cancel)
+                    .await
+            })
+            .await?;
         if cancel.load(Ordering::Relaxed) {
             return Ok(None);
         }
@@ -47,7 +51,7 @@ impl Tiles {
         Ok(image)
     }
 
-    fn add_samples_once(
+    async fn add_samples_once(
         &self,
         host: Host<'_>,
         dispatch: ShadowDispatch,
@@ -87,14 +91,16 @@ impl Tiles {
                     gpu.queue.write_buffer(&self.targets().sums, 0, bytes);
                 }
                 let extent = [tile_x, tile_y, tile_width as u32, tile_height];
-                self.render_tile(host, dispatch, params, extent, samples.clone())?;
+                self.render_tile(host, dispatch, params, extent, samples.clone())
+                    .await?;
                 if finishing {
                     self.targets()
                         .read(gpu, extent[2], tile_height, |row, colors, _| {
                             for (i, src) in colors.chunks(4).enumerate() {
                                 rgb[at(row) + i] = [src[0], src[1], src[2]];
                             }
-                        })?;
+                        })
+                        .await?;
                     continue;
                 }
                 let len = slot(tile_height) as u64 * SUMS_BYTES;
@@ -107,7 +113,8 @@ impl Tiles {
                         sums[at(row)..][..tile_width]
                             .copy_from_slice(&block[slot(row)..][..tile_width]);
                     }
-                })?;
+                })
+                .await?;
             }
         }
         Ok(finishing.then_some(Image { width, height, rgb }))

@@ -90,19 +90,19 @@ impl Proximity {
 
     /// Runs `entry` over `items` invocations with the named buffers bound
     /// (the rest of the table bound to a small placeholder).
-    fn dispatch_query(
+    async fn dispatch_query(
         &mut self,
         host: Host<'_>,
         entry: &'static str,
         items: usize,
-        bound: &[Bound],
+        bound: &[Bound<'_>],
     ) -> Result<()> {
         if self.layout.is_none() {
             self.layout = Some(PROXIMITY.layout(&host.gpu().device));
         }
         if !self.pipelines.contains_key(entry) {
             let layout = self.layout.as_ref().expect("built");
-            let pipeline = host.build(entry, layout)?;
+            let pipeline = host.build(entry, layout).await?;
             self.pipelines.insert(entry, pipeline);
         }
         // The bindings this entry point does not use: each its own kept
@@ -151,8 +151,8 @@ impl Proximity {
             pass.dispatch_workgroups(items.div_ceil(WORKGROUP_INVOCATIONS as usize) as u32, 1, 1);
         }
         host.gpu().queue.submit([encoder.finish()]);
-        host.gpu().wait()?;
-        if host.loops_were_cut()? {
+        host.gpu().wait().await?;
+        if host.loops_were_cut().await? {
             return Err(Error::LoopsCut(format!(
                 "{} cut the shader's loops short in {entry} (Mesa's llvmpipe ends loops \
                  after 65535 iterations an invocation group)",
@@ -163,7 +163,7 @@ impl Proximity {
     }
 
     /// The first `len` bytes of `buffer`, as `T`s.
-    fn read_back<T: bytemuck::Pod>(
+    async fn read_back<T: bytemuck::Pod>(
         &mut self,
         host: Host<'_>,
         buffer: &wgpu::Buffer,
@@ -181,32 +181,33 @@ impl Proximity {
             .read_mapped(&staging, len, "query results", |bytes| {
                 bytemuck::pod_collect_to_vec(bytes)
             })
+            .await
     }
 
     /// Runs `entry` over `items` invocations with `inputs` bound and its
     /// output binding `output` a kept buffer of `len` bytes, and reads the
     /// output back as `T`s; returns the buffer too (a later pass binds
     /// it).
-    fn run_query<T: bytemuck::Pod>(
+    async fn run_query<T: bytemuck::Pod>(
         &mut self,
         host: Host<'_>,
         entry: &'static str,
         items: usize,
-        inputs: &[Bound],
+        inputs: &[Bound<'_>],
         (output, len): (&'static str, u64),
     ) -> Result<(wgpu::Buffer, Vec<T>)> {
         use wgpu::BufferUsages as U;
         let buffer = self.kept_buffer(host, output, len, U::STORAGE | U::COPY_SRC | U::COPY_DST);
         let mut bound = inputs.to_vec();
         bound.push((output, &buffer, len));
-        self.dispatch_query(host, entry, items, &bound)?;
-        let values = self.read_back(host, &buffer, len)?;
+        self.dispatch_query(host, entry, items, &bound).await?;
+        let values = self.read_back(host, &buffer, len).await?;
         Ok((buffer, values))
     }
 
     /// `cpu::closest_points` on the device (`margins`: each point's cull
     /// margin, the CPU's `query_margin`).
-    pub fn closest_points(
+    pub async fn closest_points(
         &mut self,
         host: Host<'_>,
         points: &[[f32; 3]],
@@ -225,16 +226,18 @@ impl Proximity {
             let points = self.storage(host, "query_points", bytemuck::cast_slice(&input));
             let scalars = self.storage(host, "query_scalars", bytemuck::cast_slice(&scalars));
             let len = (chunk.len() * size_of::<ClosestPoint>()) as u64;
-            let (_, answers): (_, Vec<ClosestPoint>) = self.run_query(
-                host,
-                "closest_points",
-                chunk.len(),
-                &[
-                    ("query_points", &points, (input.len() * 16) as u64),
-                    ("query_scalars", &scalars, 16),
-                ],
-                ("closest_out", len),
-            )?;
+            let (_, answers): (_, Vec<ClosestPoint>) = self
+                .run_query(
+                    host,
+                    "closest_points",
+                    chunk.len(),
+                    &[
+                        ("query_points", &points, (input.len() * 16) as u64),
+                        ("query_scalars", &scalars, 16),
+                    ],
+                    ("closest_out", len),
+                )
+                .await?;
             out.extend(answers.into_iter().map(|a| {
                 if a.prim == NO_HIT {
                     ClosestPoint::NONE
@@ -248,7 +251,11 @@ impl Proximity {
 
     /// `cpu::winding_numbers` on the device: the same tree (uploaded on the
     /// first call) walked in the same order.
-    pub fn winding_numbers(&mut self, host: Host<'_>, points: &[[f32; 3]]) -> Result<Vec<f32>> {
+    pub async fn winding_numbers(
+        &mut self,
+        host: Host<'_>,
+        points: &[[f32; 3]],
+    ) -> Result<Vec<f32>> {
         if self.winding.is_none() {
             let scene = self
                 .winding_source
@@ -283,17 +290,19 @@ impl Proximity {
         for chunk in points.chunks(self.batch(host, 16)) {
             let input: Vec<[f32; 4]> = chunk.iter().map(|p| [p[0], p[1], p[2], 0.0]).collect();
             let points = self.storage(host, "query_points", bytemuck::cast_slice(&input));
-            let (_, answers) = self.run_query::<f32>(
-                host,
-                "winding_numbers",
-                chunk.len(),
-                &[
-                    ("query_points", &points, (input.len() * 16) as u64),
-                    ("winding_nodes", &nodes, nodes.size()),
-                    ("winding_prims", &prims, prims.size()),
-                ],
-                ("winding_out", (chunk.len() * 4) as u64),
-            )?;
+            let (_, answers) = self
+                .run_query::<f32>(
+                    host,
+                    "winding_numbers",
+                    chunk.len(),
+                    &[
+                        ("query_points", &points, (input.len() * 16) as u64),
+                        ("winding_nodes", &nodes, nodes.size()),
+                        ("winding_prims", &prims, prims.size()),
+                    ],
+                    ("winding_out", (chunk.len() * 4) as u64),
+                )
+                .await?;
             out.extend(answers);
         }
         Ok(out)
@@ -307,7 +316,7 @@ impl Proximity {
     }
 
     /// Each ray's count of crossings (`pad`: the CPU's `box_pad`).
-    fn count_chunk(
+    async fn count_chunk(
         &mut self,
         host: Host<'_>,
         rays: &[Ray],
@@ -315,21 +324,23 @@ impl Proximity {
     ) -> Result<(wgpu::Buffer, wgpu::Buffer, Vec<u32>)> {
         let rays_buffer = self.storage(host, "rays", bytemuck::cast_slice(rays));
         let scalars = self.crossing_scalars(host, pad);
-        let (counts, n) = self.run_query::<u32>(
-            host,
-            "count_hits",
-            rays.len(),
-            &[
-                ("rays", &rays_buffer, (rays.len() * size_of::<Ray>()) as u64),
-                ("query_scalars", &scalars, 16),
-            ],
-            ("hit_counts", (rays.len() * 4) as u64),
-        )?;
+        let (counts, n) = self
+            .run_query::<u32>(
+                host,
+                "count_hits",
+                rays.len(),
+                &[
+                    ("rays", &rays_buffer, (rays.len() * size_of::<Ray>()) as u64),
+                    ("query_scalars", &scalars, 16),
+                ],
+                ("hit_counts", (rays.len() * 4) as u64),
+            )
+            .await?;
         Ok((rays_buffer, counts, n))
     }
 
     /// `cpu::count_intersections` on the device.
-    pub fn count_intersections(
+    pub async fn count_intersections(
         &mut self,
         host: Host<'_>,
         rays: &[Ray],
@@ -337,7 +348,7 @@ impl Proximity {
     ) -> Result<Vec<u32>> {
         let mut out = Vec::with_capacity(rays.len());
         for chunk in rays.chunks(self.batch(host, size_of::<Ray>())) {
-            out.extend(self.count_chunk(host, chunk, pad)?.2);
+            out.extend(self.count_chunk(host, chunk, pad).await?.2);
         }
         Ok(out)
     }
@@ -348,7 +359,7 @@ impl Proximity {
     /// from its first slot, over runs of rays whose hits fit one binding.
     /// A ray whose crossings alone exceed one is `Error::GpuLimit` (auto
     /// takes the CPU path then).
-    pub fn list_intersections(
+    pub async fn list_intersections(
         &mut self,
         host: Host<'_>,
         rays: &[Ray],
@@ -361,7 +372,7 @@ impl Proximity {
         let mut hits = Vec::new();
         let batch = self.batch(host, size_of::<Ray>());
         for (c, chunk) in rays.chunks(batch).enumerate() {
-            let (rays_buffer, counts, n) = self.count_chunk(host, chunk, pad)?;
+            let (rays_buffer, counts, n) = self.count_chunk(host, chunk, pad).await?;
             for &k in &n {
                 splits.push(splits.last().expect("one") + k as u64);
             }
@@ -386,8 +397,9 @@ impl Proximity {
                 } else {
                     self.storage(host, "rays", bytemuck::cast_slice(run))
                 };
-                let listed =
-                    self.list_run(host, run, &run_rays, &counts, &n[range.clone()], total, pad)?;
+                let listed = self
+                    .list_run(host, run, &run_rays, &counts, &n[range.clone()], total, pad)
+                    .await?;
                 let base = (c * batch + range.start) as u32;
                 hits.extend(listed.into_iter().map(|h| ListedHit {
                     ray: h.ray + base,
@@ -401,7 +413,7 @@ impl Proximity {
     /// The `total` hits of `run` (bound in `run_rays`), whose counts are
     /// `n`, ray indices from 0 (`counts`: the chunk's count buffer, its
     /// start rewritten with each ray's first slot).
-    fn list_run(
+    async fn list_run(
         &mut self,
         host: Host<'_>,
         run: &[Ray],
@@ -423,17 +435,19 @@ impl Proximity {
             .queue
             .write_buffer(counts, 0, bytemuck::cast_slice(&firsts));
         let scalars = self.crossing_scalars(host, pad);
-        let (_, listed) = self.run_query::<ListedHit>(
-            host,
-            "list_hits",
-            run.len(),
-            &[
-                ("rays", run_rays, std::mem::size_of_val(run) as u64),
-                ("query_scalars", &scalars, 16),
-                ("hit_counts", counts, (n.len() * 4) as u64),
-            ],
-            ("listed_hits", total * size_of::<ListedHit>() as u64),
-        )?;
+        let (_, listed) = self
+            .run_query::<ListedHit>(
+                host,
+                "list_hits",
+                run.len(),
+                &[
+                    ("rays", run_rays, std::mem::size_of_val(run) as u64),
+                    ("query_scalars", &scalars, 16),
+                    ("hit_counts", counts, (n.len() * 4) as u64),
+                ],
+                ("listed_hits", total * size_of::<ListedHit>() as u64),
+            )
+            .await?;
         Ok(listed)
     }
 }

@@ -44,7 +44,7 @@ impl Lists {
 
     /// Builds the `trace_rays` pipeline for closest or any hit with the
     /// given ray/triangle test, if not built yet.
-    pub fn prepare_trace(
+    pub async fn prepare_trace(
         &mut self,
         host: Host<'_>,
         any_hit: bool,
@@ -61,7 +61,7 @@ impl Lists {
             constants.push(("INTERSECT", intersect.shader_value() as f64));
             constants.push(("ANY_HIT", if any_hit { 1.0 } else { 0.0 }));
             let layout = &host.layouts().rays.layout;
-            let pipeline = host.build_with("trace_rays", layout, &constants)?;
+            let pipeline = host.build_with("trace_rays", layout, &constants).await?;
             self.trace[a][i] = Some(pipeline);
         }
         Ok(())
@@ -70,7 +70,7 @@ impl Lists {
     /// Traces `rays` in the scene's local frame (`prepare_trace` first),
     /// timed with `timer` where there is one: hits in that frame, misses
     /// as `Hit::MISS`.
-    pub fn trace(
+    pub async fn trace(
         &mut self,
         host: Host<'_>,
         timer: Option<&Timer>,
@@ -82,10 +82,11 @@ impl Lists {
             .as_ref()
             .expect("prepared");
         let list = &host.layouts().rays;
-        let (hits, device): (Vec<Hit>, _) =
-            self.run_list(host, timer, pipeline, list, rays, 1 << 20, None)?;
+        let (hits, device): (Vec<Hit>, _) = self
+            .run_list(host, timer, pipeline, list, rays, 1 << 20, None)
+            .await?;
         self.trace_device_time = device;
-        if host.loops_were_cut()? {
+        if host.loops_were_cut().await? {
             return Err(Error::LoopsCut(format!(
                 "{} cut the shader's loops short on a ray of this query (Mesa's llvmpipe \
                  ends loops after 65535 iterations an invocation group)",
@@ -105,10 +106,10 @@ impl Lists {
     }
 
     /// Builds the `render_pixel_list` pipeline if not built yet.
-    pub fn prepare_pixel_list(&mut self, host: Host<'_>) -> Result<()> {
+    pub async fn prepare_pixel_list(&mut self, host: Host<'_>) -> Result<()> {
         if self.pixel_list.is_none() {
             let layout = &host.layouts().pixels.layout;
-            self.pixel_list = Some(host.build("render_pixel_list", layout)?);
+            self.pixel_list = Some(host.build("render_pixel_list", layout).await?);
         }
         Ok(())
     }
@@ -116,7 +117,7 @@ impl Lists {
     /// The listed pixels rendered in one pass with the view's uniform
     /// `params`, `step` samples a dispatch (`prepare_pixel_list` first):
     /// mean colour and variance of the mean.
-    pub fn render_pixel_list(
+    pub async fn render_pixel_list(
         &self,
         host: Host<'_>,
         params: &Params,
@@ -128,23 +129,27 @@ impl Lists {
         // As many samples per dispatch as a full tile at 1 spp.
         let batch = ((TILE * TILE) / step).max(RENDER_WORKGROUP[0] * RENDER_WORKGROUP[1]) as usize;
         let sampling = Some((params, step));
-        let (results, _) = self.run_list(host, None, pipeline, list, pixels, batch, sampling)?;
+        let (results, _) = self
+            .run_list(host, None, pipeline, list, pixels, batch, sampling)
+            .await?;
         Ok(results)
     }
 
     /// The lights stage's functions on `queries` (`probe_lights`, which
     /// tests compare with the CPU twin), its pipeline built on first use.
-    pub fn probe_lights(
+    pub async fn probe_lights(
         &mut self,
         host: Host<'_>,
         queries: &[LightQuery],
     ) -> Result<Vec<LightAnswer>> {
         let list = &host.layouts().light_probe;
         if self.light_probe.is_none() {
-            self.light_probe = Some(host.build("probe_lights", &list.layout)?);
+            self.light_probe = Some(host.build("probe_lights", &list.layout).await?);
         }
         let pipeline = self.light_probe.as_ref().expect("built");
-        let (answers, _) = self.run_list(host, None, pipeline, list, queries, 1 << 16, None)?;
+        let (answers, _) = self
+            .run_list(host, None, pipeline, list, queries, 1 << 16, None)
+            .await?;
         Ok(answers)
     }
 
@@ -184,7 +189,7 @@ impl Lists {
     /// returns the dispatches' device time, summed, where timestamps work
     /// (reading it back waits on each dispatch's queries).
     #[allow(clippy::too_many_arguments)]
-    fn run_list<I: bytemuck::Pod, O: bytemuck::Pod>(
+    async fn run_list<I: bytemuck::Pod, O: bytemuck::Pod>(
         &self,
         host: Host<'_>,
         timer: Option<&Timer>,
@@ -243,9 +248,9 @@ impl Lists {
                     timer.resolve(&mut encoder);
                 }
                 gpu.queue.submit([encoder.finish()]);
-                gpu.wait()?;
+                gpu.wait().await?;
                 if let (Some(timer), Some(total)) = (timer, &mut device) {
-                    *total += timer.read(gpu)?;
+                    *total += timer.read(gpu).await?;
                 }
             }
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
@@ -253,7 +258,8 @@ impl Lists {
             gpu.queue.submit([encoder.finish()]);
             gpu.read_mapped(&staging, out_len, "results", |bytes| {
                 outputs.extend_from_slice(bytemuck::cast_slice::<u8, O>(bytes))
-            })?;
+            })
+            .await?;
         }
         Ok((outputs, device))
     }

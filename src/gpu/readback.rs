@@ -1,34 +1,28 @@
 //! Getting results back from the device: mapped buffers, the render tile's
 //! buffers, and the shader's flag that the driver cut its loops short.
 
-use std::sync::mpsc;
-
 use crate::error::{Error, Result};
 
 use super::TILE;
 use super::device::Gpu;
+use super::signal::signal;
 
 impl Gpu {
     /// Maps the first `len` bytes of `buffer` (MAP_READ) once the queue's
     /// work is done, hands them to `read`, and unmaps; `what` names the
     /// data in errors.
-    pub(super) fn read_mapped<T>(
+    pub(super) async fn read_mapped<T>(
         &self,
         buffer: &wgpu::Buffer,
         len: u64,
         what: &str,
         read: impl FnOnce(&[u8]) -> T,
     ) -> Result<T> {
-        let (sender, receiver) = mpsc::channel();
-        buffer.map_async(wgpu::MapMode::Read, ..len, move |r| {
-            let _ = sender.send(r);
-        });
-        self.wait()?;
+        let (sender, mapped) = signal();
+        buffer.map_async(wgpu::MapMode::Read, ..len, move |r| sender.send(r));
+        self.wait().await?;
         let fail = |e: String| Error::Gpu(format!("reading back the {what}: {e}"));
-        receiver
-            .recv()
-            .map_err(|e| fail(e.to_string()))?
-            .map_err(|e| fail(e.to_string()))?;
+        mapped.await.map_err(|e| fail(e.to_string()))?;
         let result = {
             let mapped = buffer
                 .get_mapped_range(..len)
@@ -83,7 +77,7 @@ impl TileTargets {
     /// Copies the tile's first `height` rows (its means, after its last
     /// dispatch) to the staging buffers, maps them and hands the first
     /// `width` pixels of each row to `row_sink`.
-    pub fn read(
+    pub async fn read(
         &self,
         gpu: &Gpu,
         width: u32,
@@ -100,21 +94,19 @@ impl TileTargets {
         }
         gpu.queue.submit([encoder.finish()]);
 
-        let (sender, receiver) = mpsc::channel();
-        for (buffer, bytes) in [
+        let mapped = [
             (&self.color_staging, SUMS_BYTES),
             (&self.prim_staging, PRIM_BYTES),
-        ] {
-            let sender = sender.clone();
-            buffer.map_async(wgpu::MapMode::Read, ..rows * bytes, move |r| {
-                let _ = sender.send(r);
-            });
-        }
-        gpu.wait()?;
-        for _ in 0..2 {
-            receiver
-                .recv()
-                .map_err(|e| Error::Gpu(format!("readback: {e}")))?
+        ]
+        .map(|(buffer, bytes)| {
+            let (sender, mapped) = signal();
+            buffer.map_async(wgpu::MapMode::Read, ..rows * bytes, move |r| sender.send(r));
+            mapped
+        });
+        gpu.wait().await?;
+        for mapped in mapped {
+            mapped
+                .await
                 .map_err(|e| Error::Gpu(format!("readback: {e}")))?;
         }
         {
@@ -171,7 +163,7 @@ impl LoopStatus {
 
     /// Whether any invocation since the last call found its loops cut short
     /// (the shader's `report_cut_loops`); clears the flag.
-    pub fn were_cut(&self, gpu: &Gpu) -> Result<bool> {
+    pub async fn were_cut(&self, gpu: &Gpu) -> Result<bool> {
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         encoder.copy_buffer_to_buffer(&self.buffer, 0, &self.staging, 0, 4);
         encoder.clear_buffer(&self.buffer, 0, None);
@@ -179,5 +171,6 @@ impl LoopStatus {
         gpu.read_mapped(&self.staging, 4, "loop status", |bytes| {
             bytemuck::cast_slice::<u8, u32>(bytes)[0] != 0
         })
+        .await
     }
 }

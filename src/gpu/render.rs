@@ -4,7 +4,9 @@
 //! tile, each tile read back before the next, from the uniform of the view
 //! each call is given.
 
-use std::time::{Duration, Instant};
+use std::time::Duration;
+
+use web_time::Instant;
 
 use crate::error::{Error, Result};
 use crate::layout::{Params, WORKGROUP_INVOCATIONS};
@@ -116,30 +118,30 @@ impl Tiles {
 
     /// Builds the wavefront and its pixel list's passes if not built
     /// yet.
-    pub fn prepare_wavefront_list(&mut self, host: Host<'_>) -> Result<()> {
-        self.prepare(host, ShadowDispatch::Wavefront)?;
+    pub async fn prepare_wavefront_list(&mut self, host: Host<'_>) -> Result<()> {
+        self.prepare(host, ShadowDispatch::Wavefront).await?;
         if let Some(path_wave) = self.path_wave.as_mut() {
-            return path_wave.prepare_list(host);
+            return path_wave.prepare_list(host).await;
         }
         let wavefront = self.wavefront.as_mut().expect("prepared");
-        wavefront.prepare_list(host)
+        wavefront.prepare_list(host).await
     }
 
     /// Builds the passes a render in `dispatch` runs if not built yet: the
     /// megakernel's pipeline, or the wavefront (so that timing a render
     /// can leave the compile out).
-    pub fn prepare(&mut self, host: Host<'_>, dispatch: ShadowDispatch) -> Result<()> {
+    pub async fn prepare(&mut self, host: Host<'_>, dispatch: ShadowDispatch) -> Result<()> {
         match dispatch {
             ShadowDispatch::Wavefront if self.path => {
                 if self.path_wave.is_none() {
-                    self.path_wave = Some(PathWave::new(host, &self.targets)?);
+                    self.path_wave = Some(PathWave::new(host, &self.targets).await?);
                 }
             }
             ShadowDispatch::Wavefront if self.wavefront.is_none() => {
-                self.wavefront = Some(Wavefront::new(host, &self.targets, self.lights)?);
+                self.wavefront = Some(Wavefront::new(host, &self.targets, self.lights).await?);
             }
             ShadowDispatch::Megakernel if self.megakernel.is_none() => {
-                self.megakernel = Some(host.build("render", &host.layouts().image)?);
+                self.megakernel = Some(host.build("render", &host.layouts().image).await?);
             }
             _ => {}
         }
@@ -151,7 +153,7 @@ impl Tiles {
     /// cut the shader's loops short anywhere (checked once, after the last
     /// tile), renders again with fewer samples per dispatch
     /// (`until_whole`).
-    pub fn render_rows(
+    pub async fn render_rows(
         &mut self,
         host: Host<'_>,
         dispatch: ShadowDispatch,
@@ -159,12 +161,15 @@ impl Tiles {
         rows: std::ops::Range<u32>,
         progress: &Progress,
     ) -> Result<(Rendered, GpuTimings)> {
-        self.until_whole(host, dispatch, params.spp, |tiles| {
-            tiles.render_rows_once(host, dispatch, params, &rows, progress)
+        self.until_whole(host, dispatch, params.spp, async |tiles| {
+            tiles
+                .render_rows_once(host, dispatch, params, &rows, progress)
+                .await
         })
+        .await
     }
 
-    fn render_rows_once(
+    async fn render_rows_once(
         &self,
         host: Host<'_>,
         dispatch: ShadowDispatch,
@@ -186,7 +191,9 @@ impl Tiles {
                 let start = Instant::now();
                 let samples = 0..params.spp;
                 let extent = [tile_x, tile_y, tile_width, tile_height];
-                let device_time = self.render_tile(host, dispatch, params, extent, samples)?;
+                let device_time = self
+                    .render_tile(host, dispatch, params, extent, samples)
+                    .await?;
                 timings.render += start.elapsed();
                 if let Some(t) = device_time {
                     *timings.device.get_or_insert(Duration::ZERO) += t;
@@ -202,7 +209,8 @@ impl Tiles {
                             variance[offset + i] = src[3];
                         }
                         prims[offset..offset + n].copy_from_slice(ids);
-                    })?;
+                    })
+                    .await?;
                 timings.readback += start.elapsed();
                 progress.inc(1);
             }
@@ -240,7 +248,7 @@ impl Tiles {
     /// sums) of the view `params` holds, over as many dispatches as
     /// `samples_per_dispatch` asks. Returns the device time where
     /// timestamps work.
-    pub fn render_tile(
+    pub async fn render_tile(
         &self,
         host: Host<'_>,
         dispatch: ShadowDispatch,
@@ -258,7 +266,7 @@ impl Tiles {
                 tile_size: [extent[2], extent[3]],
                 ..*params
             };
-            if let Some(t) = self.dispatch_tile(host, dispatch, &tile)? {
+            if let Some(t) = self.dispatch_tile(host, dispatch, &tile).await? {
                 *device_time.get_or_insert(Duration::ZERO) += t;
             }
         }
@@ -292,16 +300,16 @@ impl Tiles {
     /// loops short in it (checked once, after it): after an attempt it
     /// cut, again with half as many samples per dispatch, down to one,
     /// then fails rather than return a wrong picture.
-    pub fn until_whole<T>(
+    pub async fn until_whole<T>(
         &mut self,
         host: Host<'_>,
         dispatch: ShadowDispatch,
         spp: u32,
-        mut attempt: impl FnMut(&Tiles) -> Result<T>,
+        mut attempt: impl AsyncFnMut(&Tiles) -> Result<T>,
     ) -> Result<T> {
         loop {
-            let result = attempt(self)?;
-            if !host.loops_were_cut()? {
+            let result = attempt(self).await?;
+            if !host.loops_were_cut().await? {
                 return Ok(result);
             }
             self.fewer_samples_per_dispatch(host.gpu(), dispatch, spp)?;
@@ -331,7 +339,7 @@ impl Tiles {
 
     /// Renders one tile with the uniform `params` (its tile and samples
     /// set); returns its device time where timestamps work.
-    fn dispatch_tile(
+    async fn dispatch_tile(
         &self,
         host: Host<'_>,
         dispatch: ShadowDispatch,
@@ -372,7 +380,10 @@ impl Tiles {
             timer.resolve(&mut encoder);
         }
         gpu.queue.submit([encoder.finish()]);
-        gpu.wait()?;
-        self.timer.as_ref().map(|t| t.read(gpu)).transpose()
+        gpu.wait().await?;
+        match &self.timer {
+            Some(timer) => timer.read(gpu).await.map(Some),
+            None => Ok(None),
+        }
     }
 }

@@ -4,7 +4,9 @@
 use std::ops::Range;
 use std::sync::Weak;
 use std::sync::atomic::AtomicBool;
-use std::time::{Duration, Instant};
+use std::time::Duration;
+
+use web_time::Instant;
 
 use crate::camera::View;
 use crate::error::{Error, Result};
@@ -84,14 +86,25 @@ pub struct GpuRenderer {
 impl GpuRenderer {
     /// Uploads `scene` with a shader specialised to it.
     pub fn new(gpu: Gpu, scene: &Scene) -> Result<GpuRenderer> {
+        pollster::block_on(GpuRenderer::open(gpu, scene))
+    }
+
+    /// `new`, awaited rather than blocking (the web's: a browser runs the
+    /// device's callbacks only between its tasks).
+    pub async fn open(gpu: Gpu, scene: &Scene) -> Result<GpuRenderer> {
         let storage = BvhStorage::for_scene(&gpu, scene);
-        GpuRenderer::build(gpu, scene, specialisation(scene), storage)
+        GpuRenderer::build(gpu, scene, specialisation(scene), storage).await
     }
 
     /// `new` with the BVH in the given storage rather than the adapter's
     /// (the tests check both on one adapter).
     pub fn with_bvh_storage(gpu: Gpu, scene: &Scene, storage: BvhStorage) -> Result<GpuRenderer> {
-        GpuRenderer::build(gpu, scene, specialisation(scene), storage)
+        pollster::block_on(GpuRenderer::build(
+            gpu,
+            scene,
+            specialisation(scene),
+            storage,
+        ))
     }
 
     /// Uploads `scene` with the full shader: every feature compiled in, only
@@ -103,10 +116,10 @@ impl GpuRenderer {
             .filter(|(name, _)| matches!(*name, "USE_BVH" | "INTERSECT"))
             .collect();
         let storage = BvhStorage::for_scene(&gpu, scene);
-        GpuRenderer::build(gpu, scene, constants, storage)
+        pollster::block_on(GpuRenderer::build(gpu, scene, constants, storage))
     }
 
-    fn build(
+    async fn build(
         gpu: Gpu,
         scene: &Scene,
         constants: Vec<(&'static str, f64)>,
@@ -114,11 +127,11 @@ impl GpuRenderer {
     ) -> Result<GpuRenderer> {
         let start = Instant::now();
         let (acceleration, accel_note) = match scene.accel {
-            Accel::Hardware => Acceleration::for_scene(&gpu, scene)?,
+            Accel::Hardware => Acceleration::for_scene(&gpu, scene).await?,
             _ => (None, None),
         };
         let device = &gpu.device;
-        let buffers = SceneBuffers::upload(&gpu, scene, storage)?;
+        let buffers = SceneBuffers::upload(&gpu, scene, storage).await?;
         let mut constants = resident_constants(constants, &buffers, storage, scene, &gpu);
         if let Some(acceleration) = &acceleration {
             constants.push(acceleration.constant());
@@ -148,7 +161,7 @@ impl GpuRenderer {
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu(format!("uploading the scene: {e}")));
         }
-        gpu.wait()?;
+        gpu.wait().await?;
         let shadow_dispatch = ShadowDispatch::for_scene(
             scene,
             gpu.options.shadow_dispatch.as_deref(),
@@ -215,7 +228,17 @@ impl GpuRenderer {
     /// Renders the scene as `view` sees it, tile by tile, reading each
     /// back before the next.
     pub fn render(&mut self, view: &View, progress: &Progress) -> Result<(Rendered, GpuTimings)> {
-        self.render_rows(view, 0..view.camera.height, progress)
+        pollster::block_on(self.render_async(view, progress))
+    }
+
+    /// `render`, awaited rather than blocking.
+    pub async fn render_async(
+        &mut self,
+        view: &View,
+        progress: &Progress,
+    ) -> Result<(Rendered, GpuTimings)> {
+        self.render_rows_async(view, 0..view.camera.height, progress)
+            .await
     }
 
     /// Renders rows `rows` of `view`'s image alone (a part of it), tile by
@@ -227,20 +250,34 @@ impl GpuRenderer {
         rows: std::ops::Range<u32>,
         progress: &Progress,
     ) -> Result<(Rendered, GpuTimings)> {
+        pollster::block_on(self.render_rows_async(view, rows, progress))
+    }
+
+    async fn render_rows_async(
+        &mut self,
+        view: &View,
+        rows: std::ops::Range<u32>,
+        progress: &Progress,
+    ) -> Result<(Rendered, GpuTimings)> {
         let params = self.uniform(view);
-        self.prepare_render()?;
+        self.prepare_render_async().await?;
         let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
         let dispatch = self.shadow_dispatch;
         self.tiles
             .render_rows(host, dispatch, &params, rows, progress)
+            .await
     }
 
     /// Builds the passes a render runs if not built yet: the megakernel's
     /// pipeline, or the wavefront (so that timing a render can leave the
     /// compile out).
     pub fn prepare_render(&mut self) -> Result<()> {
+        pollster::block_on(self.prepare_render_async())
+    }
+
+    async fn prepare_render_async(&mut self) -> Result<()> {
         let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
-        self.tiles.prepare(host, self.shadow_dispatch)
+        self.tiles.prepare(host, self.shadow_dispatch).await
     }
 
     /// Whether this renderer renders in the wavefront, as `shadow_dispatch`
@@ -287,19 +324,31 @@ impl GpuRenderer {
         sums: &mut [[f32; 4]],
         cancel: &AtomicBool,
     ) -> Result<Option<Image>> {
+        pollster::block_on(self.add_samples_async(view, samples, sums, cancel))
+    }
+
+    /// `add_samples_or_cancel`, awaited rather than blocking.
+    pub async fn add_samples_async(
+        &mut self,
+        view: &View,
+        samples: Range<u32>,
+        sums: &mut [[f32; 4]],
+        cancel: &AtomicBool,
+    ) -> Result<Option<Image>> {
         let params = self.uniform(view);
         let (width, height, spp) = (params.width, params.height, params.spp);
         crate::camera::check_batch((width, height, spp), &samples, sums.len())
             .map_err(Error::Usage)?;
         if samples == (0..spp) {
-            let (rendered, _) = self.render(view, &Progress::hidden())?;
+            let (rendered, _) = self.render_async(view, &Progress::hidden()).await?;
             return Ok(Some(rendered.image));
         }
-        self.prepare_render()?;
+        self.prepare_render_async().await?;
         let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
         let dispatch = self.shadow_dispatch;
         self.tiles
             .add_samples(host, dispatch, &params, samples, sums, cancel)
+            .await
     }
 
     /// Traces `rays` (world coordinates, as in a ray file) against the
@@ -329,14 +378,14 @@ impl GpuRenderer {
         self.prepare_trace(any_hit, intersect)?;
         let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
         let timer = self.tiles.timer();
-        self.lists.trace(host, timer, rays, any_hit, intersect)
+        pollster::block_on(self.lists.trace(host, timer, rays, any_hit, intersect))
     }
 
     /// Builds the `trace_rays` pipeline for closest or any hit with the
     /// given ray/triangle test, if not built yet.
     pub fn prepare_trace(&mut self, any_hit: bool, intersect: Intersect) -> Result<()> {
         let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
-        self.lists.prepare_trace(host, any_hit, intersect)
+        pollster::block_on(self.lists.prepare_trace(host, any_hit, intersect))
     }
 
     /// Device time of the last `trace_rays`, from timestamp queries (None
@@ -351,18 +400,22 @@ impl GpuRenderer {
     /// pass; the same bits either way.
     pub fn render_pixel_list(&mut self, view: &View, pixels: &[[u32; 2]]) -> Result<Vec<[f32; 4]>> {
         let params = self.uniform(view);
-        if self.is_wavefront() {
-            let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
-            return self
-                .tiles
-                .render_list_wavefront(host, &self.lists, &params, pixels);
-        }
         let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
-        self.lists.prepare_pixel_list(host)?;
-        let (lists, dispatch) = (&self.lists, ShadowDispatch::Megakernel);
-        self.tiles.until_whole(host, dispatch, params.spp, |tiles| {
-            let step = tiles.samples_per_dispatch(dispatch).min(params.spp);
-            lists.render_pixel_list(host, &params, pixels, step)
+        pollster::block_on(async {
+            if self.shadow_dispatch == ShadowDispatch::Wavefront {
+                let lists = &self.lists;
+                return (self.tiles)
+                    .render_list_wavefront(host, lists, &params, pixels)
+                    .await;
+            }
+            self.lists.prepare_pixel_list(host).await?;
+            let (lists, dispatch) = (&self.lists, ShadowDispatch::Megakernel);
+            (self.tiles)
+                .until_whole(host, dispatch, params.spp, async |tiles| {
+                    let step = tiles.samples_per_dispatch(dispatch).min(params.spp);
+                    lists.render_pixel_list(host, &params, pixels, step).await
+                })
+                .await
         })
     }
 
@@ -372,7 +425,7 @@ impl GpuRenderer {
     /// the CPU twin's.
     pub fn probe_lights(&mut self, queries: &[LightQuery]) -> Result<Vec<LightAnswer>> {
         let host = Host::new(&self.gpu, &self.pipelines, &self.resident);
-        self.lists.probe_lights(host, queries)
+        pollster::block_on(self.lists.probe_lights(host, queries))
     }
 
     /// The geometric queries' part, and what it reads of the others.
@@ -390,21 +443,21 @@ impl GpuRenderer {
         max_distance: f32,
     ) -> Result<Vec<ClosestPoint>> {
         let (host, proximity) = self.proximity();
-        proximity.closest_points(host, points, margins, max_distance)
+        pollster::block_on(proximity.closest_points(host, points, margins, max_distance))
     }
 
     /// `cpu::winding_numbers` on the device: the same tree (uploaded on the
     /// first call) walked in the same order.
     pub fn winding_numbers(&mut self, points: &[[f32; 3]]) -> Result<Vec<f32>> {
         let (host, proximity) = self.proximity();
-        proximity.winding_numbers(host, points)
+        pollster::block_on(proximity.winding_numbers(host, points))
     }
 
     /// `cpu::count_intersections` on the device (`pad`: the CPU's
     /// `box_pad`).
     pub fn count_intersections(&mut self, rays: &[Ray], pad: f32) -> Result<Vec<u32>> {
         let (host, proximity) = self.proximity();
-        proximity.count_intersections(host, rays, pad)
+        pollster::block_on(proximity.count_intersections(host, rays, pad))
     }
 
     /// `cpu::list_intersections` on the device, each ray's hits in the
@@ -416,7 +469,7 @@ impl GpuRenderer {
         pad: f32,
     ) -> Result<(Vec<u64>, Vec<ListedHit>)> {
         let (host, proximity) = self.proximity();
-        proximity.list_intersections(host, rays, pad)
+        pollster::block_on(proximity.list_intersections(host, rays, pad))
     }
 
     /// Turns shadows on or off (the viewer's key): the uniform's flag,

@@ -92,8 +92,8 @@ impl Resident {
 
     /// Whether any invocation since the last call found its loops cut
     /// short (the shader's `report_cut_loops`); clears the flag.
-    pub fn loops_were_cut(&self, gpu: &Gpu) -> Result<bool> {
-        self.loop_status.were_cut(gpu)
+    pub async fn loops_were_cut(&self, gpu: &Gpu) -> Result<bool> {
+        self.loop_status.were_cut(gpu).await
     }
 
     /// The uniform of a render of `view` (camera, size, spp, seed): the
@@ -236,28 +236,30 @@ impl<'a> Host<'a> {
 
     /// Builds `entry` with the scene's group and `layout`, specialised to
     /// the resident scene.
-    pub fn build(
+    pub async fn build(
         &self,
         entry: &str,
         layout: &wgpu::BindGroupLayout,
     ) -> Result<wgpu::ComputePipeline> {
-        self.build_with(entry, layout, self.constants())
+        self.build_with(entry, layout, self.constants()).await
     }
 
     /// `build` with other overrides.
-    pub fn build_with(
+    pub async fn build_with(
         &self,
         entry: &str,
         layout: &wgpu::BindGroupLayout,
         constants: &[(&str, f64)],
     ) -> Result<wgpu::ComputePipeline> {
-        self.pipelines.build(self.gpu, entry, layout, constants)
+        self.pipelines
+            .build(self.gpu, entry, layout, constants)
+            .await
     }
 
     /// Whether any invocation since the last call found its loops cut
     /// short; clears the flag.
-    pub fn loops_were_cut(&self) -> Result<bool> {
-        self.resident.loops_were_cut(self.gpu)
+    pub async fn loops_were_cut(&self) -> Result<bool> {
+        self.resident.loops_were_cut(self.gpu).await
     }
 }
 

@@ -75,11 +75,13 @@ impl Timer {
     }
 
     /// The pass's device time, once its submission has completed.
-    pub fn read(&self, gpu: &Gpu) -> Result<Duration> {
-        let ticks = gpu.read_mapped(&self.staging, 16, "timestamps", |bytes| {
-            let t: &[u64] = bytemuck::cast_slice(bytes);
-            t[1].saturating_sub(t[0])
-        })?;
+    pub async fn read(&self, gpu: &Gpu) -> Result<Duration> {
+        let ticks = gpu
+            .read_mapped(&self.staging, 16, "timestamps", |bytes| {
+                let t: &[u64] = bytemuck::cast_slice(bytes);
+                t[1].saturating_sub(t[0])
+            })
+            .await?;
         Ok(Duration::from_nanos((ticks as f64 * self.period) as u64))
     }
 }

@@ -83,7 +83,7 @@ pub(super) struct SceneBuffers {
 impl SceneBuffers {
     /// Uploads `scene`'s arrays, its BVH in `storage` (the other storage
     /// gets a placeholder, bound and never read).
-    pub fn upload(gpu: &Gpu, scene: &Scene, storage: BvhStorage) -> Result<SceneBuffers> {
+    pub async fn upload(gpu: &Gpu, scene: &Scene, storage: BvhStorage) -> Result<SceneBuffers> {
         // A scene within the binding limits may still not fit the device's
         // memory, which wgpu reports as an out-of-memory error.
         let memory = gpu.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
@@ -165,7 +165,7 @@ impl SceneBuffers {
                 .iter()
                 .map(|t| 16 * t.width() as u64 * t.height() as u64)
                 .sum::<u64>();
-        if let Some(e) = pollster::block_on(memory.pop()) {
+        if let Some(e) = memory.pop().await {
             return Err(Error::GpuLimit(format!(
                 "the scene's {device_bytes} bytes of GPU data (triangles {}, BVH nodes {}, leaf \
                  blocks {}) do not fit in the memory of {}: {e}",

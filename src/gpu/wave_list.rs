@@ -21,20 +21,23 @@ impl Tiles {
     /// `render_pixel_list` in the wavefront, the view's uniform `params`
     /// (`lists` keeps the buffers): each listed pixel's mean colour and the
     /// variance of its mean.
-    pub fn render_list_wavefront(
+    pub async fn render_list_wavefront(
         &mut self,
         host: Host<'_>,
         lists: &Lists,
         params: &Params,
         pixels: &[[u32; 2]],
     ) -> Result<Vec<[f32; 4]>> {
-        self.prepare_wavefront_list(host)?;
-        self.until_whole(host, ShadowDispatch::Wavefront, params.spp, |tiles| {
-            tiles.render_list_wavefront_once(host, lists, params, pixels)
+        self.prepare_wavefront_list(host).await?;
+        self.until_whole(host, ShadowDispatch::Wavefront, params.spp, async |tiles| {
+            tiles
+                .render_list_wavefront_once(host, lists, params, pixels)
+                .await
         })
+        .await
     }
 
-    fn render_list_wavefront_once(
+    async fn render_list_wavefront_once(
         &self,
         host: Host<'_>,
         lists: &Lists,
@@ -94,14 +97,15 @@ impl Tiles {
                     }
                 }
                 gpu.queue.submit([encoder.finish()]);
-                gpu.wait()?;
+                gpu.wait().await?;
             }
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
             encoder.copy_buffer_to_buffer(&sums, 0, &staging, 0, n * SUMS_BYTES);
             gpu.queue.submit([encoder.finish()]);
             gpu.read_mapped(&staging, n * SUMS_BYTES, "pixel list results", |bytes| {
                 results.extend_from_slice(bytemuck::cast_slice::<u8, [f32; 4]>(bytes))
-            })?;
+            })
+            .await?;
         }
         Ok(results)
     }

@@ -154,7 +154,7 @@ struct WaveBuffers {
 impl Wavefront {
     /// The passes and lists of a wavefront over `lights` lights, writing
     /// `tile`'s buffers.
-    pub fn new(host: Host<'_>, tile: &TileTargets, lights: u32) -> Result<Wavefront> {
+    pub async fn new(host: Host<'_>, tile: &TileTargets, lights: u32) -> Result<Wavefront> {
         let device = &host.gpu().device;
         let layout = WAVEFRONT.layout(device);
         let rays = wave_budget(lights) as u64;
@@ -203,20 +203,22 @@ impl Wavefront {
         );
         let build = |entry| host.build(entry, &buffers.layout);
         Ok(Wavefront {
-            primary: build("render_primary")?,
-            primary_samples: build("render_primary_samples")?,
+            primary: build("render_primary").await?,
+            primary_samples: build("render_primary_samples").await?,
             list_primary: None,
-            shadows: build("render_shadows")?,
-            resolve: build("render_resolve")?,
+            shadows: build("render_shadows").await?,
+            resolve: build("render_resolve").await?,
             buffers,
             tile_groups,
         })
     }
 
     /// Builds the pixel list's first pass if not built yet.
-    pub fn prepare_list(&mut self, host: Host<'_>) -> Result<()> {
+    pub async fn prepare_list(&mut self, host: Host<'_>) -> Result<()> {
         if self.list_primary.is_none() {
-            let pipeline = host.build("render_list_primary", &self.buffers.layout)?;
+            let pipeline = host
+                .build("render_list_primary", &self.buffers.layout)
+                .await?;
             self.list_primary = Some(pipeline);
         }
         Ok(())

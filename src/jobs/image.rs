@@ -3,7 +3,9 @@
 //! written to a file, with a report of where the time went.
 
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
+use std::time::Duration;
+
+use web_time::Instant;
 
 use super::{open_with, say};
 use crate::adaptive::{AdaptiveReport, AdaptiveSettings, render_adaptive};

@@ -8,7 +8,9 @@
 //! and a plain GPU render, which `diff` and the benchmarks share.
 
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Duration;
+
+use web_time::Instant;
 
 use crate::camera::View;
 use crate::error::{Error, Result};

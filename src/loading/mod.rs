@@ -190,6 +190,31 @@ pub fn load_mesh(path: &Path, mode: NormalMode) -> Result<Mesh> {
     Ok(mesh)
 }
 
+/// A model file's bytes as `path`'s name says they are (a `.ply.gz`
+/// gunzipped first): its geometry and materials, and a glTF file's cameras
+/// and lights; what `Scene::from_model` reads, and the web's dropped file
+/// (which names it). Files it refers to (MTL, external buffers, images) are
+/// read relative to `path`. A file without triangles is an error.
+pub fn parse_model(bytes: &[u8], path: &Path, mode: NormalMode) -> Result<gltf::GltfScene> {
+    let mesh = match Format::of(path)? {
+        Format::Obj => parse_obj(&String::from_utf8_lossy(bytes), path, mode)?,
+        Format::Ply => ply::parse_ply(bytes, path, mode)?,
+        Format::PlyGz => {
+            let cap = crate::files::MAX_MODEL_BYTES;
+            let bytes = crate::files::gunzip_capped(bytes, path, cap)?;
+            ply::parse_ply(&bytes, path, mode)?
+        }
+        Format::Stl => stl::parse_stl(bytes, path, mode)?,
+        // `gltf::parse_scene` requires triangles itself.
+        Format::Gltf | Format::Glb => return gltf::parse_scene(bytes, path, mode),
+    };
+    require_triangles(&mesh, path)?;
+    Ok(gltf::GltfScene {
+        mesh,
+        ..Default::default()
+    })
+}
+
 /// Corner normals of every triangle: the given per-vertex normals where
 /// there are some (`vertex_normals`, one per position), else area-weighted
 /// vertex normals.

@@ -210,14 +210,14 @@ impl Scene {
             let text = crate::files::read_text_capped(path, crate::files::MAX_TEXT_BYTES)?;
             return Scene::from_toml(&text, path);
         }
-        let format = loading::Format::of(path).map_err(|_| {
+        loading::Format::of(path).map_err(|_| {
             Error::Usage(format!(
                 "{}: not a scene (.toml) or a model file ({})",
                 path.display(),
                 loading::SUPPORTED
             ))
         })?;
-        Scene::from_model(path, format, camera)
+        Scene::from_model(path, camera)
     }
 
     /// A scene of bare triangles (one grey material), for probes.

@@ -24,18 +24,33 @@ impl Scene {
     /// lights. With no camera, one is framed on the model; with no light,
     /// the default light (docs/scene-format.md). The file's own normals
     /// shade smoothly where it gives them at every corner.
-    pub fn from_model(path: &Path, format: loading::Format, camera: Option<&str>) -> Result<Scene> {
+    pub fn from_model(path: &Path, camera: Option<&str>) -> Result<Scene> {
+        let bytes = crate::files::read_capped(path, crate::files::MAX_MODEL_BYTES)?;
+        let mut model = loading::parse_model(&bytes, path, NormalMode::Smooth)?;
+        model.mesh.files.insert(0, path.to_path_buf());
+        Scene::from_parsed_model(path, model, camera)
+    }
+
+    /// `from_model` of a file's bytes (the web's dropped file); `path` names
+    /// it in errors and tells its format. A file it refers to that cannot
+    /// be read (an OBJ's MTL, an image) is a warning, as for a file on disk
+    /// that is missing; a glTF file's external buffers, an error.
+    pub fn from_model_bytes(bytes: &[u8], path: &Path, camera: Option<&str>) -> Result<Scene> {
+        let model = loading::parse_model(bytes, path, NormalMode::Smooth)?;
+        Scene::from_parsed_model(path, model, camera)
+    }
+
+    fn from_parsed_model(
+        path: &Path,
+        model: loading::gltf::GltfScene,
+        camera: Option<&str>,
+    ) -> Result<Scene> {
         let mut scene = Scene::model_bare();
-        let (mut mesh, cameras, lights) = if format.is_gltf() {
-            let g = loading::gltf::load_scene(path, NormalMode::Smooth)?;
-            (g.mesh, g.cameras, g.lights)
-        } else {
-            (
-                loading::load_mesh(path, NormalMode::Smooth)?,
-                Vec::new(),
-                Vec::new(),
-            )
-        };
+        let loading::gltf::GltfScene {
+            mut mesh,
+            cameras,
+            lights,
+        } = model;
         if !mesh.file_normals {
             mesh.normals = None;
         }
