@@ -86,9 +86,9 @@ impl Session {
         &self,
         bytes: Vec<u8>,
         name: String,
-        width: u32,
-        height: u32,
-        spp: u32,
+        width: Option<u32>,
+        height: Option<u32>,
+        spp: Option<u32>,
     ) -> Result<JsValue, JsError> {
         let image = model::render(&self.gpu, &bytes, Path::new(&name), width, height, spp)
             .await

@@ -17,14 +17,15 @@ use lambert::scene::RenderSettings;
 pub fn scene(
     bytes: &[u8],
     path: &Path,
-    size: Option<(u32, u32)>,
+    width: Option<u32>,
+    height: Option<u32>,
     spp: Option<u32>,
 ) -> lambert::Result<(Scene, RenderSettings)> {
     let mut scene = Scene::from_model_bytes(bytes, path, None)?;
     let mut settings = scene.default_settings();
     let overrides = RenderOverrides {
-        width: size.map(|s| s.0),
-        height: size.map(|s| s.1),
+        width,
+        height,
         spp,
         ..RenderOverrides::default()
     };
@@ -37,11 +38,11 @@ pub async fn render(
     gpu: &Gpu,
     bytes: &[u8],
     path: &Path,
-    width: u32,
-    height: u32,
-    spp: u32,
+    width: Option<u32>,
+    height: Option<u32>,
+    spp: Option<u32>,
 ) -> lambert::Result<Image> {
-    let (scene, settings) = scene(bytes, path, Some((width, height)), Some(spp))?;
+    let (scene, settings) = scene(bytes, path, width, height, spp)?;
     let mut renderer = GpuRenderer::open(gpu.clone(), &scene).await?;
     drop(scene);
     let (rendered, _) = renderer

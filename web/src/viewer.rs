@@ -13,7 +13,7 @@ pub struct Viewer {
 
 impl Viewer {
     pub async fn open(_gpu: &Gpu, bytes: &[u8], path: &Path) -> lambert::Result<Viewer> {
-        super::model::scene(bytes, path, None, None)?;
+        super::model::scene(bytes, path, None, None, None)?;
         Err(lambert::Error::Usage("the viewer is not built yet".into()))
     }
 }

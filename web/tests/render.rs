@@ -35,9 +35,9 @@ async fn a_triangle_renders_as_the_cpu_twin_renders_it() {
         .render_model(
             TRIANGLE.as_bytes().to_vec(),
             "tri.obj".into(),
-            width,
-            height,
-            spp,
+            Some(width),
+            Some(height),
+            Some(spp),
         )
         .await
         .map_err(JsValue::from)
@@ -66,7 +66,8 @@ async fn a_triangle_renders_as_the_cpu_twin_renders_it() {
     let (scene, settings) = lambert_web::model::scene(
         TRIANGLE.as_bytes(),
         Path::new("tri.obj"),
-        Some((width, height)),
+        Some(width),
+        Some(height),
         Some(spp),
     )
     .unwrap();
@@ -97,7 +98,7 @@ async fn a_bad_file_is_an_error_naming_it_not_a_panic() {
     let session = Session::open().await.map_err(JsValue::from).unwrap();
     let bad = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n".to_vec();
     let error = session
-        .render_model(bad, "broken.obj".into(), 8, 8, 1)
+        .render_model(bad, "broken.obj".into(), Some(8), Some(8), Some(1))
         .await
         .map(|_| ())
         .map_err(JsValue::from)
@@ -106,7 +107,13 @@ async fn a_bad_file_is_an_error_naming_it_not_a_panic() {
     assert!(message.contains("broken.obj"), "{message}");
     // The session still renders after the error.
     let fine = session
-        .render_model(TRIANGLE.as_bytes().to_vec(), "tri.obj".into(), 8, 8, 1)
+        .render_model(
+            TRIANGLE.as_bytes().to_vec(),
+            "tri.obj".into(),
+            Some(8),
+            Some(8),
+            Some(1),
+        )
         .await;
     assert!(fine.is_ok());
 }
