@@ -107,8 +107,10 @@ fn spread_invocation(group: vec3<u32>, groups: vec3<u32>, local: vec3<u32>, size
 const NO_HIT: u32 = 0xffffffffu;
 // Texels a row of the BVH textures: 1 << TEXEL_ROW_BITS (gpu::TEXELS_PER_ROW).
 const TEXEL_ROW_BITS: u32 = 12u;
-// WGSL has no infinity literal; the largest finite f32 serves as "no hit yet".
-const FAR: f32 = 3.40282347e38;
+// WGSL has no infinity literal; the largest finite f32 serves as "no hit
+// yet", written exactly in hex: Tint (Chrome's WGSL compiler) rejects the
+// decimal 3.40282347e38, a hair above it, which naga rounds down.
+const FAR: f32 = 0x1.fffffep+127f;
 const LIGHT_POINT: u32 = 0u;
 const LIGHT_DIRECTIONAL: u32 = 1u;
 const LIGHT_SPOT: u32 = 2u;

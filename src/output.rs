@@ -40,6 +40,21 @@ impl Image {
             .collect()
     }
 
+    /// `to_srgb8` with an opaque alpha: what a viewer shows (a canvas's
+    /// ImageData, the window's frame), the bytes the PNG writer writes.
+    pub fn to_rgba8(&self) -> Vec<u8> {
+        self.to_srgb8()
+            .chunks(3)
+            .flat_map(|rgb| [rgb[0], rgb[1], rgb[2], 255])
+            .collect()
+    }
+
+    /// The PNG that `save` writes, as bytes.
+    pub fn to_png(&self) -> Result<Vec<u8>> {
+        self.encode_png()
+            .map_err(|e| Error::Usage(format!("encoding PNG: {e}")))
+    }
+
     /// Writes PNG, EXR or PFM, chosen by the extension, atomically.
     pub fn save(&self, path: &Path) -> Result<()> {
         let extension = path

@@ -300,14 +300,17 @@ impl Renderer {
     /// viewer's, for another scene), or with none on the CPU path sharing
     /// it.
     pub fn open_on(scene: Arc<Scene>, gpu: Option<&Gpu>) -> Result<Renderer> {
-        Ok(match gpu {
-            Some(gpu) => {
-                let mut renderer = GpuRenderer::new(gpu.clone(), &scene)?;
-                renderer.set_winding_source(Arc::downgrade(&scene));
-                Renderer::Gpu(Box::new(renderer))
-            }
-            None => Renderer::Cpu(scene),
-        })
+        match gpu {
+            Some(gpu) => pollster::block_on(Renderer::open_on_gpu(scene, gpu)),
+            None => Ok(Renderer::Cpu(scene)),
+        }
+    }
+
+    /// `open_on` a GPU, awaited rather than blocking (the web's).
+    pub async fn open_on_gpu(scene: Arc<Scene>, gpu: &Gpu) -> Result<Renderer> {
+        let mut renderer = GpuRenderer::open(gpu.clone(), &scene).await?;
+        renderer.set_winding_source(Arc::downgrade(&scene));
+        Ok(Renderer::Gpu(Box::new(renderer)))
     }
 
     pub fn is_cpu(&self) -> bool {
@@ -481,16 +484,25 @@ impl Renderer {
         count: u32,
         cancel: &AtomicBool,
     ) -> Result<bool> {
+        pollster::block_on(self.add_samples_async(progressive, count, cancel))
+    }
+
+    /// `add_samples_or_cancel`, awaited rather than blocking (the web's).
+    pub async fn add_samples_async(
+        &mut self,
+        progressive: &mut Progressive,
+        count: u32,
+        cancel: &AtomicBool,
+    ) -> Result<bool> {
         let view = &progressive.view;
         let start = progressive.samples;
         let samples = start..start.saturating_add(count).min(view.spp);
         let finished = match self {
-            Renderer::Gpu(renderer) => renderer.add_samples_or_cancel(
-                view,
-                samples.clone(),
-                &mut progressive.sums,
-                cancel,
-            )?,
+            Renderer::Gpu(renderer) => {
+                renderer
+                    .add_samples_async(view, samples.clone(), &mut progressive.sums, cancel)
+                    .await?
+            }
             Renderer::Cpu(scene) => cpu::add_samples_or_cancel(
                 scene,
                 view,

@@ -6,9 +6,6 @@
 //! scene, and `render.spp` honoured.
 
 mod common;
-#[path = "../src/bin/lambert/view/navigate.rs"]
-#[allow(dead_code)]
-mod navigate;
 #[path = "common/viewer.rs"]
 mod viewer;
 
@@ -18,8 +15,8 @@ use std::time::{Duration, Instant};
 use common::{lambert, s};
 use glam::DVec3;
 use lambert::camera::Camera;
+use lambert::camera::navigate::{self, Reach};
 use lambert::scene::Scene;
-use navigate::Reach;
 use viewer::{PATIENCE, Viewer, vector, wait_for, xvfb};
 
 /// A scene of one sphere at `centre` (radius 1) seen from `camera`, with
@@ -74,7 +71,7 @@ fn start(centre: DVec3) -> (Camera, Reach) {
         centre.z
     );
     let scene = Scene::from_toml(&sphere_scene(centre, &camera, ""), Path::new("s.toml")).unwrap();
-    (scene.view().camera.clone(), Reach::of(&scene))
+    (scene.view().camera.clone(), scene.reach())
 }
 
 #[test]

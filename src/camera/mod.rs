@@ -10,6 +10,7 @@ use crate::layout::{LIGHT_DIRECTIONAL, Light};
 use crate::limits::{checked_point, validate_resolution, vector_text};
 
 mod basis;
+pub mod navigate;
 
 /// The basis in single precision, as on the GPU.
 #[allow(clippy::unnecessary_cast)]

@@ -10,6 +10,7 @@ use glam::DVec3;
 use super::Scene;
 use crate::bvh::Bvh;
 use crate::camera::View;
+use crate::camera::navigate::Reach;
 use crate::layout::{
     Light, Material, Sphere, Triangle, TriangleAttributes, TriangleNormals, TriangleTangents,
 };
@@ -95,6 +96,17 @@ impl Scene {
     /// builders), returning the one it replaces.
     pub fn replace_bvh(&mut self, bvh: Bvh) -> Bvh {
         std::mem::replace(&mut self.bvh, bvh)
+    }
+
+    /// Where a viewer's camera may go in this scene: about its offset, as
+    /// far as its geometry's size (the view's distance where it has none).
+    pub fn reach(&self) -> Reach {
+        let camera = &self.view.camera;
+        let size = self.bvh.bounds().map_or_else(
+            || (DVec3::from(camera.eye) - DVec3::from(camera.look_at)).length(),
+            |b| (b.max - b.min).as_dvec3().length(),
+        );
+        Reach::new(self.offset, size)
     }
 
     /// What loading read but ignored or could not find (each names its

@@ -5,12 +5,14 @@ use std::process::ExitCode;
 
 use clap::Args;
 
+use lambert::camera::navigate::INTERACTIVE_SPP;
 use lambert::error::{Error, Result};
 use lambert::limits::validate_spp;
 
 use super::load_for;
 use super::options::SceneArgs;
-use crate::view::{INTERACTIVE_SPP, Settings, view};
+
+use crate::view::{Settings, view};
 
 #[derive(Args)]
 #[command(mut_arg("spp", |a| a.help(

@@ -23,7 +23,6 @@ use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
 
 use super::Settings;
-use super::navigate::Reach;
 use super::present::{CpuPresenter, GpuPresenter, Presenter};
 use super::worker::{Command, Frame, Report, Worker};
 
@@ -186,7 +185,7 @@ impl App {
         };
         let worker = Worker {
             path: settings.path.clone(),
-            reach: Reach::of(&scene),
+            reach: scene.reach(),
             shadows: scene.default_settings().shadows,
             integrator: scene.default_settings().integrator,
             scene,

@@ -1,10 +1,10 @@
 //! `lambert view`: a window showing the ray-traced image of a scene,
 //! refined a sample per pixel each frame (docs/viewer.md). The window and
 //! its input live here (`app`), the render thread in `worker`, the camera
-//! moves in `navigate`, showing a frame in `present`.
+//! moves in the library's `camera::navigate` (the web viewer's too),
+//! showing a frame in `present`.
 
 mod app;
-mod navigate;
 mod present;
 mod worker;
 
@@ -15,11 +15,6 @@ use lambert::error::{Error, Result};
 use lambert::gpu::AdapterRequest;
 use lambert::render::DeviceChoice;
 use lambert::scene::Scene;
-
-/// Samples per pixel of the interactive sequence when neither `--spp`,
-/// `--frames` nor the scene's `render.spp` gives them: the converged image
-/// is `render --spp 1024`'s.
-pub const INTERACTIVE_SPP: u32 = 1024;
 
 /// What the command line asks of the viewer.
 pub struct Settings {

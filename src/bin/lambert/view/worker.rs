@@ -13,11 +13,10 @@ use std::time::{Duration, Instant};
 use lambert::camera::{Camera, View};
 use lambert::error::{Error, Result};
 use lambert::gpu::Gpu;
-use lambert::output::Image;
 use lambert::render::{Progressive, Renderer};
 use lambert::scene::{Integrator, RenderSettings, Scene};
 
-use super::navigate::Reach;
+use lambert::camera::navigate::Reach;
 
 /// What the window asks of the render thread.
 pub enum Command {
@@ -139,7 +138,7 @@ impl Worker {
     }
 
     fn obey(&mut self, command: Command, report: &impl Fn(Report) -> bool) -> Result<()> {
-        use super::navigate::{camera_toml, dolly, fly, frame, orbit, pan};
+        use lambert::camera::navigate::{camera_toml, dolly, fly, frame, orbit, pan};
         let camera = self.progressive.view().camera.clone();
         let (width, height) = (camera.width, camera.height);
         let sized = |c: Camera| Camera { width, height, ..c };
@@ -318,7 +317,7 @@ impl Worker {
     /// `scene`, rendered by `renderer`, seen from `camera`.
     fn show(&mut self, scene: Arc<Scene>, renderer: Renderer, camera: Camera) {
         self.renderer = renderer;
-        self.reach = Reach::of(&scene);
+        self.reach = scene.reach();
         self.scene = scene;
         self.restart(camera);
     }
@@ -368,7 +367,7 @@ impl Worker {
         let frame = Frame {
             width: image.width,
             height: image.height,
-            rgba: rgba8(&image),
+            rgba: image.to_rgba8(),
             samples: self.progressive.samples(),
             spp: view.spp,
             frame_time,
@@ -385,14 +384,4 @@ impl Worker {
         }
         Ok(())
     }
-}
-
-/// The image as RGBA, 8-bit sRGB: the bytes the PNG writer writes, so
-/// the window shows what a screenshot saves.
-fn rgba8(image: &Image) -> Vec<u8> {
-    image
-        .to_srgb8()
-        .chunks(3)
-        .flat_map(|rgb| [rgb[0], rgb[1], rgb[2], 255])
-        .collect()
 }

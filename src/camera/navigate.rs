@@ -1,12 +1,16 @@
-//! The viewer's camera moves (orbit, pan, dolly, fly, frame) and the
+//! The viewers' camera moves (orbit, pan, dolly, fly, frame) and the
 //! camera as a `[camera]` table: pure functions of the camera, in f64,
-//! kept by a `Reach` within what a scene file accepts of a camera.
+//! kept by a `Reach` within what a scene file accepts of a camera; `lambert
+//! view`'s window and the web page's viewer (web/) move alike.
 
 use glam::{DQuat, DVec3};
 
-use lambert::camera::{Camera, MIN_UP_SINE, frame_camera};
-use lambert::limits::{MAX_COORDINATE, MAX_LOCAL_COORDINATE};
-use lambert::scene::Scene;
+use super::{Camera, MIN_UP_SINE, frame_camera};
+use crate::limits::{MAX_COORDINATE, MAX_LOCAL_COORDINATE};
+
+/// Samples per pixel of a viewer's sequence when nothing else gives them:
+/// the converged image is `render --spp 1024`'s.
+pub const INTERACTIVE_SPP: u32 = 1024;
 
 /// Where the camera may go: eye and look_at within MAX_LOCAL_COORDINATE of
 /// the scene's offset on each axis and within MAX_COORDINATE (what a scene
@@ -33,17 +37,6 @@ const MIN_DISTANCE_OF_POSITION: f64 = 1e-12;
 const MIN_DISTANCE_OF_LOCAL_POSITION: f64 = 1.0 / 8192.0;
 
 impl Reach {
-    /// `scene`'s: its offset, and the size of its geometry (of the view's
-    /// distance where it has none).
-    pub fn of(scene: &Scene) -> Reach {
-        let camera = &scene.view().camera;
-        let size = scene.bvh().bounds().map_or_else(
-            || (DVec3::from(camera.eye) - DVec3::from(camera.look_at)).length(),
-            |b| (b.max - b.min).as_dvec3().length(),
-        );
-        Reach::new(scene.offset(), size)
-    }
-
     /// About `offset`, for a scene `size` across.
     pub fn new(offset: DVec3, size: f64) -> Reach {
         // A hair inside the limits: world − offset, rounded, stays within.
