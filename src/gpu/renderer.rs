@@ -158,7 +158,7 @@ impl GpuRenderer {
             label: Some("lambert shader"),
             source: wgpu::ShaderSource::Wgsl(source.into()),
         });
-        if let Some(e) = pollster::block_on(scope.pop()) {
+        if let Some(e) = scope.pop().await {
             return Err(Error::Gpu(format!("uploading the scene: {e}")));
         }
         gpu.wait().await?;
