@@ -36,8 +36,8 @@ pub mod winding;
 pub use precision::Scalar;
 pub use prefetch::LARGE_BVH_BYTES;
 pub use proximity::{
-    box_pad, closest_points, count_intersections, list_intersections, sort_hits, spatial_order,
-    winding_numbers,
+    box_pad, closest_points, count_intersections, list_intersections, solid_inside, sort_hits,
+    spatial_order, winding_numbers,
 };
 pub use query::{
     QueryOptions, QueryRays, RayFrame, SharedOut, TracedChunk, trace_rays, trace_rays_each,
