@@ -196,19 +196,8 @@ impl Sides {
             let (t, k) = (c as usize / 3, c as usize % 3);
             corners[t][k] < corners[t][(k + 1) % 3]
         };
-        let crossing = overlap::crossing(bvh, triangles, &corners);
-        let mut crosses = vec![false; n];
-        for &t in &crossing {
-            crosses[t as usize] = true;
-        }
-        let mut edges = vec![[NONE; 3]; n];
-        let mut edge_normals = Vec::with_capacity(runs.len() / 2);
-        // Vertices that decide nothing, triangles joined into pieces, and
-        // each vertex's corners into fans, across edges that decide.
-        let mut unsure = vec![false; vertex_count];
-        let mut pieces: Vec<u32> = (0..n as u32).collect();
-        let mut fans: Vec<u32> = (0..3 * n as u32).collect();
-        let next = |c: u32| c - c % 3 + (c % 3 + 1) % 3;
+        // A hole first: it leaves the winding number no integer, and the
+        // crossing test need not be paid.
         for run in runs.chunk_by(|a, b| a.0 == b.0) {
             let ahead = run.iter().filter(|r| forward(r.1)).count();
             if 2 * ahead != run.len() {
@@ -224,6 +213,21 @@ impl Sides {
                     run.len() - ahead
                 ));
             }
+        }
+        let crossing = overlap::crossing(bvh, triangles, &corners);
+        let mut crosses = vec![false; n];
+        for &t in &crossing {
+            crosses[t as usize] = true;
+        }
+        let mut edges = vec![[NONE; 3]; n];
+        let mut edge_normals = Vec::with_capacity(runs.len() / 2);
+        // Vertices that decide nothing, triangles joined into pieces, and
+        // each vertex's corners into fans, across edges that decide.
+        let mut unsure = vec![false; vertex_count];
+        let mut pieces: Vec<u32> = (0..n as u32).collect();
+        let mut fans: Vec<u32> = (0..3 * n as u32).collect();
+        let next = |c: u32| c - c % 3 + (c % 3 + 1) % 3;
+        for run in runs.chunk_by(|a, b| a.0 == b.0) {
             let (c1, c2) = (run[0].1, run[1].1);
             let decides = run.len() == 2 && !crosses[c1 as usize / 3] && !crosses[c2 as usize / 3];
             if !decides {
