@@ -160,11 +160,10 @@ fn apart_cross(a: [DVec3; 3], b: [DVec3; 3]) -> bool {
         .fold(0.0, f64::max);
     let distances = |t: [DVec3; 3], n: DVec3, origin: DVec3| {
         let tolerance = TOUCH * n.length() * size;
-        let d = t.map(|p| {
+        t.map(|p| {
             let d = n.dot(p - origin);
             if d.abs() <= tolerance { 0.0 } else { d }
-        });
-        d
+        })
     };
     let (da, db) = (distances(a, nb, b[0]), distances(b, na, a[0]));
     let apart = |d: [f64; 3]| d.iter().all(|&x| x > 0.0) || d.iter().all(|&x| x < 0.0);

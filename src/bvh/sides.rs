@@ -368,7 +368,8 @@ impl Sides {
         };
         let away = p - q;
         let (distance, length) = (away.length(), normal.length());
-        if distance < min_distance || !(distance * length > 0.0) {
+        // A zero (or NaN) length decides nothing.
+        if distance < min_distance || distance * length <= 0.0 || length.is_nan() {
             return None;
         }
         let cosine = away.dot(normal) / (distance * length);
