@@ -104,6 +104,9 @@ impl Renderer {
     /// closed (`bvh::Sides`, built on the first call: how many pieces its
     /// surface has, and how many triangles lie in none), else why not.
     pub fn bounds_solid(&self) -> std::result::Result<(usize, usize), String> {
+        // A scene with spheres: refused as the winding numbers refuse it.
+        self.triangles_only("inside tests")
+            .map_err(|e| e.to_string())?;
         match self {
             Renderer::Gpu(_) => Err("the GPU path takes winding numbers".into()),
             Renderer::Cpu(scene) => scene

@@ -19,7 +19,7 @@
 
 use std::sync::OnceLock;
 
-use glam::DVec3;
+use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::overlap;
@@ -49,10 +49,12 @@ pub struct Sides {
     /// angles there; zero where it decides nothing (a vertex where separate
     /// fans meet, or on an edge of more than two triangles, or of a
     /// triangle that crosses another).
-    vertex_normals: Vec<DVec3>,
+    /// (f32: the direction to well within `MIN_COSINE`, in half the
+    /// memory.)
+    vertex_normals: Vec<Vec3>,
     /// Per edge, the sum of its two triangles' unit normals; zero where it
     /// decides nothing (more than two triangles, or one that crosses).
-    edge_normals: Vec<DVec3>,
+    edge_normals: Vec<Vec3>,
     /// Per triangle, its piece; `NONE` for one that crosses another or has
     /// zero area.
     piece: Vec<u32>,
@@ -239,8 +241,9 @@ impl Sides {
             edges[c1 as usize / 3][c1 as usize % 3] = id;
             edges[c2 as usize / 3][c2 as usize % 3] = id;
             edge_normals.push(
-                unit_normal(self::corners(&triangles[c1 as usize / 3]))
-                    + unit_normal(self::corners(&triangles[c2 as usize / 3])),
+                (unit_normal(self::corners(&triangles[c1 as usize / 3]))
+                    + unit_normal(self::corners(&triangles[c2 as usize / 3])))
+                .as_vec3(),
             );
             // c1 runs a → b, c2 runs b → a.
             join(&mut fans, c1, next(c2));
@@ -301,7 +304,7 @@ impl Sides {
         Ok(Sides {
             corners,
             edges,
-            vertex_normals,
+            vertex_normals: vertex_normals.iter().map(|n| n.as_vec3()).collect(),
             edge_normals,
             piece,
             samples: samples
@@ -362,9 +365,9 @@ impl Sides {
             Feature::Face => unit_normal(v),
             Feature::Edge(k) => match self.edges[prim as usize][k] {
                 NONE => DVec3::ZERO,
-                e => self.edge_normals[e as usize],
+                e => self.edge_normals[e as usize].as_dvec3(),
             },
-            Feature::Vertex(k) => self.vertex_normals[c[k] as usize],
+            Feature::Vertex(k) => self.vertex_normals[c[k] as usize].as_dvec3(),
         };
         let away = p - q;
         let (distance, length) = (away.length(), normal.length());
