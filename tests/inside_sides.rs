@@ -327,10 +327,10 @@ fn open_meshes_keep_the_winding_number() {
 }
 
 #[test]
-fn a_mesh_with_zero_area_triangles_and_a_pinched_edge_still_agrees() {
-    // Two spheres touching along one shared edge would need welding care;
-    // here, a sphere with zero-area triangles added along its edges (as
-    // the full dragon has): they are left out and the rest decides.
+fn a_mesh_with_zero_area_triangles_still_agrees() {
+    // A sphere with zero-area triangles added along its edges (as the
+    // full dragon has, making its edges look shared by four): they are
+    // left out and the rest decides.
     let mut triangles = sphere([0.0; 3], 1.0, 16, 32);
     let extra: Vec<Triangle> = triangles
         .iter()
@@ -344,4 +344,57 @@ fn a_mesh_with_zero_area_triangles_and_a_pinched_edge_still_agrees() {
     let p = points(&triangles, 4000, 2000, 9);
     let decided = check("sphere with slivers", Scene::from_triangles(triangles), &p);
     assert!(decided > 4000, "the sides decided {decided}");
+}
+
+/// `lambert query inside` and `signed-distance` say on stderr which way
+/// they took the signs: from the closest points' sides on a closed mesh
+/// (with its pieces), from winding numbers on an open one (naming the
+/// edge); nothing with --quiet.
+#[test]
+fn lambert_query_says_which_way_it_took_the_signs() {
+    use common::{lambert, s, stderr, write};
+    let dir = tempfile::tempdir().unwrap();
+    let points: Vec<u8> = [[0.1f32, 0.2, 0.3], [5.0, 0.0, 0.0], [0.0, -0.4, 0.1]]
+        .iter()
+        .flatten()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    let points = write(dir.path(), "points.bin", points);
+    let out = dir.path().join("out.bin");
+    for (mesh, expected) in [
+        (
+            "cube.obj",
+            "inside from the side of each point's closest point (the mesh is closed: 1 piece(s), 0 triangle(s)",
+        ),
+        (
+            "quad.obj",
+            "inside from winding numbers: the mesh is not closed: the edge",
+        ),
+    ] {
+        let obj = common::asset(&format!("scenes/meshes/{mesh}"));
+        for what in ["inside", "signed-distance"] {
+            let args = [
+                "query",
+                what,
+                "--obj",
+                s(&obj),
+                "--points",
+                s(&points),
+                "-o",
+                s(&out),
+            ];
+            let run = lambert(&[&args[..], &["--device", "cpu"]].concat());
+            let text = stderr(&run);
+            assert!(
+                run.status.success() && text.contains(expected),
+                "{mesh} {what}: {text}"
+            );
+            let quiet = lambert(&[&args[..], &["--device", "cpu", "--quiet"]].concat());
+            assert!(
+                !stderr(&quiet).contains("inside from"),
+                "{}",
+                stderr(&quiet)
+            );
+        }
+    }
 }
