@@ -154,8 +154,10 @@ pub fn solid_inside(
     // Each piece's winding number in front: at a point before one of its
     // triangles that has that triangle nearest, in front, and a winding
     // number within a quarter of an integer.
+    // (The winding tree built here, not under `label_pieces`' parallel
+    // calls, where the other threads would wait on its build.)
+    let tree = scene.bvh.winding_tree(scene.triangles.len());
     sides.label_pieces(|samples| {
-        let tree = scene.bvh.winding_tree(scene.triangles.len());
         samples.iter().find_map(|&t| {
             let p = Sides::in_front(&scene.triangles, t).as_vec3();
             let margin = query_margin(p.abs().max_element(), radius);
