@@ -1,0 +1,413 @@
+//! Coherent rays in packets: `PACKET` rays of a query (neighbours in the
+//! query's order: a row of camera rays) traverse the BVH together, with
+//! the single-ray kernel (`f32::Kernel::visit`) as the portable original
+//! they must equal bit for bit (tests/cpu_packets.rs).
+//!
+//! Per node, one slab test of the packet's interval bounds (its rays'
+//! reciprocal directions and offsets, each the least or greatest over the
+//! packet) against the eight children says which children some ray may
+//! enter; only those are tested ray by ray, the packet's rays in vector
+//! lanes, with each ray's own arithmetic (so each ray's entry distance is
+//! the bits `intersect_boxes` gives it). A leaf's blocks are tested for the
+//! rays that enter it, each with `intersect_triangle_block` as alone.
+//!
+//! Why the hits are the single-ray kernel's: a ray of the packet tests
+//! every box and triangle it tests alone, and more (a box is entered at a
+//! distance up to its tmax, not only below it); the closest hit among them
+//! is the same hit unless two are at the same distance, where the single
+//! ray keeps whichever its own order met first. So a ray that meets a
+//! second hit at its closest distance is traced again alone, as is an
+//! any-hit ray that hits (its answer is the first hit in its own order);
+//! only occluded-or-not (the render's shadow rays) needs no second trace.
+
+use super::f32;
+use crate::layout::{self, BVH_WIDTH, LEAF_BIT, NO_HIT, leaf_range};
+
+/// Rays a packet traces together: one 8-lane vector of each ray quantity.
+pub(super) const PACKET: usize = 8;
+
+/// A packet's rays, one lane each (a structure of arrays), as `f32::ray_slabs`
+/// and `f32::prepare_ray` give them.
+struct Packet {
+    rays: [f32::Ray; PACKET],
+    shears: [f32::Shear; PACKET],
+    inv_dir: [[f32::Real; PACKET]; 3],
+    inv_dir_far: [[f32::Real; PACKET]; 3],
+    near_offset: [[f32::Real; PACKET]; 3],
+    far_offset: [[f32::Real; PACKET]; 3],
+    tmin: [f32::Real; PACKET],
+    /// The least of `tmin`.
+    tmin_least: f32::Real,
+    /// Shrinks to each ray's closest hit so far.
+    tmax: [f32::Real; PACKET],
+    /// The packet's interval bounds, per axis: the least and greatest
+    /// reciprocal direction (near and far), the least near offset and the
+    /// greatest far offset.
+    bounds: [[f32::Real; 6]; 3],
+    /// Which plane of an axis is near: the same for every ray.
+    flip: [usize; 3],
+}
+
+/// What a packet's trace found, ray by ray.
+struct Found {
+    hits: [f32::Hit; PACKET],
+    /// The block that holds each ray's hit (`Traversal::hit_block`).
+    blocks: [u32; PACKET],
+    /// Rays to trace again alone: a tie at the closest distance, or (any
+    /// hit) a hit.
+    again: u32,
+}
+
+/// A stack entry: a child, the rays that enter it, and where each does.
+#[derive(Clone, Copy)]
+struct Entry {
+    child: u32,
+    rays: u32,
+    t: [f32::Real; PACKET],
+}
+
+impl Packet {
+    /// A packet to `load` rays into.
+    #[inline(always)]
+    fn new() -> Packet {
+        let ray = f32::Ray {
+            origin: glam::Vec3::ZERO,
+            tmin: 0.0,
+            dir: glam::Vec3::X,
+            tmax: 0.0,
+        };
+        let (ray, shear) = f32::prepare_ray(ray);
+        Packet {
+            rays: [ray; PACKET],
+            shears: [shear; PACKET],
+            inv_dir: [[0.0; PACKET]; 3],
+            inv_dir_far: [[0.0; PACKET]; 3],
+            near_offset: [[0.0; PACKET]; 3],
+            far_offset: [[0.0; PACKET]; 3],
+            tmin: [0.0; PACKET],
+            tmin_least: 0.0,
+            tmax: [0.0; PACKET],
+            bounds: [[0.0; 6]; 3],
+            flip: [0; 3],
+        }
+    }
+
+    /// Makes `rays` (none with a NaN) the packet's; false where their
+    /// directions do not share an octant (their near planes differ), and
+    /// the packet is then not traced.
+    #[inline(always)]
+    fn load(&mut self, rays: &[f32::Ray; PACKET]) -> bool {
+        let mut flips = [0u32; 3];
+        for (r, &ray) in rays.iter().enumerate() {
+            let (ray, shear) = f32::prepare_ray(ray);
+            let slabs = f32::ray_slabs(&ray);
+            for a in 0..3 {
+                self.inv_dir[a][r] = slabs.inv_dir[a];
+                self.inv_dir_far[a][r] = slabs.inv_dir_far[a];
+                self.near_offset[a][r] = slabs.near_offset[a];
+                self.far_offset[a][r] = slabs.far_offset[a];
+                flips[a] += slabs.flip[a] as u32;
+            }
+            self.tmin[r] = ray.tmin;
+            self.tmax[r] = ray.tmax;
+            self.rays[r] = ray;
+            self.shears[r] = shear;
+        }
+        if flips.iter().any(|&f| f % PACKET as u32 != 0) {
+            return false;
+        }
+        let least = |v: &[f32::Real; PACKET]| v.iter().fold(f32::FAR, |m, &x| lesser(x, m));
+        let most = |v: &[f32::Real; PACKET]| v.iter().fold(-f32::FAR, |m, &x| greater(x, m));
+        self.tmin_least = least(&self.tmin);
+        for a in 0..3 {
+            self.flip[a] = (flips[a] != 0) as usize;
+            self.bounds[a] = [
+                least(&self.inv_dir[a]),
+                most(&self.inv_dir[a]),
+                least(&self.inv_dir_far[a]),
+                most(&self.inv_dir_far[a]),
+                least(&self.near_offset[a]),
+                most(&self.far_offset[a]),
+            ];
+        }
+        true
+    }
+}
+
+/// `a` where `a > b`, else `b`: SSE's maxps, `Scalar::greater_of`'s lane.
+#[inline(always)]
+fn greater(a: f32::Real, b: f32::Real) -> f32::Real {
+    if a > b { a } else { b }
+}
+
+/// `a` where `a < b`, else `b`: minps, `Scalar::lesser_of`'s lane.
+#[inline(always)]
+fn lesser(a: f32::Real, b: f32::Real) -> f32::Real {
+    if a < b { a } else { b }
+}
+
+impl Packet {
+    /// The children of `node` that some ray of the packet may enter (up
+    /// to `tmax`, the greatest of theirs), and a lower bound of where: a
+    /// superset of each ray's `intersect_boxes` (a plane's distance
+    /// `plane·inv_dir + offset` is monotonic in each, and rounding keeps
+    /// that order, so the bounds' distances bound every ray's).
+    #[inline(always)]
+    fn candidates(&self, node: &layout::BvhNode, tmax: f32::Real) -> (u32, [f32::Real; BVH_WIDTH]) {
+        let mut t_near = [self.tmin_least; BVH_WIDTH];
+        let mut t_far = [tmax; BVH_WIDTH];
+        for a in 0..3 {
+            let [lo, hi, far_lo, far_hi, near_offset, far_offset] = self.bounds[a];
+            let near_planes = &node.bounds[2 * a + self.flip[a]];
+            let far_planes = &node.bounds[2 * a + 1 - self.flip[a]];
+            for s in 0..BVH_WIDTH {
+                let p = near_planes[s];
+                let near = lesser(p.mul_add(lo, near_offset), p.mul_add(hi, near_offset));
+                t_near[s] = greater(near, t_near[s]);
+                let p = far_planes[s];
+                let far = greater(p.mul_add(far_lo, far_offset), p.mul_add(far_hi, far_offset));
+                t_far[s] = lesser(far, t_far[s]);
+            }
+        }
+        let mut entered = 0;
+        for s in 0..BVH_WIDTH {
+            entered |= ((t_near[s] <= t_far[s] && t_near[s] <= tmax) as u32) << s;
+        }
+        (entered & node.occupied, t_near)
+    }
+
+    /// Which of `rays` enter child `slot` of `node` (at a distance up to
+    /// their tmax), and where: each ray's `intersect_boxes` arithmetic in
+    /// its lane.
+    #[inline(always)]
+    fn enter(&self, node: &layout::BvhNode, slot: usize, rays: u32) -> (u32, [f32::Real; PACKET]) {
+        let mut t_near = self.tmin;
+        let mut t_far = self.tmax;
+        for a in 0..3 {
+            let near_plane = node.bounds[2 * a + self.flip[a]][slot];
+            let far_plane = node.bounds[2 * a + 1 - self.flip[a]][slot];
+            for r in 0..PACKET {
+                let near = near_plane.mul_add(self.inv_dir[a][r], self.near_offset[a][r]);
+                t_near[r] = greater(near, t_near[r]);
+                let far = far_plane.mul_add(self.inv_dir_far[a][r], self.far_offset[a][r]);
+                t_far[r] = lesser(far, t_far[r]);
+            }
+        }
+        let mut entered = 0;
+        for r in 0..PACKET {
+            entered |= ((t_near[r] <= t_far[r] && t_near[r] <= self.tmax[r]) as u32) << r;
+        }
+        (entered & rays, t_near)
+    }
+
+    /// The greatest tmax of `rays`.
+    #[inline(always)]
+    fn farthest(&self, rays: u32) -> f32::Real {
+        let mut most = -f32::FAR;
+        for r in 0..PACKET {
+            if rays >> r & 1 != 0 {
+                most = most.max(self.tmax[r]);
+            }
+        }
+        most
+    }
+}
+
+/// Traces a packet: closest hits, or with `any_hit` whether each ray hits
+/// (`Found::again` then names the rays that do). Triangles alone, under
+/// the watertight test (`Kernel::features` 0).
+#[inline(always)]
+fn trace_packet(kernel: &f32::Kernel, p: &mut Packet, any_hit: bool) -> Found {
+    let bvh = &kernel.scene.bvh;
+    let num_triangles = kernel.scene.triangles.len() as u32;
+    let mut found = Found {
+        hits: [f32::miss(); PACKET],
+        blocks: [NO_HIT; PACKET],
+        again: 0,
+    };
+    let all = (1u32 << PACKET) - 1;
+    // Rays still traced: any-hit rays leave at their first hit.
+    let mut live = all;
+    let mut stack = [std::mem::MaybeUninit::<Entry>::uninit(); crate::bvh::STACK_SIZE];
+    let mut sp = 0;
+    let mut child = 0;
+    let mut rays = all;
+    let mut tmax = p.farthest(all);
+    loop {
+        if child & LEAF_BIT != 0 {
+            let (first, count) = leaf_range(child);
+            let blocks = &bvh.blocks[first as usize..(first + count) as usize];
+            let mut each = rays;
+            let mut shortened = false;
+            while each != 0 {
+                let r = each.trailing_zeros() as usize;
+                each &= each - 1;
+                // Lanes hit up to tmax itself: a lane at tmax is a tie.
+                let mut ray = p.rays[r];
+                ray.tmax = p.tmax[r].next_up();
+                for (b, block) in (first..).zip(blocks) {
+                    let lanes = f32::intersect_triangle_block(&ray, &p.shears[r], block);
+                    let mut recorded = false;
+                    for (lane, &t) in lanes.t.to_array().iter().enumerate() {
+                        let prim = block.prims[lane];
+                        if !(t <= p.tmax[r] && prim < num_triangles) {
+                            continue;
+                        }
+                        if t < p.tmax[r] {
+                            let (u, v) = lanes.uv(lane);
+                            p.tmax[r] = t;
+                            found.hits[r] = f32::Hit { t, prim, u, v };
+                            recorded = true;
+                        } else if found.hits[r].prim != NO_HIT {
+                            found.again |= 1 << r;
+                        }
+                    }
+                    if recorded {
+                        found.blocks[r] = b;
+                        shortened = true;
+                        if any_hit {
+                            live &= !(1 << r);
+                            found.again |= 1 << r;
+                            break;
+                        }
+                    }
+                    ray.tmax = p.tmax[r].next_up();
+                }
+            }
+            if shortened {
+                tmax = p.farthest(live);
+            }
+        } else {
+            let node = &bvh.nodes[child as usize];
+            let (mut candidates, bound) = p.candidates(node, tmax);
+            // Entered children, nearest first by the bound of their entry
+            // distances.
+            let mut order = [(0u32, 0.0 as f32::Real, [0.0 as f32::Real; PACKET]); BVH_WIDTH];
+            let mut n = 0;
+            while candidates != 0 {
+                let slot = candidates.trailing_zeros() as usize;
+                candidates &= candidates - 1;
+                let (entered, t) = p.enter(node, slot, rays);
+                if entered == 0 {
+                    continue;
+                }
+                let least = bound[slot];
+                let mut j = n;
+                while j > 0 && order[j - 1].1 > least {
+                    order[j] = order[j - 1];
+                    j -= 1;
+                }
+                order[j] = (slot as u32 | entered << 8, least, t);
+                n += 1;
+            }
+            if n > 0 {
+                // Farthest deepest; the nearest visited at once.
+                for &(key, _, t) in order[1..n].iter().rev() {
+                    stack[sp].write(Entry {
+                        child: node.children[(key & 0xff) as usize],
+                        rays: key >> 8,
+                        t,
+                    });
+                    sp += 1;
+                }
+                let key = order[0].0;
+                child = node.children[(key & 0xff) as usize];
+                rays = key >> 8;
+                continue;
+            }
+        }
+        // The nearest pushed entry that some ray still reaches.
+        let mut next = None;
+        while sp > 0 {
+            sp -= 1;
+            // SAFETY: entries below `sp` are written.
+            let entry = unsafe { stack[sp].assume_init() };
+            let mut reach = 0;
+            for r in 0..PACKET {
+                reach |= ((entry.t[r] <= p.tmax[r]) as u32) << r;
+            }
+            let reach = reach & entry.rays & live;
+            if reach != 0 {
+                next = Some((entry.child, reach));
+                break;
+            }
+        }
+        match next {
+            Some((c, r)) => (child, rays) = (c, r),
+            None => return found,
+        }
+    }
+}
+
+/// One ray alone: the single-ray kernel (`Kernel::visit`, the scene's
+/// features compiled out), its hit along the ray as given and its block.
+#[inline(always)]
+fn trace_alone(kernel: &f32::Kernel, ray: &layout::Ray, any_hit: bool) -> (f32::Hit, u32) {
+    let (ray, shear) = f32::prepare_ray(f32::Ray::from_query(ray));
+    let mut traversal = f32::Traversal::new(ray, shear, any_hit);
+    let mut stack = f32::new_stack();
+    // SAFETY: one stack for the whole traversal; no VECTOR_SORT.
+    while unsafe { kernel.visit::<false, false, 0>(&mut traversal, &mut stack) } {}
+    (traversal.answer(), traversal.hit_block)
+}
+
+/// Whether rays leave from one point (or nearly) in nearly one direction
+/// (within about 8°, as query.rs's `coherent` judges a pair): a packet of
+/// them shares most nodes.
+#[inline(always)]
+fn together(rays: &[layout::Ray], nearby: f32::Real) -> bool {
+    let first = &rays[0];
+    let d0 = glam::Vec3::from(first.dir);
+    let o0 = glam::Vec3::from(first.origin);
+    rays.iter().all(|ray| {
+        let (d, o) = (glam::Vec3::from(ray.dir), glam::Vec3::from(ray.origin));
+        let cos = d0.dot(d);
+        !(d.is_nan() || o.is_nan() || ray.tmin.is_nan())
+            && cos > 0.0
+            && cos * cos > 0.9801 * d0.length_squared() * d.length_squared()
+            && (o - o0).length_squared() <= nearby * nearby
+    })
+}
+
+/// Traces `rays` (one chunk of a query), handing `out` each ray's index,
+/// hit (along the ray as given) and the block that holds it, `PACKET` at a time where they travel together,
+/// else (and the rest) ray by ray; the hits the single-ray kernel's, bit
+/// for bit. The scene must be triangles alone under the watertight test
+/// (`Kernel::features` 0), traversing its BVH.
+#[inline(always)]
+pub(super) fn trace_packets(
+    kernel: &f32::Kernel,
+    rays: &[layout::Ray],
+    any_hit: bool,
+    nearby: f32::Real,
+    mut out: impl FnMut(usize, f32::Hit, u32),
+) {
+    let mut p = Packet::new();
+    let mut start = 0;
+    while start < rays.len() {
+        let group = &rays[start..(start + PACKET).min(rays.len())];
+        let packed = group.len() == PACKET && together(group, nearby) && {
+            let local: [f32::Ray; PACKET] =
+                std::array::from_fn(|r| f32::Ray::from_query(&group[r]));
+            p.load(&local)
+        };
+        if !packed {
+            for (i, ray) in group.iter().enumerate() {
+                let (hit, block) = trace_alone(kernel, ray, any_hit);
+                out(start + i, hit, block);
+            }
+            start += group.len();
+            continue;
+        }
+        let found = trace_packet(kernel, &mut p, any_hit);
+        for (r, ray) in group.iter().enumerate() {
+            let (hit, block) = if found.again >> r & 1 != 0 {
+                trace_alone(kernel, ray, any_hit)
+            } else {
+                (f32::unscale(found.hits[r], &p.shears[r]), found.blocks[r])
+            };
+            out(start + r, hit, block);
+        }
+        start += PACKET;
+    }
+}
