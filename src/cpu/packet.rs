@@ -92,8 +92,8 @@ impl Packet {
         }
     }
 
-    /// Makes `rays` (none with a NaN) the packet's; false where their
-    /// directions do not share an octant (their near planes differ), and
+    /// Makes `rays` the packet's; false where their directions do not
+    /// share an octant (their near planes differ) or one has a NaN, and
     /// the packet is then not traced.
     #[inline(always)]
     fn load(&mut self, rays: &[f32::Ray; PACKET]) -> bool {
@@ -113,11 +113,31 @@ impl Packet {
             self.rays[r] = ray;
             self.shears[r] = shear;
         }
-        if flips.iter().any(|&f| f % PACKET as u32 != 0) {
+        // A NaN anywhere makes its offsets or its tmin NaN.
+        let mut nan = false;
+        for r in 0..PACKET {
+            for a in 0..3 {
+                nan |= self.near_offset[a][r].is_nan() | self.far_offset[a][r].is_nan();
+            }
+            nan |= self.tmin[r].is_nan();
+        }
+        if nan || flips.iter().any(|&f| f % PACKET as u32 != 0) {
             return false;
         }
-        let least = |v: &[f32::Real; PACKET]| v.iter().fold(f32::FAR, |m, &x| lesser(x, m));
-        let most = |v: &[f32::Real; PACKET]| v.iter().fold(-f32::FAR, |m, &x| greater(x, m));
+        // Halving trees, lane by lane: a chain of selects would not vectorise.
+        let fold = |v: &[f32::Real; PACKET], pick: fn(f32::Real, f32::Real) -> f32::Real| {
+            let mut v = *v;
+            let mut width = PACKET / 2;
+            while width > 0 {
+                for r in 0..width {
+                    v[r] = pick(v[r], v[r + width]);
+                }
+                width /= 2;
+            }
+            v[0]
+        };
+        let least = |v: &[f32::Real; PACKET]| fold(v, lesser);
+        let most = |v: &[f32::Real; PACKET]| fold(v, greater);
         self.tmin_least = least(&self.tmin);
         for a in 0..3 {
             self.flip[a] = (flips[a] != 0) as usize;
@@ -200,6 +220,99 @@ impl Packet {
         (entered & rays, t_near)
     }
 
+    /// `candidates` in one 8-lane register per row (AVX2 with FMA): LLVM
+    /// split the portable loop into scalar and 4-lane pieces.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn candidates_ymm(
+        &self,
+        node: &layout::BvhNode,
+        tmax: f32::Real,
+    ) -> (u32, [f32::Real; BVH_WIDTH]) {
+        use std::arch::x86_64::*;
+        // SAFETY: the caller vouches for AVX2 and FMA; rows are read
+        // unaligned.
+        unsafe {
+            let mut t_near = _mm256_set1_ps(self.tmin_least);
+            let mut t_far = _mm256_set1_ps(tmax);
+            for a in 0..3 {
+                let [lo, hi, far_lo, far_hi, near_offset, far_offset] =
+                    self.bounds[a].map(|x| _mm256_set1_ps(x));
+                let p = _mm256_loadu_ps(node.bounds[2 * a + self.flip[a]].as_ptr());
+                let near = _mm256_min_ps(
+                    _mm256_fmadd_ps(p, lo, near_offset),
+                    _mm256_fmadd_ps(p, hi, near_offset),
+                );
+                t_near = _mm256_max_ps(near, t_near);
+                let p = _mm256_loadu_ps(node.bounds[2 * a + 1 - self.flip[a]].as_ptr());
+                let far = _mm256_max_ps(
+                    _mm256_fmadd_ps(p, far_lo, far_offset),
+                    _mm256_fmadd_ps(p, far_hi, far_offset),
+                );
+                t_far = _mm256_min_ps(far, t_far);
+            }
+            let inside = _mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_LE_OQ>(t_near, t_far),
+                _mm256_cmp_ps::<_CMP_LE_OQ>(t_near, _mm256_set1_ps(tmax)),
+            );
+            let mut t = [0.0; BVH_WIDTH];
+            _mm256_storeu_ps(t.as_mut_ptr(), t_near);
+            (_mm256_movemask_ps(inside) as u32 & node.occupied, t)
+        }
+    }
+
+    /// `enter` with the packet's eight rays in one register (AVX2 with
+    /// FMA): each lane the operations of `Scalar::intersect_boxes_ymm` for
+    /// its ray, so the same bits.
+    ///
+    /// # Safety
+    /// The CPU must have AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn enter_ymm(
+        &self,
+        node: &layout::BvhNode,
+        slot: usize,
+        rays: u32,
+    ) -> (u32, [f32::Real; PACKET]) {
+        use std::arch::x86_64::*;
+        const { assert!(PACKET == 8) };
+        // SAFETY: the caller vouches for AVX2 and FMA; the lanes are read
+        // unaligned.
+        unsafe {
+            let load = |v: &[f32::Real; PACKET]| _mm256_loadu_ps(v.as_ptr());
+            let tmax = load(&self.tmax);
+            let mut t_near = load(&self.tmin);
+            let mut t_far = tmax;
+            for a in 0..3 {
+                let near_plane = _mm256_set1_ps(node.bounds[2 * a + self.flip[a]][slot]);
+                let far_plane = _mm256_set1_ps(node.bounds[2 * a + 1 - self.flip[a]][slot]);
+                let near = _mm256_fmadd_ps(
+                    near_plane,
+                    load(&self.inv_dir[a]),
+                    load(&self.near_offset[a]),
+                );
+                let far = _mm256_fmadd_ps(
+                    far_plane,
+                    load(&self.inv_dir_far[a]),
+                    load(&self.far_offset[a]),
+                );
+                t_near = _mm256_max_ps(near, t_near);
+                t_far = _mm256_min_ps(far, t_far);
+            }
+            let inside = _mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_LE_OQ>(t_near, t_far),
+                _mm256_cmp_ps::<_CMP_LE_OQ>(t_near, tmax),
+            );
+            let mut t = [0.0; PACKET];
+            _mm256_storeu_ps(t.as_mut_ptr(), t_near);
+            (_mm256_movemask_ps(inside) as u32 & rays, t)
+        }
+    }
+
     /// The greatest tmax of `rays`.
     #[inline(always)]
     fn farthest(&self, rays: u32) -> f32::Real {
@@ -217,7 +330,7 @@ impl Packet {
 /// (`Found::again` then names the rays that do). Triangles alone, under
 /// the watertight test (`Kernel::features` 0).
 #[inline(always)]
-fn trace_packet(kernel: &f32::Kernel, p: &mut Packet, any_hit: bool) -> Found {
+fn trace_packet(kernel: &f32::Kernel, p: &mut Packet, any_hit: bool, ymm: bool) -> Found {
     let bvh = &kernel.scene.bvh;
     let num_triangles = kernel.scene.triangles.len() as u32;
     let mut found = Found {
@@ -279,15 +392,37 @@ fn trace_packet(kernel: &f32::Kernel, p: &mut Packet, any_hit: bool) -> Found {
             }
         } else {
             let node = &bvh.nodes[child as usize];
-            let (mut candidates, bound) = p.candidates(node, tmax);
+            let (mut candidates, bound) = if ymm {
+                // SAFETY: `ymm` says the CPU has AVX2 and FMA.
+                #[cfg(target_arch = "x86_64")]
+                unsafe {
+                    p.candidates_ymm(node, tmax)
+                }
+                #[cfg(not(target_arch = "x86_64"))]
+                unreachable!("no 8-lane registers off x86")
+            } else {
+                p.candidates(node, tmax)
+            };
             // Entered children, nearest first by the bound of their entry
             // distances.
-            let mut order = [(0u32, 0.0 as f32::Real, [0.0 as f32::Real; PACKET]); BVH_WIDTH];
+            let mut order = [(0u32, 0.0 as f32::Real); BVH_WIDTH];
+            // Where each ray enters each entered slot (written before read).
+            let mut entries = [std::mem::MaybeUninit::<[f32::Real; PACKET]>::uninit(); BVH_WIDTH];
             let mut n = 0;
             while candidates != 0 {
                 let slot = candidates.trailing_zeros() as usize;
                 candidates &= candidates - 1;
-                let (entered, t) = p.enter(node, slot, rays);
+                let (entered, t) = if ymm {
+                    // SAFETY: as above.
+                    #[cfg(target_arch = "x86_64")]
+                    unsafe {
+                        p.enter_ymm(node, slot, rays)
+                    }
+                    #[cfg(not(target_arch = "x86_64"))]
+                    unreachable!("no 8-lane registers off x86")
+                } else {
+                    p.enter(node, slot, rays)
+                };
                 if entered == 0 {
                     continue;
                 }
@@ -297,16 +432,19 @@ fn trace_packet(kernel: &f32::Kernel, p: &mut Packet, any_hit: bool) -> Found {
                     order[j] = order[j - 1];
                     j -= 1;
                 }
-                order[j] = (slot as u32 | entered << 8, least, t);
+                order[j] = (slot as u32 | entered << 8, least);
+                entries[slot].write(t);
                 n += 1;
             }
             if n > 0 {
                 // Farthest deepest; the nearest visited at once.
-                for &(key, _, t) in order[1..n].iter().rev() {
+                for &(key, _) in order[1..n].iter().rev() {
+                    let slot = (key & 0xff) as usize;
                     stack[sp].write(Entry {
-                        child: node.children[(key & 0xff) as usize],
+                        child: node.children[slot],
                         rays: key >> 8,
-                        t,
+                        // SAFETY: written for every entered slot.
+                        t: unsafe { entries[slot].assume_init() },
                     });
                     sp += 1;
                 }
@@ -351,42 +489,25 @@ fn trace_alone(kernel: &f32::Kernel, ray: &layout::Ray, any_hit: bool) -> (f32::
     (traversal.answer(), traversal.hit_block)
 }
 
-/// Whether rays leave from one point (or nearly) in nearly one direction
-/// (within about 8°, as query.rs's `coherent` judges a pair): a packet of
-/// them shares most nodes.
-#[inline(always)]
-fn together(rays: &[layout::Ray], nearby: f32::Real) -> bool {
-    let first = &rays[0];
-    let d0 = glam::Vec3::from(first.dir);
-    let o0 = glam::Vec3::from(first.origin);
-    rays.iter().all(|ray| {
-        let (d, o) = (glam::Vec3::from(ray.dir), glam::Vec3::from(ray.origin));
-        let cos = d0.dot(d);
-        !(d.is_nan() || o.is_nan() || ray.tmin.is_nan())
-            && cos > 0.0
-            && cos * cos > 0.9801 * d0.length_squared() * d.length_squared()
-            && (o - o0).length_squared() <= nearby * nearby
-    })
-}
-
 /// Traces `rays` (one chunk of a query), handing `out` each ray's index,
 /// hit (along the ray as given) and the block that holds it, `PACKET` at a time where they travel together,
 /// else (and the rest) ray by ray; the hits the single-ray kernel's, bit
 /// for bit. The scene must be triangles alone under the watertight test
-/// (`Kernel::features` 0), traversing its BVH.
+/// (`Kernel::features` 0), traversing its BVH. With `ymm` (the CPU has
+/// AVX2 and FMA: `CpuKernel::ymm_boxes`), node visits in 8-lane registers.
 #[inline(always)]
 pub(super) fn trace_packets(
     kernel: &f32::Kernel,
     rays: &[layout::Ray],
     any_hit: bool,
-    nearby: f32::Real,
+    ymm: bool,
     mut out: impl FnMut(usize, f32::Hit, u32),
 ) {
     let mut p = Packet::new();
     let mut start = 0;
     while start < rays.len() {
         let group = &rays[start..(start + PACKET).min(rays.len())];
-        let packed = group.len() == PACKET && together(group, nearby) && {
+        let packed = group.len() == PACKET && {
             let local: [f32::Ray; PACKET] =
                 std::array::from_fn(|r| f32::Ray::from_query(&group[r]));
             p.load(&local)
@@ -399,7 +520,7 @@ pub(super) fn trace_packets(
             start += group.len();
             continue;
         }
-        let found = trace_packet(kernel, &mut p, any_hit);
+        let found = trace_packet(kernel, &mut p, any_hit, ymm);
         for (r, ray) in group.iter().enumerate() {
             let (hit, block) = if found.again >> r & 1 != 0 {
                 trace_alone(kernel, ray, any_hit)

@@ -365,7 +365,7 @@ fn trace_each(
                                 kernel_ref,
                                 chunk_rays,
                                 any_hit,
-                                nearby,
+                                cpu_kernel.ymm_boxes(),
                                 |i, hit, block| {
                                     let hit = query_hit(hit);
                                     if let Some(normal) = normal_out.get_mut(i) {
