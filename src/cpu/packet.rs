@@ -97,21 +97,88 @@ impl Packet {
     /// the packet is then not traced.
     #[inline(always)]
     fn load(&mut self, rays: &[f32::Ray; PACKET]) -> bool {
+        // `f32::prepare_ray` and `f32::ray_slabs`, lane by lane: the same
+        // operations in the same order in each lane (so the same bits),
+        // in vector registers rather than a ray at a time.
+        let lanes = |f: &dyn Fn(&f32::Ray) -> f32::Real| -> [f32::Real; PACKET] {
+            std::array::from_fn(|r| f(&rays[r]))
+        };
+        let dir = [
+            lanes(&|r| r.dir.x),
+            lanes(&|r| r.dir.y),
+            lanes(&|r| r.dir.z),
+        ];
+        let origin = [
+            lanes(&|r| r.origin.x),
+            lanes(&|r| r.origin.y),
+            lanes(&|r| r.origin.z),
+        ];
+        let mut up = [1.0; PACKET];
+        let mut down = [1.0; PACKET];
+        let mut d = [[0.0; PACKET]; 3];
+        let mut kz = [0usize; PACKET];
         let mut flips = [0u32; 3];
-        for (r, &ray) in rays.iter().enumerate() {
-            let (ray, shear) = f32::prepare_ray(ray);
-            let slabs = f32::ray_slabs(&ray);
-            for a in 0..3 {
-                self.inv_dir[a][r] = slabs.inv_dir[a];
-                self.inv_dir_far[a][r] = slabs.inv_dir_far[a];
-                self.near_offset[a][r] = slabs.near_offset[a];
-                self.far_offset[a][r] = slabs.far_offset[a];
-                flips[a] += slabs.flip[a] as u32;
+        for r in 0..PACKET {
+            // `direction_scale` of the largest component.
+            let max = |a: f32::Real, b: f32::Real| if a > b { a } else { b };
+            let m = max(max(dir[0][r].abs(), dir[1][r].abs()), dir[2][r].abs());
+            let exponent = (m.to_bits() >> 23) & 0xff;
+            if exponent != 0 && exponent < 254 {
+                up[r] = f32::Real::from_bits((254 - exponent) << 23);
+                down[r] = f32::Real::from_bits(exponent << 23);
             }
-            self.tmin[r] = ray.tmin;
-            self.tmax[r] = ray.tmax;
-            self.rays[r] = ray;
-            self.shears[r] = shear;
+            for a in 0..3 {
+                d[a][r] = dir[a][r] * up[r];
+            }
+            self.tmin[r] = rays[r].tmin * down[r];
+            let tmax = rays[r].tmax * down[r];
+            self.tmax[r] = if tmax < f32::FAR { tmax } else { f32::FAR };
+            // `ray_shear`'s axis.
+            let (x, y, z) = (d[0][r].abs(), d[1][r].abs(), d[2][r].abs());
+            kz[r] = if x >= y && x >= z {
+                0
+            } else if y >= z {
+                1
+            } else {
+                2
+            };
+            for a in 0..3 {
+                let c = d[a][r];
+                let clamped = if c.abs() < f32::MIN_SLAB_DIR {
+                    f32::MIN_SLAB_DIR.copysign(c)
+                } else {
+                    c
+                };
+                let inv = 1.0 / clamped;
+                let inv_far = inv * f32::BOX_SLACK;
+                let near = -origin[a][r] * inv;
+                let far = -origin[a][r] * inv_far;
+                let margin = 8.0 * f32::MACHINE_EPSILON;
+                self.inv_dir[a][r] = inv;
+                self.inv_dir_far[a][r] = inv_far;
+                self.near_offset[a][r] = near - near.abs() * margin;
+                self.far_offset[a][r] = far + far.abs() * margin;
+                flips[a] += (clamped < 0.0) as u32;
+            }
+        }
+        for r in 0..PACKET {
+            let kz = kz[r];
+            let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
+            let dz = d[kz][r];
+            if dz < 0.0 {
+                std::mem::swap(&mut kx, &mut ky);
+            }
+            self.shears[r] = f32::Shear {
+                axes: [kx, ky, kz],
+                s: glam::Vec3::new(d[kx][r] / dz, d[ky][r] / dz, 1.0 / dz),
+                t_scale: up[r],
+            };
+            self.rays[r] = f32::Ray {
+                origin: rays[r].origin,
+                tmin: self.tmin[r],
+                dir: glam::Vec3::new(d[0][r], d[1][r], d[2][r]),
+                tmax: self.tmax[r],
+            };
         }
         // A NaN anywhere makes its offsets or its tmin NaN.
         let mut nan = false;

@@ -239,7 +239,7 @@ macro_rules! traverse {
         /// offsets do (no ∞ − ∞), and a ray parallel to an axis has huge slab
         /// distances of the right signs, or one near 0 for a plane that holds its
         /// origin.
-        const MIN_SLAB_DIR: Real = 1e-18;
+        pub(crate) const MIN_SLAB_DIR: Real = 1e-18;
 
         /// The ray's `Slabs`, as in the shader.
         #[inline(always)]
