@@ -16,9 +16,9 @@
 //! distance up to its tmax, not only below it); the closest hit among them
 //! is the same hit unless two are at the same distance, where the single
 //! ray keeps whichever its own order met first. So a ray that meets a
-//! second hit at its closest distance is traced again alone, as is an
-//! any-hit ray that hits (its answer is the first hit in its own order);
-//! only occluded-or-not (the render's shadow rays) needs no second trace.
+//! second hit at its closest distance is traced again alone. (Any-hit
+//! queries are not traced in packets: their answer is the first hit in
+//! each ray's own order, which a packet's order need not meet first.)
 
 use super::f32;
 use crate::layout::{self, BVH_WIDTH, LEAF_BIT, NO_HIT, leaf_range};
@@ -53,8 +53,7 @@ struct Found {
     hits: [f32::Hit; PACKET],
     /// The block that holds each ray's hit (`Traversal::hit_block`).
     blocks: [u32; PACKET],
-    /// Rays to trace again alone: a tie at the closest distance, or (any
-    /// hit) a hit.
+    /// Rays to trace again alone: a second hit at the closest distance.
     again: u32,
 }
 
@@ -393,11 +392,10 @@ impl Packet {
     }
 }
 
-/// Traces a packet: closest hits, or with `any_hit` whether each ray hits
-/// (`Found::again` then names the rays that do). Triangles alone, under
-/// the watertight test (`Kernel::features` 0).
+/// Traces a packet: each ray's closest hit. Triangles alone, under the
+/// watertight test (`Kernel::features` 0).
 #[inline(always)]
-fn trace_packet(kernel: &f32::Kernel, p: &mut Packet, any_hit: bool, ymm: bool) -> Found {
+fn trace_packet(kernel: &f32::Kernel, p: &mut Packet, ymm: bool) -> Found {
     let bvh = &kernel.scene.bvh;
     let num_triangles = kernel.scene.triangles.len() as u32;
     let mut found = Found {
@@ -406,8 +404,6 @@ fn trace_packet(kernel: &f32::Kernel, p: &mut Packet, any_hit: bool, ymm: bool) 
         again: 0,
     };
     let all = (1u32 << PACKET) - 1;
-    // Rays still traced: any-hit rays leave at their first hit.
-    let mut live = all;
     let mut stack = [std::mem::MaybeUninit::<Entry>::uninit(); crate::bvh::STACK_SIZE];
     let mut sp = 0;
     let mut child = 0;
@@ -445,17 +441,12 @@ fn trace_packet(kernel: &f32::Kernel, p: &mut Packet, any_hit: bool, ymm: bool) 
                     if recorded {
                         found.blocks[r] = b;
                         shortened = true;
-                        if any_hit {
-                            live &= !(1 << r);
-                            found.again |= 1 << r;
-                            break;
-                        }
+                        ray.tmax = p.tmax[r].next_up();
                     }
-                    ray.tmax = p.tmax[r].next_up();
                 }
             }
             if shortened {
-                tmax = p.farthest(live);
+                tmax = p.farthest(all);
             }
         } else {
             let node = &bvh.nodes[child as usize];
@@ -531,7 +522,7 @@ fn trace_packet(kernel: &f32::Kernel, p: &mut Packet, any_hit: bool, ymm: bool) 
             for r in 0..PACKET {
                 reach |= ((entry.t[r] <= p.tmax[r]) as u32) << r;
             }
-            let reach = reach & entry.rays & live;
+            let reach = reach & entry.rays;
             if reach != 0 {
                 next = Some((entry.child, reach));
                 break;
@@ -545,11 +536,12 @@ fn trace_packet(kernel: &f32::Kernel, p: &mut Packet, any_hit: bool, ymm: bool) 
 }
 
 /// One ray alone: the single-ray kernel (`Kernel::visit`, the scene's
-/// features compiled out), its hit along the ray as given and its block.
+/// features compiled out), its closest hit along the ray as given and its
+/// block.
 #[inline(always)]
-fn trace_alone(kernel: &f32::Kernel, ray: &layout::Ray, any_hit: bool) -> (f32::Hit, u32) {
+fn trace_alone(kernel: &f32::Kernel, ray: &layout::Ray) -> (f32::Hit, u32) {
     let (ray, shear) = f32::prepare_ray(f32::Ray::from_query(ray));
-    let mut traversal = f32::Traversal::new(ray, shear, any_hit);
+    let mut traversal = f32::Traversal::new(ray, shear, false);
     let mut stack = f32::new_stack();
     // SAFETY: one stack for the whole traversal; no VECTOR_SORT.
     while unsafe { kernel.visit::<false, false, 0>(&mut traversal, &mut stack) } {}
@@ -557,16 +549,16 @@ fn trace_alone(kernel: &f32::Kernel, ray: &layout::Ray, any_hit: bool) -> (f32::
 }
 
 /// Traces `rays` (one chunk of a query), handing `out` each ray's index,
-/// hit (along the ray as given) and the block that holds it, `PACKET` at a time where they travel together,
-/// else (and the rest) ray by ray; the hits the single-ray kernel's, bit
-/// for bit. The scene must be triangles alone under the watertight test
+/// closest hit (along the ray as given) and the block that holds it,
+/// `PACKET` at a time (a packet of mixed octants, or with a NaN, and the
+/// last few rays ray by ray); the hits the single-ray kernel's, bit for
+/// bit. The scene must be triangles alone under the watertight test
 /// (`Kernel::features` 0), traversing its BVH. With `ymm` (the CPU has
 /// AVX2 and FMA: `CpuKernel::ymm_boxes`), node visits in 8-lane registers.
 #[inline(always)]
 pub(super) fn trace_packets(
     kernel: &f32::Kernel,
     rays: &[layout::Ray],
-    any_hit: bool,
     ymm: bool,
     mut out: impl FnMut(usize, f32::Hit, u32),
 ) {
@@ -581,16 +573,16 @@ pub(super) fn trace_packets(
         };
         if !packed {
             for (i, ray) in group.iter().enumerate() {
-                let (hit, block) = trace_alone(kernel, ray, any_hit);
+                let (hit, block) = trace_alone(kernel, ray);
                 out(start + i, hit, block);
             }
             start += group.len();
             continue;
         }
-        let found = trace_packet(kernel, &mut p, any_hit, ymm);
+        let found = trace_packet(kernel, &mut p, ymm);
         for (r, ray) in group.iter().enumerate() {
             let (hit, block) = if found.again >> r & 1 != 0 {
-                trace_alone(kernel, ray, any_hit)
+                trace_alone(kernel, ray)
             } else {
                 (f32::unscale(found.hits[r], &p.shears[r]), found.blocks[r])
             };

@@ -364,7 +364,6 @@ fn trace_each(
                             trace_packets(
                                 kernel_ref,
                                 chunk_rays,
-                                any_hit,
                                 cpu_kernel.ymm_boxes(),
                                 |i, hit, block| {
                                     let hit = query_hit(hit);
