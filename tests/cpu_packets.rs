@@ -5,7 +5,8 @@
 //! rays of their hits, rays through shared vertices and duplicated
 //! triangles (hits at the same distance, where the single ray keeps the
 //! first it meets), rays that miss everything, packets whose rays diverge
-//! or straddle an axis, and random packets (a proptest). Scenes with
+//! or straddle an axis, and random packets (a proptest); and the CPU
+//! render's images, whose camera rays go in packets. Scenes with
 //! spheres, alpha masks or another triangle test, incoherent rays and
 //! any-hit queries do not take the packets (`cpu::traces_in_packets`).
 
@@ -372,6 +373,51 @@ fn scenes_and_queries_packets_cannot_trace_go_ray_by_ray() {
         false,
         Intersect::Watertight
     ));
+}
+
+/// The CPU render traces its camera rays in packets where the scene is
+/// triangles alone: its image and variances are those of rendering each
+/// pixel alone (`cpu::render_pixel_list`, `Kernel::render_pixel` pixel by
+/// pixel), bit for bit, on every CPU kernel, several samples a pixel and a
+/// width no multiple of the packet's (shadows on, point lights: the
+/// bundled Cornell box; the dragon as a model file, its default light).
+#[test]
+fn renders_with_packets_equal_pixels_rendered_alone() {
+    use lambert::cpu::{Precision, render_pixel_list, render_with};
+    use lambert::progress::Progress;
+    let cornell = Scene::load(&common::asset("scenes/cornell.toml")).expect("bundled scene");
+    let dragon =
+        Scene::load(&common::asset("scenes/meshes/dragon_res4.obj")).expect("bundled mesh");
+    for (name, scene) in [("cornell", &cornell), ("dragon_res4", &dragon)] {
+        let mut view = scene.view().clone();
+        view.camera.width = 67;
+        view.camera.height = 29;
+        view.spp = 3;
+        let pixels: Vec<[u32; 2]> = (0..view.camera.height)
+            .flat_map(|y| (0..view.camera.width).map(move |x| [x, y]))
+            .collect();
+        let alone = render_pixel_list(scene, &view, &pixels);
+        let lit = alone.iter().filter(|p| p[0] > 0.05).count();
+        assert!(lit > pixels.len() / 20, "{name}: {lit} lit pixels");
+        for cpu_kernel in kernels() {
+            let rendered = render_with(
+                scene,
+                &view,
+                Precision::F32,
+                &Progress::hidden(),
+                cpu_kernel,
+            );
+            for (i, (rgb, expected)) in rendered.image.rgb.iter().zip(&alone).enumerate() {
+                let got = [rgb[0], rgb[1], rgb[2], rendered.variance[i]].map(f32::to_bits);
+                assert_eq!(
+                    got,
+                    expected.map(f32::to_bits),
+                    "{name}, pixel {i}, {} kernel",
+                    cpu_kernel.name()
+                );
+            }
+        }
+    }
 }
 
 proptest! {

@@ -591,3 +591,62 @@ pub(super) fn trace_packets(
         start += PACKET;
     }
 }
+
+/// Row `y` of the render's pixels (`width` of them, `spp` samples each),
+/// `PACKET` pixels at a time: each sample's camera rays of the packet's
+/// pixels traced together (`Kernel::trace_closest` for a packet it cannot
+/// trace, and for a ray to trace again), then each pixel's radiance added
+/// in sample order, as `Kernel::add_samples` adds them; `out` takes each
+/// pixel's x and `Kernel::render_pixel`'s answer, bit for bit. The scene
+/// must be triangles alone under the watertight test (`Kernel::features`
+/// 0), traversing its BVH (not the GPU's compressed nodes).
+#[inline(always)]
+pub(super) fn render_row(
+    kernel: &f32::Kernel,
+    y: u32,
+    width: usize,
+    spp: u32,
+    ymm: bool,
+    mut out: impl FnMut(usize, (f32::Vec3, u32, f32::Real)),
+) {
+    let mut p = Packet::new();
+    for start in (0..width).step_by(PACKET) {
+        let n = PACKET.min(width - start);
+        // A short last packet repeats its last pixel; only n are kept.
+        let x = |i: usize| (start + i.min(n - 1)) as u32;
+        let mut sums = [(f32::Vec3::ZERO, 0.0); PACKET];
+        let mut first = [NO_HIT; PACKET];
+        for sample in 0..spp {
+            let rays: [f32::Ray; PACKET] = std::array::from_fn(|i| {
+                let (px, py) = kernel.sample_position(x(i), y, sample);
+                kernel.camera_ray(px, py)
+            });
+            let mut hits = [f32::miss(); PACKET];
+            if p.load(&rays) {
+                let found = trace_packet(kernel, &mut p, ymm);
+                for (r, hit) in hits.iter_mut().enumerate() {
+                    *hit = if found.again >> r & 1 != 0 {
+                        kernel.trace_closest(rays[r])
+                    } else {
+                        f32::unscale(found.hits[r], &p.shears[r])
+                    };
+                }
+            } else {
+                for (hit, &ray) in hits.iter_mut().zip(&rays) {
+                    *hit = kernel.trace_closest(ray);
+                }
+            }
+            for i in 0..n {
+                if sample == 0 {
+                    first[i] = hits[i].prim;
+                }
+                let radiance = kernel.radiance(&rays[i], &hits[i], x(i), y, sample);
+                sums[i] = kernel.add_sample(sums[i], radiance);
+            }
+        }
+        for i in 0..n {
+            let (mean, variance) = kernel.pixel_mean(sums[i]);
+            out(start + i, (mean, first[i], variance));
+        }
+    }
+}
