@@ -1,5 +1,6 @@
 //! Coherent rays in packets: `PACKET` rays of a query (neighbours in the
-//! query's order: a row of camera rays) traverse the BVH together, with
+//! query's order: a row of camera rays; `trace_packets`) or of a render's
+//! row (`render_row`) traverse the BVH together, with
 //! the single-ray kernel (`f32::Kernel::visit`) as the portable original
 //! they must equal bit for bit (tests/cpu_packets.rs).
 //!
@@ -205,8 +206,8 @@ impl Packet {
         let least = |v: &[f32::Real; PACKET]| fold(v, lesser);
         let most = |v: &[f32::Real; PACKET]| fold(v, greater);
         self.tmin_least = least(&self.tmin);
+        self.flip = flips.map(|f| (f != 0) as usize);
         for a in 0..3 {
-            self.flip[a] = (flips[a] != 0) as usize;
             self.bounds[a] = [
                 least(&self.inv_dir[a]),
                 most(&self.inv_dir[a]),
