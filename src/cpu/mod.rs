@@ -20,6 +20,7 @@ mod layout;
 mod lights;
 mod material;
 mod math;
+mod packet;
 mod precision;
 mod prefetch;
 mod proximity;
@@ -41,7 +42,8 @@ pub use proximity::{
 };
 pub use query::{
     QueryOptions, QueryRays, RayFrame, SharedOut, TracedChunk, trace_rays, trace_rays_each,
-    trace_rays_f64, trace_rays_generic, trace_rays_gpu_twin, trace_rays_with,
+    trace_rays_f64, trace_rays_generic, trace_rays_gpu_twin, trace_rays_single, trace_rays_with,
+    traces_in_packets,
 };
 pub use render::{
     add_samples, add_samples_or_cancel, render, render_gpu_twin, render_pixel_list, render_rows,
