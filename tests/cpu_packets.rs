@@ -1,6 +1,6 @@
 //! Issue 48, item 2: coherent closest-hit rays traced in packets
 //! (src/cpu/packet.rs) give the single-ray kernel's hits bit for bit
-//! (`cpu::trace_rays_single`, the portable original): t, primitive, u and
+//! (`cpu::trace_rays_as` with `QueryKernel::Single`, the portable original): t, primitive, u and
 //! v, on every CPU kernel this machine runs, for camera rays, the shadow
 //! rays of their hits, rays through shared vertices and duplicated
 //! triangles (hits at the same distance, where the single ray keeps the
@@ -12,33 +12,14 @@
 
 mod common;
 
+use common::data::{soup, unit};
 use glam::Vec3;
 use lambert::Scene;
-use lambert::cpu::{CpuKernel, trace_rays_single, trace_rays_with, traces_in_packets};
+use lambert::cpu::{CpuKernel, QueryKernel, trace_rays_as, trace_rays_with, traces_in_packets};
 use lambert::layout::{FAR, Hit, NO_HIT, Ray, Sphere, Triangle};
 use lambert::probe::Rng;
 use lambert::scene::Intersect;
 use proptest::prelude::*;
-
-fn unit(rng: &mut Rng) -> f32 {
-    rng.unit() as f32
-}
-
-/// `n` small random triangles in the unit cube around the origin.
-fn soup(seed: u64, n: usize) -> Vec<Triangle> {
-    let mut rng = Rng(seed);
-    (0..n)
-        .map(|_| {
-            let p = Vec3::new(unit(&mut rng), unit(&mut rng), unit(&mut rng)) - 0.5;
-            let mut corner = || {
-                let d = Vec3::new(unit(&mut rng), unit(&mut rng), unit(&mut rng)) - 0.5;
-                (p + 0.05 * d).to_array()
-            };
-            let (v0, v1, v2) = (corner(), corner(), corner());
-            common::data::tri(v0, v1, v2)
-        })
-        .collect()
-}
 
 /// A `side` × `side` grid of unit quads in the plane z = 0 (two triangles
 /// each, sharing edges and vertices), every triangle twice: each hit is
@@ -93,12 +74,13 @@ fn camera_rays(scene: &Scene, side: usize, offset: Vec3) -> Vec<Ray> {
 /// scene's size back along their ray) towards `light`, ending there: the
 /// shadow rays of a render, in pixel order.
 fn shadow_rays(scene: &Scene, camera: &[Ray], light: Vec3) -> Vec<Ray> {
-    let hits = trace_rays_single(
+    let hits = trace_rays_as(
         scene,
         camera,
         false,
         Intersect::Watertight,
         CpuKernel::Portable,
+        QueryKernel::Single,
     );
     camera
         .iter()
@@ -149,7 +131,14 @@ fn assert_same_hits(scene: &Scene, rays: &[Ray], what: &str) -> usize {
     );
     let mut hit_count = 0;
     for cpu_kernel in kernels() {
-        let single = trace_rays_single(scene, rays, false, Intersect::Watertight, cpu_kernel);
+        let single = trace_rays_as(
+            scene,
+            rays,
+            false,
+            Intersect::Watertight,
+            cpu_kernel,
+            QueryKernel::Single,
+        );
         let packets = trace_rays_with(scene, rays, false, Intersect::Watertight, cpu_kernel);
         for (i, (a, b)) in single.iter().zip(&packets).enumerate() {
             assert_eq!(
@@ -160,12 +149,13 @@ fn assert_same_hits(scene: &Scene, rays: &[Ray], what: &str) -> usize {
             );
         }
         // And the portable original's, whichever kernel traced.
-        let portable = trace_rays_single(
+        let portable = trace_rays_as(
             scene,
             rays,
             false,
             Intersect::Watertight,
             CpuKernel::Portable,
+            QueryKernel::Single,
         );
         assert!(
             portable.iter().zip(&packets).all(|(a, b)| key(a) == key(b)),
@@ -288,12 +278,13 @@ fn diverging_packets_equal_the_single_ray() {
         Intersect::Watertight
     ));
     for cpu_kernel in kernels() {
-        let single = trace_rays_single(
+        let single = trace_rays_as(
             &scene,
             &alternating,
             false,
             Intersect::Watertight,
             cpu_kernel,
+            QueryKernel::Single,
         );
         let with = trace_rays_with(
             &scene,
@@ -345,7 +336,14 @@ fn scenes_and_queries_packets_cannot_trace_go_ray_by_ray() {
             "{name}: in packets"
         );
         for cpu_kernel in kernels() {
-            let single = trace_rays_single(scene, &rays, any_hit, intersect, cpu_kernel);
+            let single = trace_rays_as(
+                scene,
+                &rays,
+                any_hit,
+                intersect,
+                cpu_kernel,
+                QueryKernel::Single,
+            );
             let with = trace_rays_with(scene, &rays, any_hit, intersect, cpu_kernel);
             assert!(
                 single.iter().zip(&with).all(|(a, b)| key(a) == key(b)),
@@ -449,7 +447,7 @@ proptest! {
                 }
             })
             .collect();
-        let single = trace_rays_single(&scene, &rays, false, Intersect::Watertight, CpuKernel::Portable);
+        let single = trace_rays_as(&scene, &rays, false, Intersect::Watertight, CpuKernel::Portable, QueryKernel::Single);
         for cpu_kernel in kernels() {
             let packets = trace_rays_with(&scene, &rays, false, Intersect::Watertight, cpu_kernel);
             for (i, (a, b)) in single.iter().zip(&packets).enumerate() {

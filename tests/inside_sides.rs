@@ -16,43 +16,7 @@ use lambert::scene::Scene;
 
 mod common;
 
-use common::data::{Lcg, tri};
-
-/// A closed latitude-longitude sphere of radius r about c, facing out.
-fn sphere(c: [f32; 3], r: f32, rings: usize, segments: usize) -> Vec<Triangle> {
-    let vertex = |i: usize, j: usize| {
-        let theta = std::f32::consts::PI * i as f32 / rings as f32;
-        let phi = 2.0 * std::f32::consts::PI * (j % segments) as f32 / segments as f32;
-        let (s, z) = match i {
-            0 => (0.0, 1.0),
-            _ if i == rings => (0.0, -1.0),
-            _ => (theta.sin(), theta.cos()),
-        };
-        [
-            c[0] + r * s * phi.cos(),
-            c[1] + r * s * phi.sin(),
-            c[2] + r * z,
-        ]
-    };
-    let mut out = Vec::new();
-    for i in 0..rings {
-        for j in 0..segments {
-            let (a, b, c2, d) = (
-                vertex(i, j),
-                vertex(i + 1, j),
-                vertex(i + 1, j + 1),
-                vertex(i, j + 1),
-            );
-            if i != 0 {
-                out.push(tri(a, c2, d));
-            }
-            if i != rings - 1 {
-                out.push(tri(a, b, c2));
-            }
-        }
-    }
-    out
-}
+use common::data::{Lcg, sphere_mesh, tri};
 
 /// A closed torus about the z axis (radii big and small), facing out.
 fn torus(big: f32, small: f32, around: usize, across: usize) -> Vec<Triangle> {
@@ -222,10 +186,10 @@ fn counts(triangles: Vec<Triangle>) -> (usize, usize) {
 #[test]
 fn closed_meshes_take_the_winding_numbers_inside_from_their_sides() {
     let meshes: Vec<(&str, Vec<Triangle>)> = vec![
-        ("sphere", sphere([0.1, -0.2, 0.3], 1.0, 24, 48)),
+        ("sphere", sphere_mesh([0.1, -0.2, 0.3], 1.0, 24, 48)),
         ("box", grid_box(6)),
         ("torus", torus(1.0, 0.35, 48, 24)),
-        ("inward sphere", flipped(sphere([0.0; 3], 1.0, 16, 32))),
+        ("inward sphere", flipped(sphere_mesh([0.0; 3], 1.0, 16, 32))),
     ];
     for (name, triangles) in meshes {
         let (pieces, apart) = counts(triangles.clone());
@@ -245,17 +209,17 @@ fn closed_meshes_take_the_winding_numbers_inside_from_their_sides() {
 #[test]
 fn nested_and_crossing_closed_meshes_label_each_piece() {
     // One sphere in another, both facing out: 2 inside the inner one.
-    let mut nested = sphere([0.0; 3], 1.0, 24, 48);
-    nested.extend(sphere([0.1, 0.0, 0.0], 0.5, 16, 32));
+    let mut nested = sphere_mesh([0.0; 3], 1.0, 24, 48);
+    nested.extend(sphere_mesh([0.1, 0.0, 0.0], 0.5, 16, 32));
     assert_eq!(counts(nested.clone()), (2, 0));
     // A hollow shell: the inner sphere faces in.
-    let mut hollow = sphere([0.0; 3], 1.0, 24, 48);
-    hollow.extend(flipped(sphere([0.1, 0.0, 0.0], 0.5, 16, 32)));
+    let mut hollow = sphere_mesh([0.0; 3], 1.0, 24, 48);
+    hollow.extend(flipped(sphere_mesh([0.1, 0.0, 0.0], 0.5, 16, 32)));
     // Two spheres that cross: the triangles along their crossing circle
     // are left out, and the parts of each sphere inside the other are
     // pieces of their own.
-    let mut crossing = sphere([0.0; 3], 0.6, 24, 48);
-    crossing.extend(sphere([0.5, 0.05, 0.0], 0.6, 24, 48));
+    let mut crossing = sphere_mesh([0.0; 3], 0.6, 24, 48);
+    crossing.extend(sphere_mesh([0.5, 0.05, 0.0], 0.6, 24, 48));
     let (pieces, apart) = counts(crossing.clone());
     assert!(
         pieces >= 4 && apart > 0,
@@ -308,7 +272,7 @@ fn the_bundled_models_agree_with_their_winding_numbers() {
 
 #[test]
 fn open_meshes_keep_the_winding_number() {
-    let mut open = sphere([0.0; 3], 1.0, 12, 24);
+    let mut open = sphere_mesh([0.0; 3], 1.0, 12, 24);
     open.remove(40);
     let r = cpu(Scene::from_triangles(open.clone()));
     let why = r.bounds_solid().unwrap_err();
@@ -331,7 +295,7 @@ fn a_mesh_with_zero_area_triangles_still_agrees() {
     // A sphere with zero-area triangles added along its edges (as the
     // full dragon has, making its edges look shared by four): they are
     // left out and the rest decides.
-    let mut triangles = sphere([0.0; 3], 1.0, 16, 32);
+    let mut triangles = sphere_mesh([0.0; 3], 1.0, 16, 32);
     let extra: Vec<Triangle> = triangles
         .iter()
         .step_by(37)

@@ -41,8 +41,8 @@ pub use proximity::{
     spatial_order, winding_numbers,
 };
 pub use query::{
-    QueryOptions, QueryRays, RayFrame, SharedOut, TracedChunk, trace_rays, trace_rays_each,
-    trace_rays_f64, trace_rays_generic, trace_rays_gpu_twin, trace_rays_single, trace_rays_with,
+    QueryKernel, QueryOptions, QueryRays, RayFrame, SharedOut, TracedChunk, trace_rays,
+    trace_rays_as, trace_rays_each, trace_rays_f64, trace_rays_gpu_twin, trace_rays_with,
     traces_in_packets,
 };
 pub use render::{

@@ -62,61 +62,24 @@ pub fn trace_rays_with(
     )
 }
 
-/// `trace_rays_with` one ray at a time through the kernel specialised for
-/// the scene: the portable original that coherent rays' packets
-/// (packet.rs) are tested against, bit for bit.
-pub fn trace_rays_single(
-    scene: &Scene,
-    rays: &[layout::Ray],
-    any_hit: bool,
-    intersect: Intersect,
-    cpu_kernel: CpuKernel,
-) -> Vec<layout::Hit> {
-    trace_rays_as(
-        scene,
-        rays,
-        any_hit,
-        intersect,
-        cpu_kernel,
-        QueryKernel::Single,
-    )
-}
-
-/// `trace_rays_with` through the generic kernel (`f32::ALL_FEATURES`: alpha
-/// masks, spheres and the triangle test checked at run time) rather than
-/// the variant specialised for what the scene holds: the portable
-/// original that the variants are tested against, bit for bit.
-pub fn trace_rays_generic(
-    scene: &Scene,
-    rays: &[layout::Ray],
-    any_hit: bool,
-    intersect: Intersect,
-    cpu_kernel: CpuKernel,
-) -> Vec<layout::Hit> {
-    trace_rays_as(
-        scene,
-        rays,
-        any_hit,
-        intersect,
-        cpu_kernel,
-        QueryKernel::Generic,
-    )
-}
-
-/// Which kernel a query runs.
+/// Which kernel a query runs (`trace_rays_as`): the default `Packets`,
+/// and the portable originals the faster kernels are tested against, bit
+/// for bit.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum QueryKernel {
-    /// Every feature checked at run time, one ray at a time.
+pub enum QueryKernel {
+    /// Every feature checked at run time (`f32::ALL_FEATURES`: alpha
+    /// masks, spheres and the triangle test), one ray at a time: the
+    /// original of the variants specialised for what a scene holds.
     Generic,
     /// Compiled for what the scene holds (`Kernel::features`), one ray at
-    /// a time.
+    /// a time: the original of the coherent rays' packets (packet.rs).
     Single,
     /// `Single`, and coherent rays in packets where the scene allows.
     Packets,
 }
 
 /// `trace_rays_with` through `which` kernel.
-fn trace_rays_as(
+pub fn trace_rays_as(
     scene: &Scene,
     rays: &[layout::Ray],
     any_hit: bool,
