@@ -51,6 +51,8 @@ def main():
     parser.add_argument("--rounds", type=int, default=4)
     parser.add_argument("--no-gpu", action="store_true", help="time the CPU path and Open3D only")
     parser.add_argument("--parity", action="store_true", help="also time lambert's parity signed distance")
+    parser.add_argument("--no-open3d", action="store_true",
+                        help="time lambert alone (to compare two builds of it, alternating processes)")
     parser.add_argument("--json", help="write the figures here")
     args = parser.parse_args()
 
@@ -77,8 +79,9 @@ def main():
         if args.parity:
             contenders[f"lambert {device} signed parity"] = (
                 lambda d=device: scene.signed_distance(points, method="parity", device=d))
-    contenders["open3d closest"] = lambda: theirs.compute_closest_points(q)
-    contenders["open3d signed"] = lambda: theirs.compute_signed_distance(q)
+    if not args.no_open3d:
+        contenders["open3d closest"] = lambda: theirs.compute_closest_points(q)
+        contenders["open3d signed"] = lambda: theirs.compute_signed_distance(q)
 
     for name, run in contenders.items():
         start = time.perf_counter()
@@ -93,9 +96,11 @@ def main():
         print(f"round {r + 1}: " + ", ".join(f"{n} {t[-1]:.2f} s" for n, t in times.items()), file=sys.stderr)
 
     # The answers agree (distances to f32 rounding), so the race is fair.
-    mine = scene.closest_points(points, device="cpu")["distance"]
-    their = np.linalg.norm(theirs.compute_closest_points(q)["points"].numpy() - points, axis=1)
-    worst = float(np.max(np.abs(mine - their)) / np.linalg.norm(hi - lo))
+    worst = None
+    if not args.no_open3d:
+        mine = scene.closest_points(points, device="cpu")["distance"]
+        their = np.linalg.norm(theirs.compute_closest_points(q)["points"].numpy() - points, axis=1)
+        worst = float(np.max(np.abs(mine - their)) / np.linalg.norm(hi - lo))
 
     median = {name: statistics.median(t) for name, t in times.items()}
     report = {
@@ -108,7 +113,7 @@ def main():
         "times": times,
         "speedup_over_open3d": {},
     }
-    for device in devices:
+    for device in devices if not args.no_open3d else []:
         for what in ("closest", "signed"):
             report["speedup_over_open3d"][f"{device} {what}"] = median[f"open3d {what}"] / median[
                 f"lambert {device} {what}"]
@@ -118,7 +123,8 @@ def main():
         print(f"  {name:32s} {t:8.3f} s  {args.points / t / 1e6:8.3f} M points/s")
     for name, ratio in report["speedup_over_open3d"].items():
         print(f"  lambert {name} vs Open3D: {ratio:.2f}x")
-    print(f"  largest distance difference from Open3D: {worst:.1e} of the model's size")
+    if worst is not None:
+        print(f"  largest distance difference from Open3D: {worst:.1e} of the model's size")
     if args.json:
         with open(args.json, "w") as out:
             json.dump(report, out, indent=2)

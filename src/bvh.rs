@@ -22,9 +22,12 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
+mod overlap;
+mod sides;
 mod validate;
 mod winding;
 
+pub use sides::Sides;
 pub use validate::{Invalid, TreeStats};
 pub(crate) use validate::{LeafSizes, SahCost, inside};
 pub use winding::WindingTree;
@@ -66,6 +69,9 @@ pub struct Bvh {
     /// The winding tree, built on the first winding query
     /// (`winding_tree`): renders never pay for it.
     winding: std::sync::OnceLock<WindingTree>,
+    /// The sides of its triangles' surface, built on the first inside
+    /// test that asks (`sides`).
+    sides: std::sync::OnceLock<Result<Sides, String>>,
 }
 
 /// An axis-aligned box.
@@ -135,6 +141,7 @@ impl Default for Bvh {
             blocks: Vec::new(),
             build_time: std::time::Duration::ZERO,
             winding: std::sync::OnceLock::new(),
+            sides: std::sync::OnceLock::new(),
         }
     }
 }
@@ -210,6 +217,16 @@ impl Bvh {
     pub fn winding_tree(&self, triangle_count: usize) -> &WindingTree {
         self.winding
             .get_or_init(|| WindingTree::build(self, triangle_count))
+    }
+
+    /// The sides of the surface of this BVH's triangles (`triangles`, its
+    /// primitives below their count), or why their winding number is no
+    /// integer (`Sides::build`); built on the first call.
+    pub fn sides(&self, triangles: &[Triangle]) -> Result<&Sides, &str> {
+        self.sides
+            .get_or_init(|| Sides::build(self, triangles))
+            .as_ref()
+            .map_err(String::as_str)
     }
 
     /// Fills node `index` from `node`'s children (or their children), then

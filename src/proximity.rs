@@ -99,6 +99,49 @@ impl Renderer {
         }
     }
 
+    /// Whether the winding number's inside test can be taken from closest
+    /// points' sides (`solid_inside`): Ok where the CPU path's scene is
+    /// closed (`bvh::Sides`, built on the first call: how many pieces its
+    /// surface has, and how many triangles lie in none), else why not.
+    pub fn bounds_solid(&self) -> std::result::Result<(usize, usize), String> {
+        // A scene with spheres: refused as the winding numbers refuse it.
+        self.triangles_only("inside tests")
+            .map_err(|e| e.to_string())?;
+        match self {
+            Renderer::Gpu(_) => Err("the GPU path takes winding numbers".into()),
+            Renderer::Cpu(scene) => scene
+                .bvh
+                .sides(&scene.triangles)
+                .map(|sides| sides.counts())
+                .map_err(|why| format!("the mesh is not closed: {why}")),
+        }
+    }
+
+    /// Whether each world point is inside by the winding number's rule,
+    /// from `closest`, its closest point (`closest_points` with no max
+    /// distance), where the scene is closed (`bounds_solid`; an error
+    /// where not): None for the points the sides leave unsure
+    /// (`cpu::solid_inside`), for `winding_numbers` to decide.
+    pub fn solid_inside<P: WorldPoint>(
+        &mut self,
+        points: &[P],
+        closest: &[ClosestPoint],
+    ) -> Result<Vec<Option<bool>>> {
+        let placement = self.triangles_only("inside tests")?;
+        let local = local_points(&placement, points)?;
+        match self {
+            Renderer::Cpu(scene) if closest.len() == points.len() => {
+                cpu::solid_inside(scene, &local, closest).map_err(Error::Usage)
+            }
+            _ => Err(Error::Usage(format!(
+                "inside tests from closest points: {}",
+                self.bounds_solid()
+                    .err()
+                    .unwrap_or_else(|| "one closest point a point is needed".into())
+            ))),
+        }
+    }
+
     /// Whether each world point is inside by parity: an odd number of
     /// crossings along a ray from it in direction `PARITY_DIRECTION`, as
     /// Open3D counts (for watertight meshes; `winding_numbers` for others).

@@ -1,7 +1,7 @@
 //! Issue 48, item 1: the CPU ray query runs a kernel specialised for what
 //! the scene holds (`f32::Kernel::features`: no alpha masks, no spheres,
 //! the watertight test compiles those checks out), and the generic kernel
-//! (`cpu::trace_rays_generic`, every check at run time) is the portable
+//! (`cpu::trace_rays_as` with `QueryKernel::Generic`, every check at run time) is the portable
 //! original it must equal, bit for bit, on every CPU kernel this machine
 //! runs, for camera and random rays, closest and any hit, through BVHs
 //! small and larger than cache.
@@ -9,36 +9,16 @@
 mod common;
 
 use common::brute_force;
+use common::data::{soup, unit};
 use glam::Vec3;
 use lambert::Scene;
 use lambert::cpu::f32::{
     ALL_FEATURES, FEATURE_ALPHA, FEATURE_OTHER_TESTS, FEATURE_SPHERES, Kernel,
 };
-use lambert::cpu::{CpuKernel, LARGE_BVH_BYTES, trace_rays_generic, trace_rays_with};
-use lambert::layout::{FAR, Hit, Ray, Sphere, Triangle};
+use lambert::cpu::{CpuKernel, LARGE_BVH_BYTES, QueryKernel, trace_rays_as, trace_rays_with};
+use lambert::layout::{FAR, Hit, Ray, Sphere};
 use lambert::probe::Rng;
 use lambert::scene::Intersect;
-
-fn unit(rng: &mut Rng) -> f32 {
-    rng.unit() as f32
-}
-
-/// `n` small random triangles in the cube of side 1 around the origin (a soup: overlapping, of
-/// every orientation).
-fn soup(seed: u64, n: usize) -> Vec<Triangle> {
-    let mut rng = Rng(seed);
-    (0..n)
-        .map(|_| {
-            let p = Vec3::new(unit(&mut rng), unit(&mut rng), unit(&mut rng)) - 0.5;
-            let mut corner = || {
-                let d = Vec3::new(unit(&mut rng), unit(&mut rng), unit(&mut rng)) - 0.5;
-                (p + 0.05 * d).to_array()
-            };
-            let (v0, v1, v2) = (corner(), corner(), corner());
-            common::data::tri(v0, v1, v2)
-        })
-        .collect()
-}
 
 /// `n` rays from around `scene`'s box towards points inside it.
 fn random_rays(scene: &Scene, seed: u64, n: usize) -> Vec<Ray> {
@@ -156,7 +136,14 @@ fn specialised_kernels_equal_the_generic_one() {
             }
             for (rays, what) in [(&camera, "camera"), (&random, "random")] {
                 for any_hit in [false, true] {
-                    let generic = trace_rays_generic(&scene, rays, any_hit, intersect, cpu_kernel);
+                    let generic = trace_rays_as(
+                        &scene,
+                        rays,
+                        any_hit,
+                        intersect,
+                        cpu_kernel,
+                        QueryKernel::Generic,
+                    );
                     let special = trace_rays_with(&scene, rays, any_hit, intersect, cpu_kernel);
                     let hits = generic.iter().filter(|h| h.prim != u32::MAX).count();
                     assert!(hits > rays.len() / 20, "{name}, {what}: {hits} hits");

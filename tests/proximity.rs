@@ -10,44 +10,7 @@ use lambert::scene::Scene;
 
 mod common;
 
-use common::data::{Lcg, d3, ray, tri, winding_f64};
-
-/// A closed, outward-facing latitude-longitude sphere of radius r about c.
-fn sphere_mesh(c: [f32; 3], r: f32, rings: usize, segments: usize) -> Vec<Triangle> {
-    let vertex = |i: usize, j: usize| {
-        let theta = std::f32::consts::PI * i as f32 / rings as f32;
-        let phi = 2.0 * std::f32::consts::PI * (j % segments) as f32 / segments as f32;
-        if i == 0 {
-            return [c[0], c[1], c[2] + r];
-        }
-        if i == rings {
-            return [c[0], c[1], c[2] - r];
-        }
-        [
-            c[0] + r * theta.sin() * phi.cos(),
-            c[1] + r * theta.sin() * phi.sin(),
-            c[2] + r * theta.cos(),
-        ]
-    };
-    let mut out = Vec::new();
-    for i in 0..rings {
-        for j in 0..segments {
-            let (a, b, c2, d) = (
-                vertex(i, j),
-                vertex(i + 1, j),
-                vertex(i + 1, j + 1),
-                vertex(i, j + 1),
-            );
-            if i != 0 {
-                out.push(tri(a, c2, d));
-            }
-            if i != rings - 1 {
-                out.push(tri(a, b, c2));
-            }
-        }
-    }
-    out
-}
+use common::data::{Lcg, d3, ray, sphere_mesh, tri, winding_f64};
 
 fn cpu(triangles: Vec<Triangle>) -> Renderer {
     Renderer::Cpu(Arc::new(Scene::from_triangles(triangles)))

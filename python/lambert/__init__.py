@@ -300,8 +300,11 @@ class Scene:
         inside. ``method="winding"``: inside where the generalized winding
         number is at least 0.5 in magnitude (closed meshes facing either
         way, and meshes with holes or self-intersections get
-        a sensible inside); ``"parity"``: inside where a ray from the point
-        crosses the surface an odd number of times (watertight meshes)."""
+        a sensible inside; on the CPU path a closed mesh's sign is taken
+        from each point's closest point, the same answer for little more
+        than the distance's time: docs/ray-query.md); ``"parity"``: inside
+        where a ray from the point crosses the surface an odd number of
+        times (watertight meshes)."""
         if method not in ("winding", "parity"):
             raise LambertValueError(f'method={method!r}: use "winding" or "parity"')
         return _lambert.point_values(self._native, _floats("points", points), "signed_distance", method, _device(device))

@@ -333,13 +333,25 @@ impl NativeScene {
             let n = query.len();
             let columns = make(n);
             let notes = self.trace_into(query, options, device, &|chunk| {
-                for (k, hit) in chunk.hits.iter().enumerate() {
-                    let i = chunk.start + k;
+                // No normals asked: zeros.
+                let normals = chunk
+                    .normals
+                    .iter()
+                    .copied()
+                    .chain(std::iter::repeat([0.0; 3]));
+                let rows = (chunk.start..).zip(chunk.hits.iter().zip(normals));
+                match query.local() {
+                    // Traced as given: the hit is the world's, with no
+                    // move back to make (decided once a chunk, not a row).
+                    None => rows.for_each(|(i, (hit, normal))| {
+                        write(&columns, i, *hit, hit.t as f64, normal)
+                    }),
                     // As `intersect` reports it (a hit beyond f32's t is a
                     // miss, as warned).
-                    let (hit, world_t) = query.world_hit(i, *hit);
-                    let normal = chunk.normals.get(k).copied().unwrap_or_default();
-                    write(&columns, i, hit, world_t, normal);
+                    Some(_) => rows.for_each(|(i, (hit, normal))| {
+                        let (hit, world_t) = query.world_hit(i, *hit);
+                        write(&columns, i, hit, world_t, normal)
+                    }),
                 }
             })?;
             Ok((finish(columns, n), notes))

@@ -18,10 +18,10 @@ macro_rules! layout {
 
         /// Widens a box's exit distance so that rounding cannot cull a box the ray
         /// grazes, as in the shader.
-        const BOX_SLACK: Real = 1.000001;
+        pub(crate) const BOX_SLACK: Real = 1.000001;
 
         /// Unit roundoff (pbrt's MachineEpsilon), for error bounds.
-        const MACHINE_EPSILON: Real = Real::EPSILON * 0.5;
+        pub(crate) const MACHINE_EPSILON: Real = Real::EPSILON * 0.5;
 
         /// "No hit yet" distance, as in the shader.
         pub const FAR: Real = Real::MAX;

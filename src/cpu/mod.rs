@@ -20,6 +20,7 @@ mod layout;
 mod lights;
 mod material;
 mod math;
+mod packet;
 mod precision;
 mod prefetch;
 mod proximity;
@@ -36,12 +37,13 @@ pub mod winding;
 pub use precision::Scalar;
 pub use prefetch::LARGE_BVH_BYTES;
 pub use proximity::{
-    box_pad, closest_points, count_intersections, list_intersections, sort_hits, spatial_order,
-    winding_numbers,
+    box_pad, closest_points, count_intersections, list_intersections, solid_inside, sort_hits,
+    spatial_order, winding_numbers,
 };
 pub use query::{
-    QueryOptions, QueryRays, RayFrame, SharedOut, TracedChunk, trace_rays, trace_rays_each,
-    trace_rays_f64, trace_rays_generic, trace_rays_gpu_twin, trace_rays_with,
+    QueryKernel, QueryOptions, QueryRays, RayFrame, SharedOut, TracedChunk, trace_rays,
+    trace_rays_as, trace_rays_each, trace_rays_f64, trace_rays_gpu_twin, trace_rays_with,
+    traces_in_packets,
 };
 pub use render::{
     add_samples, add_samples_or_cancel, render, render_gpu_twin, render_pixel_list, render_rows,

@@ -9,6 +9,7 @@ use rayon::prelude::*;
 use super::closest::{closest_point, query_margin};
 use super::f32;
 use super::winding::winding_number;
+use crate::bvh::Sides;
 use crate::layout::{ClosestPoint, ListedHit, NO_HIT, Ray};
 use crate::scene::Scene;
 
@@ -132,6 +133,60 @@ pub fn winding_numbers(scene: &Scene, points: &[[f32; 3]]) -> Vec<f32> {
         || (),
         |_, i| winding_number(tree, &scene.triangles, Vec3::from(points[i])),
     )
+}
+
+/// Whether each point (local frame) is inside by its winding number's rule
+/// (|w| ≥ 0.5), from the side of its closest point's surface it lies
+/// (`bvh::Sides`; `closest`, the points' `closest_points` with no max
+/// distance, gives each one's triangle): Err (why not) where the scene's
+/// winding number is no integer (a mesh with a hole); None for a point
+/// that lies within a few `query_margin`s of its closest point (where a
+/// near tie between triangles could give the other side) or where the
+/// sides decide nothing, for the winding number to decide.
+pub fn solid_inside(
+    scene: &Scene,
+    points: &[[f32; 3]],
+    closest: &[ClosestPoint],
+) -> Result<Vec<Option<bool>>, String> {
+    let sides = scene.bvh.sides(&scene.triangles)?;
+    let radius = scene.placement().radius as f32;
+    let near = |p: Vec3| f64::from(8.0 * query_margin(p.abs().max_element(), radius));
+    // Each piece's winding number in front: at a point before one of its
+    // triangles that has that triangle nearest, in front, and a winding
+    // number within a quarter of an integer.
+    // (The winding tree built here, not under `label_pieces`' parallel
+    // calls, where the other threads would wait on its build.)
+    let tree = scene.bvh.winding_tree(scene.triangles.len());
+    sides.label_pieces(|samples| {
+        samples.iter().find_map(|&t| {
+            let p = Sides::in_front(&scene.triangles, t).as_vec3();
+            let margin = query_margin(p.abs().max_element(), radius);
+            let found = closest_point(
+                &scene.bvh,
+                scene.triangles.len(),
+                p,
+                f32::INFINITY,
+                margin,
+                None,
+                &mut Vec::new(),
+            )?;
+            let ahead = sides.behind(&scene.triangles, found.prim, p.as_dvec3(), near(p));
+            if found.prim != t || ahead.map(|(behind, _)| behind) != Some(false) {
+                return None;
+            }
+            let w = winding_number(tree, &scene.triangles, p);
+            ((w - w.round()).abs() < 0.25).then_some(w.round() as i32)
+        })
+    });
+    Ok(points
+        .par_iter()
+        .zip(closest)
+        .with_min_len(CHUNK)
+        .map(|(&p, c)| {
+            let p = Vec3::from(p);
+            sides.inside(&scene.triangles, c.prim, p.as_dvec3(), near(p))
+        })
+        .collect())
 }
 
 /// How many triangles each ray (local frame) crosses in (tmin, tmax), an

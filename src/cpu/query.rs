@@ -4,6 +4,7 @@
 
 use rayon::prelude::*;
 
+use super::packet::trace_packets;
 use super::prefetch::{INTERLEAVED_INCOHERENT_RAYS, INTERLEAVED_RAYS, LARGE_BVH_BYTES};
 use super::render::twin_stack_entries;
 use super::simd::{check_runs, with_simd};
@@ -51,31 +52,40 @@ pub fn trace_rays_with(
     intersect: Intersect,
     cpu_kernel: CpuKernel,
 ) -> Vec<layout::Hit> {
-    trace_rays_as(scene, rays, any_hit, intersect, cpu_kernel, true)
+    trace_rays_as(
+        scene,
+        rays,
+        any_hit,
+        intersect,
+        cpu_kernel,
+        QueryKernel::Packets,
+    )
 }
 
-/// `trace_rays_with` through the generic kernel (`f32::ALL_FEATURES`: alpha
-/// masks, spheres and the triangle test checked at run time) rather than
-/// the variant specialised for what the scene holds: the portable
-/// original that the variants are tested against, bit for bit.
-pub fn trace_rays_generic(
+/// Which kernel a query runs (`trace_rays_as`): the default `Packets`,
+/// and the portable originals the faster kernels are tested against, bit
+/// for bit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum QueryKernel {
+    /// Every feature checked at run time (`f32::ALL_FEATURES`: alpha
+    /// masks, spheres and the triangle test), one ray at a time: the
+    /// original of the variants specialised for what a scene holds.
+    Generic,
+    /// Compiled for what the scene holds (`Kernel::features`), one ray at
+    /// a time: the original of the coherent rays' packets (packet.rs).
+    Single,
+    /// `Single`, and coherent rays in packets where the scene allows.
+    Packets,
+}
+
+/// `trace_rays_with` through `which` kernel.
+pub fn trace_rays_as(
     scene: &Scene,
     rays: &[layout::Ray],
     any_hit: bool,
     intersect: Intersect,
     cpu_kernel: CpuKernel,
-) -> Vec<layout::Hit> {
-    trace_rays_as(scene, rays, any_hit, intersect, cpu_kernel, false)
-}
-
-/// `trace_rays_with`, specialised for the scene or not.
-fn trace_rays_as(
-    scene: &Scene,
-    rays: &[layout::Ray],
-    any_hit: bool,
-    intersect: Intersect,
-    cpu_kernel: CpuKernel,
-    specialise: bool,
+    which: QueryKernel,
 ) -> Vec<layout::Hit> {
     // Written by the threads themselves: filling it first on one thread
     // would cost a twentieth of the trace.
@@ -91,7 +101,7 @@ fn trace_rays_as(
             normals: false,
         },
         RayFrame::World,
-        specialise,
+        which,
         &|chunk| {
             // SAFETY: chunks are disjoint and within the capacity.
             unsafe {
@@ -216,17 +226,16 @@ pub fn trace_rays_each(
     // its codegen settings, and the kernel ran up to 40% slower there.
     each: &(dyn Fn(&TracedChunk) + Sync),
 ) {
-    trace_each(scene, rays, options, frame, true, each)
+    trace_each(scene, rays, options, frame, QueryKernel::Packets, each)
 }
 
-/// `trace_rays_each`; with `specialise`, through the kernel compiled for
-/// what the scene holds (`Kernel::features`), else the generic one.
+/// `trace_rays_each` through `which` kernel.
 fn trace_each(
     scene: &Scene,
     rays: QueryRays,
     options: QueryOptions,
     frame: RayFrame,
-    specialise: bool,
+    which: QueryKernel,
     each: &(dyn Fn(&TracedChunk) + Sync),
 ) {
     use std::mem::MaybeUninit;
@@ -246,15 +255,13 @@ fn trace_each(
     // Chosen once for the query: a scene of watertight-tested triangles
     // alone (the usual one) takes the kernel without the alpha test, the
     // sphere loop and the choice of triangle test; any other the generic.
-    let triangles_only = specialise && kernel.features() == 0;
-    // Rays closer than this count as leaving from nearby points.
-    let nearby = scene
-        .bvh
-        .bounds()
-        .map_or(0.0, |b| 0.01 * (b.max - b.min).length());
+    let triangles_only = which != QueryKernel::Generic && kernel.features() == 0;
+    let nearby = nearby(scene);
     // Judged once for the whole query: judged per chunk, it cost camera
     // rays through small models up to 5%.
-    let incoherent = (large || vector_sort) && !coherent(&rays, nearby);
+    let coherent = coherent(&rays, nearby);
+    let incoherent = (large || vector_sort) && !coherent;
+    let packets = which == QueryKernel::Packets && packets_apply(&kernel, any_hit, coherent);
     (0..rays.len().div_ceil(CHUNK))
         .into_par_iter()
         .for_each(|index| {
@@ -309,11 +316,41 @@ fn trace_each(
                     }
                 };
             }
-            match (incoherent, large, vector_sort) {
-                (true, true, true) => chunk!(INTERLEAVED_INCOHERENT_RAYS, true, true),
-                (true, true, false) => chunk!(INTERLEAVED_INCOHERENT_RAYS, true, false),
-                (true, false, true) => chunk!(INTERLEAVED_RAYS, false, true),
-                _ => chunk!(INTERLEAVED_RAYS, false, false),
+            if packets {
+                let kernel_ref = &kernel;
+                // SAFETY: the kernel was checked.
+                unsafe {
+                    with_simd(
+                        cpu_kernel,
+                        #[inline(always)]
+                        || {
+                            trace_packets(
+                                kernel_ref,
+                                chunk_rays,
+                                cpu_kernel.ymm_boxes(),
+                                |i, hit, block| {
+                                    let hit = query_hit(hit);
+                                    if let Some(normal) = normal_out.get_mut(i) {
+                                        normal.write(block_normal(
+                                            kernel_ref.scene,
+                                            &chunk_rays[i],
+                                            &hit,
+                                            block,
+                                        ));
+                                    }
+                                    hits[i].write(hit);
+                                },
+                            )
+                        },
+                    )
+                }
+            } else {
+                match (incoherent, large, vector_sort) {
+                    (true, true, true) => chunk!(INTERLEAVED_INCOHERENT_RAYS, true, true),
+                    (true, true, false) => chunk!(INTERLEAVED_INCOHERENT_RAYS, true, false),
+                    (true, false, true) => chunk!(INTERLEAVED_RAYS, false, true),
+                    _ => chunk!(INTERLEAVED_RAYS, false, false),
+                }
             }
             // SAFETY: trace_chunk wrote every element of both.
             let (hits, normals) = unsafe {
@@ -333,6 +370,47 @@ fn trace_each(
                 normals,
             });
         });
+}
+
+/// Whether a query runs its rays in packets (packet.rs): coherent closest-hit
+/// rays (`coherent`, as `trace_rays_each` judges them) through a scene of
+/// triangles alone under the watertight test (`Kernel::features` 0),
+/// traversing its BVH. Any-hit queries run ray by ray: their answer is the
+/// first hit in each ray's own order, which a packet's shared order would
+/// have to find again alone.
+fn packets_apply(kernel: &f32::Kernel, any_hit: bool, coherent: bool) -> bool {
+    !any_hit
+        && coherent
+        && kernel.features() == 0
+        && kernel.compressed.is_none()
+        && kernel.scene.accel.traverses_bvh()
+}
+
+/// Whether `trace_rays_with` (through `cpu_kernel`: the packets' choice
+/// is the same on every one) traces `rays` in packets: for tests, which
+/// check the choice where the packets must not run (spheres, alpha masks,
+/// another triangle test, incoherent rays, any hit).
+pub fn traces_in_packets(
+    scene: &Scene,
+    rays: &[layout::Ray],
+    any_hit: bool,
+    intersect: Intersect,
+) -> bool {
+    let mut kernel = f32::Kernel::new_for(scene, false);
+    kernel.intersect = intersect;
+    packets_apply(
+        &kernel,
+        any_hit,
+        coherent(&QueryRays::Slice(rays), nearby(scene)),
+    )
+}
+
+/// Rays closer than this count as leaving from nearby points (`coherent`).
+fn nearby(scene: &Scene) -> f32 {
+    scene
+        .bvh
+        .bounds()
+        .map_or(0.0, |b| 0.01 * (b.max - b.min).length())
 }
 
 /// Traces `rays` into `hits`, `LANES` rays in turn (`Kernel::visit` with

@@ -3,6 +3,7 @@
 
 use rayon::prelude::*;
 
+use super::packet::render_row;
 use super::simd::{check_runs, with_simd};
 use super::{CpuKernel, Precision, Scalar, f32, f64};
 use crate::camera::View;
@@ -197,6 +198,14 @@ fn render_rows_with(
     let mut variance = vec![0.0; width * height];
     let kernel32 = kernel32(scene, view, cpu_kernel, compressed);
     let kernel64 = f64::Kernel::with_view(scene, view, <f64::Real as Scalar>::has_ymm_boxes());
+    // Camera rays in packets (packet.rs), the single ray's hits bit for
+    // bit, where the scene is triangles alone under the watertight test;
+    // not for the oracle, nor the GPU's twin (it traverses the GPU's
+    // nodes).
+    let packets = precision == Precision::F32
+        && compressed.is_none()
+        && kernel32.features() == 0
+        && scene.accel.traverses_bvh();
     rgb.par_chunks_mut(width)
         .zip(prims.par_chunks_mut(width))
         .zip(variance.par_chunks_mut(width))
@@ -209,6 +218,22 @@ fn render_rows_with(
                     cpu_kernel,
                     #[inline(always)]
                     || {
+                        if packets {
+                            let ymm = cpu_kernel.ymm_boxes();
+                            render_row(
+                                &kernel32,
+                                y as u32,
+                                width,
+                                view.spp,
+                                ymm,
+                                |x, (c, p, v)| {
+                                    rgb_row[x] = c.to_array();
+                                    prim_row[x] = p;
+                                    variance_row[x] = v;
+                                },
+                            );
+                            return;
+                        }
                         for x in 0..width {
                             let (c, p, v) =
                                 pixel(&kernel32, &kernel64, precision, x as u32, y as u32);

@@ -51,7 +51,12 @@ macro_rules! sample {
             }
 
             /// `samples` of the pixel added in turn to `sums` (colour, squared
-            /// luminance), and what the first of them hit.
+            /// luminance), and what the first of them hit. Inlined, so that
+            /// in `cpu::with_simd` the traversal runs with the vector
+            /// instructions: compiled on its own, the render's every node
+            /// visit called `intersect_boxes_ymm`'s intrinsics one by one
+            /// (the dragon's 1024² CPU render took 1.55 s, now 0.33 s).
+            #[inline(always)]
             pub fn add_samples(
                 &self,
                 x: u32,

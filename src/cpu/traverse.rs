@@ -11,7 +11,7 @@ macro_rules! traverse {
         /// `hit` (of a ray `prepare_ray` scaled) with its distance along the ray as
         /// given; a miss stays at FAR.
         #[inline(always)]
-        fn unscale(hit: Hit, shear: &Shear) -> Hit {
+        pub(crate) fn unscale(hit: Hit, shear: &Shear) -> Hit {
             if hit.prim == NO_HIT {
                 hit
             } else {
@@ -221,17 +221,17 @@ macro_rules! traverse {
         /// and which of the two planes the ray meets first.
         #[derive(Clone, Copy, Debug)]
         pub struct Slabs {
-            inv_dir: [Real; 3],
-            inv_dir_far: [Real; 3],
+            pub(crate) inv_dir: [Real; 3],
+            pub(crate) inv_dir_far: [Real; 3],
             /// −origin·inv_dir (or ·inv_dir_far), moved down (near) or up (far) by
             /// more than the rounding of that product, of this sum and of an
             /// unfused multiply-add (WGSL's fma may be either): a plane's distance
             /// `plane·inv_dir + offset` then errs only by rounding relative to
             /// itself, which the slack covers for exit distances.
-            near_offset: [Real; 3],
-            far_offset: [Real; 3],
+            pub(crate) near_offset: [Real; 3],
+            pub(crate) far_offset: [Real; 3],
             /// Whether the ray runs toward −axis: its near plane is the maximum.
-            flip: [bool; 3],
+            pub(crate) flip: [bool; 3],
         }
 
         /// Direction components smaller than this count as this, with their sign,
@@ -239,7 +239,7 @@ macro_rules! traverse {
         /// offsets do (no ∞ − ∞), and a ray parallel to an axis has huge slab
         /// distances of the right signs, or one near 0 for a plane that holds its
         /// origin.
-        const MIN_SLAB_DIR: Real = 1e-18;
+        pub(crate) const MIN_SLAB_DIR: Real = 1e-18;
 
         /// The ray's `Slabs`, as in the shader.
         #[inline(always)]

@@ -57,13 +57,44 @@ pub fn inside<P: WorldPoint>(
     sign: Sign,
 ) -> Result<Vec<bool>> {
     match sign {
-        Sign::Winding => Ok(renderer
-            .winding_numbers(points)?
-            .into_iter()
-            .map(|w| w.abs() >= INSIDE_WINDING)
-            .collect()),
+        Sign::Winding => winding_inside(renderer, points, None),
         Sign::Parity => renderer.parity_inside(points),
     }
+}
+
+/// Whether each point is inside by its winding number (|w| ≥
+/// `INSIDE_WINDING`): where the scene bounds a solid
+/// (`Renderer::bounds_solid`), taken from the points' closest points
+/// (`closest`, or found here) and their pseudo-normals, the same answer
+/// for the price of the closest point, with the winding number kept for
+/// the points that leaves unsure (on or very near the surface).
+fn winding_inside<P: WorldPoint>(
+    renderer: &mut Renderer,
+    points: &[P],
+    closest: Option<Vec<ClosestPoint>>,
+) -> Result<Vec<bool>> {
+    let inside_by_winding = |w: f32| w.abs() >= INSIDE_WINDING;
+    if renderer.bounds_solid().is_err() {
+        return Ok(renderer
+            .winding_numbers(points)?
+            .into_iter()
+            .map(inside_by_winding)
+            .collect());
+    }
+    let closest = match closest {
+        Some(c) => c,
+        None => renderer.closest_points(points, f32::INFINITY)?,
+    };
+    let sides = renderer.solid_inside(points, &closest)?;
+    let unsure: Vec<usize> = (0..points.len()).filter(|&i| sides[i].is_none()).collect();
+    let mut inside: Vec<bool> = sides.into_iter().map(|s| s.unwrap_or(false)).collect();
+    if !unsure.is_empty() {
+        let near: Vec<P> = unsure.iter().map(|&i| points[i]).collect();
+        for (&i, w) in unsure.iter().zip(renderer.winding_numbers(&near)?) {
+            inside[i] = inside_by_winding(w);
+        }
+    }
+    Ok(inside)
 }
 
 /// The distance from each point to the nearest triangle.
@@ -82,8 +113,12 @@ pub fn signed_distances<P: WorldPoint>(
     points: &[P],
     sign: Sign,
 ) -> Result<Vec<f32>> {
-    let distance = distances(renderer, points)?;
-    let inside = inside(renderer, points, sign)?;
+    let closest = renderer.closest_points(points, f32::INFINITY)?;
+    let distance: Vec<f32> = closest.iter().map(|c| c.distance).collect();
+    let inside = match sign {
+        Sign::Winding => winding_inside(renderer, points, Some(closest))?,
+        Sign::Parity => renderer.parity_inside(points)?,
+    };
     Ok(distance
         .into_iter()
         .zip(inside)
@@ -213,6 +248,23 @@ pub fn run_query(
     };
     if let Some(note) = walks_bvh.and_then(|what| renderer.bvh_note(what)) {
         say(sink, &note);
+    }
+    if let QueryKind::Points(
+        PointQuery::SignedDistance(Sign::Winding) | PointQuery::Inside(Sign::Winding),
+    ) = job.kind
+    {
+        // Which way the signs were taken (docs/ray-query.md).
+        say(
+            sink,
+            &match renderer.bounds_solid() {
+                Ok((pieces, apart)) => format!(
+                    "inside from the side of each point's closest point (the mesh is closed: \
+                     {pieces} piece(s), {apart} triangle(s) crossing another or of zero area \
+                     left to winding numbers), and winding numbers on and near the surface"
+                ),
+                Err(why) => format!("inside from winding numbers: {why}"),
+            },
+        );
     }
     let start = Instant::now();
     let (records, fell_back) = with_fallback(&mut renderer, job.device, &scene, work)?;

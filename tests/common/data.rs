@@ -1,7 +1,7 @@
 //! Test inputs made in code (a deterministic generator, rays, binary
 //! glTF) and an f64 reference (the winding number).
 
-use glam::DVec3;
+use glam::{DVec3, Vec3};
 use lambert::layout::{Ray, Triangle};
 
 /// A small deterministic generator (no dependency on a seed's crate).
@@ -114,4 +114,63 @@ pub fn winding_f64(q: DVec3, triangles: &[Triangle]) -> f64 {
             det.atan2(den) / (2.0 * std::f64::consts::PI)
         })
         .sum()
+}
+
+/// A closed, outward-facing latitude-longitude sphere of radius r about c.
+pub fn sphere_mesh(c: [f32; 3], r: f32, rings: usize, segments: usize) -> Vec<Triangle> {
+    let vertex = |i: usize, j: usize| {
+        let theta = std::f32::consts::PI * i as f32 / rings as f32;
+        let phi = 2.0 * std::f32::consts::PI * (j % segments) as f32 / segments as f32;
+        if i == 0 {
+            return [c[0], c[1], c[2] + r];
+        }
+        if i == rings {
+            return [c[0], c[1], c[2] - r];
+        }
+        [
+            c[0] + r * theta.sin() * phi.cos(),
+            c[1] + r * theta.sin() * phi.sin(),
+            c[2] + r * theta.cos(),
+        ]
+    };
+    let mut out = Vec::new();
+    for i in 0..rings {
+        for j in 0..segments {
+            let (a, b, c2, d) = (
+                vertex(i, j),
+                vertex(i + 1, j),
+                vertex(i + 1, j + 1),
+                vertex(i, j + 1),
+            );
+            if i != 0 {
+                out.push(tri(a, c2, d));
+            }
+            if i != rings - 1 {
+                out.push(tri(a, b, c2));
+            }
+        }
+    }
+    out
+}
+
+/// A uniform f32 in [0, 1).
+pub fn unit(rng: &mut lambert::probe::Rng) -> f32 {
+    rng.unit() as f32
+}
+
+/// `n` small random triangles in the cube of side 1 around the origin (a soup: overlapping, of
+/// every orientation).
+pub fn soup(seed: u64, n: usize) -> Vec<Triangle> {
+    let mut rng = lambert::probe::Rng(seed);
+    (0..n)
+        .map(|_| {
+            let p = Vec3::new(unit(&mut rng), unit(&mut rng), unit(&mut rng)) - 0.5;
+            let mut corner = || {
+                let d = Vec3::new(unit(&mut rng), unit(&mut rng), unit(&mut rng)) - 0.5;
+                (p + 0.05 * d).to_array()
+            };
+            let (v0, v1, v2) = (corner(), corner(), corner());
+            tri(v0, v1, v2)
+        })
+        .collect()
 }
