@@ -12,13 +12,12 @@
 // pixel costs), and the last pass runs for the listed pixels only
 // (docs/bvh.md).
 // Bindings (naga's reflection):
-// `render_primary`, `render_primary_samples`: all of group 0 (0 to 18);
+// `render_primary`, `render_primary_samples`: all of group 0;
 // group 1's out_prim, tile_sums, wave_shading, shadow_queue, wave_counts,
 // wave_workgroups, resolve_pixels (1:1, 1:6 to 1:10, 1:19).
 // `render_list_primary`: the same but out_prim, and pixel_list (1:4).
-// `render_shadows`: group 0 but for triangle_normals, materials, lights,
-// triangle_normals_hi and textures; group 1's shadow_queue, wave_counts
-// (1:8, 1:9).
+// `render_shadows`: group 0's params, arrays, scene words and texels;
+// group 1's shadow_queue, wave_counts (1:8, 1:9).
 // `render_resolve`: group 0's params; group 1's tile_sums, wave_shading,
 // shadow_queue, wave_counts, resolve_pixels (1:6 to 1:9, 1:19).
 
@@ -90,7 +89,7 @@ fn shade_but_shadows(ray: Ray, hit: Hit) -> WaveShading {
     // Counted first, sampled again below: lights are cheap to sample, and
     // a camera ray's shadow rays then take one atomic add.
     for (var i = 0u; i < params.num_lights; i++) {
-        if light_sample(surface, origin, lights[i]).lit {
+        if light_sample(surface, origin, light_at(i)).lit {
             out.count += 1u;
         }
     }
@@ -100,7 +99,7 @@ fn shade_but_shadows(ray: Ray, hit: Hit) -> WaveShading {
     out.first = enqueue(0u, out.count);
     var q = out.first;
     for (var i = 0u; i < params.num_lights; i++) {
-        let sample = light_sample(surface, origin, lights[i]);
+        let sample = light_sample(surface, origin, light_at(i));
         if sample.lit {
             let r = sample.shadow_ray;
             store_shadow_query(q, ShadowQuery(vec4<f32>(r.origin, r.tmin),

@@ -53,7 +53,7 @@ fn box_hit(ray: Ray, shear: Shear, prim: u32) -> Hit {
         }
         return miss();
     }
-    let sphere = spheres[prim - params.num_triangles];
+    let sphere = sphere_at(prim - params.num_triangles);
     let t = intersect_sphere(ray, sphere.center, sphere.radius);
     if t < ray.tmax {
         return Hit(t, prim, 0.0, 0.0);

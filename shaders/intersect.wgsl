@@ -269,7 +269,7 @@ fn intersect_primitive(ray: Ray, shear: Shear, prim: u32) -> vec3<f32> {
         return intersect_triangle(ray, shear, tri.v0, tri.v1, tri.v2);
     }
     if HAS_SPHERES && prim >= params.num_triangles {
-        let sphere = spheres[prim - params.num_triangles];
+        let sphere = sphere_at(prim - params.num_triangles);
         return vec3<f32>(intersect_sphere(ray, sphere.center, sphere.radius), 0.0, 0.0);
     }
     return no_triangle_hit();
@@ -296,7 +296,7 @@ fn texture_at(slot: u32, tri: Triangle, prim: u32, u: f32, v: f32, dir: vec3<f32
 // Alpha and shading both read it.
 fn base_color_at(tri: Triangle, prim: u32, u: f32, v: f32, dir: vec3<f32>, cone_width: f32) -> vec4<f32> {
     // Field by field: lavapipe loads a whole struct a lane at a time.
-    var color = materials[tri.material].base_color;
+    var color = material_entry(tri.material).base_color;
     if HAS_ATTRIBUTES && (tri.flags & FLAG_ATTRIBUTES) != 0u {
         let a = triangle_attributes_at(prim);
         // Each product and sum rounded on its own (`rounded`), as the
@@ -305,11 +305,11 @@ fn base_color_at(tri: Triangle, prim: u32, u: f32, v: f32, dir: vec3<f32>, cone_
         let w = rounded(rounded(1.0 - u) - v);
         color *= rounded4(rounded4(w * a.colors[0])
             + rounded4(rounded4(u * a.colors[1]) + rounded4(v * a.colors[2])));
-        let base_color_texture = materials[tri.material].base_color_texture;
+        let base_color_texture = material_entry(tri.material).base_color_texture;
         if HAS_TEXTURES && base_color_texture != NO_TEXTURE {
             color *= texture_at(base_color_texture, tri, prim, u, v, dir, cone_width);
         }
-        let alpha_texture = materials[tri.material].alpha_texture;
+        let alpha_texture = material_entry(tri.material).alpha_texture;
         if HAS_TEXTURES && alpha_texture != NO_TEXTURE {
             color.a *= texture_at(alpha_texture, tri, prim, u, v, dir, cone_width).a;
         }
@@ -330,7 +330,7 @@ fn cut_out(prim: u32, u: f32, v: f32) -> bool {
     if (tri.flags & FLAG_MASKED) == 0u {
         return false;
     }
-    return base_color_at(tri, prim, u, v, vec3<f32>(0.0), 0.0).a < materials[tri.material].alpha_cutoff;
+    return base_color_at(tri, prim, u, v, vec3<f32>(0.0), 0.0).a < material_entry(tri.material).alpha_cutoff;
 }
 
 // Tests `prim`; if it is hit nearer than ray.tmax, makes it the hit and

@@ -40,15 +40,11 @@ override INTERSECT: u32 = 2u;
 // Entry point `trace_rays`: stop at the first hit found rather than the
 // closest.
 override ANY_HIT: bool = false;
-// Arrays too large for one storage binding are split over two: the first
-// this many elements in `triangles`, `triangle_normals`,
-// `triangle_attributes`, `bvh_nodes` or `bvh_blocks`, the rest in the
-// `_hi` binding. Unsplit: all.
-override TRIANGLES_PER_BINDING: u32 = 0xffffffffu;
-override NORMALS_PER_BINDING: u32 = 0xffffffffu;
-override ATTRIBUTES_PER_BINDING: u32 = 0xffffffffu;
-override NODES_PER_BINDING: u32 = 0xffffffffu;
-override BLOCKS_PER_BINDING: u32 = 0xffffffffu;
+// The scene's arrays lie in one array of 16-byte words (`scene_words`,
+// each array from its word in `arrays`); where they pass one storage
+// binding, the first this many words in `scene_words`, the rest in
+// `scene_words_hi`. Unsplit: all.
+override WORDS_PER_BINDING: u32 = 0xffffffffu;
 // Read the BVH's nodes and blocks, and the triangles, from
 // `bvh_node_texels`, `bvh_block_texels` and `triangle_texels` rather than
 // the storage buffers (gpu::BvhStorage: lavapipe fetches texels with
@@ -326,20 +322,36 @@ struct Surface {
 }
 
 @group(0) @binding(0) var<uniform> params: Params;
-@group(0) @binding(1) var<storage, read> triangles: array<Triangle>;
-@group(0) @binding(2) var<storage, read> triangle_normals: array<TriangleNormals>;
-@group(0) @binding(3) var<storage, read> spheres: array<Sphere>;
-@group(0) @binding(4) var<storage, read> materials: array<Material>;
-@group(0) @binding(5) var<storage, read> lights: array<Light>;
-@group(0) @binding(6) var<storage, read> bvh_nodes: array<array<vec4<u32>, 5>>; // CompressedNode
-@group(0) @binding(7) var<storage, read> bvh_blocks: array<PrimBlock>;
-@group(0) @binding(8) var<storage, read> triangles_hi: array<Triangle>;
-@group(0) @binding(9) var<storage, read> triangle_normals_hi: array<TriangleNormals>;
-@group(0) @binding(10) var<storage, read> bvh_nodes_hi: array<array<vec4<u32>, 5>>; // CompressedNode
-@group(0) @binding(11) var<storage, read> bvh_blocks_hi: array<PrimBlock>;
+// Every read-only array of the scene in one binding (two where large), so
+// that a pass binds few storage buffers: WebGPU's browsers allow 8 or 10 a
+// stage (docs/web.md). Read through shaders/fetch.wgsl's `*_at`.
+@group(0) @binding(1) var<storage, read> scene_words: array<vec4<u32>>;
+@group(0) @binding(8) var<storage, read> scene_words_hi: array<vec4<u32>>;
+// Where each array starts in them, in words.
+struct SceneArrays {
+    triangles: u32,
+    normals: u32,
+    attributes: u32,
+    tangents: u32,
+    nodes: u32,
+    blocks: u32,
+    spheres: u32,
+    materials: u32,
+    lights: u32,
+    textures: u32,
+    emitters: u32,
+    environment: u32,
+    environment_cdf: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+@group(0) @binding(2) var<uniform> arrays: SceneArrays;
 // Set to 1 by an invocation whose loops the driver cut short (see
-// `loops_completed`); the host then splits the work finer or fails.
-@group(0) @binding(12) var<storage, read_write> loop_status: array<atomic<u32>>;
+// `loops_completed`); the host then splits the work finer or fails. A
+// one-texel storage texture, not a buffer, for the storage-buffer count
+// that browsers allow (every writer stores the same 1).
+@group(0) @binding(12) var loop_status: texture_storage_2d<r32uint, write>;
 // With BVH_TEXELS: node i's words at texels 5i to 5i + 4, block i's at 10i
 // to 10i + 9 (v[k][a] at 10i + 3k + a, prims at 10i + 9), texel t at
 // (t mod row, t / row). Read-only storage textures, not sampled ones:
@@ -348,16 +360,9 @@ struct Surface {
 // load has one level; 1.4x faster traversal there (docs/bvh.md).
 @group(0) @binding(13) var bvh_node_texels: texture_storage_2d<rgba32uint, read>;
 @group(0) @binding(14) var bvh_block_texels: texture_storage_2d<rgba32uint, read>;
-@group(0) @binding(15) var<storage, read> triangle_attributes: array<TriangleAttributes>;
-@group(0) @binding(16) var<storage, read> triangle_attributes_hi: array<TriangleAttributes>;
-// The scene's textures, all in one array of words (src/texture/store.rs).
-@group(0) @binding(17) var<storage, read> textures: array<u32>;
 // With BVH_TEXELS, the triangles too (the hits' surfaces, read once a hit
 // in shading): triangle i's words at texels 3i to 3i + 2.
 @group(0) @binding(18) var triangle_texels: texture_storage_2d<rgba32uint, read>;
-// Every triangle's tangent frames where HAS_NORMAL_MAPS, else one
-// placeholder element (never read).
-@group(0) @binding(19) var<storage, read> triangle_tangents: array<TriangleTangents>;
 // Group 1 holds what one entry point reads and writes: an image tile for
 // `render`, a batch of rays for `trace_rays`.
 // A render tile's pixels' first primitives, pixel (x, y) at y · TILE + x.
@@ -488,10 +493,4 @@ struct Lighting {
     total_power: f32,
     flags: u32,
 }
-@group(0) @binding(20) var<storage, read> emitters: array<Emitter>;
-// The map's pixels, linear RGB × strength, row 0 straight up.
-@group(0) @binding(21) var<storage, read> environment: array<vec4<f32>>;
-// The map's sampling distribution (src/lighting/distribution.rs): the
-// marginal CDF over its rows of cells, then each row's conditional CDF.
-@group(0) @binding(22) var<storage, read> environment_cdf: array<f32>;
 @group(0) @binding(23) var<uniform> lighting: Lighting;

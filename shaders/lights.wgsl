@@ -31,8 +31,8 @@ const INV_TWO_PI_SQUARED: f32 = 0.05066059f;
 // emissive texture read as `texture_at` does (where the triangle has
 // texture coordinates). Shading and light sampling both read it.
 fn emission_at(tri: Triangle, prim: u32, u: f32, v: f32, dir: vec3<f32>, cone_width: f32) -> vec3<f32> {
-    var emission = materials[tri.material].emission;
-    let emissive_texture = materials[tri.material].emissive_texture;
+    var emission = material_entry(tri.material).emission;
+    let emissive_texture = material_entry(tri.material).emissive_texture;
     if HAS_TEXTURES && emissive_texture != NO_TEXTURE && (tri.flags & FLAG_ATTRIBUTES) != 0u {
         emission *= texture_at(emissive_texture, tri, prim, u, v, dir, cone_width).rgb;
     }
@@ -47,7 +47,7 @@ fn pick_emitter(u: f32) -> u32 {
     let scaled = rounded(u * f32(n));
     let bin = min(u32(scaled), n - 1u);
     let rest = min(scaled - f32(bin), ONE_MINUS_EPSILON);
-    return select(emitters[bin].alias_bin, bin, rest < emitters[bin].q);
+    return select(emitter_at(bin).alias_bin, bin, rest < emitter_at(bin).q);
 }
 
 // A triangle emitter's entry in the table (triangles come first, by
@@ -57,13 +57,13 @@ fn triangle_emitter(prim: u32) -> u32 {
     var hi = lighting.num_triangle_emitters;
     while lo < hi {
         let mid = (lo + hi) / 2u;
-        if emitters[mid].index < prim {
+        if emitter_at(mid).index < prim {
             lo = mid + 1u;
         } else {
             hi = mid;
         }
     }
-    if lo < lighting.num_triangle_emitters && emitters[lo].index == prim {
+    if lo < lighting.num_triangle_emitters && emitter_at(lo).index == prim {
         return lo;
     }
     return NO_HIT;
@@ -160,12 +160,12 @@ fn sample_emitter(position: vec3<f32>, normal: vec3<f32>, u_pick: f32, u: vec2<f
         return out;
     }
     let entry = pick_emitter(u_pick);
-    let kind = emitters[entry].kind;
-    let pmf = emitters[entry].pmf;
+    let kind = emitter_at(entry).kind;
+    let pmf = emitter_at(entry).pmf;
     if kind == EMITTER_TRIANGLE {
-        out = sample_triangle(position, emitters[entry].index, u);
+        out = sample_triangle(position, emitter_at(entry).index, u);
     } else if kind == EMITTER_LIGHT {
-        out = sample_light(position, lights[emitters[entry].index]);
+        out = sample_light(position, light_at(emitter_at(entry).index));
     } else {
         out = sample_environment(u);
     }
@@ -191,7 +191,7 @@ fn emitter_pdf(position: vec3<f32>, hit_prim: u32, wi: vec3<f32>, distance: f32)
     }
     let tri = triangle_at(hit_prim);
     let n = cross_rounded(tri.v1 - tri.v0, tri.v2 - tri.v0);
-    return rounded(triangle_solid_angle_pdf(n, wi, distance) * emitters[entry].pmf);
+    return rounded(triangle_solid_angle_pdf(n, wi, distance) * emitter_at(entry).pmf);
 }
 
 // A world direction in the map's frame: turned by −rotation about +Y.
@@ -218,7 +218,7 @@ fn environment_uv(d: vec3<f32>) -> vec2<f32> {
 }
 
 fn environment_texel(x: u32, y: u32) -> vec3<f32> {
-    return environment[y * lighting.environment_width + x].xyz;
+    return environment_at(y * lighting.environment_width + x).xyz;
 }
 
 // The map at (u, v), bilinear as Mitsuba reads it: columns texel-centred
@@ -264,7 +264,7 @@ fn find_interval(start: u32, size: u32, u: f32) -> u32 {
     while remaining > 0u {
         let half = remaining >> 1u;
         let middle = first + half;
-        if environment_cdf[start + middle] <= u {
+        if environment_cdf_at(start + middle) <= u {
             first = middle + 1u;
             remaining -= half + 1u;
         } else {
@@ -301,12 +301,12 @@ fn sample_environment(u: vec2<f32>) -> EmitterSample {
     let columns = lighting.environment_width;
     let rows = lighting.environment_height - 1u;
     let row = find_interval(0u, rows + 1u, u.y);
-    let m0 = environment_cdf[row];
-    let dm = rounded(environment_cdf[row + 1u] - m0);
+    let m0 = environment_cdf_at(row);
+    let dm = rounded(environment_cdf_at(row + 1u) - m0);
     let start = conditional_start(rows, columns, row);
     let column = find_interval(start, columns + 1u, u.x);
-    let c0 = environment_cdf[start + column];
-    let dc = rounded(environment_cdf[start + column + 1u] - c0);
+    let c0 = environment_cdf_at(start + column);
+    let dc = rounded(environment_cdf_at(start + column + 1u) - c0);
     if !(dm > 0.0 && dc > 0.0) {
         return out;
     }
@@ -352,8 +352,8 @@ fn environment_pdf(dir: vec3<f32>) -> f32 {
     let column = min(u32(rounded(s * f32(columns))), columns - 1u);
     let row = min(u32(rounded(uv.y * f32(rows))), rows - 1u);
     let start = conditional_start(rows, columns, row);
-    let dm = rounded(environment_cdf[row + 1u] - environment_cdf[row]);
-    let dc = rounded(environment_cdf[start + column + 1u] - environment_cdf[start + column]);
+    let dm = rounded(environment_cdf_at(row + 1u) - environment_cdf_at(row));
+    let dc = rounded(environment_cdf_at(start + column + 1u) - environment_cdf_at(start + column));
     let sin_theta = safe_sqrt(rounded(rounded(d.x * d.x) + rounded(d.z * d.z)));
     if !(sin_theta > 0.0) {
         return 0.0;

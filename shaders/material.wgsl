@@ -15,32 +15,32 @@ struct SurfaceMaterial {
 
 fn material_at(ray: Ray, hit: Hit, surface: Surface) -> SurfaceMaterial {
     if HAS_SPHERES && hit.prim >= params.num_triangles {
-        let m = spheres[hit.prim - params.num_triangles].material;
-        return SurfaceMaterial(BsdfParams(surface.albedo, materials[m].metallic,
-            materials[m].roughness, materials[m].kind), surface.shading_normal);
+        let m = sphere_at(hit.prim - params.num_triangles).material;
+        return SurfaceMaterial(BsdfParams(surface.albedo, material_entry(m).metallic,
+            material_entry(m).roughness, material_entry(m).kind), surface.shading_normal);
     }
     let tri = triangle_at(hit.prim);
     // Field by field: lavapipe loads a whole struct a lane at a time.
-    var out = SurfaceMaterial(BsdfParams(surface.albedo, materials[tri.material].metallic,
-        materials[tri.material].roughness, materials[tri.material].kind), surface.shading_normal);
+    var out = SurfaceMaterial(BsdfParams(surface.albedo, material_entry(tri.material).metallic,
+        material_entry(tri.material).roughness, material_entry(tri.material).kind), surface.shading_normal);
     // Texture slots are filled only for meshes with texture coordinates.
     if !HAS_TEXTURES || (tri.flags & FLAG_ATTRIBUTES) == 0u {
         return out;
     }
     // The camera ray's cone where it hits, as `surface_at` takes it.
     let cone_width = hit.t * params.cone_spread;
-    let metallic_roughness = materials[tri.material].metallic_roughness_texture;
+    let metallic_roughness = material_entry(tri.material).metallic_roughness_texture;
     if metallic_roughness != NO_TEXTURE {
         let texel = texture_at(metallic_roughness, tri, hit.prim, hit.u, hit.v, ray.dir,
             cone_width);
         out.bsdf.metallic *= texel.b;
         out.bsdf.roughness *= texel.g;
     }
-    let normal_texture = materials[tri.material].normal_texture;
+    let normal_texture = material_entry(tri.material).normal_texture;
     if HAS_NORMAL_MAPS && normal_texture != NO_TEXTURE {
         let texel = texture_at(normal_texture, tri, hit.prim, hit.u, hit.v, ray.dir, cone_width);
         out.shading_normal = normal_mapped(tri, hit, ray.dir, texel.rgb,
-            materials[tri.material].normal_scale);
+            material_entry(tri.material).normal_scale);
     }
     return out;
 }
@@ -65,7 +65,7 @@ fn normal_mapped(tri: Triangle, hit: Hit, dir: vec3<f32>, texel: vec3<f32>, scal
     let outward = normalize(cross(tri.v1 - tri.v0, tri.v2 - tri.v0));
     let n = vertex_normal(tri, hit.prim, w, hit.u, hit.v, outward);
     let side = select(1.0, -1.0, dot(n, dir) > 0.0);
-    let frames = triangle_tangents[hit.prim];
+    let frames = triangle_tangents_at(hit.prim);
     let interpolated = rounded4(rounded4(w * frames.t0)
         + rounded4(rounded4(hit.u * frames.t1) + rounded4(hit.v * frames.t2)));
     let tangent = rounded3(interpolated.xyz - rounded3(n * dot_rounded(n, interpolated.xyz)));

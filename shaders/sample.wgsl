@@ -70,7 +70,7 @@ fn loops_completed() -> bool {
 
 fn report_cut_loops() {
     if !loops_completed() {
-        atomicOr(&loop_status[0], 1u);
+        textureStore(loop_status, vec2<u32>(0u, 0u), vec4<u32>(1u));
     }
 }
 

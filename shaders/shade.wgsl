@@ -53,7 +53,7 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
         let emission = emission_at(tri, hit.prim, hit.u, hit.v, ray.dir, cone_width);
         return Surface(position, error, geometric, shading, base.rgb, emission);
     }
-    let sphere = spheres[hit.prim - params.num_triangles];
+    let sphere = sphere_at(hit.prim - params.num_triangles);
     // Relative to the centre first: o − c is exact when both are near each
     // other, so far from the origin the normal keeps its precision.
     let outward = normalize((ray.origin - sphere.center) + hit.t * ray.dir);
@@ -61,7 +61,7 @@ fn surface_at(ray: Ray, hit: Hit) -> Surface {
     let position = sphere.center + sphere.radius * outward;
     let error = self_hit_bound(abs(sphere.center) + sphere.radius);
     let normal = face_forward(outward, ray.dir);
-    let material = materials[sphere.material];
+    let material = material_entry(sphere.material);
     return Surface(position, error, normal, normal, material.base_color.rgb, material.emission);
 }
 
@@ -169,7 +169,7 @@ fn shade(ray: Ray, hit: Hit) -> vec3<f32> {
     var color = rounded3(params.ambient * surface.albedo);
     let origin = offset_ray_origin(surface.position, surface.error, surface.geometric_normal);
     for (var i = 0u; i < params.num_lights; i++) {
-        let sample = light_sample(surface, origin, lights[i]);
+        let sample = light_sample(surface, origin, light_at(i));
         if !sample.lit {
             continue;
         }

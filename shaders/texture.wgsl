@@ -48,17 +48,17 @@ fn texel_position(u: f32, size: u32) -> i32 {
 // RGBA in 1/LINEAR_ONE (RGB through the table at word `table`: the sRGB
 // table for colour, the linear one for data; A linear).
 fn texel_linear(level: u32, x: i32, y: i32, table: u32) -> vec4<u32> {
-    let word = textures[textures[level] + u32(y) * textures[level + 1u] + u32(x)];
-    return vec4<u32>(textures[table + (word & 255u)], textures[table + ((word >> 8u) & 255u)],
-        textures[table + ((word >> 16u) & 255u)], ((word >> 24u) * LINEAR_ONE + 127u) / 255u);
+    let word = texture_word(texture_word(level) + u32(y) * texture_word(level + 1u) + u32(x));
+    return vec4<u32>(texture_word(table + (word & 255u)), texture_word(table + ((word >> 8u) & 255u)),
+        texture_word(table + ((word >> 16u) & 255u)), ((word >> 24u) * LINEAR_ONE + 127u) / 255u);
 }
 
 // One level's filtered value at the wrapped `uv`, weighted in 1/65536 (so
 // that 1.0 is LINEAR_ONE · 65536 = 2^31): nearest or bilinear.
 fn level_sum(level: u32, uv: vec2<f32>, wrap_u: u32, wrap_v: u32, bilinear: bool,
         table: u32) -> vec4<u32> {
-    let width = i32(textures[level + 1u]);
-    let height = i32(textures[level + 2u]);
+    let width = i32(texture_word(level + 1u));
+    let height = i32(texture_word(level + 2u));
     let px = texel_position(uv.x, u32(width));
     let py = texel_position(uv.y, u32(height));
     if !bilinear {
@@ -98,9 +98,9 @@ fn rounded4(x: vec4<f32>) -> vec4<f32> {
 
 // The slot's UV transform: uv' = M · (u, v, 1).
 fn transform_uv(slot: u32, uv: vec2<f32>) -> vec2<f32> {
-    let m = array<f32, 6>(bitcast<f32>(textures[slot]), bitcast<f32>(textures[slot + 1u]),
-        bitcast<f32>(textures[slot + 2u]), bitcast<f32>(textures[slot + 3u]),
-        bitcast<f32>(textures[slot + 4u]), bitcast<f32>(textures[slot + 5u]));
+    let m = array<f32, 6>(bitcast<f32>(texture_word(slot)), bitcast<f32>(texture_word(slot + 1u)),
+        bitcast<f32>(texture_word(slot + 2u)), bitcast<f32>(texture_word(slot + 3u)),
+        bitcast<f32>(texture_word(slot + 4u)), bitcast<f32>(texture_word(slot + 5u)));
     return vec2<f32>(rounded(rounded(rounded(m[0] * uv.x) + rounded(m[1] * uv.y)) + m[2]),
         rounded(rounded(rounded(m[3] * uv.x) + rounded(m[4] * uv.y)) + m[5]));
 }
@@ -117,9 +117,9 @@ fn fixed_to_float(sum: vec4<u32>) -> vec4<f32> {
 // convention, before the slot's transform), at level of detail `lod` in
 // 1/256 levels (≤ 0: magnified), as linear RGBA.
 fn sample_texture(slot: u32, uv: vec2<f32>, lod: i32) -> vec4<f32> {
-    let flags = textures[slot + 8u];
-    let levels = textures[slot + 7u];
-    let table = textures[slot + 9u];
+    let flags = texture_word(slot + 8u);
+    let levels = texture_word(slot + 7u);
+    let table = texture_word(slot + 9u);
     let count = (flags >> 8u) & 255u;
     let wrap_u = flags & 3u;
     let wrap_v = (flags >> 2u) & 3u;
@@ -182,7 +182,7 @@ fn texture_lod(slot: u32, p0: vec3<f32>, p1: vec3<f32>, p2: vec3<f32>, uv0: vec2
     let a = vec2<f32>(rounded(uv1.x - uv0.x), rounded(uv1.y - uv0.y));
     let b = vec2<f32>(rounded(uv2.x - uv0.x), rounded(uv2.y - uv0.y));
     let uv_area = difference_of_products(a.x, b.y, a.y, b.x);
-    let texel_area = bitcast<f32>(textures[slot + 6u]);
+    let texel_area = bitcast<f32>(texture_word(slot + 6u));
     let four_lambda = 2 * log2_fixed(uv_area) + 2 * log2_fixed(texel_area) + log2_fixed(nn)
         + 4 * log2_fixed(cone_width) - 4 * log2_fixed(nd);
     return four_lambda >> 6u;

@@ -620,3 +620,28 @@ pub struct LightAnswer {
     pub delta: u32,
     pub _pad: [u32; 2],
 }
+
+/// Where each of the scene's arrays starts in the shader's `scene_words`
+/// (group 0, binding 2; src/gpu/upload.rs), in 16-byte words: every
+/// read-only array in one storage buffer, so that a pass binds few (WebGPU
+/// in browsers allows 8 or 10 a stage).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct SceneArrays {
+    pub triangles: u32,
+    pub normals: u32,
+    pub attributes: u32,
+    pub tangents: u32,
+    pub nodes: u32,
+    pub blocks: u32,
+    pub spheres: u32,
+    pub materials: u32,
+    pub lights: u32,
+    pub textures: u32,
+    pub emitters: u32,
+    pub environment: u32,
+    pub environment_cdf: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
+}

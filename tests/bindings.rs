@@ -3,7 +3,7 @@
 //! group and binding, of that kind and access, and every shader binding has
 //! an entry. No GPU needed.
 
-use lambert::gpu::bindings::{ACCELERATION, BindingKind, BindingTable, TABLES};
+use lambert::gpu::bindings::{ACCELERATION, BindingKind, BindingTable, TABLES, unmet_limits};
 use lambert::gpu::{HARDWARE_SOURCE, SHADER_SOURCE};
 
 /// Each module with the tables its pipelines bind: the compute module
@@ -52,6 +52,10 @@ fn shader_kind(
                 format: naga::StorageFormat::Rgba32Uint,
                 access,
             } if *access == StorageAccess::LOAD => Ok(BindingKind::Texels),
+            ImageClass::Storage {
+                format: naga::StorageFormat::R32Uint,
+                access,
+            } if *access == StorageAccess::STORE => Ok(BindingKind::FlagTexel),
             other => Err(format!("a 2D image of class {other:?}")),
         },
         (space, inner) => Err(format!("{space:?} {inner:?}")),
@@ -148,4 +152,34 @@ fn no_table_binds_a_number_twice() {
             table.label
         );
     }
+}
+
+/// A browser's WebGPU adapter (10 storage buffers and 4 storage textures a
+/// stage; Chromium's SwiftShader and its tiers for real GPUs) renders: the
+/// scene's group and the largest pass's fit. One storage buffer fewer is
+/// refused in words, naming the limit; the geometric queries, which bind
+/// more, are checked apart.
+#[test]
+fn a_browsers_limits_run_the_render_passes() {
+    let browser = wgpu::Limits {
+        max_storage_buffers_per_shader_stage: 10,
+        max_storage_textures_per_shader_stage: 4,
+        ..wgpu::Limits::default()
+    };
+    assert_eq!(unmet_limits(&browser), None);
+    let fewer = wgpu::Limits {
+        max_storage_buffers_per_shader_stage: 9,
+        ..browser.clone()
+    };
+    let why = unmet_limits(&fewer).expect("9 storage buffers refused");
+    assert!(
+        why.contains("at most 9 storage buffers") && why.contains("binds 10"),
+        "{why}"
+    );
+    let textures = wgpu::Limits {
+        max_storage_textures_per_shader_stage: 3,
+        ..browser
+    };
+    let why = unmet_limits(&textures).expect("3 storage textures refused");
+    assert!(why.contains("storage textures"), "{why}");
 }

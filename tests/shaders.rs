@@ -271,6 +271,27 @@ fn lighting_structs_match_wgsl_layout() {
     );
     check_layout!(
         m,
+        SceneArrays {
+            triangles,
+            normals,
+            attributes,
+            tangents,
+            nodes,
+            blocks,
+            spheres,
+            materials,
+            lights,
+            textures,
+            emitters,
+            environment,
+            environment_cdf,
+            _pad0,
+            _pad1,
+            _pad2
+        }
+    );
+    check_layout!(
+        m,
         LightQuery {
             position,
             u_pick,

@@ -199,14 +199,14 @@ pub(super) fn choose_adapter(
                 .as_ref()
                 .is_none_or(|f| info.name.to_lowercase().contains(f))
                 && !(hardware_only && is_software(&info))
-                && unmet_limits(&a.limits()).is_none()
+                && cannot_run(a).is_none()
         })
         .min_by_key(|a| rank(&a.get_info()));
     let Some(adapter) = chosen else {
         let mut unfit = false;
         let available: Vec<String> = adapters
             .iter()
-            .map(|a| match unmet_limits(&a.limits()) {
+            .map(|a| match cannot_run(a) {
                 Some(why) => {
                     unfit = true;
                     format!("{} (cannot run lambert: {why})", describe(&a.get_info()))
@@ -238,6 +238,17 @@ pub(super) fn choose_adapter(
         )));
     };
     Ok(adapter.clone())
+}
+
+/// Why `adapter` cannot run lambert's kernel, if it cannot: its limits
+/// (`unmet_limits`), or wgpu's GL backend: the kernel fits GL's 16 storage
+/// buffers, but Mesa's GL refuses the GLSL naga writes of it ("is is not
+/// allowed on function parameter"), so GL is refused before it is tried.
+pub fn cannot_run(adapter: &wgpu::Adapter) -> Option<String> {
+    if adapter.get_info().backend == wgpu::Backend::Gl {
+        return Some("wgpu's GL backend does not compile lambert's kernel".to_string());
+    }
+    unmet_limits(&adapter.limits())
 }
 
 pub(super) fn describe(info: &wgpu::AdapterInfo) -> String {

@@ -14,6 +14,8 @@ pub enum BindingKind {
     StorageWrite,
     /// A read-only rgba32uint storage texture (`BvhStorage::Texels`).
     Texels,
+    /// A write-only r32uint storage texture (`loop_status`, one texel).
+    FlagTexel,
     /// A top-level acceleration structure (`--accel hardware`).
     AccelerationStructure,
 }
@@ -52,7 +54,7 @@ const fn bind(name: &'static str, binding: u32, kind: BindingKind) -> Binding {
     }
 }
 
-use BindingKind::{AccelerationStructure, Storage, StorageWrite, Texels, Uniform};
+use BindingKind::{AccelerationStructure, FlagTexel, Storage, StorageWrite, Texels, Uniform};
 
 /// Group 0 of every pipeline: the resident scene.
 pub const SCENE: BindingTable = BindingTable {
@@ -60,28 +62,13 @@ pub const SCENE: BindingTable = BindingTable {
     group: 0,
     entries: &[
         bind("params", 0, Uniform),
-        bind("triangles", 1, Storage),
-        bind("triangle_normals", 2, Storage),
-        bind("spheres", 3, Storage),
-        bind("materials", 4, Storage),
-        bind("lights", 5, Storage),
-        bind("bvh_nodes", 6, Storage),
-        bind("bvh_blocks", 7, Storage),
-        bind("triangles_hi", 8, Storage),
-        bind("triangle_normals_hi", 9, Storage),
-        bind("bvh_nodes_hi", 10, Storage),
-        bind("bvh_blocks_hi", 11, Storage),
-        bind("loop_status", 12, StorageWrite),
+        bind("scene_words", 1, Storage),
+        bind("arrays", 2, Uniform),
+        bind("scene_words_hi", 8, Storage),
+        bind("loop_status", 12, FlagTexel),
         bind("bvh_node_texels", 13, Texels),
         bind("bvh_block_texels", 14, Texels),
-        bind("triangle_attributes", 15, Storage),
-        bind("triangle_attributes_hi", 16, Storage),
-        bind("textures", 17, Storage),
         bind("triangle_texels", 18, Texels),
-        bind("triangle_tangents", 19, Storage),
-        bind("emitters", 20, Storage),
-        bind("environment", 21, Storage),
-        bind("environment_cdf", 22, Storage),
         bind("lighting", 23, Uniform),
     ],
 };
@@ -204,24 +191,47 @@ pub const TABLES: [&BindingTable; 8] = [
 /// Why an adapter with `limits` cannot run the kernel, if it cannot: a
 /// pipeline binds the scene's group and one second group, so it needs the
 /// scene's storage buffers (and storage textures) and the most of any
-/// second group's, within the adapter's per-stage limits. GL's 16 storage
-/// buffers are too few; without this check wgpu fails later with "Too many
-/// bindings" and `auto` never falls back.
+/// second group's, within the adapter's per-stage limits: 10 storage
+/// buffers, what browsers' WebGPU allows. Without this check wgpu fails
+/// later with "Too many bindings" and `auto` never falls back.
 pub fn unmet_limits(limits: &wgpu::Limits) -> Option<String> {
-    unmet_limits_with(limits, &[])
+    unmet_limits_with(limits, &RENDER_SECONDS, &[])
 }
 
 /// `unmet_limits` of the hardware module, whose pipelines bind
 /// `ACCELERATION` too.
 pub(super) fn unmet_hardware_limits(limits: &wgpu::Limits) -> Option<String> {
-    unmet_limits_with(limits, &[&ACCELERATION])
+    unmet_limits_with(limits, &RENDER_SECONDS, &[&ACCELERATION])
 }
 
-/// `unmet_limits` with the groups `extra` bound by every pipeline too.
-fn unmet_limits_with(limits: &wgpu::Limits, extra: &[&BindingTable]) -> Option<String> {
+/// `unmet_limits` of the geometric queries' passes (`PROXIMITY`), checked
+/// when they are first built: a browser's adapter (10 storage buffers a
+/// stage) renders but cannot bind them.
+pub(super) fn unmet_proximity_limits(limits: &wgpu::Limits) -> Option<String> {
+    unmet_limits_with(limits, &[&PROXIMITY], &[])
+}
+
+/// The second groups of the passes that render and trace rays: every
+/// table's but the scene's and the geometric queries'.
+const RENDER_SECONDS: [&BindingTable; 6] = [
+    &IMAGE_TILE,
+    &WAVEFRONT,
+    &PATH_WAVE,
+    &RAYS,
+    &PIXEL_LIST,
+    &LIGHT_PROBE,
+];
+
+/// Whether `limits` hold the scene's group, the largest of `seconds` and
+/// the groups `extra` bound by every pipeline too.
+fn unmet_limits_with(
+    limits: &wgpu::Limits,
+    seconds: &[&BindingTable],
+    extra: &[&BindingTable],
+) -> Option<String> {
     let most = |kind: fn(BindingKind) -> bool| {
         let count = |table: &BindingTable| table.entries.iter().filter(|e| kind(e.kind)).count();
-        let second = TABLES[1..].iter().map(|t| count(t)).max().unwrap_or(0);
+        let second = seconds.iter().map(|t| count(t)).max().unwrap_or(0);
         (count(&SCENE) + second + extra.iter().map(|t| count(t)).sum::<usize>()) as u32
     };
     let short = |what: &str, has: u32, needs: u32| {
@@ -240,7 +250,7 @@ fn unmet_limits_with(limits: &wgpu::Limits, extra: &[&BindingTable]) -> Option<S
         (
             "storage textures",
             limits.max_storage_textures_per_shader_stage,
-            most(|k| k == Texels),
+            most(|k| matches!(k, Texels | FlagTexel)),
         ),
         (
             "acceleration structures",
@@ -272,6 +282,11 @@ impl BindingTable {
                     Texels => wgpu::BindingType::StorageTexture {
                         access: wgpu::StorageTextureAccess::ReadOnly,
                         format: wgpu::TextureFormat::Rgba32Uint,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                    },
+                    FlagTexel => wgpu::BindingType::StorageTexture {
+                        access: wgpu::StorageTextureAccess::WriteOnly,
+                        format: wgpu::TextureFormat::R32Uint,
                         view_dimension: wgpu::TextureViewDimension::D2,
                     },
                     AccelerationStructure => wgpu::BindingType::AccelerationStructure {

@@ -1,6 +1,5 @@
 //! An open device and queue: its limits, its error slot, and waiting on it.
 
-use std::borrow::Cow;
 use std::sync::{Arc, Mutex};
 
 use crate::error::{Error, Result};
@@ -199,14 +198,4 @@ fn error_slot(device: &wgpu::Device, info: &wgpu::AdapterInfo) -> Arc<Mutex<Opti
             ));
     });
     errors
-}
-
-/// At least one element: wgpu rejects empty storage bindings. Borrows the
-/// scene's own memory otherwise, so that upload makes no host copy.
-pub(super) fn non_empty<T: bytemuck::Pod + Default>(items: &[T]) -> Cow<'_, [u8]> {
-    if items.is_empty() {
-        Cow::Owned(bytemuck::bytes_of(&T::default()).to_vec())
-    } else {
-        Cow::Borrowed(bytemuck::cast_slice(items))
-    }
 }

@@ -53,7 +53,7 @@ mod upload;
 mod wave_list;
 mod wavefront;
 
-pub use adapter::{AdapterRequest, Presenting, enumerate_adapters};
+pub use adapter::{AdapterRequest, Presenting, cannot_run, enumerate_adapters};
 pub use device::Gpu;
 pub use hardware::{AccelerationStats, TriangleGeometry, offers_ray_queries};
 pub use options::{GpuOptions, MAX_BUFFER_ENV, RAY_QUERY_GEOMETRY_ENV, SHADOW_DISPATCH_ENV};

@@ -101,7 +101,7 @@ impl Pipelines {
 }
 
 /// `specialisation`'s overrides (or some of them) and those the upload
-/// decides: how the arrays are split, where the BVH is read from, the
+/// decides: where the scene's words are split, where the BVH is read from, the
 /// workgroup's shape and the traversal stack's size.
 pub(super) fn resident_constants(
     mut constants: Vec<(&'static str, f64)>,
@@ -110,17 +110,7 @@ pub(super) fn resident_constants(
     scene: &Scene,
     gpu: &Gpu,
 ) -> Vec<(&'static str, f64)> {
-    constants.push((
-        "TRIANGLES_PER_BINDING",
-        buffers.triangles.per_binding as f64,
-    ));
-    constants.push(("NORMALS_PER_BINDING", buffers.normals.per_binding as f64));
-    constants.push((
-        "ATTRIBUTES_PER_BINDING",
-        buffers.attributes.per_binding as f64,
-    ));
-    constants.push(("NODES_PER_BINDING", buffers.nodes.per_binding as f64));
-    constants.push(("BLOCKS_PER_BINDING", buffers.blocks.per_binding as f64));
+    constants.push(("WORDS_PER_BINDING", buffers.words.per_binding as f64));
     constants.push(("BVH_TEXELS", (storage == BvhStorage::Texels) as u32 as f64));
     constants.push(("RENDER_WORKGROUP_X", RENDER_WORKGROUP[0] as f64));
     constants.push(("RENDER_WORKGROUP_Y", RENDER_WORKGROUP[1] as f64));

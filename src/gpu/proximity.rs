@@ -12,7 +12,7 @@ use crate::error::{Error, Result};
 use crate::layout::{ClosestPoint, ListedHit, NO_HIT, Ray, WORKGROUP_INVOCATIONS};
 use crate::scene::Scene;
 
-use super::bindings::{PROXIMITY, leading_bytes};
+use super::bindings::{PROXIMITY, leading_bytes, unmet_proximity_limits};
 use super::resident::Host;
 
 /// Items per dispatch at most: no dispatch runs long enough for a watchdog,
@@ -98,6 +98,12 @@ impl Proximity {
         bound: &[Bound<'_>],
     ) -> Result<()> {
         if self.layout.is_none() {
+            if let Some(why) = unmet_proximity_limits(&host.gpu().limits) {
+                return Err(Error::GpuLimit(format!(
+                    "{} cannot run the geometric queries: {why}",
+                    host.gpu().describe()
+                )));
+            }
             self.layout = Some(PROXIMITY.layout(&host.gpu().device));
         }
         if !self.pipelines.contains_key(entry) {

@@ -134,27 +134,40 @@ impl TileTargets {
     }
 }
 
-/// The shader's flag that the driver cut its loops short (`loop_status`),
-/// and its readback.
+/// The shader's flag that the driver cut its loops short (`loop_status`,
+/// a one-texel r32uint storage texture), and its readback.
 pub(super) struct LoopStatus {
-    pub buffer: wgpu::Buffer,
+    pub texture: wgpu::Texture,
     staging: wgpu::Buffer,
 }
+
+/// A flag's bytes, and what a row of a texture copy to a buffer is
+/// aligned to.
+const FLAG_BYTES: u32 = 4;
+const ROW_ALIGNMENT: u64 = wgpu::COPY_BYTES_PER_ROW_ALIGNMENT as u64;
 
 impl LoopStatus {
     pub fn new(device: &wgpu::Device) -> LoopStatus {
         LoopStatus {
-            buffer: device.create_buffer(&wgpu::BufferDescriptor {
+            texture: device.create_texture(&wgpu::TextureDescriptor {
                 label: Some("loop status"),
-                size: 4,
-                usage: wgpu::BufferUsages::STORAGE
-                    | wgpu::BufferUsages::COPY_SRC
-                    | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
+                size: wgpu::Extent3d {
+                    width: 1,
+                    height: 1,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::R32Uint,
+                usage: wgpu::TextureUsages::STORAGE_BINDING
+                    | wgpu::TextureUsages::COPY_SRC
+                    | wgpu::TextureUsages::COPY_DST,
+                view_formats: &[],
             }),
             staging: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("loop status readback"),
-                size: 4,
+                size: ROW_ALIGNMENT,
                 usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
                 mapped_at_creation: false,
             }),
@@ -165,10 +178,37 @@ impl LoopStatus {
     /// (the shader's `report_cut_loops`); clears the flag.
     pub async fn were_cut(&self, gpu: &Gpu) -> Result<bool> {
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        encoder.copy_buffer_to_buffer(&self.buffer, 0, &self.staging, 0, 4);
-        encoder.clear_buffer(&self.buffer, 0, None);
+        let extent = wgpu::Extent3d {
+            width: 1,
+            height: 1,
+            depth_or_array_layers: 1,
+        };
+        encoder.copy_texture_to_buffer(
+            self.texture.as_image_copy(),
+            wgpu::TexelCopyBufferInfo {
+                buffer: &self.staging,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(ROW_ALIGNMENT as u32),
+                    rows_per_image: None,
+                },
+            },
+            extent,
+        );
         gpu.queue.submit([encoder.finish()]);
-        gpu.read_mapped(&self.staging, 4, "loop status", |bytes| {
+        // Queued after the copy: the queue's writes go before the next
+        // submission's commands.
+        gpu.queue.write_texture(
+            self.texture.as_image_copy(),
+            &[0; FLAG_BYTES as usize],
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(FLAG_BYTES),
+                rows_per_image: None,
+            },
+            extent,
+        );
+        gpu.read_mapped(&self.staging, FLAG_BYTES as u64, "loop status", |bytes| {
             bytemuck::cast_slice::<u8, u32>(bytes)[0] != 0
         })
         .await

@@ -69,7 +69,8 @@ pub struct GpuRenderer {
     pub shadow_dispatch: ShadowDispatch,
     /// Bytes of the scene's buffers on the device.
     pub device_bytes: u64,
-    /// The arrays split over two bindings.
+    /// The arrays that lie, whole or in part, in the high binding of the
+    /// scene's words (none where they fit one binding).
     pub split_arrays: Vec<&'static str>,
     /// Where the shader reads the BVH from.
     pub bvh_storage: BvhStorage,

@@ -55,7 +55,8 @@ impl Resident {
             device,
             layouts,
             buffers,
-            [&params_buffer, &loop_status.buffer],
+            &params_buffer,
+            &loop_status.texture,
         );
         let image_group = IMAGE_TILE.bind_group(
             device,
@@ -263,35 +264,33 @@ impl<'a> Host<'a> {
     }
 }
 
-/// Group 0: the uniform, the scene's arrays (low and high ranges), the
-/// loop flag, the BVH's texels and the path integrator's lights.
+/// Group 0: the uniform, the scene's words (low and high ranges) and
+/// where its arrays start, the loop flag, the BVH's texels and the
+/// lighting uniform.
 fn scene_bind_group(
     device: &wgpu::Device,
     layouts: &Layouts,
     buffers: &SceneBuffers,
-    [params_buffer, loop_status]: [&wgpu::Buffer; 2],
+    params_buffer: &wgpu::Buffer,
+    loop_status: &wgpu::Texture,
 ) -> wgpu::BindGroup {
-    let node_view = buffers.node_texture.create_view(&Default::default());
-    let block_view = buffers.block_texture.create_view(&Default::default());
-    let triangle_view = buffers.triangle_texture.create_view(&Default::default());
-    let mut entries = vec![
+    let view = |texture: &wgpu::Texture| texture.create_view(&Default::default());
+    let [node_view, block_view, triangle_view, status_view] = [
+        &buffers.node_texture,
+        &buffers.block_texture,
+        &buffers.triangle_texture,
+        loop_status,
+    ]
+    .map(view);
+    let entries = vec![
         ("params", params_buffer.as_entire_binding()),
-        ("triangles", buffers.triangles.low_binding()),
-        ("triangle_normals", buffers.normals.low_binding()),
-        ("spheres", buffers.spheres.as_entire_binding()),
-        ("materials", buffers.materials.as_entire_binding()),
-        ("lights", buffers.lights.as_entire_binding()),
-        ("bvh_nodes", buffers.nodes.low_binding()),
-        ("bvh_blocks", buffers.blocks.low_binding()),
-        ("triangles_hi", buffers.triangles.high_binding()),
-        ("triangle_normals_hi", buffers.normals.high_binding()),
-        ("bvh_nodes_hi", buffers.nodes.high_binding()),
-        ("bvh_blocks_hi", buffers.blocks.high_binding()),
-        ("loop_status", loop_status.as_entire_binding()),
-        ("triangle_attributes", buffers.attributes.low_binding()),
-        ("triangle_attributes_hi", buffers.attributes.high_binding()),
-        ("textures", buffers.textures.as_entire_binding()),
-        ("triangle_tangents", buffers.tangents.as_entire_binding()),
+        ("scene_words", buffers.words.low_binding()),
+        ("arrays", buffers.arrays.as_entire_binding()),
+        ("scene_words_hi", buffers.words.high_binding()),
+        (
+            "loop_status",
+            wgpu::BindingResource::TextureView(&status_view),
+        ),
         (
             "bvh_node_texels",
             wgpu::BindingResource::TextureView(&node_view),
@@ -304,7 +303,7 @@ fn scene_bind_group(
             "triangle_texels",
             wgpu::BindingResource::TextureView(&triangle_view),
         ),
+        ("lighting", buffers.lighting.as_entire_binding()),
     ];
-    entries.extend(buffers.lighting.entries());
     SCENE.bind_group(device, SCENE.label, &layouts.scene, entries)
 }

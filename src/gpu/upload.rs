@@ -1,18 +1,14 @@
-//! The scene's arrays on the device: storage buffers (split over two
-//! bindings when large) and the BVH's texel textures.
+//! The scene's arrays on the device: one storage buffer of words (split
+//! over two bindings when large) and the BVH's texel textures.
 
 use wgpu::util::DeviceExt;
 
 use crate::error::{Error, Result};
-use crate::layout::{
-    CompressedNode, PrimBlock, Sphere, Triangle, TriangleAttributes, TriangleNormals,
-    TriangleTangents,
-};
+use crate::layout::{CompressedNode, SceneArrays};
 use crate::scene::Scene;
 
 use super::adapter::is_llvmpipe;
-use super::device::{Gpu, non_empty};
-use super::lighting::LightingBuffers;
+use super::device::Gpu;
 
 /// Where the shader reads the BVH's nodes and leaf blocks from
 /// (`BVH_TEXELS` in shaders/layout.wgsl).
@@ -57,107 +53,123 @@ pub const TEXELS_PER_ROW: u32 = 4096;
 
 /// The scene's arrays on the device, as the scene bind group binds them.
 pub(super) struct SceneBuffers {
-    pub triangles: SplitBuffer,
-    pub normals: SplitBuffer,
-    pub attributes: SplitBuffer,
-    pub nodes: SplitBuffer,
-    pub blocks: SplitBuffer,
-    pub spheres: wgpu::Buffer,
-    pub materials: wgpu::Buffer,
-    pub lights: wgpu::Buffer,
+    /// Every read-only array, at the words `arrays` gives.
+    pub words: SceneWords,
+    /// `arrays` as the uniform the shader reads it from.
+    pub arrays: wgpu::Buffer,
     pub node_texture: wgpu::Texture,
     pub block_texture: wgpu::Texture,
     /// The triangles, with `BvhStorage::Texels` (3 texels each).
     pub triangle_texture: wgpu::Texture,
-    /// `texture::TextureStore::words`.
-    pub textures: wgpu::Buffer,
-    /// `Scene::tangents` (a placeholder where no material has a normal
-    /// texture); one binding, as it is kept only for normal-mapped scenes.
-    pub tangents: wgpu::Buffer,
-    /// The path integrator's lights (bindings 20 to 23).
-    pub lighting: LightingBuffers,
+    /// The path integrator's lighting uniform (binding 23).
+    pub lighting: wgpu::Buffer,
     /// Bytes of all of them.
     pub device_bytes: u64,
 }
 
+/// Bytes of a word of `scene_words`.
+const WORD: u64 = 16;
+
 impl SceneBuffers {
-    /// Uploads `scene`'s arrays, its BVH in `storage` (the other storage
-    /// gets a placeholder, bound and never read).
+    /// Uploads `scene`'s arrays, its BVH in `storage` (the triangles too:
+    /// each either in the words or in texels, never both).
     pub async fn upload(gpu: &Gpu, scene: &Scene, storage: BvhStorage) -> Result<SceneBuffers> {
         // A scene within the binding limits may still not fit the device's
         // memory, which wgpu reports as an out-of-memory error.
         let memory = gpu.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-        let limit = gpu.binding_limit();
         let texels = storage == BvhStorage::Texels;
-        // In one place only: texels or buffer.
-        let (buffer_triangles, texel_triangles): (&[Triangle], &[u8]) = if texels {
-            (&[], bytemuck::cast_slice(&scene.triangles))
-        } else {
-            (&scene.triangles, &[])
-        };
-        let triangles = gpu.split_buffer("triangles", &non_empty(buffer_triangles), 48)?;
-        let triangle_texture = gpu.texel_texture("triangle texels", texel_triangles)?;
-        let normals =
-            gpu.split_buffer("normals", &non_empty::<TriangleNormals>(&scene.normals), 48)?;
-        let attributes = gpu.split_buffer(
-            "triangle attributes",
-            &non_empty::<TriangleAttributes>(&scene.attributes),
-            size_of::<TriangleAttributes>() as u64,
-        )?;
         let compressed = crate::cwbvh::compress(&scene.bvh);
-        let (buffer_nodes, buffer_blocks): (&[CompressedNode], &[PrimBlock]) = if texels {
-            (&[], &[])
-        } else {
-            (&compressed, &scene.bvh.blocks)
+        // Each in one place only: [texels, words].
+        let place = |bytes: &[u8]| -> [usize; 2] {
+            if texels {
+                [bytes.len(), 0]
+            } else {
+                [0, bytes.len()]
+            }
         };
-        let (texel_nodes, texel_blocks): (&[u8], &[u8]) = if texels {
+        let triangles: &[u8] = bytemuck::cast_slice(&scene.triangles);
+        let nodes: &[u8] = bytemuck::cast_slice(&compressed);
+        let blocks: &[u8] = bytemuck::cast_slice(&scene.bvh.blocks);
+        let [in_texels, in_words] = place(triangles);
+        let triangle_texture = gpu.texel_texture("triangle texels", &triangles[..in_texels])?;
+        let triangle_words = &triangles[..in_words];
+        let [in_texels, in_words] = place(nodes);
+        let node_texture = gpu.texel_texture("BVH node texels", &nodes[..in_texels])?;
+        let node_words = &nodes[..in_words];
+        let [in_texels, in_words] = place(blocks);
+        let block_texture = gpu.texel_texture("BVH leaf block texels", &blocks[..in_texels])?;
+        let block_words = &blocks[..in_words];
+        let table = scene.emitters();
+        let map = scene.environment().and_then(|e| e.map.as_ref());
+        let (pixels, cdf): (&[[f32; 4]], &[f32]) = map.map_or((&[], &[]), |m| (&m.pixels, &m.cdf));
+        let mut arrays = SceneArrays::default();
+        let words = gpu.scene_words(&mut [
+            ("triangles", triangle_words, &mut arrays.triangles),
             (
-                bytemuck::cast_slice(&compressed),
-                bytemuck::cast_slice(&scene.bvh.blocks),
-            )
-        } else {
-            (&[], &[])
-        };
-        let node_texture = gpu.texel_texture("BVH node texels", texel_nodes)?;
-        let block_texture = gpu.texel_texture("BVH leaf block texels", texel_blocks)?;
-        let nodes = gpu.split_buffer(
-            "BVH nodes",
-            &non_empty(buffer_nodes),
-            std::mem::size_of::<CompressedNode>() as u64,
-        )?;
-        let spheres = gpu.storage_buffer("spheres", &non_empty::<Sphere>(&scene.spheres), limit)?;
-        let materials = gpu.storage_buffer("materials", &non_empty(&scene.materials), limit)?;
-        let lights = gpu.storage_buffer("lights", &non_empty(&scene.lights), limit)?;
-        let textures = gpu.storage_buffer(
-            "textures",
-            bytemuck::cast_slice(scene.textures.words()),
-            limit,
-        )?;
-        let tangents = gpu.storage_buffer(
-            "triangle tangents",
-            &non_empty::<TriangleTangents>(&scene.tangents),
-            limit,
-        )?;
-        let blocks = gpu.split_buffer(
-            "BVH leaf blocks",
-            &non_empty(buffer_blocks),
-            std::mem::size_of::<PrimBlock>() as u64,
-        )?;
+                "triangle normals",
+                bytemuck::cast_slice(&scene.normals),
+                &mut arrays.normals,
+            ),
+            (
+                "triangle attributes",
+                bytemuck::cast_slice(&scene.attributes),
+                &mut arrays.attributes,
+            ),
+            (
+                "triangle tangents",
+                bytemuck::cast_slice(&scene.tangents),
+                &mut arrays.tangents,
+            ),
+            ("BVH nodes", node_words, &mut arrays.nodes),
+            ("BVH leaf blocks", block_words, &mut arrays.blocks),
+            (
+                "spheres",
+                bytemuck::cast_slice(&scene.spheres),
+                &mut arrays.spheres,
+            ),
+            (
+                "materials",
+                bytemuck::cast_slice(&scene.materials),
+                &mut arrays.materials,
+            ),
+            (
+                "lights",
+                bytemuck::cast_slice(&scene.lights),
+                &mut arrays.lights,
+            ),
+            (
+                "textures",
+                bytemuck::cast_slice(scene.textures.words()),
+                &mut arrays.textures,
+            ),
+            (
+                "emitters",
+                bytemuck::cast_slice(&table.entries),
+                &mut arrays.emitters,
+            ),
+            (
+                "environment",
+                bytemuck::cast_slice(pixels),
+                &mut arrays.environment,
+            ),
+            (
+                "environment CDF",
+                bytemuck::cast_slice(cdf),
+                &mut arrays.environment_cdf,
+            ),
+        ])?;
         drop(compressed);
-        let lighting = LightingBuffers::upload(gpu, scene)?;
-        let device_bytes = lighting.device_bytes()
-            + [
-                &triangles.buffer,
-                &normals.buffer,
-                &attributes.buffer,
-                &nodes.buffer,
-                &spheres,
-                &materials,
-                &lights,
-                &textures,
-                &tangents,
-                &blocks.buffer,
-            ]
+        let uniform = |label, contents: &[u8]| {
+            gpu.device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(label),
+                    contents,
+                    usage: wgpu::BufferUsages::UNIFORM,
+                })
+        };
+        let arrays_buffer = uniform("scene arrays", bytemuck::bytes_of(&arrays));
+        let lighting = uniform("lighting", bytemuck::bytes_of(&table.uniform));
+        let device_bytes = [&words.buffer, &arrays_buffer, &lighting]
             .iter()
             .map(|b| b.size())
             .sum::<u64>()
@@ -167,59 +179,44 @@ impl SceneBuffers {
                 .sum::<u64>();
         if let Some(e) = memory.pop().await {
             return Err(Error::GpuLimit(format!(
-                "the scene's {device_bytes} bytes of GPU data (triangles {}, BVH nodes {}, leaf \
-                 blocks {}) do not fit in the memory of {}: {e}",
-                triangles.buffer.size(),
-                nodes.buffer.size(),
-                blocks.buffer.size(),
+                "the scene's {device_bytes} bytes of GPU data ({}) do not fit in the memory of {}: {e}",
+                words.sizes(),
                 gpu.describe()
             )));
         }
         Ok(SceneBuffers {
-            triangles,
-            normals,
-            attributes,
-            nodes,
-            blocks,
-            spheres,
-            materials,
-            lights,
+            words,
+            arrays: arrays_buffer,
             node_texture,
             block_texture,
             triangle_texture,
-            textures,
-            tangents,
             lighting,
             device_bytes,
         })
     }
 
-    /// The arrays split over two bindings.
+    /// The arrays that lie, whole or in part, in the high binding.
     pub fn split_arrays(&self) -> Vec<&'static str> {
-        [
-            ("triangles", &self.triangles),
-            ("triangle normals", &self.normals),
-            ("triangle attributes", &self.attributes),
-            ("BVH nodes", &self.nodes),
-            ("BVH leaf blocks", &self.blocks),
-        ]
-        .iter()
-        .filter(|(_, b)| b.per_binding != u32::MAX)
-        .map(|(name, _)| *name)
-        .collect()
+        self.words.split_arrays.clone()
     }
 }
 
-/// A buffer bound as a low range and, when split, a high one.
-pub(super) struct SplitBuffer {
+/// The scene's read-only arrays in one buffer of 16-byte words, bound as a
+/// low range and, when it passes one binding, a high one
+/// (`WORDS_PER_BINDING` in the shader).
+pub(super) struct SceneWords {
     pub buffer: wgpu::Buffer,
-    /// Elements in the low binding (u32::MAX: all of them).
+    /// Words in the low binding (u32::MAX: all of them).
     pub per_binding: u32,
     /// Bytes in the low binding.
     low: u64,
+    /// Each array's name and bytes, for messages.
+    arrays: Vec<(&'static str, u64)>,
+    /// The arrays that lie in the high binding, whole or in part.
+    split_arrays: Vec<&'static str>,
 }
 
-impl SplitBuffer {
+impl SceneWords {
     pub fn low_binding(&self) -> wgpu::BindingResource<'_> {
         wgpu::BindingResource::Buffer(wgpu::BufferBinding {
             buffer: &self.buffer,
@@ -239,58 +236,81 @@ impl SplitBuffer {
             size: wgpu::BufferSize::new(self.buffer.size() - self.low),
         })
     }
+
+    /// The arrays' sizes, for messages: "triangles 4800 bytes, …".
+    fn sizes(&self) -> String {
+        SceneWords::describe(&self.arrays)
+    }
+
+    fn describe(arrays: &[(&'static str, u64)]) -> String {
+        arrays
+            .iter()
+            .filter(|(_, bytes)| *bytes > 0)
+            .map(|(name, bytes)| format!("{name} {bytes} bytes"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
 }
 
 impl Gpu {
-    /// A storage buffer of `bytes`, which may be at most `max_bytes` long.
-    pub(super) fn storage_buffer(
-        &self,
-        label: &str,
-        bytes: &[u8],
-        max_bytes: u64,
-    ) -> Result<wgpu::Buffer> {
-        if bytes.len() as u64 > max_bytes {
+    /// `arrays` (name, bytes, where to write its first word) in one buffer
+    /// of 16-byte words, each array from a whole word; bound as two ranges
+    /// where they pass one binding (see WORDS_PER_BINDING in the shader).
+    fn scene_words(&self, arrays: &mut [(&'static str, &[u8], &mut u32)]) -> Result<SceneWords> {
+        let limit = self.binding_limit();
+        let mut words = 0u64;
+        for (_, bytes, first) in arrays.iter_mut() {
+            **first = u32::try_from(words).unwrap_or(u32::MAX);
+            words += (bytes.len() as u64).div_ceil(WORD);
+        }
+        // One word at the least: a binding is never empty.
+        let len = words.max(1) * WORD;
+        // The low range a multiple of 256 bytes, an offset every device
+        // accepts; the high range holds the rest, up to one binding more.
+        let low = if len <= limit { len } else { limit / 256 * 256 };
+        let max_bytes = (low + limit).min(self.limits.max_buffer_size);
+        let sizes: Vec<(&'static str, u64)> = arrays
+            .iter()
+            .map(|(name, bytes, _)| (*name, bytes.len() as u64))
+            .collect();
+        if len > max_bytes || words > u32::MAX as u64 {
+            let named = SceneWords::describe(&sizes);
             return Err(Error::GpuLimit(format!(
-                "the scene's {label} take {} bytes, {} more than the {max_bytes} bytes {} can \
-                 bind for them (max_buffer_size {}, max_storage_buffer_binding_size {})",
-                bytes.len(),
-                bytes.len() as u64 - max_bytes,
+                "the scene's arrays take {len} bytes ({named}), {} more than the {max_bytes} bytes {} \
+                 can bind for them in two bindings (max_buffer_size {}, \
+                 max_storage_buffer_binding_size {})",
+                len.saturating_sub(max_bytes),
                 self.describe(),
                 self.limits.max_buffer_size,
                 self.limits.max_storage_buffer_binding_size
             )));
         }
-        Ok(self
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: bytes,
-                usage: wgpu::BufferUsages::STORAGE,
-            }))
-    }
-
-    /// An array that may exceed one storage binding: one buffer, bound as
-    /// two ranges (see TRIANGLES_PER_BINDING in the shader).
-    fn split_buffer(&self, label: &str, bytes: &[u8], stride: u64) -> Result<SplitBuffer> {
-        let limit = self.binding_limit();
-        let len = bytes.len() as u64;
-        // Whole elements in the low range, and an offset every device
-        // accepts (a multiple of 256 elements is a multiple of 256 bytes);
-        // the high range holds the rest, up to one binding more.
-        let per_binding = (limit / stride) / 256 * 256;
-        let max_bytes = (per_binding * stride + limit).min(self.limits.max_buffer_size);
-        let buffer = self.storage_buffer(label, bytes, max_bytes)?;
-        if len <= limit {
-            return Ok(SplitBuffer {
-                buffer,
-                per_binding: u32::MAX,
-                low: len,
-            });
+        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("scene words"),
+            size: len,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut split_arrays = Vec::new();
+        for (name, bytes, first) in arrays.iter() {
+            let offset = **first as u64 * WORD;
+            if !bytes.is_empty() {
+                self.queue.write_buffer(&buffer, offset, bytes);
+                if offset + bytes.len() as u64 > low {
+                    split_arrays.push(*name);
+                }
+            }
         }
-        Ok(SplitBuffer {
+        Ok(SceneWords {
             buffer,
-            per_binding: per_binding as u32,
-            low: per_binding * stride,
+            per_binding: if len == low {
+                u32::MAX
+            } else {
+                (low / WORD) as u32
+            },
+            low,
+            arrays: sizes,
+            split_arrays,
         })
     }
 

@@ -248,7 +248,7 @@ pub(super) fn info(args: &AdapterArgs) -> Result<ExitCode> {
             "  ray queries (--accel hardware): {}",
             gpu::offers_ray_queries(&adapter)
         );
-        if let Some(why) = gpu::bindings::unmet_limits(&limits) {
+        if let Some(why) = gpu::cannot_run(&adapter) {
             println!("  cannot run lambert: {why}");
         }
     }
