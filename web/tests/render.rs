@@ -27,7 +27,6 @@ fn field(object: &JsValue, key: &str) -> JsValue {
 }
 
 #[wasm_bindgen_test]
-#[ignore = "the scene group exceeds WebGPU's 10 storage buffers per stage (docs/web.md, Status)"]
 async fn a_triangle_renders_as_the_cpu_twin_renders_it() {
     let session = Session::open().await.map_err(JsValue::from).unwrap();
     assert!(!session.adapter().is_empty());
