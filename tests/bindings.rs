@@ -3,7 +3,9 @@
 //! group and binding, of that kind and access, and every shader binding has
 //! an entry. No GPU needed.
 
-use lambert::gpu::bindings::{ACCELERATION, BindingKind, BindingTable, TABLES, unmet_limits};
+use lambert::gpu::bindings::{
+    ACCELERATION, BindingKind, BindingTable, TABLES, fits_wavefront, unmet_limits,
+};
 use lambert::gpu::{HARDWARE_SOURCE, SHADER_SOURCE};
 
 /// Each module with the tables its pipelines bind: the compute module
@@ -154,31 +156,35 @@ fn no_table_binds_a_number_twice() {
     }
 }
 
-/// A browser's WebGPU adapter (10 storage buffers and 4 storage textures a
-/// stage; Chromium's SwiftShader and its tiers for real GPUs) renders: the
-/// scene's group and the largest pass's fit. One storage buffer fewer is
-/// refused in words, naming the limit; the geometric queries, which bind
-/// more, are checked apart.
+/// WebGPU's default limits (8 storage buffers and 4 storage textures a
+/// stage) run every required pass: the scene's group and the megakernel's,
+/// ray queries' and pixel lists'; a browser's 10 (Chromium's SwiftShader
+/// and its tier for real GPUs) run the wavefronts too. Fewer are refused in
+/// words, naming the limit; the geometric queries, which bind more, are
+/// checked apart.
 #[test]
-fn a_browsers_limits_run_the_render_passes() {
+fn webgpu_default_and_browser_limits_run_the_render_passes() {
+    let default = wgpu::Limits::default();
+    assert_eq!(default.max_storage_buffers_per_shader_stage, 8);
+    assert_eq!(unmet_limits(&default), None);
+    assert!(!fits_wavefront(&default, false) && !fits_wavefront(&default, true));
     let browser = wgpu::Limits {
         max_storage_buffers_per_shader_stage: 10,
-        max_storage_textures_per_shader_stage: 4,
-        ..wgpu::Limits::default()
+        ..default.clone()
     };
-    assert_eq!(unmet_limits(&browser), None);
+    assert!(fits_wavefront(&browser, false) && fits_wavefront(&browser, true));
     let fewer = wgpu::Limits {
-        max_storage_buffers_per_shader_stage: 9,
-        ..browser.clone()
+        max_storage_buffers_per_shader_stage: 3,
+        ..default.clone()
     };
-    let why = unmet_limits(&fewer).expect("9 storage buffers refused");
+    let why = unmet_limits(&fewer).expect("3 storage buffers refused");
     assert!(
-        why.contains("at most 9 storage buffers") && why.contains("binds 10"),
+        why.contains("at most 3 storage buffers") && why.contains("binds 4"),
         "{why}"
     );
     let textures = wgpu::Limits {
         max_storage_textures_per_shader_stage: 3,
-        ..browser
+        ..default
     };
     let why = unmet_limits(&textures).expect("3 storage textures refused");
     assert!(why.contains("storage textures"), "{why}");

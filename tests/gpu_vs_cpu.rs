@@ -160,6 +160,51 @@ fn scenes_split_across_bindings_render_the_same() {
     }
 }
 
+/// An adapter with WebGPU's default 8 storage buffers a stage (too few
+/// for the wavefronts' passes, enough for the megakernel's) renders in the
+/// megakernel, direct and path-traced, and gives the image the wavefront
+/// gives where it fits: the same bits.
+#[test]
+fn an_adapter_with_webgpus_default_bindings_renders_in_the_megakernel() {
+    use lambert::gpu::GpuRenderer;
+    use lambert::scene::{Integrator, Scene};
+    let small = |scene: Scene, integrator| {
+        let mut settings = scene.default_settings();
+        settings.integrator = integrator;
+        (settings.view.camera.width, settings.view.camera.height) = (96, 72);
+        settings.view.spp = 2;
+        scene.with_settings(&settings)
+    };
+    // The wavefront is the default for shadowed direct lighting and for a
+    // textured path-traced scene.
+    let textured = Scene::load(&asset("scenes/meshes/textured.glb")).expect("bundled model");
+    for (name, scene) in [
+        (
+            "cornell, direct",
+            small(load("cornell"), Integrator::Direct),
+        ),
+        ("textured.glb, path", small(textured, Integrator::Path)),
+    ] {
+        let mut gpu = open_gpu();
+        gpu.limits.max_storage_buffers_per_shader_stage = 8;
+        let mut few = GpuRenderer::new(gpu, &scene).expect("8 storage buffers");
+        let mut wide = GpuRenderer::new(open_gpu(), &scene).unwrap();
+        assert!(!few.is_wavefront(), "{name}: the wavefront chosen with 8");
+        assert!(
+            wide.is_wavefront(),
+            "{name}: the wavefront not chosen where it fits"
+        );
+        let image = |r: &mut GpuRenderer| {
+            r.render(scene.view(), &lambert::progress::Progress::hidden())
+                .unwrap()
+                .0
+        };
+        let (a, b) = (image(&mut few), image(&mut wide));
+        assert_eq!(a.image.rgb, b.image.rgb, "{name}");
+        assert_eq!(a.prims, b.prims, "{name}");
+    }
+}
+
 /// The wavefront render (shadow rays traced apart from the camera rays; the default at any spp where
 /// shadows are traced) and the megakernel give the same image, bit for bit (colour, variance and
 /// primitive): at 1 and 3 spp on five scenes, at 40 spp (more than a

@@ -10,7 +10,6 @@ use std::sync::Arc;
 
 use lambert::jobs::{self, Sign};
 use lambert::layout::Triangle;
-use lambert::loading::Format;
 use lambert::render::Renderer;
 use lambert::scene::Scene;
 
@@ -245,12 +244,7 @@ fn the_bundled_models_agree_with_their_winding_numbers() {
         ("boxes.glb", 4000, 2000),
     ] {
         let path = common::asset(&format!("scenes/meshes/{file}"));
-        let format = if file.ends_with(".glb") {
-            Format::Glb
-        } else {
-            Format::Obj
-        };
-        let scene = Scene::from_model(&path, format, None).unwrap();
+        let scene = Scene::from_model(&path, None).unwrap();
         let triangles = scene.triangles().to_vec();
         let offset = scene.offset();
         // World points: the triangles are in the scene's local frame.
@@ -258,7 +252,7 @@ fn the_bundled_models_agree_with_their_winding_numbers() {
             .iter()
             .map(|p| std::array::from_fn(|k| (f64::from(p[k]) + offset[k]) as f32))
             .collect();
-        let closed = cpu(Scene::from_model(&path, format, None).unwrap()).bounds_solid();
+        let closed = cpu(Scene::from_model(&path, None).unwrap()).bounds_solid();
         let decided = check(file, scene, &world);
         eprintln!(
             "{file}: {closed:?}, the sides decided {decided} of {}",

@@ -191,17 +191,27 @@ pub const TABLES: [&BindingTable; 8] = [
 /// Why an adapter with `limits` cannot run the kernel, if it cannot: a
 /// pipeline binds the scene's group and one second group, so it needs the
 /// scene's storage buffers (and storage textures) and the most of any
-/// second group's, within the adapter's per-stage limits: 10 storage
-/// buffers, what browsers' WebGPU allows. Without this check wgpu fails
-/// later with "Too many bindings" and `auto` never falls back.
+/// required pass's second group, within the adapter's per-stage limits:
+/// the megakernel's, ray queries' and pixel lists' (4 storage buffers in
+/// all, within WebGPU's default 8). The wavefronts' passes, which bind up
+/// to 10 (what browsers allow at most), are used where they fit
+/// (`fits_wavefront`). Without this check wgpu fails later with "Too many
+/// bindings" and `auto` never falls back.
 pub fn unmet_limits(limits: &wgpu::Limits) -> Option<String> {
-    unmet_limits_with(limits, &RENDER_SECONDS, &[])
+    unmet_limits_with(limits, &REQUIRED_SECONDS, &[])
+}
+
+/// Whether `limits` bind the passes of the direct integrator's wavefront,
+/// or of the path integrator's (`path`).
+pub fn fits_wavefront(limits: &wgpu::Limits, path: bool) -> bool {
+    let table = if path { &PATH_WAVE } else { &WAVEFRONT };
+    unmet_limits_with(limits, &[table], &[]).is_none()
 }
 
 /// `unmet_limits` of the hardware module, whose pipelines bind
 /// `ACCELERATION` too.
 pub(super) fn unmet_hardware_limits(limits: &wgpu::Limits) -> Option<String> {
-    unmet_limits_with(limits, &RENDER_SECONDS, &[&ACCELERATION])
+    unmet_limits_with(limits, &REQUIRED_SECONDS, &[&ACCELERATION])
 }
 
 /// `unmet_limits` of the geometric queries' passes (`PROXIMITY`), checked
@@ -211,16 +221,10 @@ pub(super) fn unmet_proximity_limits(limits: &wgpu::Limits) -> Option<String> {
     unmet_limits_with(limits, &[&PROXIMITY], &[])
 }
 
-/// The second groups of the passes that render and trace rays: every
-/// table's but the scene's and the geometric queries'.
-const RENDER_SECONDS: [&BindingTable; 6] = [
-    &IMAGE_TILE,
-    &WAVEFRONT,
-    &PATH_WAVE,
-    &RAYS,
-    &PIXEL_LIST,
-    &LIGHT_PROBE,
-];
+/// The second groups of the passes every render and ray query may need:
+/// every table's but the scene's, the wavefronts' (used where they fit)
+/// and the geometric queries' (checked when first built).
+const REQUIRED_SECONDS: [&BindingTable; 4] = [&IMAGE_TILE, &RAYS, &PIXEL_LIST, &LIGHT_PROBE];
 
 /// Whether `limits` hold the scene's group, the largest of `seconds` and
 /// the groups `extra` bound by every pipeline too.

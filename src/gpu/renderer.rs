@@ -163,11 +163,8 @@ impl GpuRenderer {
             return Err(Error::Gpu(format!("uploading the scene: {e}")));
         }
         gpu.wait().await?;
-        let shadow_dispatch = ShadowDispatch::for_scene(
-            scene,
-            gpu.options.shadow_dispatch.as_deref(),
-            gpu.limits.max_storage_buffer_binding_size as u64,
-        )?;
+        let shadow_dispatch =
+            ShadowDispatch::for_scene(scene, gpu.options.shadow_dispatch.as_deref(), &gpu.limits)?;
         Ok(GpuRenderer {
             gpu,
             pipelines: Pipelines::new(
@@ -530,7 +527,7 @@ impl GpuRenderer {
             params.shadows != 0,
             params.num_lights,
             self.gpu.options.shadow_dispatch.as_deref(),
-            self.gpu.limits.max_storage_buffer_binding_size,
+            &self.gpu.limits,
         )?;
         Ok(())
     }

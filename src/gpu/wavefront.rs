@@ -9,7 +9,7 @@ use crate::error::{Error, Result};
 use crate::layout::WORKGROUP_INVOCATIONS;
 use crate::scene::Scene;
 
-use super::bindings::WAVEFRONT;
+use super::bindings::{WAVEFRONT, fits_wavefront};
 use super::device::Gpu;
 use super::options::SHADOW_DISPATCH_ENV;
 use super::path_wave::path_wave_bytes;
@@ -42,36 +42,46 @@ impl ShadowDispatch {
     /// `Wavefront` where it applies, unless `chosen`
     /// (LAMBERT_SHADOW_DISPATCH) says otherwise: for the direct
     /// integrator, where shadows are traced and a queue for the scene's
-    /// lights is no larger than `max_binding` bytes; for the path
-    /// integrator, the path wavefront (gpu::path_wave) where its buffers
-    /// fit `max_binding`.
+    /// lights fits one storage binding; for the path integrator, the path
+    /// wavefront (gpu::path_wave) where its buffers fit one. Either only
+    /// where the adapter binds its passes' storage buffers.
     pub(super) fn for_scene(
         scene: &Scene,
         chosen: Option<&str>,
-        max_binding: u64,
+        limits: &wgpu::Limits,
     ) -> Result<ShadowDispatch> {
         let lights = scene.lights.len().min(u32::MAX as usize) as u32;
         let path = scene.integrator == crate::scene::Integrator::Path;
         let textured = scene.has_textures();
-        ShadowDispatch::for_lights(path, textured, scene.shadows, lights, chosen, max_binding)
+        ShadowDispatch::for_lights(path, textured, scene.shadows, lights, chosen, limits)
     }
 
     /// `for_scene` from the integrator, whether the scene has textures and
     /// the uniform's shadows and light count (what `GpuRenderer::set_shadows`
-    /// has).
+    /// has). The wavefront applies only where its lists fit one binding and
+    /// its passes' bindings fit the adapter's limits (WebGPU's default 8
+    /// storage buffers a stage hold the megakernel's, not the wavefront's).
     pub(super) fn for_lights(
         path: bool,
         textured: bool,
         shadows: bool,
         lights: u32,
         chosen: Option<&str>,
-        max_binding: u64,
+        limits: &wgpu::Limits,
     ) -> Result<ShadowDispatch> {
+        let max_binding = limits.max_storage_buffer_binding_size;
+        let bound = fits_wavefront(limits, path);
         let (applies, unset) = if path {
-            (path_wave_bytes() <= max_binding, path_dispatch(textured))
+            (
+                bound && path_wave_bytes() <= max_binding,
+                path_dispatch(textured),
+            )
         } else {
             let queue = wave_queue_bytes(lights) <= max_binding;
-            (shadows && lights > 0 && queue, ShadowDispatch::Wavefront)
+            (
+                bound && shadows && lights > 0 && queue,
+                ShadowDispatch::Wavefront,
+            )
         };
         match chosen {
             None if applies => Ok(unset),
