@@ -1,7 +1,7 @@
 // Entry points: the geometric queries (closest points, winding numbers,
 // every hit along rays), one point or ray per invocation, in the scene's
-// local frame. Bindings: group 0 (the scene: params, triangles,
-// triangles_hi, the BVH's nodes and blocks, buffers or texels) and group
+// local frame. Bindings: group 0 (the scene: params, its words
+// with the triangles and the BVH's nodes and blocks, or its texels) and group
 // 1's PROXIMITY table (src/gpu/bindings.rs): each entry point reads and
 // writes those named in its comment.
 

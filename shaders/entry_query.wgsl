@@ -1,8 +1,7 @@
 // Entry point: a ray query (`lambert trace`, the Python binding):
 // `trace_rays`, one ray per invocation, closest hit or (ANY_HIT) any.
-// Bindings (naga's reflection): group 0 but for triangle_normals,
-// materials, lights and triangle_normals_hi (0:0, 0:1, 0:3, 0:6 to 0:8,
-// 0:10 to 0:14); group 1's rays (read) and hits (written), 1:2 and 1:3.
+// Bindings (naga's reflection): group 0 (the scene's words and texels);
+// group 1's rays (read) and hits (written), 1:2 and 1:3.
 
 // One ray of a `lambert trace` batch. Misses leave t = FAR, prim = NO_HIT.
 @compute @workgroup_size(WORKGROUP_INVOCATIONS)

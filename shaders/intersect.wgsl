@@ -295,7 +295,6 @@ fn texture_at(slot: u32, tri: Triangle, prim: u32, u: f32, v: f32, dir: vec3<f32
 // texture (RGBA) and its alpha texture's alpha, read as `texture_at` does.
 // Alpha and shading both read it.
 fn base_color_at(tri: Triangle, prim: u32, u: f32, v: f32, dir: vec3<f32>, cone_width: f32) -> vec4<f32> {
-    // Field by field: lavapipe loads a whole struct a lane at a time.
     var color = material_entry(tri.material).base_color;
     if HAS_ATTRIBUTES && (tri.flags & FLAG_ATTRIBUTES) != 0u {
         let a = triangle_attributes_at(prim);

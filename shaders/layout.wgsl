@@ -13,8 +13,8 @@ override HAS_SHADOWS: bool = true;
 override HAS_POINT_LIGHTS: bool = true;
 override HAS_DIRECTIONAL_LIGHTS: bool = true;
 override HAS_SPOT_LIGHTS: bool = true;
-// Some material has a normal texture: `triangle_tangents` holds every
-// triangle's tangent frames. False: their reads are compiled out.
+// Some material has a normal texture: the scene's words hold every
+// triangle's tangent frames (`triangle_tangents_at`). False: their reads are compiled out.
 override HAS_NORMAL_MAPS: bool = true;
 // Some triangle is alpha-masked (FLAG_MASKED): traversal tests alpha at
 // its hits. False: the test is compiled out.

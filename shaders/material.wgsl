@@ -20,7 +20,6 @@ fn material_at(ray: Ray, hit: Hit, surface: Surface) -> SurfaceMaterial {
             material_entry(m).roughness, material_entry(m).kind), surface.shading_normal);
     }
     let tri = triangle_at(hit.prim);
-    // Field by field: lavapipe loads a whole struct a lane at a time.
     var out = SurfaceMaterial(BsdfParams(surface.albedo, material_entry(tri.material).metallic,
         material_entry(tri.material).roughness, material_entry(tri.material).kind), surface.shading_normal);
     // Texture slots are filled only for meshes with texture coordinates.

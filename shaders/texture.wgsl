@@ -1,5 +1,5 @@
-// Stage: textures. Sampling the scene's texture store (`textures`, one
-// array of words: the sRGB table, mip levels, texels, texture slots;
+// Stage: textures. Sampling the scene's texture store (`texture_word`: one
+// array of words in the scene's words: the sRGB table, mip levels, texels, texture slots;
 // src/texture/store.rs) and the level of detail from a ray cone. CPU
 // twin: src/cpu/texture.rs. Bit-identical to it: every float result that
 // another operation reads passes through `rounded`, so no compiler can

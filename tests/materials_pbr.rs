@@ -448,8 +448,8 @@ fn info_lists_metallic_roughness_and_normal_maps() {
     );
 }
 
-/// A scene with normal and metallic-roughness maps (tangents uploaded at
-/// binding 19, data textures in the store) renders under the direct
+/// A scene with normal and metallic-roughness maps (tangents uploaded in
+/// the scene's words, data textures in the store) renders under the direct
 /// integrator on the GPU as on the CPU, bit for bit, and as it would
 /// without the maps: the direct integrator reads neither.
 #[test]

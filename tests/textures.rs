@@ -267,6 +267,8 @@ fn images_that_do_not_decode_say_which_and_why() {
 /// entry points over arrays of inputs.
 const TWIN_SHADER: &str = r#"
 @group(0) @binding(0) var<storage, read> textures: array<u32>;
+// The kernel reads them from the scene's words (shaders/fetch.wgsl).
+fn texture_word(i: u32) -> u32 { return textures[i]; }
 struct Sample { slot: u32, lod: i32, u: f32, v: f32 }
 struct Footprint { p0: vec4<f32>, p1: vec4<f32>, p2: vec4<f32>, dir: vec4<f32>, uv01: vec4<f32>, uv2_b: vec4<f32>, slot: vec4<u32> }
 @group(0) @binding(1) var<storage, read> samples: array<Sample>;

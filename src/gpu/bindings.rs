@@ -202,10 +202,12 @@ pub fn unmet_limits(limits: &wgpu::Limits) -> Option<String> {
 }
 
 /// Whether `limits` bind the passes of the direct integrator's wavefront,
-/// or of the path integrator's (`path`).
-pub fn fits_wavefront(limits: &wgpu::Limits, path: bool) -> bool {
+/// or of the path integrator's (`path`); in the ray-query module
+/// (`hardware`) with its group 2 too.
+pub fn fits_wavefront(limits: &wgpu::Limits, path: bool, hardware: bool) -> bool {
     let table = if path { &PATH_WAVE } else { &WAVEFRONT };
-    unmet_limits_with(limits, &[table], &[]).is_none()
+    let extra: &[&BindingTable] = if hardware { &[&ACCELERATION] } else { &[] };
+    unmet_limits_with(limits, &[table], extra).is_none()
 }
 
 /// `unmet_limits` of the hardware module, whose pipelines bind

@@ -15,6 +15,7 @@ use crate::output::{Image, Rendered};
 use crate::progress::Progress;
 use crate::scene::{Accel, Integrator, Intersect, Scene};
 
+use super::bindings::fits_wavefront;
 use super::device::Gpu;
 use super::hardware::{Acceleration, AccelerationStats};
 use super::pipelines::{Layouts, Pipelines, resident_constants};
@@ -163,8 +164,12 @@ impl GpuRenderer {
             return Err(Error::Gpu(format!("uploading the scene: {e}")));
         }
         gpu.wait().await?;
-        let shadow_dispatch =
-            ShadowDispatch::for_scene(scene, gpu.options.shadow_dispatch.as_deref(), &gpu.limits)?;
+        let shadow_dispatch = ShadowDispatch::for_scene(
+            scene,
+            gpu.options.shadow_dispatch.as_deref(),
+            &gpu.limits,
+            acceleration.is_some(),
+        )?;
         Ok(GpuRenderer {
             gpu,
             pipelines: Pipelines::new(
@@ -521,13 +526,15 @@ impl GpuRenderer {
     /// integrator (each integrator has its own wavefront).
     fn choose_shadow_dispatch(&mut self) -> Result<()> {
         let params = self.resident.scene_params();
+        let path = self.path_traced();
         self.shadow_dispatch = ShadowDispatch::for_lights(
-            self.path_traced(),
+            path,
             self.constant_on("HAS_TEXTURES"),
             params.shadows != 0,
             params.num_lights,
             self.gpu.options.shadow_dispatch.as_deref(),
             &self.gpu.limits,
+            fits_wavefront(&self.gpu.limits, path, self.acceleration_stats.is_some()),
         )?;
         Ok(())
     }

@@ -14,8 +14,8 @@ use super::device::Gpu;
 /// (`BVH_TEXELS` in shaders/layout.wgsl).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BvhStorage {
-    /// Storage buffers, split over two bindings when large: what hardware
-    /// GPUs get.
+    /// The scene's words (a storage buffer, split over two bindings when
+    /// large): what hardware GPUs get.
     Buffers,
     /// rgba32uint read-only storage textures: what llvmpipe gets. It
     /// fetches a texel for its 8 SIMD lanes with vector instructions, where

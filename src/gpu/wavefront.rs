@@ -49,18 +49,21 @@ impl ShadowDispatch {
         scene: &Scene,
         chosen: Option<&str>,
         limits: &wgpu::Limits,
+        hardware: bool,
     ) -> Result<ShadowDispatch> {
         let lights = scene.lights.len().min(u32::MAX as usize) as u32;
         let path = scene.integrator == crate::scene::Integrator::Path;
         let textured = scene.has_textures();
-        ShadowDispatch::for_lights(path, textured, scene.shadows, lights, chosen, limits)
+        let bound = fits_wavefront(limits, path, hardware);
+        ShadowDispatch::for_lights(path, textured, scene.shadows, lights, chosen, limits, bound)
     }
 
     /// `for_scene` from the integrator, whether the scene has textures and
     /// the uniform's shadows and light count (what `GpuRenderer::set_shadows`
     /// has). The wavefront applies only where its lists fit one binding and
-    /// its passes' bindings fit the adapter's limits (WebGPU's default 8
-    /// storage buffers a stage hold the megakernel's, not the wavefront's).
+    /// its passes' bindings fit the adapter's limits (`bound`: WebGPU's
+    /// default 8 storage buffers a stage hold the megakernel's, not the
+    /// wavefront's; `fits_wavefront`).
     pub(super) fn for_lights(
         path: bool,
         textured: bool,
@@ -68,9 +71,9 @@ impl ShadowDispatch {
         lights: u32,
         chosen: Option<&str>,
         limits: &wgpu::Limits,
+        bound: bool,
     ) -> Result<ShadowDispatch> {
         let max_binding = limits.max_storage_buffer_binding_size;
-        let bound = fits_wavefront(limits, path);
         let (applies, unset) = if path {
             (
                 bound && path_wave_bytes() <= max_binding,

@@ -35,8 +35,9 @@ pub struct Session {
 impl Session {
     /// Opens the browser's default WebGPU adapter or, where it has none,
     /// its fallback adapter (SwiftShader in Chromium: never refused), with
-    /// the adapter's own limits (the kernel binds more storage buffers and
-    /// larger ones than WebGPU's defaults allow). Rejects with a message
+    /// the adapter's own limits (larger storage bindings than WebGPU's
+    /// default 128 MiB, and the wavefronts' 10 storage buffers a stage
+    /// where it allows them). Rejects with a message
     /// naming what is missing where the browser has no WebGPU at all.
     pub async fn open() -> Result<Session, JsError> {
         let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
