@@ -28,10 +28,7 @@ import time
 import numpy as np
 
 import lambert
-from python_bench import cpu_name  # benches/, beside this script
-
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-
+from python_bench import cpu_name, default_model  # benches/, beside this script
 
 def load_mesh(path):
     """Vertices (float32, as Open3D stores them) and faces, in file order."""
@@ -42,11 +39,8 @@ def load_mesh(path):
 
 
 def main():
-    default = os.path.join(ROOT, "..", "shared", "models", "dragon.obj")
-    if not os.path.exists(default):
-        default = os.path.join(ROOT, "assets", "scenes", "meshes", "dragon_res4.obj")
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("model", nargs="?", default=default)
+    parser.add_argument("model", nargs="?", default=default_model())
     parser.add_argument("--points", type=int, default=1_000_000)
     parser.add_argument("--rounds", type=int, default=4)
     parser.add_argument("--no-gpu", action="store_true", help="time the CPU path and Open3D only")

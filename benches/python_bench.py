@@ -45,6 +45,13 @@ def cpu_name():
     return platform.processor() or "unknown CPU"
 
 
+def default_model():
+    """The full dragon from ../shared when it is there, else the bundled
+    dragon_res4."""
+    shared = os.path.join(ROOT, "..", "shared", "models", "dragon.obj")
+    return shared if os.path.exists(shared) else os.path.join(ROOT, "assets", "scenes", "meshes", "dragon_res4.obj")
+
+
 def median_time(runs, f):
     f()
     times = []

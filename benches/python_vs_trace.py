@@ -21,30 +21,16 @@ import statistics
 import subprocess
 import sys
 import tempfile
-import time
 
 import numpy as np
 
 import lambert
-from python_bench import LAMBERT, ROOT, cpu_name  # benches/, beside this script
-
-
-def median_time(f, runs=7):
-    f()
-    times = []
-    for _ in range(runs):
-        start = time.perf_counter()
-        f()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
+from python_bench import LAMBERT, cpu_name, default_model, median_time  # benches/, beside this script
 
 
 def main():
-    default = os.path.join(ROOT, "..", "shared", "models", "dragon.obj")
-    if not os.path.exists(default):
-        default = os.path.join(ROOT, "assets", "scenes", "meshes", "dragon_res4.obj")
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("model", nargs="?", default=default)
+    parser.add_argument("model", nargs="?", default=default_model())
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--side", type=int, default=1024)
     args = parser.parse_args()
@@ -77,10 +63,10 @@ def main():
               f"{os.cpu_count()} threads")
         for r in range(args.rounds):
             closest = trace(False)
-            f32 = median_time(lambda: scene.intersect(o32, d32, device="cpu"))
-            f64 = median_time(lambda: scene.intersect(o64, d64, device="cpu"))
+            f32 = median_time(7, lambda: scene.intersect(o32, d32, device="cpu"))
+            f64 = median_time(7, lambda: scene.intersect(o64, d64, device="cpu"))
             any_hit = trace(True)
-            occluded = median_time(lambda: scene.occluded(o32, d32, device="cpu"))
+            occluded = median_time(7, lambda: scene.occluded(o32, d32, device="cpu"))
             print(f"round {r + 1}: trace {closest * 1e3:.1f} ms; intersect float32 {f32 * 1e3:.1f} ms "
                   f"({closest / f32:.2f}x), float64 {f64 * 1e3:.1f} ms ({closest / f64:.2f}x); "
                   f"trace --any-hit {any_hit * 1e3:.1f} ms, occluded float32 {occluded * 1e3:.1f} ms "

@@ -114,8 +114,7 @@ impl Placement {
         tmax: f64,
     ) -> Option<(DVec3, f64, f64, f64)> {
         let o = origin - self.offset;
-        let reach = FAR_RATIO * self.radius;
-        if o.length_squared() <= reach * reach {
+        if self.is_near(o) {
             return Some((o, tmin, tmax, 0.0));
         }
         // The near root of |o + t·d|² = r² in the stable form (as
@@ -137,6 +136,22 @@ impl Placement {
                 entry,
             )
         })
+    }
+
+    /// `local_ray` where the origin stays where it is (shift 0: within
+    /// FAR_RATIO radii), else None: the usual ray, without `place`'s
+    /// search for where a far one enters.
+    #[inline]
+    pub fn near_ray(&self, origin: DVec3, dir: DVec3, tmin: f64, tmax: f64) -> Option<Ray> {
+        let o = origin - self.offset;
+        self.is_near(o).then(|| f32_ray(o, dir, tmin, tmax))
+    }
+
+    /// Whether an origin `o` (relative to the offset) stays where it is.
+    #[inline]
+    fn is_near(&self, o: DVec3) -> bool {
+        let reach = FAR_RATIO * self.radius;
+        o.length_squared() <= reach * reach
     }
 
     /// `local_ray` for every ray of a query given in world f32 (a ray
@@ -180,9 +195,7 @@ impl Placement {
     /// Whether a world f32 ray's origin (the scene not being centred) is
     /// beyond FAR_RATIO radii.
     fn is_far(&self, r: &Ray) -> bool {
-        let reach = FAR_RATIO * self.radius;
-        let [x, y, z] = r.origin.map(f64::from);
-        x * x + y * y + z * z > reach * reach
+        !self.is_near(world(r.origin))
     }
 
     /// What limits the precision of a query ray from `origin` along `dir`

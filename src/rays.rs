@@ -173,15 +173,34 @@ pub fn ray_is_valid(ray: &Ray) -> bool {
         & oz.is_finite()
         & dx.is_finite()
         & dy.is_finite()
-        & dz.is_finite()
-        & ray.tmin.is_finite()
-        & (ray.tmax.is_finite() | (ray.tmax == f32::INFINITY));
-    let [x, y, z] = ray.dir.map(f64::from);
+        & dz.is_finite();
+    finite & direction_length_is_valid(ray.dir) & bounds_are_valid(ray.tmin, ray.tmax)
+}
+
+/// Whether a direction's length is within [MIN_DIRECTION, MAX_DIRECTION]
+/// (its coordinates finite or not: `ray_is_valid` checks that).
+#[inline]
+pub fn direction_length_is_valid(dir: [f32; 3]) -> bool {
+    let [x, y, z] = dir.map(f64::from);
     let squared = x * x + y * y + z * z;
-    finite
-        & (squared >= MIN_DIRECTION * MIN_DIRECTION)
-        & (squared <= MAX_DIRECTION * MAX_DIRECTION)
-        & (ray.tmin <= ray.tmax)
+    (squared >= MIN_DIRECTION * MIN_DIRECTION) & (squared <= MAX_DIRECTION * MAX_DIRECTION)
+}
+
+/// Whether every direction whose longest axis (in magnitude) lies within
+/// [shortest, longest] has a valid length (`direction_length_is_valid`):
+/// its length lies within [longest axis, √3 · longest axis]. A check of
+/// many rays at once, which may refuse some valid ones near the limits
+/// (check those one by one).
+#[inline]
+pub fn direction_lengths_are_valid(shortest: f32, longest: f32) -> bool {
+    (shortest as f64 >= MIN_DIRECTION) & (longest as f64 * 3f64.sqrt() <= MAX_DIRECTION)
+}
+
+/// Whether a ray's bounds are valid: tmin finite, tmax finite or +∞,
+/// tmin ≤ tmax.
+#[inline]
+pub fn bounds_are_valid(tmin: f32, tmax: f32) -> bool {
+    tmin.is_finite() & (tmax.is_finite() | (tmax == f32::INFINITY)) & (tmin <= tmax)
 }
 
 #[inline]

@@ -15,7 +15,7 @@ use lambert::scene::Scene;
 
 mod common;
 
-use common::data::{Lcg, sphere_mesh, tri};
+use common::data::{Lcg, quad_grid, sphere_mesh, tri};
 
 /// A closed torus about the z axis (radii big and small), facing out.
 fn torus(big: f32, small: f32, around: usize, across: usize) -> Vec<Triangle> {
@@ -25,20 +25,7 @@ fn torus(big: f32, small: f32, around: usize, across: usize) -> Vec<Triangle> {
         let ring = big + small * v.cos();
         [ring * u.cos(), ring * u.sin(), small * v.sin()]
     };
-    let mut out = Vec::new();
-    for i in 0..around {
-        for j in 0..across {
-            let (a, b, c, d) = (
-                vertex(i, j),
-                vertex(i + 1, j),
-                vertex(i + 1, j + 1),
-                vertex(i, j + 1),
-            );
-            out.push(tri(a, b, c));
-            out.push(tri(a, c, d));
-        }
-    }
-    out
+    quad_grid(around, across, vertex)
 }
 
 /// The box [−1, 1]³, each face an n × n grid of squares cut in two (many

@@ -11,7 +11,8 @@ use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
 use lambert::cpu::{
-    CpuKernel, QueryOptions, QueryRays, RayFrame, SharedOut, TracedChunk, trace_rays_each,
+    CpuKernel, QueryOptions, QueryRays, RayFrame, SharedOut, TracedChunk, prefetch_rows,
+    trace_rays_each,
 };
 use lambert::gpu::AdapterRequest;
 use lambert::layout::{Hit, NO_HIT, Ray};
@@ -110,11 +111,32 @@ impl<T> Column<T> {
         Column { vec, out }
     }
 
+    /// Elements start..start + len, to write.
+    ///
     /// # Safety
-    /// `i` within the `n` elements, written by one thread.
+    /// The range within the `n` elements, written by one thread, and no
+    /// other slice of it alive.
     #[inline]
-    unsafe fn set(&self, i: usize, value: T) {
-        unsafe { self.out.at(i).write(value) }
+    #[allow(clippy::mut_from_ref)]
+    unsafe fn rows(&self, start: usize, len: usize) -> &mut [MaybeUninit<T>] {
+        unsafe { std::slice::from_raw_parts_mut(self.out.at(start).cast(), len) }
+    }
+
+    /// Writes `values` into the rows from `start` on, and starts loading
+    /// the rows after them (those this thread most likely writes next, as
+    /// the trace's chunks run in order within each thread's share).
+    ///
+    /// # Safety
+    /// As `rows`, for as many rows as `values` has.
+    #[inline]
+    unsafe fn write(&self, start: usize, values: impl ExactSizeIterator<Item = T>) {
+        let len = values.len();
+        let rows = unsafe { self.rows(start, len) };
+        for (row, value) in rows.iter_mut().zip(values) {
+            row.write(value);
+        }
+        let next = start + len;
+        prefetch_rows(rows.as_ptr_range().end, len.min(self.vec.capacity() - next));
     }
 
     /// # Safety
@@ -140,13 +162,20 @@ impl TColumn {
         }
     }
 
+    /// Writes the t of `rows`' hits: each hit's own (float32), or its t
+    /// in f64 (the local t plus the shift where the rays were moved).
+    ///
     /// # Safety
-    /// As `Column::set`.
+    /// As `Column::write`.
     #[inline]
-    unsafe fn set(&self, i: usize, t: f32, t64: f64) {
-        match self {
-            TColumn::F32(c) => unsafe { c.set(i, t) },
-            TColumn::F64(c) => unsafe { c.set(i, t64) },
+    unsafe fn write(&self, rows: &HitRows) {
+        let start = rows.start;
+        match (self, rows.world_t) {
+            (TColumn::F32(c), _) => unsafe { c.write(start, rows.hits.iter().map(|h| h.t)) },
+            (TColumn::F64(c), Some(t)) => unsafe { c.write(start, t.iter().copied()) },
+            (TColumn::F64(c), None) => unsafe {
+                c.write(start, rows.hits.iter().map(|h| h.t as f64))
+            },
         }
     }
 
@@ -165,6 +194,19 @@ enum TValues {
     F64(Vec<f64>),
 }
 
+/// A chunk of a query's hits in the world's frame, as the columns take
+/// them.
+struct HitRows<'a> {
+    /// The index of its first ray.
+    start: usize,
+    hits: &'a [Hit],
+    /// The hits' t in f64, where the rays were traced in the scene's frame
+    /// (`Query::world_hit`); None: the hits' own.
+    world_t: Option<&'a [f64]>,
+    /// The hits' normals, if asked.
+    normals: &'a [[f32; 3]],
+}
+
 /// The hit columns Python receives.
 struct Columns {
     t: TValues,
@@ -181,6 +223,7 @@ fn each_chunk(
     rays: &[Ray],
     hits: &[Hit],
     normals: bool,
+    moved: bool,
     each: &(dyn Fn(&TracedChunk) + Sync),
 ) {
     use rayon::prelude::*;
@@ -200,6 +243,7 @@ fn each_chunk(
             start,
             hits,
             normals: &chunk_normals,
+            moved,
         });
     });
 }
@@ -262,7 +306,7 @@ impl NativeScene {
                 }
                 Query::Arrays { n, .. } => {
                     let first_bad = FirstBad::new();
-                    let fill = |start: usize, out: &mut [MaybeUninit<Ray>]| {
+                    let fill = |start: usize, out: &mut [MaybeUninit<Ray>]| -> bool {
                         query.fill(start, out, &first_bad, &problems)
                     };
                     let rays = QueryRays::Fill(n, &fill);
@@ -277,7 +321,9 @@ impl NativeScene {
             Ok(None)
         })?;
         if let Some((rays, hits)) = traced {
-            each_chunk(scene, &rays, &hits, options.normals, sink);
+            // A local query's rays were traced as moved (`local_ray`).
+            let moved = query.local().is_some();
+            each_chunk(scene, &rays, &hits, options.normals, moved, sink);
             if let (Gathered::Buffer(b), Ok(mut home)) = (rays, self.scratch.try_lock()) {
                 if home.capacity() < b.capacity() {
                     *home = b;
@@ -313,11 +359,11 @@ impl NativeScene {
     }
 
     /// Traces `query` on `device` without the GIL into the columns that
-    /// `make` makes for its n rays: `write` fills ray i's row from its hit
-    /// in the world's frame (`Query::world_hit`, with its t in f64) and,
-    /// with `options.normals`, its normal, each row once and from one
-    /// thread. Warns of the trace's notes and returns what `finish` makes
-    /// of the columns once every row is written.
+    /// `make` makes for its n rays: `write` fills a chunk's rows from its
+    /// hits in the world's frame (`Query::world_hit`, with their t in f64)
+    /// and, with `options.normals`, their normals, each row once and from
+    /// one thread. Warns of the trace's notes and returns what `finish`
+    /// makes of the columns once every row is written.
     #[allow(clippy::too_many_arguments)]
     fn trace_rows<C: Sync, R: Send>(
         &self,
@@ -326,32 +372,43 @@ impl NativeScene {
         options: QueryOptions,
         device: DeviceChoice,
         make: impl FnOnce(usize) -> C + Send,
-        write: impl Fn(&C, usize, Hit, f64, [f32; 3]) + Sync,
+        write: impl Fn(&C, &HitRows) + Sync,
         finish: impl FnOnce(C, usize) -> R + Send,
     ) -> PyResult<R> {
         let (out, notes) = detached(py, || {
             let n = query.len();
             let columns = make(n);
             let notes = self.trace_into(query, options, device, &|chunk| {
-                // No normals asked: zeros.
-                let normals = chunk
-                    .normals
-                    .iter()
-                    .copied()
-                    .chain(std::iter::repeat([0.0; 3]));
-                let rows = (chunk.start..).zip(chunk.hits.iter().zip(normals));
-                match query.local() {
-                    // Traced as given: the hit is the world's, with no
+                let start = chunk.start;
+                match chunk.moved {
+                    // Traced as given: the hits are the world's, with no
                     // move back to make (decided once a chunk, not a row).
-                    None => rows.for_each(|(i, (hit, normal))| {
-                        write(&columns, i, *hit, hit.t as f64, normal)
-                    }),
-                    // As `intersect` reports it (a hit beyond f32's t is a
-                    // miss, as warned).
-                    Some(_) => rows.for_each(|(i, (hit, normal))| {
-                        let (hit, world_t) = query.world_hit(i, *hit);
-                        write(&columns, i, hit, world_t, normal)
-                    }),
+                    false => write(
+                        &columns,
+                        &HitRows {
+                            start,
+                            hits: chunk.hits,
+                            world_t: None,
+                            normals: chunk.normals,
+                        },
+                    ),
+                    // As `intersect` reports them (a hit beyond f32's t is
+                    // a miss, as warned).
+                    true => {
+                        let (hits, world_t): (Vec<Hit>, Vec<f64>) = (start..)
+                            .zip(chunk.hits)
+                            .map(|(i, hit)| query.world_hit(i, *hit))
+                            .unzip();
+                        write(
+                            &columns,
+                            &HitRows {
+                                start,
+                                hits: &hits,
+                                world_t: Some(&world_t),
+                                normals: chunk.normals,
+                            },
+                        )
+                    }
                 }
             })?;
             Ok((finish(columns, n), notes))
@@ -380,20 +437,19 @@ impl NativeScene {
                 let (u, v) = (Column::<f32>::new(n), Column::<f32>::new(n));
                 (t, prim, u, v, Column::<[f32; 3]>::new(n))
             },
-            |(t, prim, u, v, normal), i, hit, world_t, ng| {
-                let id = if hit.prim == NO_HIT {
-                    -1
-                } else {
-                    hit.prim as i64
-                };
-                // SAFETY: `trace_rows` writes each row once, from one
-                // thread, within the n rows.
-                unsafe {
-                    t.set(i, hit.t, world_t);
-                    prim.set(i, id);
-                    u.set(i, hit.u);
-                    v.set(i, hit.v);
-                    normal.set(i, ng);
+            // SAFETY: `trace_rows` writes each chunk's rows once, from one
+            // thread, within the n rows.
+            |(t, prim, u, v, normal), rows| unsafe {
+                let (start, hits) = (rows.start, rows.hits);
+                t.write(rows);
+                let id = |h: &Hit| if h.prim == NO_HIT { -1 } else { h.prim as i64 };
+                prim.write(start, hits.iter().map(id));
+                u.write(start, hits.iter().map(|h| h.u));
+                v.write(start, hits.iter().map(|h| h.v));
+                match rows.normals.len() {
+                    // No normals asked: zeros.
+                    0 => normal.write(start, hits.iter().map(|_| [0.0; 3])),
+                    _ => normal.write(start, rows.normals.iter().copied()),
                 }
             },
             // SAFETY: the trace handed over every ray's hit and normal.
@@ -576,9 +632,11 @@ impl NativeScene {
                     options,
                     device,
                     Column::<bool>::new,
-                    // SAFETY: `trace_rows` writes each row once, from one
-                    // thread, within the n rows.
-                    |hit, i, h, _, _| unsafe { hit.set(i, h.prim != NO_HIT) },
+                    // SAFETY: `trace_rows` writes each chunk's rows once,
+                    // from one thread, within the n rows.
+                    |hit, rows| unsafe {
+                        hit.write(rows.start, rows.hits.iter().map(|h| h.prim != NO_HIT))
+                    },
                     // SAFETY: every row is written.
                     |hit, n| unsafe { hit.filled(n) },
                 )?;

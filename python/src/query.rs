@@ -11,6 +11,7 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use glam::DVec3;
+use lambert::cpu::prefetch_rows;
 use lambert::layout::{Hit, NO_HIT, Ray};
 use lambert::placement::{Placement, RayProblem, world_hit};
 use lambert::{Error, rays};
@@ -144,7 +145,7 @@ impl Query<'_> {
         out: &mut [MaybeUninit<Ray>],
         first_bad: &FirstBad,
         problems: &Problems,
-    ) {
+    ) -> bool {
         if let Query::Arrays {
             origins: RowsView::PackedF32(o),
             directions: RowsView::PackedF32(d),
@@ -156,38 +157,75 @@ impl Query<'_> {
         {
             let (tmin, tmax) = (tmin as f32, tmax as f32);
             let rows = start * 3..(start + out.len()) * 3;
-            let (o, d) = (o[rows.clone()].chunks_exact(3), d[rows].chunks_exact(3));
-            let mut valid = true;
-            // The chunk's largest origin coordinate and shortest direction
-            // axis (as `Placement::rays_clear` takes them).
-            let (mut origin_max, mut dir_min) = (0.0f32, f32::INFINITY);
-            for (slot, (o, d)) in out.iter_mut().zip(o.zip(d)) {
-                valid &= rays::ray_is_valid(slot.write(Ray {
+            prefetch_next(o, start, out.len());
+            prefetch_next(d, start, out.len());
+            let (o, d) = (&o[rows.clone()], &d[rows]);
+            // Over the flat rows, in loops that vectorise: the largest
+            // magnitude's bits, which are infinity's or more where a
+            // coordinate is not finite; so the origins' largest
+            // coordinate (as `Placement::rays_clear` takes it) comes too.
+            let largest = |a: &[f32]| a.iter().fold(0, |m, c| m.max(c.to_bits() & 0x7fff_ffff));
+            let (origin_bits, dir_bits) = (largest(o), largest(d));
+            let infinite = f32::INFINITY.to_bits();
+            let mut valid = (origin_bits < infinite)
+                & (dir_bits < infinite)
+                & rays::bounds_are_valid(tmin, tmax);
+            // The chunk's shortest longest direction axis (compared
+            // plainly: every value is finite where the chunk is valid).
+            let mut dir_min = f32::INFINITY;
+            for (slot, (o, d)) in out.iter_mut().zip(o.chunks_exact(3).zip(d.chunks_exact(3))) {
+                slot.write(Ray {
                     origin: [o[0], o[1], o[2]],
                     tmin,
                     dir: [d[0], d[1], d[2]],
                     tmax,
-                }));
-                origin_max = origin_max.max(o[0].abs().max(o[1].abs()).max(o[2].abs()));
-                dir_min = dir_min.min(d[0].abs().max(d[1].abs()).max(d[2].abs()));
+                });
+                let (x, y, z) = (d[0].abs(), d[1].abs(), d[2].abs());
+                let longest = if x > y { x } else { y };
+                let longest = if longest > z { longest } else { z };
+                dir_min = if longest < dir_min { longest } else { dir_min };
             }
+            valid &= rays::direction_lengths_are_valid(dir_min, f32::from_bits(dir_bits));
             if valid {
                 let rows = start..start + out.len();
+                let origin_max = f32::from_bits(origin_bits);
                 problems.check(self, rows, origin_max as f64, dir_min as f64);
-                return;
+                // Traced as given, in the world's frame.
+                return false;
             }
         }
-        // float64 origins in packed rows with scalar bounds: the general
+        // float64 origins in packed rows with scalar bounds: the chunk at
+        // once where every ray is valid and none moves, else the general
         // loop below, compiled for that layout.
         if let Query::Arrays {
             origins: RowsView::PackedF64(o),
             directions,
             tmin: Bound1View::All(tmin),
             tmax: Bound1View::All(tmax),
-            local: Some(_),
+            local: Some(placement),
             ..
         } = *self
         {
+            let rows = start * 3..(start + out.len()) * 3;
+            prefetch_next(o, start, out.len());
+            if let RowsView::PackedF64(d) = directions {
+                prefetch_next(d, start, out.len());
+            } else if let RowsView::PackedF32(d) = directions {
+                prefetch_next(d, start, out.len());
+            }
+            let near = match directions {
+                RowsView::PackedF64(d) => {
+                    fill_near(&placement, &o[rows.clone()], &d[rows], tmin, tmax, out)
+                }
+                RowsView::PackedF32(d) => {
+                    fill_near(&placement, &o[rows.clone()], &d[rows], tmin, tmax, out)
+                }
+                _ => None,
+            };
+            if let Some((origin_max, dir_min)) = near {
+                problems.check(self, start..start + out.len(), origin_max, dir_min);
+                return false;
+            }
             match directions {
                 RowsView::PackedF64(d) => {
                     return self.fill_from(start, out, first_bad, problems, |i| {
@@ -217,8 +255,9 @@ impl Query<'_> {
         first_bad: &FirstBad,
         problems: &Problems,
         ray: impl Fn(usize) -> (DVec3, DVec3, f64, f64),
-    ) {
+    ) -> bool {
         let (mut origin_max, mut dir_min) = (0.0f64, f64::INFINITY);
+        let mut moved = false;
         let len = out.len();
         for (i, slot) in (start..).zip(out) {
             let (origin, dir, tmin, tmax) = ray(i);
@@ -231,13 +270,18 @@ impl Query<'_> {
             };
             first_bad.check(&world, i);
             slot.write(match self.local() {
-                Some(placement) => placement.local_ray(origin, dir, tmin, tmax).0,
+                Some(placement) => {
+                    let (ray, shift) = placement.local_ray(origin, dir, tmin, tmax);
+                    moved |= shift != 0.0;
+                    ray
+                }
                 None => world,
             });
             origin_max = origin_max.max(origin.abs().max_element());
             dir_min = dir_min.min(dir.abs().max_element());
         }
         problems.check(self, start..start + len, origin_max, dir_min);
+        moved
     }
 
     /// The rays in one buffer (what a GPU uploads), checked: records as
@@ -260,12 +304,75 @@ impl Query<'_> {
         buffer.spare_capacity_mut()[..n]
             .par_chunks_mut(CHUNK)
             .enumerate()
-            .for_each(|(c, chunk)| self.fill(c * CHUNK, chunk, &first_bad, problems));
+            .for_each(|(c, chunk)| {
+                self.fill(c * CHUNK, chunk, &first_bad, problems);
+            });
         // SAFETY: every one of the n slots was written above.
         unsafe { buffer.set_len(n) };
         first_bad.result(self)?;
         Ok(Gathered::Buffer(buffer))
     }
+}
+
+/// Starts loading the packed rows after rays start..start + len of `all`
+/// (three values a ray): those this thread most likely reads next, as
+/// the trace's chunks run in order within each thread's share, so that
+/// their trips to memory overlap this chunk's trace.
+#[inline]
+fn prefetch_next<T>(all: &[T], start: usize, len: usize) {
+    let next = (start + len) * 3;
+    prefetch_rows(
+        all.as_ptr().wrapping_add(next),
+        (len * 3).min(all.len().saturating_sub(next)),
+    );
+}
+
+/// Writes the local rays of packed float64 `origins` and `directions`
+/// (float64 or float32 rows) over (`tmin`, `tmax`) into `out`, where the
+/// chunk's rays are all valid (as `FirstBad` checks them in f32) and none
+/// moves (`Placement::near_ray`): the usual query, at once. Returns the
+/// origins' largest coordinate and the directions' shortest longest axis
+/// (`Problems::check`'s), or None where some ray needs the general loop.
+#[inline(always)]
+fn fill_near<D: Copy + Into<f64>>(
+    placement: &Placement,
+    origins: &[f64],
+    directions: &[D],
+    tmin: f64,
+    tmax: f64,
+    out: &mut [MaybeUninit<Ray>],
+) -> Option<(f64, f64)> {
+    // Over the flat origins, in a loop that vectorises: the largest
+    // magnitude's bits, which are infinity's or more where one is not
+    // finite.
+    let origin_bits = origins
+        .iter()
+        .fold(0, |m, c| m.max(c.to_bits() & (u64::MAX >> 1)));
+    let origin_max = f64::from_bits(origin_bits);
+    // In f32 too (a bound on each; the general loop decides the rest).
+    let mut valid =
+        (origin_max <= f32::MAX as f64) & rays::bounds_are_valid(tmin as f32, tmax as f32);
+    let (mut dir_min, mut dir_max) = (f64::INFINITY, 0.0f64);
+    for (slot, (o, d)) in out
+        .iter_mut()
+        .zip(origins.chunks_exact(3).zip(directions.chunks_exact(3)))
+    {
+        let origin = DVec3::new(o[0], o[1], o[2]);
+        let dir = DVec3::new(d[0].into(), d[1].into(), d[2].into());
+        let Some(ray) = placement.near_ray(origin, dir, tmin, tmax) else {
+            return None;
+        };
+        slot.write(ray);
+        // (`max_element` passes over NaN.)
+        valid &= dir.is_finite();
+        let longest = dir.abs().max_element();
+        dir_min = dir_min.min(longest);
+        dir_max = dir_max.max(longest);
+    }
+    // The longest axes in f32, as `FirstBad` checks each ray: rounding
+    // keeps their order, and one beyond f32 becomes infinite and fails.
+    (valid && rays::direction_lengths_are_valid(dir_min as f32, dir_max as f32))
+        .then_some((origin_max, dir_min))
 }
 
 /// A query's rays in one buffer.

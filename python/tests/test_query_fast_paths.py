@@ -75,6 +75,78 @@ def test_packed_rows_hit_as_the_general_layout(place, origins, directions, bound
     assert 0.1 * N < np.count_nonzero(fast["prim_id"] >= 0) < N
 
 
+def near_then_far(centre, seed):
+    """`rays_near_and_far`'s rays, the first 1500 from within 2 units of
+    the sphere's centre (so whole chunks of them stay where they are, and
+    run through the per-chunk loops at once) and the rest as drawn (far
+    ones moved, near ones not)."""
+    o, d = rays_near_and_far(centre, seed)
+    near = slice(0, 1500)
+    away = o[near] - centre
+    o[near] = centre + 2.0 * away / np.linalg.norm(away, axis=1)[:, None]
+    d[near] = centre + 1.5 * (np.random.default_rng(seed + 1).random((1500, 3)) - 0.5) - o[near]
+    return o, d
+
+
+@pytest.mark.parametrize("place", [[0.0, 0.0, 0.0], [1e6, -0.7e6, 0.3e6]])
+@pytest.mark.parametrize("origins", [np.float32, np.float64])
+@pytest.mark.parametrize("directions", [np.float32, np.float64])
+def test_chunks_of_near_rays_hit_as_the_general_layout(place, origins, directions):
+    scene, centre = sphere_scene(place)
+    o, d = near_then_far(centre, seed=21)
+    o, d = o.astype(origins), d.astype(directions)
+    for t64 in (False, True):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            fast = scene.intersect(o, d, device="cpu", _t64=t64)
+            slow = scene.intersect(general(o), general(d), device="cpu", _t64=t64)
+        same(fast, slow)
+    assert 0.1 * N < np.count_nonzero(fast["prim_id"][:1500] >= 0) < 1500
+
+
+# A ray that is invalid as f32 holds it, among near ones: a NaN or an
+# infinite coordinate, a direction too short or too long (also one whose
+# length is within the limits though its longest axis is not), an
+# origin beyond f32's range.
+BAD = {
+    "nan direction": lambda o, d: d.__setitem__((300, 1), np.nan),
+    "infinite origin": lambda o, d: o.__setitem__((300, 2), np.inf),
+    "zero direction": lambda o, d: d.__setitem__(300, 0.0),
+    "short direction": lambda o, d: d.__setitem__(300, [4e-19, 4e-19, 0.0]),
+    "long direction": lambda o, d: d.__setitem__(300, [1e18, 1e18, 0.0]),
+    "origin beyond float32": lambda o, d: o.__setitem__((300, 0), 1e39),
+}
+
+
+@pytest.mark.parametrize("bad", sorted(BAD))
+@pytest.mark.parametrize("origins", [np.float32, np.float64])
+@pytest.mark.parametrize("directions", [np.float32, np.float64])
+def test_an_invalid_ray_among_near_ones_is_named_as_the_general_layout(bad, origins, directions):
+    scene, centre = sphere_scene([0.0, 0.0, 0.0])
+    o, d = near_then_far(centre, seed=22)
+    with np.errstate(over="ignore"):
+        o, d = o.astype(origins), d.astype(directions)
+        BAD[bad](o, d)
+    with pytest.raises(ValueError) as packed:
+        scene.intersect(o, d, device="cpu")
+    with pytest.raises(ValueError) as slow:
+        scene.intersect(general(o), general(d), device="cpu")
+    assert str(packed.value) == str(slow.value)
+    assert "300" in str(packed.value)
+
+
+def test_a_valid_ray_beyond_the_chunks_quick_bounds_is_traced():
+    """A direction whose longest axis is under the shortest allowed length
+    while its length is not: the per-chunk bound refuses the chunk, and
+    the general loop then accepts the ray (no error, hits as the general
+    layout's)."""
+    scene, centre = sphere_scene([0.0, 0.0, 0.0])
+    o, d = near_then_far(centre, seed=23)
+    d[300] = 1.2e-18 / np.sqrt(3.0)
+    assert np.abs(d[300]).max() < 1e-18 <= np.linalg.norm(d[300])
+    same(scene.intersect(o, d, device="cpu"), scene.intersect(general(o), general(d), device="cpu"))
+
+
 @pytest.mark.parametrize("layout", ["packed", "general", "records"])
 def test_coarse_float32_origins_are_warned_of_chunk_by_chunk(layout):
     # A sphere at 1e8 seen from around the world's origin: float32 holds

@@ -35,7 +35,7 @@ mod traverse_cpu;
 pub mod winding;
 
 pub use precision::Scalar;
-pub use prefetch::LARGE_BVH_BYTES;
+pub use prefetch::{LARGE_BVH_BYTES, prefetch_rows};
 pub use proximity::{
     box_pad, closest_points, count_intersections, list_intersections, solid_inside, sort_hits,
     spatial_order, winding_numbers,

@@ -17,6 +17,19 @@ pub(super) fn prefetch<T>(p: *const T) {
     let _ = p;
 }
 
+/// Starts loading the cache lines of the `count` values from `first` on
+/// (rows a thread will most likely read or write next, so that their
+/// trips to memory overlap the work before). The pointer is never read
+/// through, so it may point at memory another thread writes, or past the
+/// end.
+#[inline]
+pub fn prefetch_rows<T>(first: *const T, count: usize) {
+    let start = first.cast::<u8>();
+    for line in (0..count * std::mem::size_of::<T>()).step_by(64) {
+        prefetch(start.wrapping_add(line));
+    }
+}
+
 /// Rays one thread traces together through the BVH, a node visit each in
 /// turn, so that one ray's cache misses overlap the others' work. Each ray
 /// takes exactly the path it takes alone. Two (docs/benchmarks.md): through

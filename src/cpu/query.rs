@@ -146,13 +146,15 @@ impl<T> SharedOut<T> {
 /// A ray query's rays: a slice, or `count` rays that `fill(start, out)`
 /// writes (rays start.. into all of `out`), assembled chunk by chunk as
 /// they are traced (the Python binding's arrays: no pass over all the rays
-/// before the trace, nor a buffer of them).
+/// before the trace, nor a buffer of them). `fill` answers whether it
+/// moved any of them along itself into the scene's frame
+/// (`Placement::local_ray`'s shift; `TracedChunk::moved`).
 #[derive(Clone, Copy)]
 pub enum QueryRays<'a> {
     Slice(&'a [layout::Ray]),
     Fill(
         usize,
-        &'a (dyn Fn(usize, &mut [std::mem::MaybeUninit<layout::Ray>]) + Sync),
+        &'a (dyn Fn(usize, &mut [std::mem::MaybeUninit<layout::Ray>]) -> bool + Sync),
     ),
 }
 
@@ -200,6 +202,11 @@ pub struct TracedChunk<'a> {
     pub start: usize,
     pub hits: &'a [layout::Hit],
     pub normals: &'a [[f32; 3]],
+    /// Whether the hits may lie on rays the caller moved along themselves
+    /// (`RayFrame::Local`: a slice's, or those a fill said it moved), to
+    /// be moved back (`placement::world_hit`); false where the hits are on
+    /// the rays as the caller gave them.
+    pub moved: bool,
 }
 
 /// The frame a query's rays are in.
@@ -239,7 +246,10 @@ fn trace_each(
     each: &(dyn Fn(&TracedChunk) + Sync),
 ) {
     use std::mem::MaybeUninit;
-    const CHUNK: usize = 1024;
+    // A chunk's rays, hits and normals stay within L1 (48 KiB a core on
+    // current servers): 1024 a chunk (60 KiB) cost the Python binding's
+    // camera rays through the dragon 2–3% (docs/benchmarks.md).
+    const CHUNK: usize = 256;
     let QueryOptions {
         any_hit,
         intersect,
@@ -268,12 +278,13 @@ fn trace_each(
             let start = index * CHUNK;
             let len = CHUNK.min(rays.len() - start);
             let mut own = [MaybeUninit::<layout::Ray>::uninit(); CHUNK];
-            let chunk_rays = match rays {
-                QueryRays::Slice(all) => &all[start..start + len],
+            let (chunk_rays, filled_moved) = match rays {
+                QueryRays::Slice(all) => (&all[start..start + len], true),
                 QueryRays::Fill(_, fill) => {
-                    fill(start, &mut own[..len]);
+                    let moved = fill(start, &mut own[..len]);
                     // SAFETY: `fill` writes all of its buffer.
-                    unsafe { &*(&own[..len] as *const [_] as *const [layout::Ray]) }
+                    let rays = unsafe { &*(&own[..len] as *const [_] as *const [layout::Ray]) };
+                    (rays, moved)
                 }
             };
             // Moved rays on the heap, and only where some ray moves: two
@@ -368,6 +379,7 @@ fn trace_each(
                 start,
                 hits,
                 normals,
+                moved: frame == RayFrame::Local && filled_moved,
             });
         });
 }

@@ -133,20 +133,28 @@ pub fn sphere_mesh(c: [f32; 3], r: f32, rings: usize, segments: usize) -> Vec<Tr
             c[2] + r * theta.cos(),
         ]
     };
+    quad_grid(rings, segments, vertex)
+}
+
+/// The triangles of a rows × cols grid of quads, quad (i, j) having
+/// corners `vertex(i, j)`, `vertex(i + 1, j)`, `vertex(i + 1, j + 1)` and
+/// `vertex(i, j + 1)` (`vertex` wraps them where the grid closes), cut
+/// along its first diagonal; a half with two corners the same (at a
+/// sphere's poles) is left out.
+pub fn quad_grid(rows: usize, cols: usize, vertex: impl Fn(usize, usize) -> [f32; 3]) -> Vec<Triangle> {
     let mut out = Vec::new();
-    for i in 0..rings {
-        for j in 0..segments {
-            let (a, b, c2, d) = (
+    for i in 0..rows {
+        for j in 0..cols {
+            let (a, b, c, d) = (
                 vertex(i, j),
                 vertex(i + 1, j),
                 vertex(i + 1, j + 1),
                 vertex(i, j + 1),
             );
-            if i != 0 {
-                out.push(tri(a, c2, d));
-            }
-            if i != rings - 1 {
-                out.push(tri(a, b, c2));
+            for (x, y, z) in [(a, c, d), (a, b, c)] {
+                if x != y && y != z && z != x {
+                    out.push(tri(x, y, z));
+                }
             }
         }
     }
