@@ -10,6 +10,7 @@ use std::panic::AssertUnwindSafe;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
+use lambert::Error;
 use lambert::cpu::{
     CpuKernel, QueryOptions, QueryRays, RayFrame, SharedOut, TracedChunk, prefetch_rows,
     trace_rays_each,
@@ -18,7 +19,6 @@ use lambert::gpu::AdapterRequest;
 use lambert::layout::{Hit, NO_HIT, Ray};
 use lambert::render::{DeviceChoice, Renderer, Renderers};
 use lambert::scene::{Intersect, Scene, hit_normal, prefetch_hit_triangles};
-use lambert::{Error, rays};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
@@ -299,25 +299,17 @@ impl NativeScene {
                     .map(Some);
             }
             // The CPU path traces the rays as it reads them.
-            match query {
-                Query::Records(r) => {
-                    rays::validate_rays(r).map_err(|bad| Error::Usage(bad.to_string()))?;
-                    trace_rays_each(scene, QueryRays::Slice(r), options, RayFrame::World, sink);
-                }
-                Query::Arrays { n, .. } => {
-                    let first_bad = FirstBad::new();
-                    let fill = |start: usize, out: &mut [MaybeUninit<Ray>]| -> bool {
-                        query.fill(start, out, &first_bad, &problems)
-                    };
-                    let rays = QueryRays::Fill(n, &fill);
-                    let frame = match query.local() {
-                        Some(_) => RayFrame::Local,
-                        None => RayFrame::World,
-                    };
-                    trace_rays_each(scene, rays, options, frame, sink);
-                    first_bad.result(&query)?;
-                }
-            }
+            let first_bad = FirstBad::new();
+            let fill = |start: usize, out: &mut [MaybeUninit<Ray>]| -> bool {
+                query.fill(start, out, &first_bad, &problems)
+            };
+            let rays = QueryRays::Fill(query.len(), &fill);
+            let frame = match query.local() {
+                Some(_) => RayFrame::Local,
+                None => RayFrame::World,
+            };
+            trace_rays_each(scene, rays, options, frame, sink);
+            first_bad.result(&query)?;
             Ok(None)
         })?;
         if let Some((rays, hits)) = traced {
@@ -330,7 +322,7 @@ impl NativeScene {
                 }
             }
         }
-        Ok((note, problems.warnings(&query)))
+        Ok((note, problems.warnings()))
     }
 
     /// `query`'s rays gathered into one buffer and traced on `renderer`

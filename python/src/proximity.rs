@@ -200,7 +200,7 @@ fn rays_query<'py, T: Send>(
                 None => Crossings::World(&rays),
             };
             let (out, note) = on_device(native, device, |renderer| work(renderer, crossings))?;
-            Ok((out, (note, problems.warnings(&query))))
+            Ok((out, (note, problems.warnings())))
         })?;
         NativeScene::warn(py, notes.0.into_iter().chain(notes.1))?;
         Ok(out)

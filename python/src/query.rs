@@ -146,6 +146,19 @@ impl Query<'_> {
         first_bad: &FirstBad,
         problems: &Problems,
     ) -> bool {
+        if let Query::Records(r) = *self {
+            let rays = &r[start..start + out.len()];
+            prefetch_rows(
+                r[start + out.len()..].as_ptr(),
+                out.len().min(r.len() - start - out.len()),
+            );
+            for (slot, ray) in out.iter_mut().zip(rays) {
+                slot.write(*ray);
+            }
+            self.check_records(start, rays, first_bad, problems);
+            // Traced as given, in the world's frame.
+            return false;
+        }
         if let Query::Arrays {
             origins: RowsView::PackedF32(o),
             directions: RowsView::PackedF32(d),
@@ -246,6 +259,39 @@ impl Query<'_> {
         self.fill_from(start, out, first_bad, problems, |i| self.ray_f64(i))
     }
 
+    /// Checks records start.. (`rays`) as `fill` checks arrays: each ray's
+    /// validity (`FirstBad`), and the chunk's precision problems.
+    fn check_records(&self, start: usize, rays: &[Ray], first_bad: &FirstBad, problems: &Problems) {
+        // As the packed float32 rows' loop: the largest magnitudes' bits
+        // (infinity's or more where a value is not finite), the shortest
+        // longest direction axis compared plainly, each ray's bounds; the
+        // rays one by one only where the chunk fails.
+        let magnitude = |c: &f32| c.to_bits() & 0x7fff_ffff;
+        let (mut origin_bits, mut dir_bits, mut dir_min) = (0, 0, f32::INFINITY);
+        let mut bounds = true;
+        for ray in rays {
+            origin_bits = ray.origin.iter().map(magnitude).fold(origin_bits, u32::max);
+            dir_bits = ray.dir.iter().map(magnitude).fold(dir_bits, u32::max);
+            let [x, y, z] = ray.dir.map(f32::abs);
+            let longest = if x > y { x } else { y };
+            let longest = if longest > z { longest } else { z };
+            dir_min = if longest < dir_min { longest } else { dir_min };
+            bounds &= rays::bounds_are_valid(ray.tmin, ray.tmax);
+        }
+        let infinite = f32::INFINITY.to_bits();
+        let valid = (origin_bits < infinite)
+            & (dir_bits < infinite)
+            & bounds
+            & rays::direction_lengths_are_valid(dir_min, f32::from_bits(dir_bits));
+        if !valid {
+            for (i, ray) in (start..).zip(rays) {
+                first_bad.check(ray, i);
+            }
+        }
+        let origin_max = f32::from_bits(origin_bits) as f64;
+        problems.check(self, start..start + rays.len(), origin_max, dir_min as f64);
+    }
+
     /// `fill`'s loop, ray i being `ray(i)` as given in f64 (`ray_f64`).
     #[inline(always)]
     fn fill_from(
@@ -293,8 +339,12 @@ impl Query<'_> {
     ) -> Result<Gathered<'_>, Error> {
         use rayon::prelude::*;
         const CHUNK: usize = 4096;
-        if let Query::Records(r) = self {
-            rays::validate_rays(r).map_err(|bad| Error::Usage(bad.to_string()))?;
+        if let Query::Records(r) = *self {
+            let first_bad = FirstBad::new();
+            r.par_chunks(CHUNK)
+                .enumerate()
+                .for_each(|(c, chunk)| self.check_records(c * CHUNK, chunk, &first_bad, problems));
+            first_bad.result(self)?;
             return Ok(Gathered::Records(r));
         }
         let n = self.len();
@@ -359,10 +409,7 @@ fn fill_near<D: Copy + Into<f64>>(
     {
         let origin = DVec3::new(o[0], o[1], o[2]);
         let dir = DVec3::new(d[0].into(), d[1].into(), d[2].into());
-        let Some(ray) = placement.near_ray(origin, dir, tmin, tmax) else {
-            return None;
-        };
-        slot.write(ray);
+        slot.write(placement.near_ray(origin, dir, tmin, tmax)?);
         // (`max_element` passes over NaN.)
         valid &= dir.is_finite();
         let longest = dir.abs().max_element();
@@ -460,13 +507,9 @@ impl Problems {
         }
     }
 
-    /// Where f32 limits `query`'s hits: one warning per kind, naming the
-    /// first ray and counting the rest (records, which `fill` does not
-    /// read, are checked here).
-    pub fn warnings(self, query: &Query) -> Vec<String> {
-        if let Query::Records(r) = query {
-            return self.placement.ray_warnings(r);
-        }
+    /// Where f32 limits the query's hits: one warning per kind, naming the
+    /// first ray and counting the rest.
+    pub fn warnings(self) -> Vec<String> {
         let mut found = self
             .found
             .into_inner()

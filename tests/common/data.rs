@@ -141,7 +141,11 @@ pub fn sphere_mesh(c: [f32; 3], r: f32, rings: usize, segments: usize) -> Vec<Tr
 /// `vertex(i, j + 1)` (`vertex` wraps them where the grid closes), cut
 /// along its first diagonal; a half with two corners the same (at a
 /// sphere's poles) is left out.
-pub fn quad_grid(rows: usize, cols: usize, vertex: impl Fn(usize, usize) -> [f32; 3]) -> Vec<Triangle> {
+pub fn quad_grid(
+    rows: usize,
+    cols: usize,
+    vertex: impl Fn(usize, usize) -> [f32; 3],
+) -> Vec<Triangle> {
     let mut out = Vec::new();
     for i in 0..rows {
         for j in 0..cols {
