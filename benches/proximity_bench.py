@@ -30,6 +30,7 @@ import numpy as np
 import lambert
 from python_bench import cpu_name, default_model  # benches/, beside this script
 
+
 def load_mesh(path):
     """Vertices (float32, as Open3D stores them) and faces, in file order."""
     import trimesh

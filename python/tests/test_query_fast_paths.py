@@ -12,7 +12,7 @@ trimesh = pytest.importorskip("trimesh")
 
 import lambert  # noqa: E402
 
-# More rays than one of the kernel's chunks (1024), so that several chunks
+# More rays than one of the kernel's chunks (256), so that several chunks
 # (and the short last one) are read.
 N = 2500
 COLUMNS = ("t", "prim_id", "u", "v", "normal")
