@@ -177,7 +177,7 @@ impl Query<'_> {
             // magnitude's bits, which are infinity's or more where a
             // coordinate is not finite; so the origins' largest
             // coordinate (as `Placement::rays_clear` takes it) comes too.
-            let largest = |a: &[f32]| a.iter().fold(0, |m, c| m.max(c.to_bits() & 0x7fff_ffff));
+            let largest = |a: &[f32]| a.iter().copied().map(magnitude_bits).fold(0, u32::max);
             let (origin_bits, dir_bits) = (largest(o), largest(d));
             let infinite = f32::INFINITY.to_bits();
             let mut valid = (origin_bits < infinite)
@@ -193,9 +193,7 @@ impl Query<'_> {
                     dir: [d[0], d[1], d[2]],
                     tmax,
                 });
-                let (x, y, z) = (d[0].abs(), d[1].abs(), d[2].abs());
-                let longest = if x > y { x } else { y };
-                let longest = if longest > z { longest } else { z };
+                let longest = longest_axis([d[0], d[1], d[2]]);
                 dir_min = if longest < dir_min { longest } else { dir_min };
             }
             valid &= rays::direction_lengths_are_valid(dir_min, f32::from_bits(dir_bits));
@@ -266,15 +264,20 @@ impl Query<'_> {
         // (infinity's or more where a value is not finite), the shortest
         // longest direction axis compared plainly, each ray's bounds; the
         // rays one by one only where the chunk fails.
-        let magnitude = |c: &f32| c.to_bits() & 0x7fff_ffff;
         let (mut origin_bits, mut dir_bits, mut dir_min) = (0, 0, f32::INFINITY);
         let mut bounds = true;
         for ray in rays {
-            origin_bits = ray.origin.iter().map(magnitude).fold(origin_bits, u32::max);
-            dir_bits = ray.dir.iter().map(magnitude).fold(dir_bits, u32::max);
-            let [x, y, z] = ray.dir.map(f32::abs);
-            let longest = if x > y { x } else { y };
-            let longest = if longest > z { longest } else { z };
+            origin_bits = ray
+                .origin
+                .map(magnitude_bits)
+                .into_iter()
+                .fold(origin_bits, u32::max);
+            dir_bits = ray
+                .dir
+                .map(magnitude_bits)
+                .into_iter()
+                .fold(dir_bits, u32::max);
+            let longest = longest_axis(ray.dir);
             dir_min = if longest < dir_min { longest } else { dir_min };
             bounds &= rays::bounds_are_valid(ray.tmin, ray.tmax);
         }
@@ -362,6 +365,23 @@ impl Query<'_> {
         first_bad.result(self)?;
         Ok(Gathered::Buffer(buffer))
     }
+}
+
+/// The bits of |c|: infinity's or more where c is not finite, and in the
+/// order of the magnitudes (so a chunk's largest is one integer maximum,
+/// which vectorises).
+#[inline(always)]
+fn magnitude_bits(c: f32) -> u32 {
+    c.to_bits() & 0x7fff_ffff
+}
+
+/// A direction's longest axis in magnitude, compared plainly (its values
+/// finite where it counts: a chunk with one that is not fails anyway).
+#[inline(always)]
+fn longest_axis(d: [f32; 3]) -> f32 {
+    let [x, y, z] = d.map(f32::abs);
+    let longest = if x > y { x } else { y };
+    if longest > z { longest } else { z }
 }
 
 /// Starts loading the packed rows after rays start..start + len of `all`
