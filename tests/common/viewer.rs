@@ -35,7 +35,32 @@ static ONE_SERVER: std::sync::Mutex<()> = std::sync::Mutex::new(());
 pub struct Xvfb {
     pub display: String,
     server: Child,
+    /// The server's stderr, for a failing test's message.
+    log: tempfile::NamedTempFile,
     _turn: std::sync::MutexGuard<'static, ()>,
+}
+
+impl Xvfb {
+    /// Whether a client (xdotool) gets through now.
+    pub fn takes_client(&self) -> bool {
+        Command::new("xdotool")
+            .arg("getmouselocation")
+            .env("DISPLAY", &self.display)
+            .output()
+            .is_ok_and(|o| o.status.success())
+    }
+
+    /// The server's state and the last of what it wrote to stderr.
+    pub fn report(&mut self) -> String {
+        let state = match self.server.try_wait() {
+            Ok(Some(status)) => format!("ended ({status})"),
+            _ => "running".to_string(),
+        };
+        let said = std::fs::read_to_string(self.log.path()).unwrap_or_default();
+        let tail: Vec<&str> = said.lines().rev().take(8).collect();
+        let tail: Vec<&str> = tail.into_iter().rev().collect();
+        format!("Xvfb {} {state}; it said: {tail:?}", self.display)
+    }
 }
 
 impl Drop for Xvfb {
@@ -72,6 +97,7 @@ pub fn xvfb() -> Option<Xvfb> {
         return None;
     }
     let turn = ONE_SERVER.lock().unwrap_or_else(|e| e.into_inner());
+    let log = tempfile::NamedTempFile::new().expect("a file for Xvfb's stderr");
     // -displayfd: the server picks a free display and writes its number.
     let mut server = Command::new("Xvfb")
         .args([
@@ -90,7 +116,7 @@ pub fn xvfb() -> Option<Xvfb> {
             "30000",
         ])
         .stdout(Stdio::piped())
-        .stderr(Stdio::null())
+        .stderr(log.reopen().expect("Xvfb's stderr file"))
         .spawn()
         .expect("Xvfb starts");
     let mut line = String::new();
@@ -98,23 +124,19 @@ pub fn xvfb() -> Option<Xvfb> {
         .read_line(&mut line)
         .unwrap();
     let number: u32 = line.trim().parse().expect("Xvfb names its display");
-    let x = Xvfb {
+    let mut x = Xvfb {
         display: format!(":{number}"),
         server,
+        log,
         _turn: turn,
     };
     // Until a client gets through (other suites may start servers too).
     let deadline = Instant::now() + PATIENCE;
-    while !Command::new("xdotool")
-        .arg("getmouselocation")
-        .env("DISPLAY", &x.display)
-        .output()
-        .is_ok_and(|o| o.status.success())
-    {
+    while !x.takes_client() {
         assert!(
             Instant::now() < deadline,
-            "Xvfb {} takes no client",
-            x.display
+            "no client gets through: {}",
+            x.report()
         );
         std::thread::sleep(Duration::from_millis(100));
     }
@@ -173,17 +195,19 @@ impl Viewer {
         Viewer::start_with(x, args, &[])
     }
 
-    /// `start`, with environment variables set. A first connection to a
-    /// fresh Xvfb is now and then refused on this machine (shared with
-    /// other suites' servers) though xdotool's got through: a viewer that
-    /// says it cannot open a window is started again, twice at most.
-    pub fn start_with(x: Xvfb, args: &[&str], env: &[(&str, &str)]) -> Viewer {
-        let spawn = || {
+    /// `start`, with environment variables set. A connection to a fresh
+    /// Xvfb is now and then refused on a loaded machine though xdotool's
+    /// got through (once, on CI, three times in a row): a viewer that says
+    /// it cannot open a window is started again, after a pause, on a fresh
+    /// server where the old one takes no client any more; four times at
+    /// most, each refusal printed with the server's state.
+    pub fn start_with(mut x: Xvfb, args: &[&str], env: &[(&str, &str)]) -> Viewer {
+        let spawn = |display: &str| {
             let mut child = lambert_command()
                 .arg("view")
                 .args(args)
                 .envs(env.iter().copied())
-                .env("DISPLAY", &x.display)
+                .env("DISPLAY", display)
                 .env_remove("WAYLAND_DISPLAY")
                 .stdin(Stdio::null())
                 .stdout(Stdio::piped())
@@ -194,9 +218,10 @@ impl Viewer {
             let stderr = lines(child.stderr.take().unwrap());
             (Killed(child), stdout, stderr)
         };
+        const ATTEMPTS: u32 = 5;
         let mut attempt = 1;
         let (window, (process, stdout, stderr)) = 'started: loop {
-            let (mut process, stdout, stderr) = spawn();
+            let (mut process, stdout, stderr) = spawn(&x.display);
             let deadline = Instant::now() + PATIENCE;
             loop {
                 // Mapped, not only created: the pointer moved over it below
@@ -208,12 +233,19 @@ impl Viewer {
                 if let Some(status) = process.0.try_wait().unwrap() {
                     let errors: Vec<String> = stderr.try_iter().collect();
                     let refused = errors.iter().any(|e| e.contains("cannot open a window"));
+                    let server = x.report();
                     assert!(
-                        refused && attempt < 3,
-                        "lambert view exited ({status}) before its window showed: {errors:?}"
+                        refused && attempt < ATTEMPTS,
+                        "lambert view exited ({status}) before its window showed: {errors:?}; {server}"
                     );
-                    eprintln!("attempt {attempt}: {errors:?}; again");
+                    eprintln!("attempt {attempt}: {errors:?}; {server}; again");
                     attempt += 1;
+                    std::thread::sleep(Duration::from_millis(500));
+                    if !x.takes_client() {
+                        drop(x);
+                        x = xvfb().expect("the tools were there a moment ago");
+                        eprintln!("a fresh server: {}", x.display);
+                    }
                     break;
                 }
                 assert!(Instant::now() < deadline, "no window within {PATIENCE:?}");
