@@ -114,6 +114,11 @@ pub fn xvfb() -> Option<Xvfb> {
             // as the next one's).
             "-ardelay",
             "30000",
+            // No reset when the last client leaves: xdotool's probes are
+            // such clients, and a viewer connecting while the server
+            // resets is refused (two loops of 300 probes at once: 15 and
+            // 12 refused without this flag, none with it).
+            "-noreset",
         ])
         .stdout(Stdio::piped())
         .stderr(log.reopen().expect("Xvfb's stderr file"))
@@ -195,12 +200,13 @@ impl Viewer {
         Viewer::start_with(x, args, &[])
     }
 
-    /// `start`, with environment variables set. A connection to a fresh
-    /// Xvfb is now and then refused on a loaded machine though xdotool's
-    /// got through (once, on CI, three times in a row): a viewer that says
-    /// it cannot open a window is started again, after a pause, on a fresh
-    /// server where the old one takes no client any more; four times at
-    /// most, each refusal printed with the server's state.
+    /// `start`, with environment variables set. A viewer connecting while
+    /// xdotool's probe left the server, which then reset, was refused
+    /// (once, on CI, three times in a row; the servers now run with
+    /// `-noreset`). Should one still say it cannot open a window, it is
+    /// started again after a pause, on a fresh server where the old one
+    /// takes no client any more; four times at most, each refusal printed
+    /// with the server's state.
     pub fn start_with(mut x: Xvfb, args: &[&str], env: &[(&str, &str)]) -> Viewer {
         let spawn = |display: &str| {
             let mut child = lambert_command()
