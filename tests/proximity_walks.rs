@@ -9,6 +9,7 @@ use glam::Vec3;
 use lambert::Scene;
 use lambert::cpu::closest::{better, closest_point, closest_point_triangle, query_margin};
 use lambert::cpu::winding::{triangle_winding, triangle_winding4};
+use lambert::cpu::{CpuKernel, closest_points_with};
 use lambert::layout::{NO_HIT, Triangle};
 use lambert::probe::Rng;
 
@@ -111,6 +112,43 @@ fn the_depth_first_walk_finds_the_brute_force_minimum() {
             );
         }
     }
+}
+
+/// `closest_points` compiled for each CPU kernel this machine runs gives
+/// the portable kernel's answers, bit for bit: points in the soup, far
+/// outside it and on the strip's shared vertices, with and without a
+/// largest distance (some points then find none).
+#[test]
+fn every_cpu_kernel_finds_the_portable_kernels_closest_points() {
+    let triangles = triangles(5, 20_000);
+    let scene = Scene::from_triangles(triangles.clone());
+    let mut rng = Rng(6);
+    let mut points: Vec<[f32; 3]> = (0..3000).map(|_| point(&mut rng, 1.2).to_array()).collect();
+    points.extend((0..500).map(|_| point(&mut rng, 6.0).to_array()));
+    points.extend(triangles[20_000..].iter().map(|t| t.v1));
+    let mut compared = 0;
+    for max_distance in [f32::INFINITY, 0.02] {
+        let portable = closest_points_with(&scene, &points, max_distance, CpuKernel::Portable);
+        assert!(portable.iter().any(|c| c.prim == NO_HIT) == max_distance.is_finite());
+        for kernel in CpuKernel::ALL {
+            if let Some(missing) = kernel.missing() {
+                eprintln!("skipped: the {} kernel needs {missing}", kernel.name());
+                continue;
+            }
+            let found = closest_points_with(&scene, &points, max_distance, kernel);
+            for (i, (a, b)) in found.iter().zip(&portable).enumerate() {
+                assert_eq!(
+                    bytemuck::bytes_of(a),
+                    bytemuck::bytes_of(b),
+                    "point {i} {:?}, the {} kernel, max distance {max_distance}",
+                    points[i],
+                    kernel.name()
+                );
+            }
+            compared += 1;
+        }
+    }
+    assert!(compared >= 2);
 }
 
 /// Four lanes of `triangle_winding4` are four calls of `triangle_winding`,

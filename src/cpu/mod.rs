@@ -37,8 +37,8 @@ pub mod winding;
 pub use precision::Scalar;
 pub use prefetch::{LARGE_BVH_BYTES, prefetch_rows};
 pub use proximity::{
-    box_pad, closest_points, count_intersections, list_intersections, solid_inside, sort_hits,
-    spatial_order, winding_numbers,
+    box_pad, closest_points, closest_points_with, count_intersections, list_intersections,
+    solid_inside, sort_hits, spatial_order, winding_numbers,
 };
 pub use query::{
     QueryKernel, QueryOptions, QueryRays, RayFrame, SharedOut, TracedChunk, trace_rays,

@@ -8,6 +8,7 @@ use rayon::prelude::*;
 
 use super::closest::{closest_point, query_margin};
 use super::f32;
+use super::simd::{CpuKernel, check_runs, with_simd};
 use super::winding::winding_number;
 use crate::bvh::Sides;
 use crate::layout::{ClosestPoint, ListedHit, NO_HIT, Ray};
@@ -88,8 +89,25 @@ where
 /// The nearest point of the scene's triangles to each point (local frame)
 /// within `max_distance` (squared distance ≤ max_distance², in f32);
 /// `ClosestPoint::NONE` where none is. The point comes back in the local
-/// frame.
+/// frame. Through this process's CPU kernel (`CpuKernel::active`).
 pub fn closest_points(scene: &Scene, points: &[[f32; 3]], max_distance: f32) -> Vec<ClosestPoint> {
+    closest_points_with(scene, points, max_distance, CpuKernel::active())
+}
+
+/// `closest_points` through `kernel`: the walk compiled for its vector
+/// instructions, the same answers bit for bit (tests compare them with the
+/// portable kernel's). Compiled for AVX-512, the dragon's closest points ran
+/// 4–5% faster than in the portable code (docs/benchmarks.md).
+///
+/// # Panics
+/// Where this CPU cannot run `kernel`.
+pub fn closest_points_with(
+    scene: &Scene,
+    points: &[[f32; 3]],
+    max_distance: f32,
+    kernel: CpuKernel,
+) -> Vec<ClosestPoint> {
+    check_runs(kernel);
     let triangles = scene.triangles.len();
     let radius = scene.placement().radius as f32;
     let max_d2 = max_distance * max_distance;
@@ -98,27 +116,34 @@ pub fn closest_points(scene: &Scene, points: &[[f32; 3]], max_distance: f32) -> 
         &order,
         ClosestPoint::NONE,
         || (Vec::new(), NO_HIT),
-        |(queue, previous), i| {
-            let p = Vec3::from(points[i]);
-            let margin = query_margin(p.abs().max_element(), radius);
-            let hint = (*previous != NO_HIT).then(|| {
-                let t = &scene.triangles[*previous as usize];
-                (*previous, [t.v0, t.v1, t.v2].map(Vec3::from))
-            });
-            match closest_point(&scene.bvh, triangles, p, max_d2, margin, hint, queue) {
-                Some(n) => {
-                    *previous = n.prim;
-                    ClosestPoint {
-                        point: n.point.to_array(),
-                        prim: n.prim,
-                        u: n.u,
-                        v: n.v,
-                        distance: n.d2.sqrt(),
-                        _pad: 0,
+        // SAFETY: `check_runs` checked the kernel.
+        |(queue, previous), i| unsafe {
+            with_simd(
+                kernel,
+                #[inline(always)]
+                || {
+                    let p = Vec3::from(points[i]);
+                    let margin = query_margin(p.abs().max_element(), radius);
+                    let hint = (*previous != NO_HIT).then(|| {
+                        let t = &scene.triangles[*previous as usize];
+                        (*previous, [t.v0, t.v1, t.v2].map(Vec3::from))
+                    });
+                    match closest_point(&scene.bvh, triangles, p, max_d2, margin, hint, queue) {
+                        Some(n) => {
+                            *previous = n.prim;
+                            ClosestPoint {
+                                point: n.point.to_array(),
+                                prim: n.prim,
+                                u: n.u,
+                                v: n.v,
+                                distance: n.d2.sqrt(),
+                                _pad: 0,
+                            }
+                        }
+                        None => ClosestPoint::NONE,
                     }
-                }
-                None => ClosestPoint::NONE,
-            }
+                },
+            )
         },
     )
 }

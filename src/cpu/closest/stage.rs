@@ -206,6 +206,7 @@ macro_rules! closest {
         /// neighbouring query's answer), is the first candidate: its bound prunes
         /// from the start, and as `better` orders candidates totally the answer
         /// is the same with or without it, and in any order of visits.
+        #[inline(always)]
         pub fn closest_point(
             bvh: &Bvh,
             triangle_count: usize,
