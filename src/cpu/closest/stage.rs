@@ -151,11 +151,17 @@ macro_rules! closest {
             let sum = va + vb + vc;
             let zero = Vec4::ZERO;
             let interior = va.cmpgt(zero) & vb.cmpgt(zero) & vc.cmpgt(zero) & sum.cmpgt(zero);
-            let iv = vb / sum;
-            let iw = vc / sum;
-            let iq: [Vec4; 3] = std::array::from_fn(|k| a[k] + ab[k] * iv + ac[k] * iw);
-            let id = sub(p, iq);
-            let id2 = dot(id, id);
+            // Few blocks hold a triangle the point projects into: their
+            // projection only where one does.
+            let (iv, iw, iq, id2) = if interior.any() {
+                let iv = vb / sum;
+                let iw = vc / sum;
+                let iq: [Vec4; 3] = std::array::from_fn(|k| a[k] + ab[k] * iv + ac[k] * iw);
+                let id = sub(p, iq);
+                (iv, iw, iq, dot(id, id))
+            } else {
+                (zero, zero, [zero; 3], zero)
+            };
             let segment = |s0: [Vec4; 3], e: [Vec4; 3]| {
                 let ee = dot(e, e);
                 let t = Vec4::select(
