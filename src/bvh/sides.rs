@@ -341,6 +341,50 @@ impl Sides {
         (v[0] + v[1] + v[2]) / 3.0 + cross.normalize_or_zero() * (0.1 * cross.length().sqrt())
     }
 
+    /// Where `behind` reads for triangle `prim`: its piece, corners and
+    /// edges, then (`normals`, which reads the corners and edges, so
+    /// best called once those are in cache) its vertices' and edges'
+    /// normals; for a caller to prefetch (a point's triangle is far in
+    /// memory from the last point's, and each of these loads would
+    /// otherwise wait on it in turn).
+    pub fn rows(&self, prim: u32, normals: bool) -> [*const u8; 6] {
+        let at = |v: &[u32]| v.as_ptr().wrapping_add(prim as usize).cast::<u8>();
+        let i = prim as usize;
+        match (normals, self.corners.get(i), self.edges.get(i)) {
+            (true, Some(c), Some(e)) => [
+                self.vertex_normals
+                    .as_ptr()
+                    .wrapping_add(c[0] as usize)
+                    .cast(),
+                self.vertex_normals
+                    .as_ptr()
+                    .wrapping_add(c[1] as usize)
+                    .cast(),
+                self.vertex_normals
+                    .as_ptr()
+                    .wrapping_add(c[2] as usize)
+                    .cast(),
+                self.edge_normals
+                    .as_ptr()
+                    .wrapping_add(e[0] as usize)
+                    .cast(),
+                self.edge_normals
+                    .as_ptr()
+                    .wrapping_add(e[1] as usize)
+                    .cast(),
+                self.edge_normals
+                    .as_ptr()
+                    .wrapping_add(e[2] as usize)
+                    .cast(),
+            ],
+            _ => {
+                let corners = self.corners.as_ptr().wrapping_add(i).cast::<u8>();
+                let edges = self.edges.as_ptr().wrapping_add(i).cast::<u8>();
+                [at(&self.piece), corners, edges, corners, edges, corners]
+            }
+        }
+    }
+
     /// Whether point `p` is behind the surface at its closest point on
     /// triangle `prim` (all in the frame of `triangles`, the sides'), and
     /// that triangle's piece: None where that does not decide (a triangle

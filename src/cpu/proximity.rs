@@ -8,6 +8,7 @@ use rayon::prelude::*;
 
 use super::closest::{closest_point, query_margin};
 use super::f32;
+use super::prefetch::prefetch_rows;
 use super::simd::{CpuKernel, check_runs, with_simd};
 use super::winding::winding_number;
 use crate::bvh::Sides;
@@ -203,15 +204,36 @@ pub fn solid_inside(
             ((w - w.round()).abs() < 0.25).then_some(w.round() as i32)
         })
     });
-    Ok(points
+    // The points' triangles are far apart in memory, and `inside` reads
+    // several rows of each in turn: the rows of the triangle AHEAD points
+    // on asked for first, then, once those are in, the normals they name.
+    const AHEAD: usize = 16;
+    let prefetch = |i: usize, normals: bool| {
+        if let Some(c) = closest.get(i) {
+            for row in sides.rows(c.prim, normals) {
+                prefetch_rows(row, 1);
+            }
+            if !normals {
+                prefetch_rows(scene.triangles.as_ptr().wrapping_add(c.prim as usize), 1);
+            }
+        }
+    };
+    let starts: Vec<usize> = (0..points.len()).step_by(CHUNK).collect();
+    let chunks: Vec<Vec<Option<bool>>> = starts
         .par_iter()
-        .zip(closest)
-        .with_min_len(CHUNK)
-        .map(|(&p, c)| {
-            let p = Vec3::from(p);
-            sides.inside(&scene.triangles, c.prim, p.as_dvec3(), near(p))
+        .map(|&start| {
+            let end = (start + CHUNK).min(points.len());
+            (start..end)
+                .map(|i| {
+                    prefetch(i + AHEAD, false);
+                    prefetch(i + AHEAD / 2, true);
+                    let p = Vec3::from(points[i]);
+                    sides.inside(&scene.triangles, closest[i].prim, p.as_dvec3(), near(p))
+                })
+                .collect()
         })
-        .collect())
+        .collect();
+    Ok(chunks.concat())
 }
 
 /// How many triangles each ray (local frame) crosses in (tmin, tmax), an
