@@ -348,39 +348,23 @@ impl Sides {
     /// memory from the last point's, and each of these loads would
     /// otherwise wait on it in turn).
     pub fn rows(&self, prim: u32, normals: bool) -> [*const u8; 6] {
-        let at = |v: &[u32]| v.as_ptr().wrapping_add(prim as usize).cast::<u8>();
-        let i = prim as usize;
-        match (normals, self.corners.get(i), self.edges.get(i)) {
-            (true, Some(c), Some(e)) => [
-                self.vertex_normals
-                    .as_ptr()
-                    .wrapping_add(c[0] as usize)
-                    .cast(),
-                self.vertex_normals
-                    .as_ptr()
-                    .wrapping_add(c[1] as usize)
-                    .cast(),
-                self.vertex_normals
-                    .as_ptr()
-                    .wrapping_add(c[2] as usize)
-                    .cast(),
-                self.edge_normals
-                    .as_ptr()
-                    .wrapping_add(e[0] as usize)
-                    .cast(),
-                self.edge_normals
-                    .as_ptr()
-                    .wrapping_add(e[1] as usize)
-                    .cast(),
-                self.edge_normals
-                    .as_ptr()
-                    .wrapping_add(e[2] as usize)
-                    .cast(),
-            ],
+        fn at<T>(v: &[T], i: u32) -> *const u8 {
+            v.as_ptr().wrapping_add(i as usize).cast()
+        }
+        match (normals, self.corners.get(prim as usize)) {
+            (true, Some(&c)) => {
+                let e = self.edges[prim as usize];
+                let vertex = |k: usize| at(&self.vertex_normals, c[k]);
+                let edge = |k: usize| at(&self.edge_normals, e[k]);
+                [vertex(0), vertex(1), vertex(2), edge(0), edge(1), edge(2)]
+            }
             _ => {
-                let corners = self.corners.as_ptr().wrapping_add(i).cast::<u8>();
-                let edges = self.edges.as_ptr().wrapping_add(i).cast::<u8>();
-                [at(&self.piece), corners, edges, corners, edges, corners]
+                let rows = [
+                    at(&self.piece, prim),
+                    at(&self.corners, prim),
+                    at(&self.edges, prim),
+                ];
+                [rows[0], rows[1], rows[2], rows[0], rows[1], rows[2]]
             }
         }
     }
