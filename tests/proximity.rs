@@ -507,6 +507,7 @@ fn a_hint_changes_no_closest_point() {
             1e-5,
             None,
             &mut queue,
+            false,
         );
         for prim in (0..triangles.len()).step_by(37) {
             let t = &triangles[prim];
@@ -519,6 +520,7 @@ fn a_hint_changes_no_closest_point() {
                 1e-5,
                 hint,
                 &mut queue,
+                false,
             );
             assert_eq!(hinted, plain, "{p} from triangle {prim}");
         }
@@ -533,7 +535,8 @@ fn a_hint_changes_no_closest_point() {
                 0.01,
                 1e-5,
                 hint,
-                &mut queue
+                &mut queue,
+                false
             ),
             closest_point(
                 scene.bvh(),
@@ -542,7 +545,8 @@ fn a_hint_changes_no_closest_point() {
                 0.01,
                 1e-5,
                 None,
-                &mut queue
+                &mut queue,
+                false
             ),
         );
     }

@@ -9,8 +9,8 @@ use glam::Vec3;
 use lambert::Scene;
 use lambert::cpu::closest::{better, closest_point, closest_point_triangle, query_margin};
 use lambert::cpu::winding::{triangle_winding, triangle_winding4};
-use lambert::cpu::{CpuKernel, closest_points_with};
-use lambert::layout::{NO_HIT, Triangle};
+use lambert::cpu::{CpuKernel, Scalar, closest_points_with};
+use lambert::layout::{LEAF_BIT, NO_HIT, Triangle, leaf_range};
 use lambert::probe::Rng;
 
 fn point(rng: &mut Rng, half: f64) -> Vec3 {
@@ -56,10 +56,18 @@ fn triangles(seed: u64, n: usize) -> Vec<Triangle> {
     out
 }
 
+/// Leaves' blocks one at a time, and where this CPU runs f32's `Wide`
+/// (AVX on x86), a leaf's two blocks at once.
+fn widths() -> impl Iterator<Item = bool> + Clone {
+    let wide = <f32 as Scalar>::has_wide(CpuKernel::active());
+    [false, true].into_iter().filter(move |&w| !w || wide)
+}
+
 /// The depth-first walk finds `better`'s minimum over every triangle, bit
-/// for bit (point, distance, id, u, v), with and without a hint, for points
-/// inside the soup, far outside it and on the strip's shared vertices,
-/// through a BVH of many levels.
+/// for bit (point, distance, id, u, v), with and without a hint, a leaf's
+/// blocks one at a time or two at once (`widths`), for points inside the
+/// soup, far outside it and on the strip's shared vertices, through a BVH
+/// of many levels.
 #[test]
 fn the_depth_first_walk_finds_the_brute_force_minimum() {
     let triangles = triangles(3, 20_000);
@@ -82,7 +90,10 @@ fn the_depth_first_walk_finds_the_brute_force_minimum() {
         let t = &triangles[hint_id];
         let hint = (hint_id as u32, [t.v0, t.v1, t.v2].map(Vec3::from));
         let margin = query_margin(p.abs().max_element(), radius);
-        for hint in [None, Some(hint)] {
+        for (hint, wide) in [None, Some(hint)]
+            .into_iter()
+            .flat_map(|h| widths().map(move |w| (h, w)))
+        {
             let found = closest_point(
                 scene.bvh(),
                 triangles.len(),
@@ -91,6 +102,7 @@ fn the_depth_first_walk_finds_the_brute_force_minimum() {
                 margin,
                 hint,
                 &mut queue,
+                wide,
             )
             .expect("a nearest triangle");
             assert_eq!(
@@ -108,7 +120,7 @@ fn the_depth_first_walk_finds_the_brute_force_minimum() {
                     best.4.to_bits(),
                     best.2.to_array().map(f32::to_bits)
                 ),
-                "point {i} {p}, hint {hint:?}"
+                "point {i} {p}, hint {hint:?}, wide {wide}"
             );
         }
     }
@@ -177,4 +189,66 @@ fn four_lane_windings_are_the_scalar_ones_bit_for_bit() {
             }
         }
     }
+}
+
+/// The f64 walk (the oracle) gives the same answers, bit for bit, with a
+/// leaf's two blocks at once (`Scalar::Wide`: two 4-lane vectors) as one
+/// at a time, ties on the strip's shared vertices included.
+#[test]
+fn the_f64_walk_gives_the_same_answers_two_blocks_at_once() {
+    use lambert::cpu::f64;
+    let triangles = triangles(7, 5_000);
+    let scene = Scene::from_triangles(triangles.clone());
+    let radius = scene.placement().radius;
+    let mut rng = Rng(8);
+    let mut points: Vec<Vec3> = (0..300).map(|_| point(&mut rng, 1.2)).collect();
+    points.extend((0..100).map(|_| point(&mut rng, 6.0)));
+    points.extend(triangles[5_000..].iter().map(|t| Vec3::from(t.v2)));
+    let mut queue = f64::BoxQueue::new();
+    let mut pairs = 0;
+    for p in points {
+        let p = p.as_dvec3();
+        let margin = f64::query_margin(p.abs().max_element(), radius);
+        let [one, two] = [false, true].map(|wide| {
+            f64::closest_point(
+                scene.bvh(),
+                triangles.len(),
+                p,
+                f64::INFINITY,
+                margin,
+                None,
+                &mut queue,
+                wide,
+            )
+            .expect("a nearest triangle")
+        });
+        let bits = |n: f64::Nearest| {
+            (
+                n.prim,
+                n.d2.to_bits(),
+                n.u.to_bits(),
+                n.v.to_bits(),
+                n.point.to_array().map(f64::Real::to_bits),
+            )
+        };
+        assert_eq!(bits(two), bits(one), "{p}");
+        pairs += 1;
+    }
+    assert_eq!(pairs, 480);
+    // Leaves of two blocks, which `wide` takes at once.
+    let two_block_leaves = scene
+        .bvh()
+        .nodes
+        .iter()
+        .flat_map(|n| {
+            (0..8)
+                .filter(move |s| n.occupied & 1 << s != 0)
+                .map(move |s| n.children[s])
+        })
+        .filter(|&c| c & LEAF_BIT != 0 && leaf_range(c).1 == 2)
+        .count();
+    assert!(
+        two_block_leaves > 100,
+        "{two_block_leaves} leaves of two blocks"
+    );
 }

@@ -30,9 +30,17 @@ fn the_oracles_closest_points_are_f64() {
     let p = DVec3::new(10000.25 + 1e-7, 10000.25 - 3e-7, 1e-3);
     let mut queue = cpu::f64::BoxQueue::new();
     let margin = cpu::f64::query_margin(p.abs().max_element(), 2e4);
-    let nearest =
-        cpu::f64::closest_point(scene.bvh(), 1, p, f64::INFINITY, margin, None, &mut queue)
-            .expect("the triangle is found");
+    let nearest = cpu::f64::closest_point(
+        scene.bvh(),
+        1,
+        p,
+        f64::INFINITY,
+        margin,
+        None,
+        &mut queue,
+        true,
+    )
+    .expect("the triangle is found");
     assert_eq!(nearest.prim, 0);
     assert!(
         (nearest.d2 - 1e-6).abs() < 1e-15,

@@ -36,6 +36,30 @@ impl Scalar for Real {
         Real::from_bits(x.to_bits() & 0xffff_f000)
     }
 
+    #[cfg(target_arch = "x86_64")]
+    type Wide = crate::cpu::lanes::Ymm;
+    #[cfg(not(target_arch = "x86_64"))]
+    type Wide = crate::cpu::lanes::Pair<Vec4>;
+
+    fn has_wide(kernel: super::CpuKernel) -> bool {
+        cfg!(not(target_arch = "x86_64")) || kernel.ymm_boxes()
+    }
+
+    #[inline(always)]
+    unsafe fn wide_vertices(low: &PrimBlock, high: &PrimBlock) -> [[Self::Wide; 3]; 3] {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: the caller vouches for the kernel, which has AVX.
+        return std::array::from_fn(|i| {
+            std::array::from_fn(|k| unsafe {
+                crate::cpu::lanes::Ymm::join(&low.v[i][k], &high.v[i][k])
+            })
+        });
+        #[cfg(not(target_arch = "x86_64"))]
+        return std::array::from_fn(|i| {
+            std::array::from_fn(|k| crate::cpu::lanes::Pair(vec4(low.v[i][k]), vec4(high.v[i][k])))
+        });
+    }
+
     fn has_ymm_boxes() -> bool {
         super::CpuKernel::active().ymm_boxes()
     }

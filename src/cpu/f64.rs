@@ -17,6 +17,19 @@ impl Scalar for Real {
         Vec4::select(a.cmplt(b), a, b)
     }
 
+    type Wide = crate::cpu::lanes::Pair<Vec4>;
+
+    fn has_wide(_: crate::cpu::CpuKernel) -> bool {
+        true
+    }
+
+    #[inline(always)]
+    unsafe fn wide_vertices(low: &PrimBlock, high: &PrimBlock) -> [[Self::Wide; 3]; 3] {
+        std::array::from_fn(|i| {
+            std::array::from_fn(|k| crate::cpu::lanes::Pair(vec4(low.v[i][k]), vec4(high.v[i][k])))
+        })
+    }
+
     /// The low 26 of the 52 stored mantissa bits cleared: the oracle's
     /// twin of the f32 split (27 and 26 bits, each product exact).
     #[inline(always)]

@@ -16,6 +16,7 @@ mod fetch;
 mod integrator;
 mod intersect;
 mod kernel;
+mod lanes;
 mod layout;
 mod lights;
 mod material;

@@ -5,7 +5,9 @@
 //! `<Real as Scalar>::greater_of(…)`, and a precision that lacks one, or
 //! gives it another signature, does not compile.
 
-use crate::layout::{BVH_WIDTH, BvhNode};
+use super::lanes::Lanes;
+use super::simd::CpuKernel;
+use crate::layout::{BVH_WIDTH, BvhNode, PrimBlock};
 
 /// The kernel's own items in a precision that `Scalar` names: the types
 /// its functions take and give, and the portable slab test its SIMD
@@ -52,6 +54,22 @@ pub trait Scalar: KernelItems {
     /// than by the multiply of Veltkamp's, which a fused multiply-add
     /// would spoil).
     fn high_half(x: Self) -> Self;
+
+    /// A leaf's two blocks' eight lanes, side by side, for closest points
+    /// (`closest_point_lanes`): f32's one AVX register on x86, else two
+    /// 4-lane vectors.
+    type Wide: Lanes<Scalar = Self>;
+
+    /// Whether `kernel`'s code may make and run `Wide` values (f32's are
+    /// AVX instructions on x86, which the portable kernel lacks).
+    fn has_wide(kernel: CpuKernel) -> bool;
+
+    /// The vertices of blocks `low` and `high` (per vertex, per axis),
+    /// `low`'s lanes first.
+    ///
+    /// # Safety
+    /// `has_wide` holds for the kernel whose code this runs in.
+    unsafe fn wide_vertices(low: &PrimBlock, high: &PrimBlock) -> [[Self::Wide; 3]; 3];
 
     /// Whether this process runs `intersect_boxes_ymm`.
     fn has_ymm_boxes() -> bool {

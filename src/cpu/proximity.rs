@@ -8,6 +8,7 @@ use rayon::prelude::*;
 
 use super::closest::{closest_point, query_margin};
 use super::f32;
+use super::precision::Scalar;
 use super::prefetch::prefetch_rows;
 use super::simd::{CpuKernel, check_runs, with_simd};
 use super::winding::winding_number;
@@ -113,6 +114,7 @@ pub fn closest_points_with(
     let radius = scene.placement().radius as f32;
     let max_d2 = max_distance * max_distance;
     let order = spatial_order(points);
+    let wide = <f32::Real as Scalar>::has_wide(kernel);
     in_order(
         &order,
         ClosestPoint::NONE,
@@ -129,7 +131,8 @@ pub fn closest_points_with(
                         let t = &scene.triangles[*previous as usize];
                         (*previous, [t.v0, t.v1, t.v2].map(Vec3::from))
                     });
-                    match closest_point(&scene.bvh, triangles, p, max_d2, margin, hint, queue) {
+                    match closest_point(&scene.bvh, triangles, p, max_d2, margin, hint, queue, wide)
+                    {
                         Some(n) => {
                             *previous = n.prim;
                             ClosestPoint {
@@ -195,6 +198,7 @@ pub fn solid_inside(
                 margin,
                 None,
                 &mut Vec::new(),
+                false,
             )?;
             let ahead = sides.behind(&scene.triangles, found.prim, p.as_dvec3(), near(p));
             if found.prim != t || ahead.map(|(behind, _)| behind) != Some(false) {

@@ -6,6 +6,7 @@
 macro_rules! closest {
     () => {
         use crate::bvh::Bvh;
+        use crate::cpu::lanes::Lanes;
 
         /// The nearest point found for a query point: its squared distance, the
         /// triangle, (u, v) on it, and the point itself (all in the scene's local
@@ -121,19 +122,70 @@ macro_rules! closest {
             1e-5 * point_extent.max(scene_radius)
         }
 
-        /// `closest_point_triangle` on a leaf block's four lanes at once: the same
-        /// operations in the same order in each lane (SSE's are IEEE's, so the
-        /// same bits as the scalar function and the shader), the interior and the
-        /// three edges all computed and the answer selected as the scalar
-        /// function's branches choose it. Returns (d², u, v) per lane and the
+        /// `closest_point_triangle` on a leaf block's four lanes at once
+        /// (`closest_point_lanes`). Returns (d², u, v) per lane and the
         /// points' coordinates per axis.
         #[inline(always)]
         pub fn closest_point_block(p: Vec3, block: &PrimBlock) -> (Vec4, Vec4, Vec4, [Vec4; 3]) {
-            let v = |k: usize| block.v[k].map(vec4);
-            let [a, b, c] = [v(0), v(1), v(2)];
-            let p = [Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z)];
-            let sub = |x: [Vec4; 3], y: [Vec4; 3]| [x[0] - y[0], x[1] - y[1], x[2] - y[2]];
-            let dot = |x: [Vec4; 3], y: [Vec4; 3]| x[0] * y[0] + x[1] * y[1] + x[2] * y[2];
+            let v = |i: usize| -> [Vec4; 3] { std::array::from_fn(|k| vec4(block.v[i][k])) };
+            closest_point_lanes(p, [v(0), v(1), v(2)])
+        }
+
+        /// `closest_point_triangle` on triangles (a, b, c) in lanes: the same
+        /// operations in the same order in each lane (SSE's are IEEE's, so the
+        /// same bits as the scalar function and the shader), the interior and
+        /// the three edges all computed and the answer selected as the scalar
+        /// function's branches choose it. Returns (d², u, v) per lane and the
+        /// points' coordinates per axis.
+        #[inline(always)]
+        pub fn closest_point_lanes<L: Lanes<Scalar = Real>>(
+            p: Vec3,
+            [a, b, c]: [[L; 3]; 3],
+        ) -> (L, L, L, [L; 3]) {
+            // Functions, not closures, each inlined: a closure left a call
+            // to every AVX intrinsic in it (a `Ymm` is f32's `Wide`).
+            #[inline(always)]
+            fn sub<L: Lanes>(x: [L; 3], y: [L; 3]) -> [L; 3] {
+                [x[0] - y[0], x[1] - y[1], x[2] - y[2]]
+            }
+            #[inline(always)]
+            fn dot<L: Lanes>(x: [L; 3], y: [L; 3]) -> L {
+                x[0] * y[0] + x[1] * y[1] + x[2] * y[2]
+            }
+            /// s0 + e·t.
+            #[inline(always)]
+            fn along<L: Lanes>(s0: [L; 3], e: [L; 3], t: L) -> [L; 3] {
+                [s0[0] + e[0] * t, s0[1] + e[1] * t, s0[2] + e[2] * t]
+            }
+            #[inline(always)]
+            fn select<L: Lanes>(mask: L::Mask, x: [L; 3], y: [L; 3]) -> [L; 3] {
+                [
+                    L::select(mask, x[0], y[0]),
+                    L::select(mask, x[1], y[1]),
+                    L::select(mask, x[2], y[2]),
+                ]
+            }
+            /// `closest_on_segment` in lanes.
+            #[inline(always)]
+            fn segment<L: Lanes<Scalar = Real>>(
+                p: [L; 3],
+                s0: [L; 3],
+                e: [L; 3],
+            ) -> ([L; 3], L, L) {
+                let zero = L::splat(0.0);
+                let ee = dot(e, e);
+                let t = L::select(
+                    ee.gt(zero),
+                    (dot(sub(p, s0), e) / ee)
+                        .greater(zero)
+                        .lesser(L::splat(1.0)),
+                    zero,
+                );
+                let q = along(s0, e, t);
+                let d = sub(p, q);
+                (q, dot(d, d), t)
+            }
+            let p = [L::splat(p.x), L::splat(p.y), L::splat(p.z)];
             let ab = sub(b, a);
             let ac = sub(c, a);
             let ap = sub(p, a);
@@ -149,50 +201,75 @@ macro_rules! closest {
             let vb = d5 * d2 - d1 * d6;
             let vc = d1 * d4 - d3 * d2;
             let sum = va + vb + vc;
-            let zero = Vec4::ZERO;
-            let interior = va.cmpgt(zero) & vb.cmpgt(zero) & vc.cmpgt(zero) & sum.cmpgt(zero);
+            let zero = L::splat(0.0);
+            let interior = va.gt(zero) & vb.gt(zero) & vc.gt(zero) & sum.gt(zero);
             // Few blocks hold a triangle the point projects into: their
             // projection only where one does.
-            let (iv, iw, iq, id2) = if interior.any() {
+            let (iv, iw, iq, id2) = if L::any(interior) {
                 let iv = vb / sum;
                 let iw = vc / sum;
-                let iq: [Vec4; 3] = std::array::from_fn(|k| a[k] + ab[k] * iv + ac[k] * iw);
+                let iq = along(along(a, ab, iv), ac, iw);
                 let id = sub(p, iq);
                 (iv, iw, iq, dot(id, id))
             } else {
                 (zero, zero, [zero; 3], zero)
             };
-            let segment = |s0: [Vec4; 3], e: [Vec4; 3]| {
-                let ee = dot(e, e);
-                let t = Vec4::select(
-                    ee.cmpgt(zero),
-                    (dot(sub(p, s0), e) / ee).max(zero).min(Vec4::ONE),
-                    zero,
-                );
-                let q: [Vec4; 3] = std::array::from_fn(|k| s0[k] + e[k] * t);
-                let d = sub(p, q);
-                (q, dot(d, d), t)
-            };
-            let (mut q, mut best, t1) = segment(a, ab);
+            let (mut q, mut best, t1) = segment(p, a, ab);
             let (mut u, mut w) = (t1, zero);
-            let (q2, d2_ac, t2) = segment(a, ac);
-            let nearer = d2_ac.cmplt(best);
-            q = std::array::from_fn(|k| Vec4::select(nearer, q2[k], q[k]));
-            best = Vec4::select(nearer, d2_ac, best);
-            u = Vec4::select(nearer, zero, u);
-            w = Vec4::select(nearer, t2, w);
-            let (q3, d2_bc, t3) = segment(b, sub(c, b));
-            let nearer = d2_bc.cmplt(best);
-            q = std::array::from_fn(|k| Vec4::select(nearer, q3[k], q[k]));
-            best = Vec4::select(nearer, d2_bc, best);
-            u = Vec4::select(nearer, Vec4::ONE - t3, u);
-            w = Vec4::select(nearer, t3, w);
+            let (q2, d2_ac, t2) = segment(p, a, ac);
+            let nearer = d2_ac.lt(best);
+            q = select(nearer, q2, q);
+            best = L::select(nearer, d2_ac, best);
+            u = L::select(nearer, zero, u);
+            w = L::select(nearer, t2, w);
+            let (q3, d2_bc, t3) = segment(p, b, sub(c, b));
+            let nearer = d2_bc.lt(best);
+            q = select(nearer, q3, q);
+            best = L::select(nearer, d2_bc, best);
+            u = L::select(nearer, L::splat(1.0) - t3, u);
+            w = L::select(nearer, t3, w);
             (
-                Vec4::select(interior, id2, best),
-                Vec4::select(interior, iv, u),
-                Vec4::select(interior, iw, w),
-                std::array::from_fn(|k| Vec4::select(interior, iq[k], q[k])),
+                L::select(interior, id2, best),
+                L::select(interior, iv, u),
+                L::select(interior, iw, w),
+                select(interior, iq, q),
             )
+        }
+
+        /// Takes the lanes of a block test (`closest_point_lanes`) whose
+        /// triangles (`prims`, the ids of `triangle_count` and above
+        /// padding) beat `best`, and shrinks `bound` to the best's.
+        #[inline(always)]
+        fn take_nearest<L: Lanes<Scalar = Real>>(
+            (d2, u, v, q): (L, L, L, [L; 3]),
+            prims: &[u32],
+            triangle_count: usize,
+            margin: Real,
+            best: &mut Nearest,
+            bound: &mut Real,
+        ) {
+            // Most blocks hold nothing as near as the best so far: one
+            // branch on all the lanes, not one on each.
+            if !L::any(d2.le(L::splat(best.d2))) {
+                return;
+            }
+            let (d2, u, v) = (d2.to_lanes(), u.to_lanes(), v.to_lanes());
+            let [qx, qy, qz] = q;
+            let (qx, qy, qz) = (qx.to_lanes(), qy.to_lanes(), qz.to_lanes());
+            let lanes = d2.as_ref().iter().zip(u.as_ref()).zip(v.as_ref());
+            let points = qx.as_ref().iter().zip(qy.as_ref()).zip(qz.as_ref());
+            for ((&prim, ((&d2, &u), &v)), ((&x, &y), &z)) in prims.iter().zip(lanes).zip(points) {
+                if (prim as usize) < triangle_count && better(d2, prim, best.d2, best.prim) {
+                    *best = Nearest {
+                        d2,
+                        prim,
+                        u,
+                        v,
+                        point: Vec3::new(x, y, z),
+                    };
+                    *bound = cull_bound(d2, margin);
+                }
+            }
         }
 
         /// Pushes the children of `node` whose squared distances (`d2`, four
@@ -248,7 +325,14 @@ macro_rules! closest {
         /// neighbouring query's answer), is the first candidate: its bound prunes
         /// from the start, and as `better` orders candidates totally the answer
         /// is the same with or without it, and in any order of visits.
+        /// `wide`: a leaf's two blocks tested at once, in `Scalar::Wide`'s
+        /// eight lanes (the same answer); the caller vouches that
+        /// `Scalar::has_wide` holds for the kernel this runs in. Half the
+        /// leaves a query opens hold two blocks; with them in one AVX
+        /// register, the dragon's million points took 1.20–1.22 s against
+        /// 1.31–1.34 (docs/benchmarks.md).
         #[inline(always)]
+        #[allow(clippy::too_many_arguments)]
         pub fn closest_point(
             bvh: &Bvh,
             triangle_count: usize,
@@ -257,6 +341,7 @@ macro_rules! closest {
             margin: Real,
             hint: Option<(u32, [Vec3; 3])>,
             queue: &mut BoxQueue,
+            wide: bool,
         ) -> Option<Nearest> {
             let mut best = Nearest {
                 d2: max_d2,
@@ -299,27 +384,39 @@ macro_rules! closest {
                     push_children(queue, node, [distance2(0), distance2(1)], bound);
                 } else {
                     let (first, count) = leaf_range(current);
-                    for block in &bvh.blocks[first as usize..(first + count) as usize] {
-                        let (d2, u, v, q) = closest_point_block(p, block);
-                        // Most blocks hold nothing as near as the best so far:
-                        // one branch on the four lanes, not one on each.
-                        if d2.cmple(Vec4::splat(best.d2)).bitmask() == 0 {
-                            continue;
+                    let blocks = &bvh.blocks[first as usize..(first + count) as usize];
+                    match blocks {
+                        [low, high] if wide => {
+                            let prims: [u32; 8] = std::array::from_fn(|i| {
+                                if i < 4 {
+                                    low.prims[i]
+                                } else {
+                                    high.prims[i - 4]
+                                }
+                            });
+                            // SAFETY: the caller vouches for `wide`.
+                            let v = unsafe { <Real as Scalar>::wide_vertices(low, high) };
+                            let lanes = closest_point_lanes(p, v);
+                            take_nearest(
+                                lanes,
+                                &prims,
+                                triangle_count,
+                                margin,
+                                &mut best,
+                                &mut bound,
+                            );
                         }
-                        let (d2, u, v) = (d2.to_array(), u.to_array(), v.to_array());
-                        for lane in 0..4 {
-                            let prim = block.prims[lane];
-                            if (prim as usize) < triangle_count
-                                && better(d2[lane], prim, best.d2, best.prim)
-                            {
-                                best = Nearest {
-                                    d2: d2[lane],
-                                    prim,
-                                    u: u[lane],
-                                    v: v[lane],
-                                    point: Vec3::new(q[0][lane], q[1][lane], q[2][lane]),
-                                };
-                                bound = cull_bound(d2[lane], margin);
+                        _ => {
+                            for block in blocks {
+                                let lanes = closest_point_block(p, block);
+                                take_nearest(
+                                    lanes,
+                                    &block.prims,
+                                    triangle_count,
+                                    margin,
+                                    &mut best,
+                                    &mut bound,
+                                );
                             }
                         }
                     }
