@@ -232,22 +232,19 @@ pub fn solid_inside(
             }
         }
     };
-    let starts: Vec<usize> = (0..points.len()).step_by(CHUNK).collect();
-    let chunks: Vec<Vec<Option<bool>>> = starts
-        .par_iter()
-        .map(|&start| {
-            let end = (start + CHUNK).min(points.len());
-            (start..end)
-                .map(|i| {
-                    prefetch(i + AHEAD, false);
-                    prefetch(i + AHEAD / 2, true);
-                    let p = Vec3::from(points[i]);
-                    sides.inside(&scene.triangles, closest[i].prim, p.as_dvec3(), near(p))
-                })
-                .collect()
-        })
-        .collect();
-    Ok(chunks.concat())
+    let mut inside = vec![None; points.len()];
+    inside
+        .par_chunks_mut(CHUNK)
+        .enumerate()
+        .for_each(|(c, rows)| {
+            for (i, row) in (c * CHUNK..).zip(rows) {
+                prefetch(i + AHEAD, false);
+                prefetch(i + AHEAD / 2, true);
+                let p = Vec3::from(points[i]);
+                *row = sides.inside(&scene.triangles, closest[i].prim, p.as_dvec3(), near(p));
+            }
+        });
+    Ok(inside)
 }
 
 /// How many triangles each ray (local frame) crosses in (tmin, tmax), an
