@@ -65,7 +65,7 @@ pub fn spatial_order(points: &[[f32; 3]]) -> Vec<u32> {
 /// points' indices), in parallel chunks of `CHUNK` taken in order (with
 /// state `init()` carried through a chunk), put back in index order. In
 /// `order` the points lie far apart in memory: each is asked for
-/// `AHEAD` queries before its own (an eighth of the dragon's closest-point
+/// `AHEAD` queries before its own (8% of the dragon's closest-point
 /// walk waited on the point's load without).
 fn in_order<T, S>(
     points: &[[f32; 3]],
