@@ -60,15 +60,16 @@ pub trait Scalar: KernelItems {
     /// 4-lane vectors.
     type Wide: Lanes<Scalar = Self>;
 
-    /// Whether `kernel`'s code may make and run `Wide` values (f32's are
-    /// AVX instructions on x86, which the portable kernel lacks).
+    /// Whether `kernel` has the instructions of `Wide`'s operations (f32's
+    /// are AVX's on x86, which the portable kernel lacks).
     fn has_wide(kernel: CpuKernel) -> bool;
 
     /// The vertices of blocks `low` and `high` (per vertex, per axis),
     /// `low`'s lanes first.
     ///
     /// # Safety
-    /// `has_wide` holds for the kernel whose code this runs in.
+    /// `has_wide` holds for a kernel this CPU runs (fastest inlined into
+    /// that kernel's code; elsewhere each operation is a call).
     unsafe fn wide_vertices(low: &PrimBlock, high: &PrimBlock) -> [[Self::Wide; 3]; 3];
 
     /// Whether this process runs `intersect_boxes_ymm`.

@@ -327,8 +327,9 @@ macro_rules! closest {
         /// is the same with or without it, and in any order of visits.
         /// `wide`: a leaf's two blocks tested at once, in `Scalar::Wide`'s
         /// eight lanes, or a leaf of one block with the next box when that
-        /// is one too (the same answer); the caller vouches that
-        /// `Scalar::has_wide` holds for the kernel this runs in. Half the
+        /// is one too (the same answer), where `Scalar::has_wide` holds for
+        /// the process's kernel; inlined into the code of a kernel that
+        /// lacks it (the portable one), slowly, but the same answer. Half the
         /// leaves a query opens hold two blocks; with them in one AVX
         /// register, the dragon's million points took 1.20–1.22 s against
         /// 1.31–1.34, and with the leaves of one block paired, 2–3% less
@@ -365,6 +366,10 @@ macro_rules! closest {
                 }
             }
             let mut bound = cull_bound(best.d2, margin);
+            // Only where this process's CPU runs `Wide`'s instructions: a
+            // safe function's flag must not reach an instruction the CPU
+            // lacks (one check a query).
+            let wide = wide && <Real as Scalar>::has_wide(crate::cpu::CpuKernel::active());
             queue.clear();
             let mut current = 0u32;
             loop {
@@ -411,7 +416,8 @@ macro_rules! closest {
                                     high.prims[i - 4]
                                 }
                             });
-                            // SAFETY: the caller vouches for `wide`.
+                            // SAFETY: `wide` holds only where the CPU runs
+                            // the process's kernel, which has_wide allows.
                             let v = unsafe { <Real as Scalar>::wide_vertices(low, high) };
                             let lanes = closest_point_lanes(p, v);
                             take_nearest(
