@@ -12,7 +12,7 @@ macro_rules! fetch {
             /// visits next, so that the load overlaps the other interleaved rays'
             /// work.
             #[inline(always)]
-            fn prefetch<const PREFETCH: bool>(&self, child: u32) {
+            pub(crate) fn prefetch<const PREFETCH: bool>(&self, child: u32) {
                 if !PREFETCH {
                     return;
                 }
