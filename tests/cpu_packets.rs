@@ -1,5 +1,5 @@
-//! Issue 48, item 2: coherent closest-hit rays traced in packets
-//! (src/cpu/packet.rs) give the single-ray kernel's hits bit for bit
+//! Issue 48, item 2: coherent rays traced in packets (src/cpu/packet.rs)
+//! give the single-ray kernel's hits bit for bit, closest and any hits
 //! (`cpu::trace_rays_as` with `QueryKernel::Single`, the portable original): t, primitive, u and
 //! v, on every CPU kernel this machine runs, for camera rays, the shadow
 //! rays of their hits, rays through shared vertices and duplicated
@@ -7,8 +7,8 @@
 //! first it meets), rays that miss everything, packets whose rays diverge
 //! or straddle an axis, and random packets (a proptest); and the CPU
 //! render's images, whose camera rays go in packets. Scenes with
-//! spheres, alpha masks or another triangle test, incoherent rays and
-//! any-hit queries do not take the packets (`cpu::traces_in_packets`).
+//! spheres, alpha masks or another triangle test and incoherent rays do
+//! not take the packets (`cpu::traces_in_packets`).
 
 mod common;
 
@@ -122,47 +122,54 @@ fn kernels() -> Vec<CpuKernel> {
         .collect()
 }
 
-/// The packets' closest hits equal the single ray's, bit for bit, on
-/// every CPU kernel; returns how many rays hit.
+/// The packets' closest hits, and their any hits (each ray's first hit in
+/// its own order), equal the single ray's, bit for bit, on every CPU
+/// kernel; returns how many rays hit.
 fn assert_same_hits(scene: &Scene, rays: &[Ray], what: &str) -> usize {
     assert!(
-        traces_in_packets(scene, rays, false, Intersect::Watertight),
+        traces_in_packets(scene, rays, Intersect::Watertight),
         "{what}: not traced in packets"
     );
     let mut hit_count = 0;
-    for cpu_kernel in kernels() {
-        let single = trace_rays_as(
-            scene,
-            rays,
-            false,
-            Intersect::Watertight,
-            cpu_kernel,
-            QueryKernel::Single,
-        );
-        let packets = trace_rays_with(scene, rays, false, Intersect::Watertight, cpu_kernel);
-        for (i, (a, b)) in single.iter().zip(&packets).enumerate() {
-            assert_eq!(
-                key(a),
-                key(b),
-                "{what}, ray {i}, {} kernel",
+    for any_hit in [false, true] {
+        for cpu_kernel in kernels() {
+            let single = trace_rays_as(
+                scene,
+                rays,
+                any_hit,
+                Intersect::Watertight,
+                cpu_kernel,
+                QueryKernel::Single,
+            );
+            let packets = trace_rays_with(scene, rays, any_hit, Intersect::Watertight, cpu_kernel);
+            for (i, (a, b)) in single.iter().zip(&packets).enumerate() {
+                assert_eq!(
+                    key(a),
+                    key(b),
+                    "{what}, ray {i}, {} kernel, any hit {any_hit}",
+                    cpu_kernel.name()
+                );
+            }
+            // And the portable original's, whichever kernel traced.
+            let portable = trace_rays_as(
+                scene,
+                rays,
+                any_hit,
+                Intersect::Watertight,
+                CpuKernel::Portable,
+                QueryKernel::Single,
+            );
+            assert!(
+                portable.iter().zip(&packets).all(|(a, b)| key(a) == key(b)),
+                "{what}: the {} kernel's packets differ from the portable kernel, any hit {any_hit}",
                 cpu_kernel.name()
             );
+            let hits = single.iter().filter(|h| h.prim != NO_HIT).count();
+            if any_hit {
+                assert_eq!(hits, hit_count, "{what}: any hits against closest hits");
+            }
+            hit_count = hits;
         }
-        // And the portable original's, whichever kernel traced.
-        let portable = trace_rays_as(
-            scene,
-            rays,
-            false,
-            Intersect::Watertight,
-            CpuKernel::Portable,
-            QueryKernel::Single,
-        );
-        assert!(
-            portable.iter().zip(&packets).all(|(a, b)| key(a) == key(b)),
-            "{what}: the {} kernel's packets differ from the portable kernel",
-            cpu_kernel.name()
-        );
-        hit_count = single.iter().filter(|h| h.prim != NO_HIT).count();
     }
     hit_count
 }
@@ -274,7 +281,6 @@ fn diverging_packets_equal_the_single_ray() {
     assert!(!traces_in_packets(
         &scene,
         &alternating,
-        false,
         Intersect::Watertight
     ));
     for cpu_kernel in kernels() {
@@ -297,8 +303,8 @@ fn diverging_packets_equal_the_single_ray() {
     }
 }
 
-/// Spheres, alpha masks, another triangle test, incoherent rays and
-/// any-hit queries take the single-ray kernel, and their hits are its.
+/// Spheres, alpha masks, another triangle test and incoherent rays take
+/// the single-ray kernel, and their hits (closest and any) are its.
 #[test]
 fn scenes_and_queries_packets_cannot_trace_go_ray_by_ray() {
     let plain = common::scene_of(soup(5, 3000), Vec::new());
@@ -320,19 +326,20 @@ fn scenes_and_queries_packets_cannot_trace_go_ray_by_ray() {
     assert!(traces_in_packets(
         &plain,
         &camera(&plain),
-        false,
         Intersect::Watertight
     ));
     let cases = [
-        ("spheres", &with_spheres, Intersect::Watertight, false),
-        ("alpha masks", &masked, Intersect::Watertight, false),
-        ("Möller–Trumbore", &plain, Intersect::MollerTrumbore, false),
-        ("any hit", &plain, Intersect::Watertight, true),
+        ("spheres", &with_spheres, Intersect::Watertight),
+        ("alpha masks", &masked, Intersect::Watertight),
+        ("Möller–Trumbore", &plain, Intersect::MollerTrumbore),
     ];
-    for (name, scene, intersect, any_hit) in cases {
+    for ((name, scene, intersect), any_hit) in cases
+        .into_iter()
+        .flat_map(|case| [(case, false), (case, true)])
+    {
         let rays = camera(scene);
         assert!(
-            !traces_in_packets(scene, &rays, any_hit, intersect),
+            !traces_in_packets(scene, &rays, intersect),
             "{name}: in packets"
         );
         for cpu_kernel in kernels() {
@@ -365,12 +372,7 @@ fn scenes_and_queries_packets_cannot_trace_go_ray_by_ray() {
             }
         })
         .collect();
-    assert!(!traces_in_packets(
-        &plain,
-        &random,
-        false,
-        Intersect::Watertight
-    ));
+    assert!(!traces_in_packets(&plain, &random, Intersect::Watertight));
 }
 
 /// The CPU render traces its camera rays in packets where the scene is
@@ -423,7 +425,8 @@ proptest! {
 
     /// Random packets: 64 rays from around one point of a random soup's
     /// neighbourhood, within a random spread of one direction, some with a
-    /// finite tmax; in packets, the single ray's hits bit for bit.
+    /// finite tmax; in packets, the single ray's hits (closest and any)
+    /// bit for bit.
     #[test]
     fn random_packets_equal_the_single_ray(
         seed in 0u64..1000,
@@ -447,11 +450,13 @@ proptest! {
                 }
             })
             .collect();
-        let single = trace_rays_as(&scene, &rays, false, Intersect::Watertight, CpuKernel::Portable, QueryKernel::Single);
-        for cpu_kernel in kernels() {
-            let packets = trace_rays_with(&scene, &rays, false, Intersect::Watertight, cpu_kernel);
-            for (i, (a, b)) in single.iter().zip(&packets).enumerate() {
-                prop_assert_eq!(key(a), key(b), "ray {}, {} kernel", i, cpu_kernel.name());
+        for any_hit in [false, true] {
+            let single = trace_rays_as(&scene, &rays, any_hit, Intersect::Watertight, CpuKernel::Portable, QueryKernel::Single);
+            for cpu_kernel in kernels() {
+                let packets = trace_rays_with(&scene, &rays, any_hit, Intersect::Watertight, cpu_kernel);
+                for (i, (a, b)) in single.iter().zip(&packets).enumerate() {
+                    prop_assert_eq!(key(a), key(b), "ray {}, {} kernel, any hit {}", i, cpu_kernel.name(), any_hit);
+                }
             }
         }
     }

@@ -57,8 +57,12 @@ struct Found {
     hits: [f32::Hit; PACKET],
     /// The block that holds each ray's hit (`Traversal::hit_block`).
     blocks: [u32; PACKET],
-    /// Rays to trace again alone: a second hit at the closest distance.
+    /// Rays to trace again alone: a second hit at the closest distance,
+    /// or an any hit where the ray's order left the packet's.
     again: u32,
+    /// The node whose subtree each ray in `again` is traced again from
+    /// (the root for closest hits).
+    from: [u32; PACKET],
 }
 
 /// A stack entry: a child, the rays that enter it, and where each does.
@@ -67,6 +71,13 @@ struct Entry {
     child: u32,
     rays: u32,
     t: [f32::Real; PACKET],
+    /// Rays suspect above the child's node (`trace_packet`'s
+    /// `suspects`), and those the packet takes into the child early
+    /// (`out_of_order`): suspect from that node on.
+    above: u32,
+    early: u32,
+    /// The child's node's parent.
+    parent: u32,
 }
 
 impl Packet {
@@ -396,25 +407,61 @@ impl Packet {
     }
 }
 
-/// Traces a packet: each ray's closest hit. Triangles alone, under the
-/// watertight test (`Kernel::features` 0).
+/// Traces a packet: each ray's closest hit, or with `ANY_HIT` its first
+/// hit in its own order (`found.again` then names the rays whose order
+/// left the packet's before their hit: see `diverged`). Triangles alone,
+/// under the watertight test (`Kernel::features` 0).
 #[inline(always)]
-fn trace_packet(kernel: &f32::Kernel, p: &mut Packet, ymm: bool) -> Found {
+fn trace_packet<const ANY_HIT: bool>(kernel: &f32::Kernel, p: &mut Packet, ymm: bool) -> Found {
     let bvh = &kernel.scene.bvh;
     let num_triangles = kernel.scene.triangles.len() as u32;
     let mut found = Found {
         hits: [f32::miss(); PACKET],
         blocks: [NO_HIT; PACKET],
         again: 0,
+        from: [0; PACKET],
     };
     let all = (1u32 << PACKET) - 1;
     let mut stack = [std::mem::MaybeUninit::<Entry>::uninit(); crate::bvh::STACK_SIZE];
     let mut sp = 0;
     let mut child = 0;
     let mut rays = all;
+    // Rays still traced: an any-hit ray leaves at its hit, or where its
+    // order leaves the packet's.
+    let mut active = all;
+    // Any-hit rays for which some node on the packet's path was entered
+    // before a sibling the ray alone enters first (`out_of_order`): a hit
+    // below it may not be the ray's first alone, so the ray is traced
+    // again alone from the parent of the outermost such node
+    // (`found.from`); a miss is a miss in any order.
+    let mut suspects = 0u32;
     let mut tmax = p.farthest(all);
     loop {
-        if child & LEAF_BIT != 0 {
+        if ANY_HIT && child & LEAF_BIT != 0 {
+            // The single ray's leaf step: its blocks in order, the first
+            // with a hit ends its trace.
+            let (first, count) = leaf_range(child);
+            let blocks = &bvh.blocks[first as usize..(first + count) as usize];
+            let mut each = rays & active;
+            while each != 0 {
+                let r = each.trailing_zeros() as usize;
+                each &= each - 1;
+                let mut ray = p.rays[r];
+                for (b, block) in (first..).zip(blocks) {
+                    if kernel.record_block_hits::<0>(
+                        &mut ray,
+                        &p.shears[r],
+                        &mut found.hits[r],
+                        block,
+                    ) {
+                        found.blocks[r] = b;
+                        found.again |= suspects & 1 << r;
+                        active &= !(1 << r);
+                        break;
+                    }
+                }
+            }
+        } else if child & LEAF_BIT != 0 {
             let (first, count) = leaf_range(child);
             let blocks = &bvh.blocks[first as usize..(first + count) as usize];
             let mut each = rays;
@@ -466,7 +513,8 @@ fn trace_packet(kernel: &f32::Kernel, p: &mut Packet, ymm: bool) -> Found {
                 p.candidates(node, tmax)
             };
             // Entered children, nearest first by the bound of their entry
-            // distances.
+            // distances, the higher slot first on a tie as a ray alone
+            // takes them (siblings often share their near plane).
             let mut order = [(0u32, 0.0 as f32::Real); BVH_WIDTH];
             // Where each ray enters each entered slot (written before read).
             let mut entries = [std::mem::MaybeUninit::<[f32::Real; PACKET]>::uninit(); BVH_WIDTH];
@@ -489,12 +537,22 @@ fn trace_packet(kernel: &f32::Kernel, p: &mut Packet, ymm: bool) -> Found {
                 } else {
                     p.enter(node, slot, rays)
                 };
+                // An any-hit ray enters a box below its tmax, as alone.
+                let entered = if ANY_HIT {
+                    let mut below = 0;
+                    for r in 0..PACKET {
+                        below |= ((t[r] < p.tmax[r]) as u32) << r;
+                    }
+                    entered & below & active
+                } else {
+                    entered
+                };
                 if entered == 0 {
                     continue;
                 }
                 let least = bound[slot];
                 let mut j = n;
-                while j > 0 && order[j - 1].1 > least {
+                while j > 0 && order[j - 1].1 >= least {
                     order[j] = order[j - 1];
                     j -= 1;
                 }
@@ -502,18 +560,27 @@ fn trace_packet(kernel: &f32::Kernel, p: &mut Packet, ymm: bool) -> Found {
                 entries[slot].write(t);
                 n += 1;
             }
+            let early = if ANY_HIT && n > 1 {
+                out_of_order(&order[..n], &entries)
+            } else {
+                [0; BVH_WIDTH]
+            };
             if n > 0 {
                 // Farthest deepest; the nearest visited at once.
-                for &(key, _) in order[1..n].iter().rev() {
+                for (k, &(key, _)) in order.iter().enumerate().take(n).skip(1).rev() {
                     let slot = (key & 0xff) as usize;
                     stack[sp].write(Entry {
                         child: node.children[slot],
                         rays: key >> 8,
                         // SAFETY: written for every entered slot.
                         t: unsafe { entries[slot].assume_init() },
+                        above: suspects,
+                        early: early[k],
+                        parent: child,
                     });
                     sp += 1;
                 }
+                suspect_below(&mut suspects, &mut found.from, early[0], child);
                 let key = order[0].0;
                 child = node.children[(key & 0xff) as usize];
                 rays = key >> 8;
@@ -526,11 +593,13 @@ fn trace_packet(kernel: &f32::Kernel, p: &mut Packet, ymm: bool) -> Found {
             sp -= 1;
             // SAFETY: entries below `sp` are written.
             let entry = unsafe { stack[sp].assume_init() };
+            suspects = entry.above;
+            suspect_below(&mut suspects, &mut found.from, entry.early, entry.parent);
             let mut reach = 0;
             for r in 0..PACKET {
                 reach |= ((entry.t[r] <= p.tmax[r]) as u32) << r;
             }
-            let reach = reach & entry.rays;
+            let reach = reach & entry.rays & active;
             if reach != 0 {
                 next = Some((entry.child, reach));
                 break;
@@ -543,13 +612,65 @@ fn trace_packet(kernel: &f32::Kernel, p: &mut Packet, ymm: bool) -> Found {
     }
 }
 
-/// One ray alone: the single-ray kernel (`Kernel::visit`, the scene's
-/// features compiled out), its closest hit along the ray as given and its
-/// block.
+/// Adds the rays `early` into a child of `node` to `suspects`, traced
+/// again from `node` (`from`) where they were not suspect above it.
 #[inline(always)]
-fn trace_alone(kernel: &f32::Kernel, ray: &layout::Ray) -> (f32::Hit, u32) {
+fn suspect_below(suspects: &mut u32, from: &mut [u32; PACKET], early: u32, node: u32) {
+    let mut new = early & !*suspects;
+    *suspects |= early;
+    while new != 0 {
+        from[new.trailing_zeros() as usize] = node;
+        new &= new - 1;
+    }
+}
+
+/// For each of a node's entered children in the packet's `order`, the
+/// rays that the packet takes into it before a sibling they enter first
+/// alone: `Kernel::visit` visits a ray's children by its own entry
+/// distance, the higher slot first on a tie. Before its first hit a ray
+/// enters the same boxes in any order, so one that meets its first hit
+/// where no child on its path was entered early meets its leaves with
+/// hits in its own order: its first hit in the packet is its first alone.
+#[inline(always)]
+fn out_of_order(
+    order: &[(u32, f32::Real)],
+    entries: &[std::mem::MaybeUninit<[f32::Real; PACKET]>; BVH_WIDTH],
+) -> [u32; BVH_WIDTH] {
+    // The first, by each ray's own order, of the children after the one
+    // at hand in the packet's.
+    let mut first_t = [f32::Real::INFINITY; PACKET];
+    let mut first_slot = [0u32; PACKET];
+    let mut early = [0; BVH_WIDTH];
+    for (k, &(key, _)) in order.iter().enumerate().rev() {
+        let (slot, entered) = (key & 0xff, key >> 8);
+        // SAFETY: written for every entered slot.
+        let t = unsafe { entries[slot as usize].assume_init_ref() };
+        // Without branches, so that the lanes vectorise.
+        for r in 0..PACKET {
+            let enters = entered >> r & 1 != 0;
+            // A later child the ray alone takes first.
+            let later_first = (first_t[r] < t[r]) | ((first_t[r] == t[r]) & (first_slot[r] > slot));
+            early[k] |= ((enters & later_first) as u32) << r;
+            let first = enters & !later_first;
+            first_t[r] = if first { t[r] } else { first_t[r] };
+            first_slot[r] = if first { slot } else { first_slot[r] };
+        }
+    }
+    early
+}
+
+/// One ray alone: the single-ray kernel (`Kernel::visit`, the scene's
+/// features compiled out) from node `from` (0: the root), its closest hit
+/// (with `any_hit`, its first) along the ray as given and its block.
+#[inline(always)]
+fn trace_alone(
+    kernel: &f32::Kernel,
+    ray: &layout::Ray,
+    any_hit: bool,
+    from: u32,
+) -> (f32::Hit, u32) {
     let (ray, shear) = f32::prepare_ray(f32::Ray::from_query(ray));
-    let mut traversal = f32::Traversal::new(ray, shear, false);
+    let mut traversal = f32::Traversal::new(ray, shear, any_hit).below(from);
     let mut stack = f32::new_stack();
     // SAFETY: one stack for the whole traversal; no VECTOR_SORT.
     while unsafe { kernel.visit::<false, false, 0>(&mut traversal, &mut stack) } {}
@@ -557,7 +678,8 @@ fn trace_alone(kernel: &f32::Kernel, ray: &layout::Ray) -> (f32::Hit, u32) {
 }
 
 /// Traces `rays` (one chunk of a query), handing `out` each ray's index,
-/// closest hit (along the ray as given) and the block that holds it,
+/// closest hit (with `any_hit`, its first hit: `Kernel::visit`'s) along
+/// the ray as given, and the block that holds it,
 /// `PACKET` at a time (a packet of mixed octants, or with a NaN, and the
 /// last few rays ray by ray); the hits the single-ray kernel's, bit for
 /// bit. The scene must be triangles alone under the watertight test
@@ -568,6 +690,7 @@ pub(super) fn trace_packets(
     kernel: &f32::Kernel,
     rays: &[layout::Ray],
     ymm: bool,
+    any_hit: bool,
     mut out: impl FnMut(usize, f32::Hit, u32),
 ) {
     let mut p = Packet::new();
@@ -583,16 +706,20 @@ pub(super) fn trace_packets(
         };
         if !packed {
             for (i, ray) in group.iter().enumerate() {
-                let (hit, block) = trace_alone(kernel, ray);
+                let (hit, block) = trace_alone(kernel, ray, any_hit, 0);
                 out(start + i, hit, block);
             }
             start += group.len();
             continue;
         }
-        let found = trace_packet(kernel, &mut p, ymm);
+        let found = if any_hit {
+            trace_packet::<true>(kernel, &mut p, ymm)
+        } else {
+            trace_packet::<false>(kernel, &mut p, ymm)
+        };
         for (r, ray) in group.iter().enumerate() {
             let (hit, block) = if found.again >> r & 1 != 0 {
-                trace_alone(kernel, ray)
+                trace_alone(kernel, ray, any_hit, found.from[r])
             } else {
                 (f32::unscale(found.hits[r], &p.shears[r]), found.blocks[r])
             };
@@ -633,7 +760,7 @@ pub(super) fn render_row(
             });
             let mut hits = [f32::miss(); PACKET];
             if p.load(&rays) {
-                let found = trace_packet(kernel, &mut p, ymm);
+                let found = trace_packet::<false>(kernel, &mut p, ymm);
                 for (r, hit) in hits.iter_mut().enumerate() {
                     *hit = if found.again >> r & 1 != 0 {
                         kernel.trace_closest(rays[r])

@@ -271,7 +271,7 @@ fn trace_each(
     // rays through small models up to 5%.
     let coherent = coherent(&rays, nearby);
     let incoherent = (large || vector_sort) && !coherent;
-    let packets = which == QueryKernel::Packets && packets_apply(&kernel, any_hit, coherent);
+    let packets = which == QueryKernel::Packets && packets_apply(&kernel, coherent);
     (0..rays.len().div_ceil(CHUNK))
         .into_par_iter()
         .for_each(|index| {
@@ -339,6 +339,7 @@ fn trace_each(
                                 kernel_ref,
                                 chunk_rays,
                                 cpu_kernel.ymm_boxes(),
+                                any_hit,
                                 |i, hit, block| {
                                     let hit = query_hit(hit);
                                     if let Some(normal) = normal_out.get_mut(i) {
@@ -384,37 +385,26 @@ fn trace_each(
         });
 }
 
-/// Whether a query runs its rays in packets (packet.rs): coherent closest-hit
-/// rays (`coherent`, as `trace_rays_each` judges them) through a scene of
+/// Whether a query runs its rays in packets (packet.rs): coherent rays
+/// (`coherent`, as `trace_rays_each` judges them) through a scene of
 /// triangles alone under the watertight test (`Kernel::features` 0),
-/// traversing its BVH. Any-hit queries run ray by ray: their answer is the
-/// first hit in each ray's own order, which a packet's shared order would
-/// have to find again alone.
-fn packets_apply(kernel: &f32::Kernel, any_hit: bool, coherent: bool) -> bool {
-    !any_hit
-        && coherent
+/// traversing its BVH. Any-hit rays too: a ray whose order of children
+/// leaves the packet's is traced again alone (`packet::diverged`).
+fn packets_apply(kernel: &f32::Kernel, coherent: bool) -> bool {
+    coherent
         && kernel.features() == 0
         && kernel.compressed.is_none()
         && kernel.scene.accel.traverses_bvh()
 }
 
 /// Whether `trace_rays_with` (through `cpu_kernel`: the packets' choice
-/// is the same on every one) traces `rays` in packets: for tests, which
-/// check the choice where the packets must not run (spheres, alpha masks,
-/// another triangle test, incoherent rays, any hit).
-pub fn traces_in_packets(
-    scene: &Scene,
-    rays: &[layout::Ray],
-    any_hit: bool,
-    intersect: Intersect,
-) -> bool {
+/// is the same on every one, and for closest and any hits) traces `rays`
+/// in packets: for tests, which check the choice where the packets must
+/// not run (spheres, alpha masks, another triangle test, incoherent rays).
+pub fn traces_in_packets(scene: &Scene, rays: &[layout::Ray], intersect: Intersect) -> bool {
     let mut kernel = f32::Kernel::new_for(scene, false);
     kernel.intersect = intersect;
-    packets_apply(
-        &kernel,
-        any_hit,
-        coherent(&QueryRays::Slice(rays), nearby(scene)),
-    )
+    packets_apply(&kernel, coherent(&QueryRays::Slice(rays), nearby(scene)))
 }
 
 /// Rays closer than this count as leaving from nearby points (`coherent`).

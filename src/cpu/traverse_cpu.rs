@@ -54,6 +54,15 @@ macro_rules! traverse_cpu {
                 }
             }
 
+            /// The traversal of `node`'s subtree alone, not the root's: where a
+            /// packet's any-hit ray left the packet's order (packet.rs).
+            #[inline(always)]
+            #[allow(dead_code)] // the f32 packets' alone
+            pub(crate) fn below(mut self, node: u32) -> Traversal {
+                self.child = node;
+                self
+            }
+
             /// The hit found, its distance along the ray as given.
             #[inline(always)]
             #[allow(dead_code)] // the oracle traces through `Kernel::trace` alone
