@@ -17,9 +17,9 @@
 //! distance up to its tmax, not only below it); the closest hit among them
 //! is the same hit unless two are at the same distance, where the single
 //! ray keeps whichever its own order met first. So a ray that meets a
-//! second hit at its closest distance is traced again alone. (Any-hit
-//! queries are not traced in packets: their answer is the first hit in
-//! each ray's own order, which a packet's order need not meet first.)
+//! second hit at its closest distance is traced again alone. An any-hit
+//! ray's answer is its first hit in its own order: `out_of_order` says
+//! where the packet's order may differ, and such a hit is traced again.
 
 use super::f32;
 use crate::layout::{self, BVH_WIDTH, LEAF_BIT, NO_HIT, leaf_range};
