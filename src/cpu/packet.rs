@@ -409,7 +409,7 @@ impl Packet {
 
 /// Traces a packet: each ray's closest hit, or with `ANY_HIT` its first
 /// hit in its own order (`found.again` then names the rays whose order
-/// left the packet's before their hit: see `diverged`). Triangles alone,
+/// left the packet's above their hit: `out_of_order`). Triangles alone,
 /// under the watertight test (`Kernel::features` 0).
 #[inline(always)]
 fn trace_packet<const ANY_HIT: bool>(kernel: &f32::Kernel, p: &mut Packet, ymm: bool) -> Found {
@@ -426,8 +426,8 @@ fn trace_packet<const ANY_HIT: bool>(kernel: &f32::Kernel, p: &mut Packet, ymm: 
     let mut sp = 0;
     let mut child = 0;
     let mut rays = all;
-    // Rays still traced: an any-hit ray leaves at its hit, or where its
-    // order leaves the packet's.
+    // Rays still traced: an any-hit ray leaves at its first hit in the
+    // packet.
     let mut active = all;
     // Any-hit rays for which some node on the packet's path was entered
     // before a sibling the ray alone enters first (`out_of_order`): a hit
