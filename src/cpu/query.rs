@@ -389,7 +389,7 @@ fn trace_each(
 /// (`coherent`, as `trace_rays_each` judges them) through a scene of
 /// triangles alone under the watertight test (`Kernel::features` 0),
 /// traversing its BVH. Any-hit rays too: a ray whose order of children
-/// leaves the packet's is traced again alone (`packet::diverged`).
+/// leaves the packet's is traced again alone (`packet::out_of_order`).
 fn packets_apply(kernel: &f32::Kernel, coherent: bool) -> bool {
     coherent
         && kernel.features() == 0
