@@ -595,9 +595,13 @@ fn trace_packet<const ANY_HIT: bool>(kernel: &f32::Kernel, p: &mut Packet, ymm: 
             let entry = unsafe { stack[sp].assume_init() };
             suspects = entry.above;
             suspect_below(&mut suspects, &mut found.from, entry.early, entry.parent);
-            let mut reach = 0;
+            // An any-hit ray's tmax stays as it was when the entry was
+            // pushed (below it) while the ray is active.
+            let mut reach = if ANY_HIT { all } else { 0 };
             for r in 0..PACKET {
-                reach |= ((entry.t[r] <= p.tmax[r]) as u32) << r;
+                if !ANY_HIT {
+                    reach |= ((entry.t[r] <= p.tmax[r]) as u32) << r;
+                }
             }
             let reach = reach & entry.rays & active;
             if reach != 0 {
