@@ -26,6 +26,7 @@ use crate::layout::{self, BVH_WIDTH, LEAF_BIT, NO_HIT, leaf_range};
 
 #[cfg(target_arch = "x86_64")]
 mod load_ymm;
+mod order;
 
 /// Rays a packet traces together: one 8-lane vector of each ray quantity.
 pub(super) const PACKET: usize = 8;
@@ -278,10 +279,15 @@ impl Packet {
     }
 
     /// Which of `rays` enter child `slot` of `node` (at a distance up to
-    /// their tmax), and where: each ray's `intersect_boxes` arithmetic in
-    /// its lane.
+    /// their tmax; with `BELOW`, below it, as an any-hit ray alone), and
+    /// where: each ray's `intersect_boxes` arithmetic in its lane.
     #[inline(always)]
-    fn enter(&self, node: &layout::BvhNode, slot: usize, rays: u32) -> (u32, [f32::Real; PACKET]) {
+    fn enter<const BELOW: bool>(
+        &self,
+        node: &layout::BvhNode,
+        slot: usize,
+        rays: u32,
+    ) -> (u32, [f32::Real; PACKET]) {
         let mut t_near = self.tmin;
         let mut t_far = self.tmax;
         for a in 0..3 {
@@ -296,7 +302,12 @@ impl Packet {
         }
         let mut entered = 0;
         for r in 0..PACKET {
-            entered |= ((t_near[r] <= t_far[r] && t_near[r] <= self.tmax[r]) as u32) << r;
+            let reach = if BELOW {
+                t_near[r] < self.tmax[r]
+            } else {
+                t_near[r] <= self.tmax[r]
+            };
+            entered |= ((t_near[r] <= t_far[r] && reach) as u32) << r;
         }
         (entered & rays, t_near)
     }
@@ -353,7 +364,7 @@ impl Packet {
     /// The CPU must have AVX2 and FMA.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    unsafe fn enter_ymm(
+    unsafe fn enter_ymm<const BELOW: bool>(
         &self,
         node: &layout::BvhNode,
         slot: usize,
@@ -386,7 +397,11 @@ impl Packet {
             }
             let inside = _mm256_and_ps(
                 _mm256_cmp_ps::<_CMP_LE_OQ>(t_near, t_far),
-                _mm256_cmp_ps::<_CMP_LE_OQ>(t_near, tmax),
+                if BELOW {
+                    _mm256_cmp_ps::<_CMP_LT_OQ>(t_near, tmax)
+                } else {
+                    _mm256_cmp_ps::<_CMP_LE_OQ>(t_near, tmax)
+                },
             );
             let mut t = [0.0; PACKET];
             _mm256_storeu_ps(t.as_mut_ptr(), t_near);
@@ -537,23 +552,14 @@ fn trace_packet<const ANY_HIT: bool>(kernel: &f32::Kernel, p: &mut Packet, ymm: 
                     // SAFETY: as above.
                     #[cfg(target_arch = "x86_64")]
                     unsafe {
-                        p.enter_ymm(node, slot, rays)
+                        p.enter_ymm::<ANY_HIT>(node, slot, rays)
                     }
                     #[cfg(not(target_arch = "x86_64"))]
                     unreachable!("no 8-lane registers off x86")
                 } else {
-                    p.enter(node, slot, rays)
+                    p.enter::<ANY_HIT>(node, slot, rays)
                 };
-                // An any-hit ray enters a box below its tmax, as alone.
-                let entered = if ANY_HIT {
-                    let mut below = 0;
-                    for r in 0..PACKET {
-                        below |= ((t[r] < p.tmax[r]) as u32) << r;
-                    }
-                    entered & below & active
-                } else {
-                    entered
-                };
+                let entered = if ANY_HIT { entered & active } else { entered };
                 if entered == 0 {
                     continue;
                 }
@@ -568,7 +574,17 @@ fn trace_packet<const ANY_HIT: bool>(kernel: &f32::Kernel, p: &mut Packet, ymm: 
                 n += 1;
             }
             let early = if ANY_HIT && n > 1 {
-                out_of_order(&order[..n], &entries)
+                if ymm {
+                    // SAFETY: `ymm` says the CPU has AVX2.
+                    #[cfg(target_arch = "x86_64")]
+                    unsafe {
+                        order::out_of_order_ymm(&order[..n], &entries)
+                    }
+                    #[cfg(not(target_arch = "x86_64"))]
+                    unreachable!("no 8-lane registers off x86")
+                } else {
+                    order::out_of_order(&order[..n], &entries)
+                }
             } else {
                 [0; BVH_WIDTH]
             };
@@ -633,41 +649,6 @@ fn suspect_below(suspects: &mut u32, from: &mut [u32; PACKET], early: u32, node:
         from[new.trailing_zeros() as usize] = node;
         new &= new - 1;
     }
-}
-
-/// For each of a node's entered children in the packet's `order`, the
-/// rays that the packet takes into it before a sibling they enter first
-/// alone: `Kernel::visit` visits a ray's children by its own entry
-/// distance, the higher slot first on a tie. Before its first hit a ray
-/// enters the same boxes in any order, so one that meets its first hit
-/// where no child on its path was entered early meets its leaves with
-/// hits in its own order: its first hit in the packet is its first alone.
-#[inline(always)]
-fn out_of_order(
-    order: &[(u32, f32::Real)],
-    entries: &[std::mem::MaybeUninit<[f32::Real; PACKET]>; BVH_WIDTH],
-) -> [u32; BVH_WIDTH] {
-    // The first, by each ray's own order, of the children after the one
-    // at hand in the packet's.
-    let mut first_t = [f32::Real::INFINITY; PACKET];
-    let mut first_slot = [0u32; PACKET];
-    let mut early = [0; BVH_WIDTH];
-    for (k, &(key, _)) in order.iter().enumerate().rev() {
-        let (slot, entered) = (key & 0xff, key >> 8);
-        // SAFETY: written for every entered slot.
-        let t = unsafe { entries[slot as usize].assume_init_ref() };
-        // Without branches, so that the lanes vectorise.
-        for r in 0..PACKET {
-            let enters = entered >> r & 1 != 0;
-            // A later child the ray alone takes first.
-            let later_first = (first_t[r] < t[r]) | ((first_t[r] == t[r]) & (first_slot[r] > slot));
-            early[k] |= ((enters & later_first) as u32) << r;
-            let first = enters & !later_first;
-            first_t[r] = if first { t[r] } else { first_t[r] };
-            first_slot[r] = if first { slot } else { first_slot[r] };
-        }
-    }
-    early
 }
 
 /// One ray alone: the single-ray kernel (`Kernel::visit`, the scene's
