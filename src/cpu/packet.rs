@@ -206,18 +206,6 @@ impl Packet {
         if nan || flips.iter().any(|&f| f % PACKET as u32 != 0) {
             return false;
         }
-        // Halving trees, lane by lane: a chain of selects would not vectorise.
-        let fold = |v: &[f32::Real; PACKET], pick: fn(f32::Real, f32::Real) -> f32::Real| {
-            let mut v = *v;
-            let mut width = PACKET / 2;
-            while width > 0 {
-                for r in 0..width {
-                    v[r] = pick(v[r], v[r + width]);
-                }
-                width /= 2;
-            }
-            v[0]
-        };
         let least = |v: &[f32::Real; PACKET]| fold(v, lesser);
         let most = |v: &[f32::Real; PACKET]| fold(v, greater);
         self.tmin_least = least(&self.tmin);
@@ -234,6 +222,21 @@ impl Packet {
         }
         true
     }
+}
+
+/// `v` folded with `pick` in a halving tree, lane r against lane r +
+/// width: a chain of selects would not vectorise.
+#[inline(always)]
+fn fold(v: &[f32::Real; PACKET], pick: fn(f32::Real, f32::Real) -> f32::Real) -> f32::Real {
+    let mut v = *v;
+    let mut width = PACKET / 2;
+    while width > 0 {
+        for r in 0..width {
+            v[r] = pick(v[r], v[r + width]);
+        }
+        width /= 2;
+    }
+    v[0]
 }
 
 /// `a` where `a > b`, else `b`: SSE's maxps, `Scalar::greater_of`'s lane.
@@ -409,16 +412,10 @@ impl Packet {
         }
     }
 
-    /// The greatest tmax of `rays`.
+    /// The greatest tmax of the packet's rays.
     #[inline(always)]
-    fn farthest(&self, rays: u32) -> f32::Real {
-        let mut most = -f32::FAR;
-        for r in 0..PACKET {
-            if rays >> r & 1 != 0 {
-                most = most.max(self.tmax[r]);
-            }
-        }
-        most
+    fn farthest(&self) -> f32::Real {
+        fold(&self.tmax, greater)
     }
 }
 
@@ -450,7 +447,7 @@ fn trace_packet<const ANY_HIT: bool>(kernel: &f32::Kernel, p: &mut Packet, ymm: 
     // again alone from the parent of the outermost such node
     // (`found.from`); a miss is a miss in any order.
     let mut suspects = 0u32;
-    let mut tmax = p.farthest(all);
+    let mut tmax = p.farthest();
     loop {
         if ANY_HIT && child & LEAF_BIT != 0 {
             // The single ray's leaf step: its blocks in order, the first
@@ -519,7 +516,7 @@ fn trace_packet<const ANY_HIT: bool>(kernel: &f32::Kernel, p: &mut Packet, ymm: 
                 }
             }
             if shortened {
-                tmax = p.farthest(all);
+                tmax = p.farthest();
             }
         } else {
             let node = &bvh.nodes[child as usize];
