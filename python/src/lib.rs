@@ -6,6 +6,7 @@
 //! (the one copy out). Tracing and rendering run with the GIL released.
 
 use std::mem::MaybeUninit;
+use std::ops::Range;
 use std::panic::AssertUnwindSafe;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
@@ -122,9 +123,7 @@ impl<T> Column<T> {
         unsafe { std::slice::from_raw_parts_mut(self.out.at(start).cast(), len) }
     }
 
-    /// Writes `values` into the rows from `start` on, and starts loading
-    /// the rows after them (those this thread most likely writes next, as
-    /// the trace's chunks run in order within each thread's share).
+    /// Writes `values` into the rows from `start` on.
     ///
     /// # Safety
     /// As `rows`, for as many rows as `values` has.
@@ -135,8 +134,16 @@ impl<T> Column<T> {
         for (row, value) in rows.iter_mut().zip(values) {
             row.write(value);
         }
-        let next = start + len;
-        prefetch_rows(rows.as_ptr_range().end, len.min(self.vec.capacity() - next));
+    }
+
+    /// Starts loading rows `rows` (a later chunk's: `QueryRays::Fill`'s
+    /// ahead), so that writing them does not wait on memory.
+    #[inline]
+    fn prefetch(&self, rows: Range<usize>) {
+        let first = rows.start.min(self.vec.capacity());
+        // SAFETY: within the capacity; prefetching reads nothing.
+        let at = unsafe { self.out.at(first) };
+        prefetch_rows(at, rows.len().min(self.vec.capacity() - first));
     }
 
     /// # Safety
@@ -176,6 +183,13 @@ impl TColumn {
             (TColumn::F64(c), None) => unsafe {
                 c.write(start, rows.hits.iter().map(|h| h.t as f64))
             },
+        }
+    }
+
+    fn prefetch(&self, rows: Range<usize>) {
+        match self {
+            TColumn::F32(c) => c.prefetch(rows),
+            TColumn::F64(c) => c.prefetch(rows),
         }
     }
 
@@ -282,12 +296,15 @@ impl NativeScene {
     /// trace at once; a GPU gets them in one buffer, and its queue is taken
     /// in turn. Hits come in the frame the rays were traced in (a local
     /// query's: `Query::world_hit` turns them back). Returns the fallback
-    /// note, if any, and the query's precision warnings.
+    /// note, if any, and the query's precision warnings. `ahead(rows)`
+    /// starts loading the rows the sink will write for rays `rows`
+    /// (`QueryRays::Fill`'s ahead; their rays are loaded too).
     fn trace_into(
         &self,
         query: Query,
         options: QueryOptions,
         device: DeviceChoice,
+        ahead: &(dyn Fn(Range<usize>) + Sync),
         sink: &(dyn Fn(&TracedChunk) + Sync),
     ) -> Result<(Option<String>, Vec<String>), Error> {
         let scene = &self.scene;
@@ -303,7 +320,11 @@ impl NativeScene {
             let fill = |start: usize, out: &mut [MaybeUninit<Ray>]| -> bool {
                 query.fill(start, out, &first_bad, &problems)
             };
-            let rays = QueryRays::Fill(query.len(), &fill);
+            let ahead = |rows: Range<usize>| {
+                query.prefetch(rows.clone());
+                ahead(rows);
+            };
+            let rays = QueryRays::Fill(query.len(), &fill, &ahead);
             let frame = match query.local() {
                 Some(_) => RayFrame::Local,
                 None => RayFrame::World,
@@ -354,8 +375,9 @@ impl NativeScene {
     /// `make` makes for its n rays: `write` fills a chunk's rows from its
     /// hits in the world's frame (`Query::world_hit`, with their t in f64)
     /// and, with `options.normals`, their normals, each row once and from
-    /// one thread. Warns of the trace's notes and returns what `finish`
-    /// makes of the columns once every row is written.
+    /// one thread; `ahead` starts loading rows a later chunk writes
+    /// (`trace_into`'s). Warns of the trace's notes and returns what
+    /// `finish` makes of the columns once every row is written.
     #[allow(clippy::too_many_arguments)]
     fn trace_rows<C: Sync, R: Send>(
         &self,
@@ -364,13 +386,15 @@ impl NativeScene {
         options: QueryOptions,
         device: DeviceChoice,
         make: impl FnOnce(usize) -> C + Send,
+        ahead: impl Fn(&C, Range<usize>) + Sync,
         write: impl Fn(&C, &HitRows) + Sync,
         finish: impl FnOnce(C, usize) -> R + Send,
     ) -> PyResult<R> {
         let (out, notes) = detached(py, || {
             let n = query.len();
             let columns = make(n);
-            let notes = self.trace_into(query, options, device, &|chunk| {
+            let ahead = |rows| ahead(&columns, rows);
+            let notes = self.trace_into(query, options, device, &ahead, &|chunk| {
                 let start = chunk.start;
                 match chunk.moved {
                     // Traced as given: the hits are the world's, with no
@@ -428,6 +452,13 @@ impl NativeScene {
                 let prim = Column::<i64>::new(n);
                 let (u, v) = (Column::<f32>::new(n), Column::<f32>::new(n));
                 (t, prim, u, v, Column::<[f32; 3]>::new(n))
+            },
+            |(t, prim, u, v, normal), rows| {
+                t.prefetch(rows.clone());
+                prim.prefetch(rows.clone());
+                u.prefetch(rows.clone());
+                v.prefetch(rows.clone());
+                normal.prefetch(rows);
             },
             // SAFETY: `trace_rows` writes each chunk's rows once, from one
             // thread, within the n rows.
@@ -624,6 +655,7 @@ impl NativeScene {
                     options,
                     device,
                     Column::<bool>::new,
+                    Column::prefetch,
                     // SAFETY: `trace_rows` writes each chunk's rows once,
                     // from one thread, within the n rows.
                     |hit, rows| unsafe {

@@ -44,6 +44,32 @@ impl Query<'_> {
         }
     }
 
+    /// Starts loading rays `rows` as given (`QueryRays::Fill`'s ahead):
+    /// records, and packed origins and directions.
+    #[inline]
+    pub fn prefetch(&self, rows: Range<usize>) {
+        match self {
+            Query::Records(r) => {
+                let first = rows.start.min(r.len());
+                prefetch_rows(r[first..].as_ptr(), rows.len().min(r.len() - first));
+            }
+            Query::Arrays {
+                origins,
+                directions,
+                ..
+            } => {
+                for view in [origins, directions] {
+                    match view {
+                        RowsView::PackedF32(a) => prefetch_packed(a, &rows),
+                        RowsView::PackedF64(a) => prefetch_packed(a, &rows),
+                        // Strided rows are rare; left to the CPU.
+                        RowsView::F32(_) | RowsView::F64(_) => {}
+                    }
+                }
+            }
+        }
+    }
+
     /// The placement its rays are moved into the scene's frame by, when
     /// they are traced as local rays (float64 origins).
     pub fn local(&self) -> Option<&Placement> {
@@ -148,10 +174,6 @@ impl Query<'_> {
     ) -> bool {
         if let Query::Records(r) = *self {
             let rays = &r[start..start + out.len()];
-            prefetch_rows(
-                r[start + out.len()..].as_ptr(),
-                out.len().min(r.len() - start - out.len()),
-            );
             for (slot, ray) in out.iter_mut().zip(rays) {
                 slot.write(*ray);
             }
@@ -170,8 +192,6 @@ impl Query<'_> {
         {
             let (tmin, tmax) = (tmin as f32, tmax as f32);
             let rows = start * 3..(start + out.len()) * 3;
-            prefetch_next(o, start, out.len());
-            prefetch_next(d, start, out.len());
             let (o, d) = (&o[rows.clone()], &d[rows]);
             // Over the flat rows, in loops that vectorise: the largest
             // magnitude's bits, which are infinity's or more where a
@@ -218,12 +238,6 @@ impl Query<'_> {
         } = *self
         {
             let rows = start * 3..(start + out.len()) * 3;
-            prefetch_next(o, start, out.len());
-            if let RowsView::PackedF64(d) = directions {
-                prefetch_next(d, start, out.len());
-            } else if let RowsView::PackedF32(d) = directions {
-                prefetch_next(d, start, out.len());
-            }
             let near = match directions {
                 RowsView::PackedF64(d) => {
                     fill_near(&placement, &o[rows.clone()], &d[rows], tmin, tmax, out)
@@ -384,17 +398,11 @@ fn longest_axis(d: [f32; 3]) -> f32 {
     if longest > z { longest } else { z }
 }
 
-/// Starts loading the packed rows after rays start..start + len of `all`
-/// (three values a ray): those this thread most likely reads next, as
-/// the trace's chunks run in order within each thread's share, so that
-/// their trips to memory overlap this chunk's trace.
+/// Starts loading the packed rows (three values a ray) of rays `rows`.
 #[inline]
-fn prefetch_next<T>(all: &[T], start: usize, len: usize) {
-    let next = (start + len) * 3;
-    prefetch_rows(
-        all.as_ptr().wrapping_add(next),
-        (len * 3).min(all.len().saturating_sub(next)),
-    );
+fn prefetch_packed<T>(all: &[T], rows: &Range<usize>) {
+    let first = (rows.start * 3).min(all.len());
+    prefetch_rows(all[first..].as_ptr(), (rows.len() * 3).min(all.len() - first));
 }
 
 /// Writes the local rays of packed float64 `origins` and `directions`

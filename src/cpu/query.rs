@@ -4,7 +4,7 @@
 
 use rayon::prelude::*;
 
-use super::packet::trace_packets;
+use super::packet::{PACKET, trace_packets};
 use super::prefetch::{INTERLEAVED_INCOHERENT_RAYS, INTERLEAVED_RAYS, LARGE_BVH_BYTES};
 use super::render::twin_stack_entries;
 use super::simd::{check_runs, with_simd};
@@ -148,13 +148,18 @@ impl<T> SharedOut<T> {
 /// they are traced (the Python binding's arrays: no pass over all the rays
 /// before the trace, nor a buffer of them). `fill` answers whether it
 /// moved any of them along itself into the scene's frame
-/// (`Placement::local_ray`'s shift; `TracedChunk::moved`).
+/// (`Placement::local_ray`'s shift; `TracedChunk::moved`). `ahead(rows)`
+/// starts loading what rays `rows` will read and write (they are a
+/// thread's next chunk's): asked a packet's worth at a time while a chunk
+/// is traced, so that the trips to memory overlap the trace (all at once
+/// they stalled it on the CPU's few outstanding misses).
 #[derive(Clone, Copy)]
 pub enum QueryRays<'a> {
     Slice(&'a [layout::Ray]),
     Fill(
         usize,
         &'a (dyn Fn(usize, &mut [std::mem::MaybeUninit<layout::Ray>]) -> bool + Sync),
+        &'a (dyn Fn(std::ops::Range<usize>) + Sync),
     ),
 }
 
@@ -162,7 +167,7 @@ impl QueryRays<'_> {
     pub fn len(&self) -> usize {
         match self {
             QueryRays::Slice(rays) => rays.len(),
-            QueryRays::Fill(count, _) => *count,
+            QueryRays::Fill(count, ..) => *count,
         }
     }
 
@@ -174,7 +179,7 @@ impl QueryRays<'_> {
     pub fn ray(&self, i: usize) -> layout::Ray {
         match self {
             QueryRays::Slice(rays) => rays[i],
-            QueryRays::Fill(_, fill) => {
+            QueryRays::Fill(_, fill, _) => {
                 let mut one = [std::mem::MaybeUninit::uninit()];
                 fill(i, &mut one);
                 // SAFETY: `fill` writes all of `out`.
@@ -250,6 +255,7 @@ fn trace_each(
     // current servers): 1024 a chunk (60 KiB) cost the Python binding's
     // camera rays through the dragon 2–3% (docs/benchmarks.md).
     const CHUNK: usize = 256;
+    const AHEAD: usize = PACKET;
     let QueryOptions {
         any_hit,
         intersect,
@@ -280,7 +286,7 @@ fn trace_each(
             let mut own = [MaybeUninit::<layout::Ray>::uninit(); CHUNK];
             let (chunk_rays, filled_moved) = match rays {
                 QueryRays::Slice(all) => (&all[start..start + len], true),
-                QueryRays::Fill(_, fill) => {
+                QueryRays::Fill(_, fill, _) => {
                     let moved = fill(start, &mut own[..len]);
                     // SAFETY: `fill` writes all of its buffer.
                     let rays = unsafe { &*(&own[..len] as *const [_] as *const [layout::Ray]) };
@@ -295,6 +301,14 @@ fn trace_each(
                 None
             };
             let chunk_rays = moved.as_ref().map_or(chunk_rays, |(local, _)| &local[..]);
+            // This thread's next chunk, most likely (its share runs in
+            // order), AHEAD rays at a time.
+            let ahead = |i: usize| {
+                if let QueryRays::Fill(count, _, ahead) = rays {
+                    let from = (start + CHUNK + i).min(count);
+                    ahead(from..(from + AHEAD).min(count));
+                }
+            };
             let mut buffer = [MaybeUninit::<layout::Hit>::uninit(); CHUNK];
             let hits = &mut buffer[..len];
             let mut normal_buffer = [MaybeUninit::<[f32; 3]>::uninit(); CHUNK];
@@ -340,7 +354,11 @@ fn trace_each(
                                 chunk_rays,
                                 cpu_kernel.ymm_boxes(),
                                 any_hit,
+                                #[inline(always)]
                                 |i, hit, block| {
+                                    if i % AHEAD == 0 {
+                                        ahead(i);
+                                    }
                                     let hit = query_hit(hit);
                                     if let Some(normal) = normal_out.get_mut(i) {
                                         normal.write(block_normal(
@@ -357,6 +375,9 @@ fn trace_each(
                     )
                 }
             } else {
+                for i in (0..CHUNK).step_by(AHEAD) {
+                    ahead(i);
+                }
                 match (incoherent, large, vector_sort) {
                     (true, true, true) => chunk!(INTERLEAVED_INCOHERENT_RAYS, true, true),
                     (true, true, false) => chunk!(INTERLEAVED_INCOHERENT_RAYS, true, false),
@@ -507,9 +528,18 @@ unsafe fn trace_chunk<
 #[inline(always)]
 fn block_normal(scene: &Scene, ray: &layout::Ray, hit: &layout::Hit, block: u32) -> [f32; 3] {
     use glam::Vec3;
+    if hit.prim == NO_HIT {
+        return [0.0; 3];
+    }
+    // The lane found without a branch a lane: which lane holds the hit
+    // is unpredictable, and a search mispredicted nearly every hit.
+    let lane = |block: &layout::PrimBlock| {
+        let lanes = glam::UVec4::from(block.prims).cmpeq(glam::UVec4::splat(hit.prim));
+        (lanes.bitmask() != 0).then(|| lanes.bitmask().trailing_zeros() as usize)
+    };
     if let Some(block) = scene.bvh.blocks.get(block as usize)
         && (hit.prim as usize) < scene.triangles.len()
-        && let Some(lane) = block.prims.iter().position(|&p| p == hit.prim)
+        && let Some(lane) = lane(block)
     {
         let vertex = |k: usize| {
             Vec3::new(
