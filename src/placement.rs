@@ -180,7 +180,9 @@ impl Placement {
     /// `localize` for a chunk of rays, on this thread: None where every
     /// ray stays as it is (the usual case, which then costs no copy).
     pub fn localize_chunk(&self, rays: &[Ray]) -> Option<(Vec<Ray>, Vec<f64>)> {
-        if self.offset == DVec3::ZERO && !rays.iter().any(|r| self.is_far(r)) {
+        if self.offset == DVec3::ZERO
+            && (self.all_near(rays) || !rays.iter().any(|r| self.is_far(r)))
+        {
             return None;
         }
         Some(
@@ -190,6 +192,23 @@ impl Placement {
                 })
                 .unzip(),
         )
+    }
+
+    /// Whether every origin of `rays` is near (`is_near`), as their
+    /// largest coordinate bounds them (no further than √3 times it): one
+    /// pass without a branch a ray, where the usual chunk is near. False
+    /// where that cannot tell (a far or non-finite origin).
+    fn all_near(&self, rays: &[Ray]) -> bool {
+        let bits = rays
+            .iter()
+            .flat_map(|r| r.origin)
+            .fold(0, |m, c| m.max(c.to_bits() & (u32::MAX >> 1)));
+        let largest = f32::from_bits(bits) as f64;
+        let reach = FAR_RATIO * self.radius;
+        // `is_near`'s sum, each square the largest's (rounding keeps the
+        // order, so the bound holds as computed).
+        let square = largest * largest;
+        square + square + square <= reach * reach
     }
 
     /// Whether a world f32 ray's origin (the scene not being centred) is

@@ -13,7 +13,7 @@ use std::sync::{Arc, Mutex};
 
 use lambert::Error;
 use lambert::cpu::{
-    CpuKernel, QueryOptions, QueryRays, RayFrame, SharedOut, TracedChunk, prefetch_rows,
+    CpuKernel, QueryOptions, QueryRays, RayFrame, SharedOut, TracedChunk, with_simd, prefetch_rows,
     trace_rays_each,
 };
 use lambert::gpu::AdapterRequest;
@@ -317,8 +317,17 @@ impl NativeScene {
             }
             // The CPU path traces the rays as it reads them.
             let first_bad = FirstBad::new();
+            // In the kernel's vector instructions (the same IEEE
+            // operations): the fill's loops then take 8 lanes.
             let fill = |start: usize, out: &mut [MaybeUninit<Ray>]| -> bool {
-                query.fill(start, out, &first_bad, &problems)
+                // SAFETY: the options' kernel is one this CPU runs.
+                unsafe {
+                    with_simd(
+                        options.cpu_kernel,
+                        #[inline(always)]
+                        || query.fill(start, out, &first_bad, &problems),
+                    )
+                }
             };
             let ahead = |rows: Range<usize>| {
                 query.prefetch(rows.clone());

@@ -164,7 +164,7 @@ impl Query<'_> {
     /// chunk's precision problems in `problems`: per chunk, so the usual
     /// arrays (packed rows, scalar bounds) take a loop of their own, with
     /// no choice of layout per ray.
-    #[inline]
+    #[inline(always)]
     pub fn fill(
         &self,
         start: usize,

@@ -50,7 +50,7 @@ pub use render::{
     add_samples, add_samples_or_cancel, render, render_gpu_twin, render_pixel_list, render_rows,
     render_with,
 };
-pub use simd::{CPU_KERNEL_ENV, CpuKernel};
+pub use simd::{CPU_KERNEL_ENV, CpuKernel, with_simd};
 
 /// Which precision the CPU path computes in.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -127,7 +127,7 @@ impl CpuKernel {
 /// # Safety
 /// The CPU must run `kernel` (`CpuKernel::missing` is None).
 #[inline(always)]
-pub(super) unsafe fn with_simd<R>(kernel: CpuKernel, f: impl FnOnce() -> R) -> R {
+pub unsafe fn with_simd<R>(kernel: CpuKernel, f: impl FnOnce() -> R) -> R {
     #[cfg(target_arch = "x86_64")]
     match kernel {
         CpuKernel::Avx512 => {
