@@ -402,7 +402,10 @@ fn longest_axis(d: [f32; 3]) -> f32 {
 #[inline]
 fn prefetch_packed<T>(all: &[T], rows: &Range<usize>) {
     let first = (rows.start * 3).min(all.len());
-    prefetch_rows(all[first..].as_ptr(), (rows.len() * 3).min(all.len() - first));
+    prefetch_rows(
+        all[first..].as_ptr(),
+        (rows.len() * 3).min(all.len() - first),
+    );
 }
 
 /// Writes the local rays of packed float64 `origins` and `directions`

@@ -255,7 +255,7 @@ fn trace_each(
     // current servers): 1024 a chunk (60 KiB) cost the Python binding's
     // camera rays through the dragon 2–3% (docs/benchmarks.md).
     const CHUNK: usize = 256;
-    const AHEAD: usize = PACKET;
+    const AHEAD: usize = 4 * PACKET;
     let QueryOptions {
         any_hit,
         intersect,
