@@ -195,20 +195,28 @@ impl Placement {
     }
 
     /// Whether every origin of `rays` is near (`is_near`), as their
-    /// largest coordinate bounds them (no further than √3 times it): one
-    /// pass without a branch a ray, where the usual chunk is near. False
-    /// where that cannot tell (a far or non-finite origin).
+    /// largest coordinate bounds them (`near_within`): one pass without a
+    /// branch a ray, where the usual chunk is near. False where that
+    /// cannot tell (a far or non-finite origin).
     fn all_near(&self, rays: &[Ray]) -> bool {
         let bits = rays
             .iter()
             .flat_map(|r| r.origin)
             .fold(0, |m, c| m.max(c.to_bits() & (u32::MAX >> 1)));
-        let largest = f32::from_bits(bits) as f64;
+        self.near_within(f32::from_bits(bits))
+    }
+
+    /// Whether every world f32 origin with coordinates within ±`largest`
+    /// is near, and needs no move (`localize_chunk`): the scene not being
+    /// centred, and √3 times `largest` (NaN: false) within FAR_RATIO
+    /// radii.
+    pub fn near_within(&self, largest: f32) -> bool {
+        let largest = largest as f64;
         let reach = FAR_RATIO * self.radius;
         // `is_near`'s sum, each square the largest's (rounding keeps the
         // order, so the bound holds as computed).
         let square = largest * largest;
-        square + square + square <= reach * reach
+        self.offset == DVec3::ZERO && square + square + square <= reach * reach
     }
 
     /// Whether a world f32 ray's origin (the scene not being centred) is

@@ -13,7 +13,7 @@ use std::sync::{Arc, Mutex};
 
 use lambert::Error;
 use lambert::cpu::{
-    CpuKernel, QueryOptions, QueryRays, RayFrame, SharedOut, TracedChunk, with_simd, prefetch_rows,
+    CpuKernel, Filled, QueryOptions, QueryRays, RayFrame, SharedOut, TracedChunk, with_simd, prefetch_rows,
     trace_rays_each,
 };
 use lambert::gpu::AdapterRequest;
@@ -319,7 +319,7 @@ impl NativeScene {
             let first_bad = FirstBad::new();
             // In the kernel's vector instructions (the same IEEE
             // operations): the fill's loops then take 8 lanes.
-            let fill = |start: usize, out: &mut [MaybeUninit<Ray>]| -> bool {
+            let fill = |start: usize, out: &mut [MaybeUninit<Ray>]| -> Filled {
                 // SAFETY: the options' kernel is one this CPU runs.
                 unsafe {
                     with_simd(

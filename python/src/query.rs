@@ -11,7 +11,7 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use glam::DVec3;
-use lambert::cpu::prefetch_rows;
+use lambert::cpu::{Filled, prefetch_rows};
 use lambert::layout::{Hit, NO_HIT, Ray};
 use lambert::placement::{Placement, RayProblem, world_hit};
 use lambert::{Error, rays};
@@ -171,7 +171,7 @@ impl Query<'_> {
         out: &mut [MaybeUninit<Ray>],
         first_bad: &FirstBad,
         problems: &Problems,
-    ) -> bool {
+    ) -> Filled {
         if let Query::Records(r) = *self {
             let rays = &r[start..start + out.len()];
             for (slot, ray) in out.iter_mut().zip(rays) {
@@ -179,7 +179,7 @@ impl Query<'_> {
             }
             self.check_records(start, rays, first_bad, problems);
             // Traced as given, in the world's frame.
-            return false;
+            return Filled::AsGiven;
         }
         if let Query::Arrays {
             origins: RowsView::PackedF32(o),
@@ -221,8 +221,12 @@ impl Query<'_> {
                 let rows = start..start + out.len();
                 let origin_max = f32::from_bits(origin_bits);
                 problems.check(self, rows, origin_max as f64, dir_min as f64);
-                // Traced as given, in the world's frame.
-                return false;
+                // Traced as given, in the world's frame: moved by the
+                // trace where some origin may be far.
+                return match problems.placement.near_within(origin_max) {
+                    true => Filled::Near,
+                    false => Filled::AsGiven,
+                };
             }
         }
         // float64 origins in packed rows with scalar bounds: the chunk at
@@ -249,7 +253,7 @@ impl Query<'_> {
             };
             if let Some((origin_max, dir_min)) = near {
                 problems.check(self, start..start + out.len(), origin_max, dir_min);
-                return false;
+                return Filled::AsGiven;
             }
             match directions {
                 RowsView::PackedF64(d) => {
@@ -318,7 +322,7 @@ impl Query<'_> {
         first_bad: &FirstBad,
         problems: &Problems,
         ray: impl Fn(usize) -> (DVec3, DVec3, f64, f64),
-    ) -> bool {
+    ) -> Filled {
         let (mut origin_max, mut dir_min) = (0.0f64, f64::INFINITY);
         let mut moved = false;
         let len = out.len();
@@ -344,7 +348,10 @@ impl Query<'_> {
             dir_min = dir_min.min(dir.abs().max_element());
         }
         problems.check(self, start..start + len, origin_max, dir_min);
-        moved
+        match moved {
+            true => Filled::Moved,
+            false => Filled::AsGiven,
+        }
     }
 
     /// The rays in one buffer (what a GPU uploads), checked: records as

@@ -42,7 +42,7 @@ pub use proximity::{
     solid_inside, sort_hits, spatial_order, winding_numbers,
 };
 pub use query::{
-    QueryKernel, QueryOptions, QueryRays, RayFrame, SharedOut, TracedChunk, trace_rays,
+    Filled, QueryKernel, QueryOptions, QueryRays, RayFrame, SharedOut, TracedChunk, trace_rays,
     trace_rays_as, trace_rays_each, trace_rays_f64, trace_rays_gpu_twin, trace_rays_with,
     traces_in_packets,
 };

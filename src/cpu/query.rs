@@ -146,9 +146,8 @@ impl<T> SharedOut<T> {
 /// A ray query's rays: a slice, or `count` rays that `fill(start, out)`
 /// writes (rays start.. into all of `out`), assembled chunk by chunk as
 /// they are traced (the Python binding's arrays: no pass over all the rays
-/// before the trace, nor a buffer of them). `fill` answers whether it
-/// moved any of them along itself into the scene's frame
-/// (`Placement::local_ray`'s shift; `TracedChunk::moved`). `ahead(rows)`
+/// before the trace, nor a buffer of them), answering what it did with
+/// them (`Filled`). `ahead(rows)`
 /// starts loading what rays `rows` will read and write (they are a
 /// thread's next chunk's): asked a packet's worth at a time while a chunk
 /// is traced, so that the trips to memory overlap the trace (all at once
@@ -158,9 +157,22 @@ pub enum QueryRays<'a> {
     Slice(&'a [layout::Ray]),
     Fill(
         usize,
-        &'a (dyn Fn(usize, &mut [std::mem::MaybeUninit<layout::Ray>]) -> bool + Sync),
+        &'a (dyn Fn(usize, &mut [std::mem::MaybeUninit<layout::Ray>]) -> Filled + Sync),
         &'a (dyn Fn(std::ops::Range<usize>) + Sync),
     ),
+}
+
+/// What a query's fill did with a chunk's rays (`QueryRays::Fill`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Filled {
+    /// Wrote them as given.
+    AsGiven,
+    /// As given, in the world's frame, every origin near the scene
+    /// (`Placement::near_within`): none for the trace to move.
+    Near,
+    /// Moved some along themselves into the scene's frame
+    /// (`Placement::local_ray`'s shift; `TracedChunk::moved`).
+    Moved,
 }
 
 impl QueryRays<'_> {
@@ -284,18 +296,19 @@ fn trace_each(
             let start = index * CHUNK;
             let len = CHUNK.min(rays.len() - start);
             let mut own = [MaybeUninit::<layout::Ray>::uninit(); CHUNK];
-            let (chunk_rays, filled_moved) = match rays {
-                QueryRays::Slice(all) => (&all[start..start + len], true),
+            let (chunk_rays, filled) = match rays {
+                // A local slice's rays may have been moved.
+                QueryRays::Slice(all) => (&all[start..start + len], Filled::Moved),
                 QueryRays::Fill(_, fill, _) => {
-                    let moved = fill(start, &mut own[..len]);
+                    let filled = fill(start, &mut own[..len]);
                     // SAFETY: `fill` writes all of its buffer.
                     let rays = unsafe { &*(&own[..len] as *const [_] as *const [layout::Ray]) };
-                    (rays, moved)
+                    (rays, filled)
                 }
             };
             // Moved rays on the heap, and only where some ray moves: two
             // zeroed stack arrays a chunk cost camera rays 3%.
-            let moved = if frame == RayFrame::World {
+            let moved = if frame == RayFrame::World && filled != Filled::Near {
                 placement.localize_chunk(chunk_rays)
             } else {
                 None
@@ -401,7 +414,7 @@ fn trace_each(
                 start,
                 hits,
                 normals,
-                moved: frame == RayFrame::Local && filled_moved,
+                moved: frame == RayFrame::Local && filled == Filled::Moved,
             });
         });
 }
