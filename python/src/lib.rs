@@ -13,8 +13,8 @@ use std::sync::{Arc, Mutex};
 
 use lambert::Error;
 use lambert::cpu::{
-    CpuKernel, Filled, QueryOptions, QueryRays, RayFrame, SharedOut, TracedChunk, with_simd, prefetch_rows,
-    trace_rays_each,
+    CpuKernel, Filled, QueryOptions, QueryRays, RayFrame, SharedOut, TracedChunk, prefetch_rows,
+    trace_rays_each, with_simd,
 };
 use lambert::gpu::AdapterRequest;
 use lambert::layout::{Hit, NO_HIT, Ray};

@@ -11,7 +11,7 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use glam::DVec3;
-use lambert::cpu::{Filled, prefetch_rows};
+use lambert::cpu::{Filled, pack_rays, prefetch_rows};
 use lambert::layout::{Hit, NO_HIT, Ray};
 use lambert::placement::{Placement, RayProblem, world_hit};
 use lambert::{Error, rays};
@@ -203,19 +203,9 @@ impl Query<'_> {
             let mut valid = (origin_bits < infinite)
                 & (dir_bits < infinite)
                 & rays::bounds_are_valid(tmin, tmax);
-            // The chunk's shortest longest direction axis (compared
-            // plainly: every value is finite where the chunk is valid).
-            let mut dir_min = f32::INFINITY;
-            for (slot, (o, d)) in out.iter_mut().zip(o.chunks_exact(3).zip(d.chunks_exact(3))) {
-                slot.write(Ray {
-                    origin: [o[0], o[1], o[2]],
-                    tmin,
-                    dir: [d[0], d[1], d[2]],
-                    tmax,
-                });
-                let longest = longest_axis([d[0], d[1], d[2]]);
-                dir_min = if longest < dir_min { longest } else { dir_min };
-            }
+            // The chunk's shortest longest direction axis (meaningful
+            // where every value is finite: where the chunk is valid).
+            let dir_min = pack_rays(o, d, tmin, tmax, out);
             valid &= rays::direction_lengths_are_valid(dir_min, f32::from_bits(dir_bits));
             if valid {
                 let rows = start..start + out.len();

@@ -27,6 +27,7 @@ mod prefetch;
 mod proximity;
 mod query;
 mod render;
+mod rows;
 mod sample;
 mod shade;
 mod simd;
@@ -50,6 +51,7 @@ pub use render::{
     add_samples, add_samples_or_cancel, render, render_gpu_twin, render_pixel_list, render_rows,
     render_with,
 };
+pub use rows::pack_rays;
 pub use simd::{CPU_KERNEL_ENV, CpuKernel, with_simd};
 
 /// Which precision the CPU path computes in.
