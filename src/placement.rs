@@ -150,8 +150,14 @@ impl Placement {
     /// Whether an origin `o` (relative to the offset) stays where it is.
     #[inline]
     fn is_near(&self, o: DVec3) -> bool {
+        o.length_squared() <= self.reach_squared()
+    }
+
+    /// The square of how far from the offset an origin stays where it is
+    /// (`is_near`).
+    pub fn reach_squared(&self) -> f64 {
         let reach = FAR_RATIO * self.radius;
-        o.length_squared() <= reach * reach
+        reach * reach
     }
 
     /// `local_ray` for every ray of a query given in world f32 (a ray
@@ -212,11 +218,10 @@ impl Placement {
     /// radii.
     pub fn near_within(&self, largest: f32) -> bool {
         let largest = largest as f64;
-        let reach = FAR_RATIO * self.radius;
         // `is_near`'s sum, each square the largest's (rounding keeps the
         // order, so the bound holds as computed).
         let square = largest * largest;
-        self.offset == DVec3::ZERO && square + square + square <= reach * reach
+        self.offset == DVec3::ZERO && square + square + square <= self.reach_squared()
     }
 
     /// Whether a world f32 ray's origin (the scene not being centred) is

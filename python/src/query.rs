@@ -420,34 +420,44 @@ fn fill_near<D: Copy + Into<f64>>(
     tmax: f64,
     out: &mut [MaybeUninit<Ray>],
 ) -> Option<(f64, f64)> {
-    // Over the flat origins, in a loop that vectorises: the largest
-    // magnitude's bits, which are infinity's or more where one is not
-    // finite.
-    let origin_bits = origins
-        .iter()
-        .fold(0, |m, c| m.max(c.to_bits() & (u64::MAX >> 1)));
-    let origin_max = f64::from_bits(origin_bits);
-    // In f32 too (a bound on each; the general loop decides the rest).
-    let mut valid =
-        (origin_max <= f32::MAX as f64) & rays::bounds_are_valid(tmin as f32, tmax as f32);
-    let (mut dir_min, mut dir_max) = (f64::INFINITY, 0.0f64);
+    // Magnitudes compared as their bits (the same order for finite
+    // values; infinity's or more where one is not finite), in loops
+    // without a branch a ray, which vectorise.
+    let magnitude = |v: f64| v.to_bits() & (u64::MAX >> 1);
+    let origin_max = f64::from_bits(origins.iter().fold(0, |m, &c| m.max(magnitude(c))));
+    let (offset, reach) = (placement.offset.to_array(), placement.reach_squared());
+    let (mut near, mut dir_min, mut dir_max) = (true, u64::MAX, 0u64);
     for (slot, (o, d)) in out
         .iter_mut()
         .zip(origins.chunks_exact(3).zip(directions.chunks_exact(3)))
     {
-        let origin = DVec3::new(o[0], o[1], o[2]);
-        let dir = DVec3::new(d[0].into(), d[1].into(), d[2].into());
-        slot.write(placement.near_ray(origin, dir, tmin, tmax)?);
-        // (`max_element` passes over NaN.)
-        valid &= dir.is_finite();
-        let longest = dir.abs().max_element();
+        // `Placement::near_ray`'s ray, where the origin is near
+        // (`Placement::is_near`'s sum).
+        let local = [o[0] - offset[0], o[1] - offset[1], o[2] - offset[2]];
+        near &= local[0] * local[0] + local[1] * local[1] + local[2] * local[2] <= reach;
+        let dir: [f64; 3] = [d[0].into(), d[1].into(), d[2].into()];
+        slot.write(Ray {
+            origin: local.map(|v| v as f32),
+            tmin: tmin as f32,
+            dir: dir.map(|v| v as f32),
+            tmax: tmax as f32,
+        });
+        let longest = magnitude(dir[0])
+            .max(magnitude(dir[1]))
+            .max(magnitude(dir[2]));
         dir_min = dir_min.min(longest);
         dir_max = dir_max.max(longest);
     }
+    let (dir_min, dir_max) = (f64::from_bits(dir_min), f64::from_bits(dir_max));
+    // In f32 too (a bound on each; the general loop decides the rest).
     // The longest axes in f32, as `FirstBad` checks each ray: rounding
     // keeps their order, and one beyond f32 becomes infinite and fails.
-    (valid && rays::direction_lengths_are_valid(dir_min as f32, dir_max as f32))
-        .then_some((origin_max, dir_min))
+    let valid = near
+        && dir_max <= f64::MAX
+        && origin_max <= f32::MAX as f64
+        && rays::bounds_are_valid(tmin as f32, tmax as f32)
+        && rays::direction_lengths_are_valid(dir_min as f32, dir_max as f32);
+    valid.then_some((origin_max, dir_min))
 }
 
 /// A query's rays in one buffer.
