@@ -147,11 +147,11 @@ impl<T> SharedOut<T> {
 /// writes (rays start.. into all of `out`), assembled chunk by chunk as
 /// they are traced (the Python binding's arrays: no pass over all the rays
 /// before the trace, nor a buffer of them), answering what it did with
-/// them (`Filled`). `ahead(rows)`
-/// starts loading what rays `rows` will read and write (they are a
-/// thread's next chunk's): asked a packet's worth at a time while a chunk
-/// is traced, so that the trips to memory overlap the trace (all at once
-/// they stalled it on the CPU's few outstanding misses).
+/// them (`Filled`). `ahead(rows)` starts loading what rays `rows` will
+/// read and write (a thread's next chunk's): asked four packets at a
+/// time while a chunk traces in packets (all at once, the loads stalled
+/// it on the CPU's few outstanding misses), and for the whole chunk
+/// before a chunk of single rays.
 #[derive(Clone, Copy)]
 pub enum QueryRays<'a> {
     Slice(&'a [layout::Ray]),
