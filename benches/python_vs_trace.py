@@ -11,7 +11,9 @@ float32 and float64 arrays. Each round: `lambert trace --device cpu
 intersect on float32 and on float64 arrays (medians of 7 calls in this
 process, after a warm-up: conversion, checks and the output arrays
 included), then `trace --any-hit` and `occluded` on float32 arrays.
-Prints the trace's time over the binding's (1 = the CLI's speed).
+Prints the trace's time over the binding's (1 = the CLI's speed), each
+round's and, after the rounds, the median of each ratio over them (a
+host that slows in spells moves single rounds by 10% either way).
 """
 
 import argparse
@@ -61,6 +63,7 @@ def main():
 
         print(f"{os.path.basename(args.model)}, {len(o32)} camera rays, CPU path; {cpu_name()}, "
               f"{os.cpu_count()} threads")
+        ratios = {"intersect float32": [], "intersect float64": [], "occluded float32": []}
         for r in range(args.rounds):
             closest = trace(False)
             f32 = median_time(7, lambda: scene.intersect(o32, d32, device="cpu"))
@@ -71,6 +74,10 @@ def main():
                   f"({closest / f32:.2f}x), float64 {f64 * 1e3:.1f} ms ({closest / f64:.2f}x); "
                   f"trace --any-hit {any_hit * 1e3:.1f} ms, occluded float32 {occluded * 1e3:.1f} ms "
                   f"({any_hit / occluded:.2f}x); load average {os.getloadavg()[0]:.1f}", flush=True)
+            for name, ratio in zip(ratios, (closest / f32, closest / f64, any_hit / occluded)):
+                ratios[name].append(ratio)
+        print("medians over the rounds: " + ", ".join(
+            f"{name} {statistics.median(values):.2f}x" for name, values in ratios.items()))
 
 
 if __name__ == "__main__":
