@@ -70,11 +70,12 @@ def main():
             f64 = median_time(7, lambda: scene.intersect(o64, d64, device="cpu"))
             any_hit = trace(True)
             occluded = median_time(7, lambda: scene.occluded(o32, d32, device="cpu"))
+            f32_x, f64_x, occluded_x = closest / f32, closest / f64, any_hit / occluded
             print(f"round {r + 1}: trace {closest * 1e3:.1f} ms; intersect float32 {f32 * 1e3:.1f} ms "
-                  f"({closest / f32:.2f}x), float64 {f64 * 1e3:.1f} ms ({closest / f64:.2f}x); "
+                  f"({f32_x:.2f}x), float64 {f64 * 1e3:.1f} ms ({f64_x:.2f}x); "
                   f"trace --any-hit {any_hit * 1e3:.1f} ms, occluded float32 {occluded * 1e3:.1f} ms "
-                  f"({any_hit / occluded:.2f}x); load average {os.getloadavg()[0]:.1f}", flush=True)
-            for name, ratio in zip(ratios, (closest / f32, closest / f64, any_hit / occluded)):
+                  f"({occluded_x:.2f}x); load average {os.getloadavg()[0]:.1f}", flush=True)
+            for name, ratio in zip(ratios, (f32_x, f64_x, occluded_x)):
                 ratios[name].append(ratio)
         print("medians over the rounds: " + ", ".join(
             f"{name} {statistics.median(values):.2f}x" for name, values in ratios.items()))
