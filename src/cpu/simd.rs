@@ -24,11 +24,13 @@ static ACTIVE: std::sync::OnceLock<CpuKernel> = std::sync::OnceLock::new();
 pub enum CpuKernel {
     /// Plain Rust (SSE2 on x86-64; NEON or none elsewhere).
     Portable,
-    /// AVX2 with FMA (x86 since 2013): the 8-lane slab test in one
-    /// register, and fused multiply-adds (without FMA, each is a library
-    /// call per lane: about 4× slower traversal).
+    /// AVX2 with FMA (x86 since 2013), and the bit instructions every
+    /// such CPU has (BMI1/2, LZCNT, POPCNT: x86-64-v3's): the 8-lane slab
+    /// test in one register, and fused multiply-adds (without FMA, each is
+    /// a library call per lane: about 4× slower traversal); without
+    /// POPCNT, a count of set bits is a dozen instructions.
     Avx2Fma,
-    /// AVX-512 (F, VL, DQ, BW, with BMI1/2 and LZCNT): AVX2's kernel with
+    /// AVX-512 (F, VL, DQ, BW, with BMI1/2, LZCNT and POPCNT): AVX2's kernel with
     /// mask registers and embedded broadcasts, and incoherent rays order
     /// their entered children in vector registers (`push_sorted_zmm`).
     Avx512,
@@ -51,16 +53,18 @@ impl CpuKernel {
         #[cfg(target_arch = "x86_64")]
         {
             use std::is_x86_feature_detected as has;
-            let avx2_fma = has!("avx2") && has!("fma");
+            let bits = has!("bmi1") && has!("bmi2") && has!("lzcnt") && has!("popcnt");
+            let avx2_fma = has!("avx2") && has!("fma") && bits;
             match self {
                 CpuKernel::Portable => None,
-                CpuKernel::Avx2Fma => (!avx2_fma).then_some("AVX2 and FMA"),
+                CpuKernel::Avx2Fma => {
+                    (!avx2_fma).then_some("AVX2 and FMA with BMI1, BMI2, LZCNT and POPCNT")
+                }
                 CpuKernel::Avx512 => {
                     let avx512 =
                         has!("avx512f") && has!("avx512vl") && has!("avx512dq") && has!("avx512bw");
-                    let bits = has!("bmi1") && has!("bmi2") && has!("lzcnt");
-                    (!(avx2_fma && avx512 && bits))
-                        .then_some("AVX-512 F/VL/DQ/BW with BMI1, BMI2 and LZCNT")
+                    (!(avx2_fma && avx512))
+                        .then_some("AVX-512 F/VL/DQ/BW with BMI1, BMI2, LZCNT and POPCNT")
                 }
             }
         }
@@ -132,7 +136,7 @@ pub unsafe fn with_simd<R>(kernel: CpuKernel, f: impl FnOnce() -> R) -> R {
     match kernel {
         CpuKernel::Avx512 => {
             #[target_feature(
-                enable = "avx2,fma,avx512f,avx512vl,avx512dq,avx512bw,bmi1,bmi2,lzcnt"
+                enable = "avx2,fma,avx512f,avx512vl,avx512dq,avx512bw,bmi1,bmi2,lzcnt,popcnt"
             )]
             fn avx512<R>(f: impl FnOnce() -> R) -> R {
                 f()
@@ -141,7 +145,7 @@ pub unsafe fn with_simd<R>(kernel: CpuKernel, f: impl FnOnce() -> R) -> R {
             return unsafe { avx512(f) };
         }
         CpuKernel::Avx2Fma => {
-            #[target_feature(enable = "avx2,fma")]
+            #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
             fn avx2<R>(f: impl FnOnce() -> R) -> R {
                 f()
             }
