@@ -185,10 +185,21 @@ impl Placement {
 
     /// `localize` for a chunk of rays, on this thread: None where every
     /// ray stays as it is (the usual case, which then costs no copy).
+    /// Inlined, so that the usual case's one pass takes the caller's
+    /// vector instructions (`with_simd`: 3% of the CLI's camera rays as a
+    /// scalar call).
+    #[inline(always)]
     pub fn localize_chunk(&self, rays: &[Ray]) -> Option<(Vec<Ray>, Vec<f64>)> {
-        if self.offset == DVec3::ZERO
-            && (self.all_near(rays) || !rays.iter().any(|r| self.is_far(r)))
-        {
+        match self.all_near(rays) {
+            true => None,
+            false => self.localize_rays(rays),
+        }
+    }
+
+    /// `localize_chunk` where the largest coordinate could not tell.
+    #[inline(never)]
+    fn localize_rays(&self, rays: &[Ray]) -> Option<(Vec<Ray>, Vec<f64>)> {
+        if self.offset == DVec3::ZERO && !rays.iter().any(|r| self.is_far(r)) {
             return None;
         }
         Some(
@@ -202,14 +213,16 @@ impl Placement {
 
     /// Whether every origin of `rays` is near (`is_near`), as their
     /// largest coordinate bounds them (`near_within`): one pass without a
-    /// branch a ray, where the usual chunk is near. False where that
-    /// cannot tell (a far or non-finite origin).
+    /// branch a ray, where the usual chunk is near, over each ray's eight
+    /// values at once (the origins' taken after), which vectorises.
+    /// False where that cannot tell (a far or non-finite origin).
+    #[inline(always)]
     fn all_near(&self, rays: &[Ray]) -> bool {
-        let bits = rays
-            .iter()
-            .flat_map(|r| r.origin)
-            .fold(0, |m, c| m.max(c.to_bits() & (u32::MAX >> 1)));
-        self.near_within(f32::from_bits(bits))
+        let lanes = rays.iter().fold([0u32; 8], |m, r| {
+            let values: [u32; 8] = bytemuck::cast(*r);
+            std::array::from_fn(|k| m[k].max(values[k] & (u32::MAX >> 1)))
+        });
+        self.near_within(f32::from_bits(lanes[..3].iter().copied().fold(0, u32::max)))
     }
 
     /// Whether every world f32 origin with coordinates within ±`largest`

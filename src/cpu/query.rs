@@ -309,7 +309,14 @@ fn trace_each(
             // Moved rays on the heap, and only where some ray moves: two
             // zeroed stack arrays a chunk cost camera rays 3%.
             let moved = if frame == RayFrame::World && filled != Filled::Near {
-                placement.localize_chunk(chunk_rays)
+                // SAFETY: the kernel was checked.
+                unsafe {
+                    with_simd(
+                        cpu_kernel,
+                        #[inline(always)]
+                        || placement.localize_chunk(chunk_rays),
+                    )
+                }
             } else {
                 None
             };
