@@ -29,6 +29,14 @@ pub const FAR_RATIO: f64 = 8.0;
 /// to be as precise as its geometry: coarser, `ray_problem` warns.
 pub const ORIGIN_PRECISION: f64 = 1e-5;
 
+/// The bits of |c|: infinity's or more where c is not finite, and in the
+/// order of the magnitudes, so that the largest of many values is one
+/// integer maximum, which vectorises (as `near_within` takes it).
+#[inline(always)]
+pub fn magnitude_bits(c: f32) -> u32 {
+    c.to_bits() & (u32::MAX >> 1)
+}
+
 /// The offset a geometry with world bounds `lo`..`hi` is kept relative to:
 /// the centre of the bounds where it is far (CENTRE_RATIO), else zero.
 pub fn centring_offset(lo: DVec3, hi: DVec3) -> DVec3 {
@@ -219,8 +227,8 @@ impl Placement {
     #[inline(always)]
     fn all_near(&self, rays: &[Ray]) -> bool {
         let lanes = rays.iter().fold([0u32; 8], |m, r| {
-            let values: [u32; 8] = bytemuck::cast(*r);
-            std::array::from_fn(|k| m[k].max(values[k] & (u32::MAX >> 1)))
+            let values: [f32; 8] = bytemuck::cast(*r);
+            std::array::from_fn(|k| m[k].max(magnitude_bits(values[k])))
         });
         self.near_within(f32::from_bits(lanes[..3].iter().copied().fold(0, u32::max)))
     }

@@ -13,7 +13,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use glam::DVec3;
 use lambert::cpu::{Filled, pack_rays, prefetch_rows};
 use lambert::layout::{Hit, NO_HIT, Ray};
-use lambert::placement::{Placement, RayProblem, world_hit};
+use lambert::placement::{Placement, RayProblem, magnitude_bits, world_hit};
 use lambert::{Error, rays};
 
 use crate::arrays::{Bound1View, RowsView};
@@ -376,14 +376,6 @@ impl Query<'_> {
         first_bad.result(self)?;
         Ok(Gathered::Buffer(buffer))
     }
-}
-
-/// The bits of |c|: infinity's or more where c is not finite, and in the
-/// order of the magnitudes (so a chunk's largest is one integer maximum,
-/// which vectorises).
-#[inline(always)]
-fn magnitude_bits(c: f32) -> u32 {
-    c.to_bits() & 0x7fff_ffff
 }
 
 /// A direction's longest axis in magnitude, compared plainly (its values
