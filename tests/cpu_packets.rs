@@ -461,3 +461,23 @@ proptest! {
         }
     }
 }
+
+/// AVX-512 narrows to AVX2 for packets on an Intel CPU (as Linux's
+/// /proc/cpuinfo names its vendor) and nowhere else; no other kernel
+/// narrows.
+#[cfg(target_os = "linux")]
+#[test]
+fn avx512_narrows_to_avx2_on_intel_alone() {
+    let cpuinfo = std::fs::read_to_string("/proc/cpuinfo").expect("/proc/cpuinfo");
+    let intel = cpuinfo
+        .lines()
+        .find(|l| l.starts_with("vendor_id"))
+        .is_some_and(|l| l.ends_with("GenuineIntel"));
+    assert_eq!(CpuKernel::Portable.narrow_on_intel(), CpuKernel::Portable);
+    assert_eq!(CpuKernel::Avx2Fma.narrow_on_intel(), CpuKernel::Avx2Fma);
+    let narrowed = match intel {
+        true => CpuKernel::Avx2Fma,
+        false => CpuKernel::Avx512,
+    };
+    assert_eq!(CpuKernel::Avx512.narrow_on_intel(), narrowed);
+}

@@ -318,12 +318,14 @@ impl NativeScene {
             // The CPU path traces the rays as it reads them.
             let first_bad = FirstBad::new();
             // In the kernel's vector instructions (the same IEEE
-            // operations): the fill's loops then take 8 lanes.
+            // operations): the fill's loops then take 8 lanes. No wider
+            // on Intel, whose core the packets' rays then leave slowed.
             let fill = |start: usize, out: &mut [MaybeUninit<Ray>]| -> Filled {
-                // SAFETY: the options' kernel is one this CPU runs.
+                // SAFETY: the options' kernel is one this CPU runs, and so
+                // is any narrower.
                 unsafe {
                     with_simd(
-                        options.cpu_kernel,
+                        options.cpu_kernel.narrow_on_intel(),
                         #[inline(always)]
                         || query.fill(start, out, &first_bad, &problems),
                     )

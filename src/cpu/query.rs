@@ -290,6 +290,12 @@ fn trace_each(
     let coherent = coherent(&rays, nearby);
     let incoherent = (large || vector_sort) && !coherent;
     let packets = which == QueryKernel::Packets && packets_apply(&kernel, coherent);
+    // The whole chunk's (the rays' placing too): an Intel core slows for
+    // a while after any 512-bit instruction.
+    let cpu_kernel = match packets {
+        true => cpu_kernel.narrow_on_intel(),
+        false => cpu_kernel,
+    };
     (0..rays.len().div_ceil(CHUNK))
         .into_par_iter()
         .for_each(|index| {

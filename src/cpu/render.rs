@@ -206,6 +206,10 @@ fn render_rows_with(
         && compressed.is_none()
         && kernel32.features() == 0
         && scene.accel.traverses_bvh();
+    let cpu_kernel = match packets {
+        true => cpu_kernel.narrow_on_intel(),
+        false => cpu_kernel,
+    };
     rgb.par_chunks_mut(width)
         .zip(prims.par_chunks_mut(width))
         .zip(variance.par_chunks_mut(width))

@@ -119,11 +119,43 @@ impl CpuKernel {
         self >= CpuKernel::Avx2Fma
     }
 
+    /// This kernel at most 256 bits wide where 512-bit instructions cost:
+    /// AVX2's for AVX-512 on an Intel CPU. Intel's cores run a 512-bit
+    /// instruction with port 1's vector unit off (some at a lower clock
+    /// too), and LLVM's AVX-512 code moves the packets' arrays in 512-bit
+    /// registers: on a Sapphire Rapids, camera rays traced 1.06–1.08×
+    /// faster in AVX2's kernel, the Python binding's 1.04–1.08×
+    /// (docs/benchmarks.md). Zen 4 and 5 split a 512-bit instruction into
+    /// two 256-bit halves at no cost, and trace camera rays 1.01–1.03×
+    /// faster in AVX-512's kernel; incoherent rays keep it everywhere
+    /// (its `push_sorted_zmm`: 1.07× on the Intel too).
+    pub fn narrow_on_intel(self) -> CpuKernel {
+        match self {
+            CpuKernel::Avx512 if is_intel() => CpuKernel::Avx2Fma,
+            kernel => kernel,
+        }
+    }
+
     /// Whether incoherent rays order children with f32's
     /// `Scalar::push_sorted_zmm`.
     pub fn vector_sort(self) -> bool {
         self == CpuKernel::Avx512
     }
+}
+
+/// Whether this CPU is Intel's (CPUID's vendor string).
+fn is_intel() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        static INTEL: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+        *INTEL.get_or_init(|| {
+            let id = std::arch::x86_64::__cpuid(0);
+            // "GenuineIntel", in EBX, EDX, ECX.
+            [id.ebx, id.edx, id.ecx] == [0x756e_6547, 0x4965_6e69, 0x6c65_746e]
+        })
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    false
 }
 
 /// Runs `f` (an `#[inline(always)]` closure) compiled for `kernel`'s vector
