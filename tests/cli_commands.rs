@@ -10,7 +10,8 @@ use common::{lambert, lambert_command, s};
 
 /// `LAMBERT_CPU_KERNEL` is read by the binary, not the library: `info`
 /// reports the kernel it names (or the widest narrower one the CPU has),
-/// and the wider ones as not chosen; a name that is no kernel's leaves the
+/// the packets' narrower one where it differs, and the wider ones as not
+/// chosen; a name that is no kernel's leaves the
 /// widest.
 #[test]
 fn the_cpu_kernel_variable_reaches_the_cli() {
@@ -34,6 +35,16 @@ fn the_cpu_kernel_variable_reaches_the_cli() {
     let text = info("no such kernel");
     assert!(
         text.contains(&format!(", {} kernel", best.name())),
+        "{text}"
+    );
+    // The packets' own kernel, where it differs (AVX-512 on Intel).
+    let packets = format!(
+        "coherent rays' packets: {} kernel",
+        best.narrow_on_intel().name()
+    );
+    assert_eq!(
+        text.contains(&packets),
+        best.narrow_on_intel() != best,
         "{text}"
     );
     assert_eq!(

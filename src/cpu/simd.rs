@@ -124,7 +124,7 @@ impl CpuKernel {
     /// instruction with port 1's vector unit off (some at a lower clock
     /// too), and LLVM's AVX-512 code moves the packets' arrays in 512-bit
     /// registers: on a Sapphire Rapids, camera rays traced 1.06–1.08×
-    /// faster in AVX2's kernel, the Python binding's 1.04–1.08×
+    /// faster in AVX2's kernel, the Python binding's 1.04–1.10×
     /// (docs/benchmarks.md). Zen 4 and 5 split a 512-bit instruction into
     /// two 256-bit halves at no cost, and trace camera rays 1.01–1.03×
     /// faster in AVX-512's kernel; incoherent rays keep it everywhere

@@ -196,6 +196,13 @@ pub(super) fn info(args: &AdapterArgs) -> Result<ExitCode> {
         rayon::current_num_threads(),
         kernel.name()
     );
+    let packets = kernel.narrow_on_intel();
+    if packets != kernel {
+        println!(
+            "  coherent rays' packets: {} kernel (512-bit instructions slow an Intel core)",
+            packets.name()
+        );
+    }
     for other in cpu::CpuKernel::ALL {
         if let Some(missing) = other.missing() {
             println!(
